@@ -1,0 +1,8 @@
+"""galvoscan gateware: reusable Amaranth cores, independent of any board.
+
+Data flow (SPEC §3)::
+
+    sources/ (spiral …) ──▶ field/ (scale, offset, saturation) ──▶ phy/ (XY2-100) ──▶ galvos
+
+`top.GalvoScanTop` wires them together with board-independent port names.
+"""

@@ -1,0 +1,1 @@
+"""Field transforms between the position sources and the PHY: scale, offset, saturation."""

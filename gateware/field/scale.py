@@ -1,0 +1,76 @@
+"""Scale and offset: source offsets to galvo positions, saturating (SPEC §3, §4)."""
+
+from amaranth.hdl import Module, Mux, Signal
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..points import FIELD_MAX, FieldPoint, OffsetPoint
+
+
+__all__ = ["ScaleOffset", "GAIN_ONE"]
+
+
+#: The gain register value for a gain of 1.0: gains are unsigned Q1.15.
+GAIN_ONE = 1 << 15
+
+
+class ScaleOffset(wiring.Component):
+    """Per-axis gain and centre, saturating at the field edges.
+
+    For each axis ``position = clamp(centre + floor(offset × gain / 32768), 0, 65535)``. A
+    point that had to be clamped is still sent, at the field edge, and flagged on
+    :attr:`clipped`: positions never wrap around.
+
+    One point is held at a time: the stage takes a point when its output is empty or being
+    taken, so it never adds a frame of latency to points paced by frame strobes.
+
+    Interface attributes
+    --------------------
+    offsets : ``In(stream.Signature(OffsetPoint))``
+        Points from a position source, signed, 0 = field centre.
+    positions : ``Out(stream.Signature(FieldPoint))``
+        Points in galvo units for the PHY.
+    gain_x, gain_y : ``In(16)``
+        Gain, unsigned Q1.15: 32768 = 1.0 (the table's full swing reaches the field edge),
+        65535 ≈ 2.0. Sampled with each point.
+    centre_x, centre_y : ``In(16)``
+        Centre of the pattern in galvo units (32768 = field centre). Sampled with each point.
+    clipped : ``Out(1)``
+        High for one clock when a point is taken that had to be clamped on either axis.
+    """
+
+    offsets: In(stream.Signature(OffsetPoint))
+    positions: Out(stream.Signature(FieldPoint))
+    gain_x: In(16)
+    gain_y: In(16)
+    centre_x: In(16)
+    centre_y: In(16)
+    clipped: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+
+        def scale(offset, gain, centre):
+            # signed(16) × unsigned(16) → signed(33); >> is arithmetic, so this floors.
+            wide = centre + ((offset * gain) >> 15)
+            low, high = wide < 0, wide > FIELD_MAX
+            return Mux(low, 0, Mux(high, FIELD_MAX, wide)), low | high
+
+        x, clip_x = scale(self.offsets.payload.x, self.gain_x, self.centre_x)
+        y, clip_y = scale(self.offsets.payload.y, self.gain_y, self.centre_y)
+
+        take = self.offsets.valid & self.offsets.ready
+        m.d.comb += [
+            self.offsets.ready.eq(~self.positions.valid | self.positions.ready),
+            self.clipped.eq(take & (clip_x | clip_y)),
+        ]
+        with m.If(take):
+            m.d.sync += [
+                self.positions.payload.x.eq(x),
+                self.positions.payload.y.eq(y),
+                self.positions.valid.eq(1),
+            ]
+        with m.Elif(self.positions.ready):
+            m.d.sync += self.positions.valid.eq(0)
+
+        return m

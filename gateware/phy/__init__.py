@@ -1,0 +1,1 @@
+"""Physical layer: the XY2-100 scan head bus."""

@@ -1,0 +1,123 @@
+"""Spiral sequencer: walks the two angle ROMs at different cycle lengths (SPEC §1, §3)."""
+
+from amaranth.hdl import Module, Mux, Signal, signed
+from amaranth.lib import stream, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from ..points import OffsetPoint
+from .spiral_table import SpiralTable
+
+
+__all__ = ["SpiralSequencer"]
+
+
+class SpiralSequencer(wiring.Component):
+    """Precessing spiral from two ROMs.
+
+    X walks ``ROM_X[x_first … x_last]`` and Y walks ``ROM_Y[y_first … y_last]``, one step per
+    point, each wrapping to its first address after its last. With the paper's ranges (0-127 and
+    1-126) the two cycles differ in length, the phase between X and Y drifts, and the ellipse the
+    spot draws precesses until it fills the field; the pattern repeats after lcm(128, 126) = 8064
+    points.
+
+    Each point is offered once, right after the frame strobe on which its predecessor's dwell
+    ended, and is then shown for ``dwell`` frames: the PHY repeats the last position on frames
+    when nothing new is offered. Register inputs are sampled when a point is issued, so a change
+    takes effect at a point boundary.
+
+    Parameters
+    ----------
+    table : :class:`SpiralTable`
+        The angle tables, placed in two ROMs (block RAM on iCE40).
+
+    Interface attributes
+    --------------------
+    frame_strobe : ``In(1)``
+        The PHY's frame strobe: one pulse per 10 µs frame.
+    run : ``In(1)``
+        Issue points while high. While low the last point stays on the galvos, and the next
+        start begins the pattern again from ``x_first``/``y_first``.
+    dwell : ``In(16)``
+        Frames each point is held, 1 … 65535 (×10 µs at 2 Mbit/s). 0 is taken as 1.
+    x_first, x_last, y_first, y_last : ``In(range(points))``
+        ROM address ranges walked by each axis, inclusive. An address past ``*_last`` (after
+        the range is changed) wraps to ``*_first``.
+    points : ``Out(stream.Signature(OffsetPoint))``
+        Spiral points, signed offsets from the field centre.
+    """
+
+    class Signature(wiring.Signature):
+        """Signature of a spiral sequencer whose ROMs hold ``points`` samples per axis."""
+
+        def __init__(self, *, points):
+            if not isinstance(points, int) or points < 2:
+                raise TypeError(f"points must be an integer of at least 2, not {points!r}")
+            self.rom_points = points
+            super().__init__({
+                "frame_strobe": In(1),
+                "run":          In(1),
+                "dwell":        In(16),
+                "x_first":      In(range(points)),
+                "x_last":       In(range(points)),
+                "y_first":      In(range(points)),
+                "y_last":       In(range(points)),
+                "points":       Out(stream.Signature(OffsetPoint)),
+            })
+
+    def __init__(self, table):
+        if not isinstance(table, SpiralTable):
+            raise TypeError(f"table must be a SpiralTable, not {table!r}")
+        self.table = table
+        super().__init__(self.Signature(points=table.points))
+
+    def elaborate(self, platform):
+        m = Module()
+
+        depth = self.table.points
+        m.submodules.rom_x = rom_x = Memory(shape=signed(16), depth=depth, init=self.table.x)
+        m.submodules.rom_y = rom_y = Memory(shape=signed(16), depth=depth, init=self.table.y)
+        read_x = rom_x.read_port()
+        read_y = rom_y.read_port()
+
+        addr_x = Signal(range(depth))
+        addr_y = Signal(range(depth))
+        m.d.comb += [read_x.addr.eq(addr_x), read_y.addr.eq(addr_y)]
+
+        issued = self.points.valid & self.points.ready
+
+        # After reset, and whenever `run` is low, the walk starts again from the first
+        # addresses, so every start replays the pattern from its beginning.
+        restart = Signal(init=1)
+        with m.If(~self.run):
+            m.d.sync += restart.eq(1)
+        with m.Elif(restart):
+            m.d.sync += [
+                restart.eq(0),
+                addr_x.eq(self.x_first),
+                addr_y.eq(self.y_first),
+            ]
+        with m.Elif(issued):
+            m.d.sync += [
+                addr_x.eq(Mux(addr_x >= self.x_last, self.x_first, addr_x + 1)),
+                addr_y.eq(Mux(addr_y >= self.y_last, self.y_first, addr_y + 1)),
+            ]
+
+        # The ROMs answer one clock after the address changes; `fetched` is low on that clock.
+        fetched = Signal()
+        m.d.sync += fetched.eq(~restart & ~issued)
+
+        # Frame strobes still to pass before the next point is due.
+        frames_left = Signal(16)
+        with m.If(issued):
+            m.d.sync += frames_left.eq(Mux(self.dwell == 0, 1, self.dwell))
+        with m.Elif(self.frame_strobe & (frames_left != 0)):
+            m.d.sync += frames_left.eq(frames_left - 1)
+
+        m.d.comb += [
+            self.points.payload.x.eq(read_x.data),
+            self.points.payload.y.eq(read_y.data),
+            self.points.valid.eq(self.run & ~restart & fetched & (frames_left == 0)),
+        ]
+
+        return m

@@ -1,0 +1,1 @@
+"""Board glue: pin-outs and clocking for the boards galvoscan runs on."""
