@@ -1,0 +1,55 @@
+"""Every proof galvoscan has, in one list: what ``galvoscan prove`` and the tests run."""
+
+from dataclasses import dataclass
+from typing import Callable
+
+from ..gateware.phy.xy2_100 import FRAME_BITS, XY2Transmitter
+from .xy2_100 import XY2TransmitterSpec
+
+
+__all__ = ["Proof", "PROOFS", "xy2_phy_proof"]
+
+
+@dataclass(frozen=True)
+class Proof:
+    """A spec harness and the depths SymbiYosys needs for it."""
+    name: str
+    description: str
+    harness: Callable[[], object]   # builds a fresh harness
+    depth: int                      # k-induction depth (system clocks)
+    cover_depth: int
+
+
+def xy2_phy_proof(clocks_per_bit, *, make_phy=None, name=None):
+    """The XY2-100 transmitter proof at ``clocks_per_bit`` system clocks per bit.
+
+    ``make_phy(clk_freq=…, bit_rate=…)`` builds the design under proof (the real transmitter
+    by default; the tests pass deliberately broken ones).
+
+    The black-box spec remembers the last position taken for as long as no new one comes, so
+    k-induction has to see three whole frames before it can tie that memory to the PHY's own:
+    the depth is three frames and a few clocks. The cover needs two frames.
+    """
+    make_phy = XY2Transmitter if make_phy is None else make_phy
+    bit_rate = 2_000_000
+    frame = FRAME_BITS * clocks_per_bit
+
+    def harness():
+        phy = make_phy(clk_freq=clocks_per_bit * bit_rate, bit_rate=bit_rate)
+        return XY2TransmitterSpec(phy, clocks_per_bit=clocks_per_bit)
+
+    return Proof(
+        name=name or f"xy2_100_{clocks_per_bit}x",
+        description=f"XY2-100 PHY at {clocks_per_bit} system clocks per bit: clock, edges, "
+                    f"20-bit frames, SYNC, parity, control bits, latched data",
+        harness=harness,
+        depth=3 * frame + 5,
+        cover_depth=2 * frame + 10)
+
+
+PROOFS = [
+    # The smallest divider, as simulated.
+    xy2_phy_proof(2),
+    # The iCEBreaker's 12 MHz system clock.
+    xy2_phy_proof(6),
+]

@@ -1,0 +1,87 @@
+"""Run a spec harness through SymbiYosys: an unbounded proof (k-induction) and a cover."""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+import re
+import subprocess
+import time
+
+from amaranth.back import rtlil
+from amaranth.hdl import ClockSignal
+
+from ..toolchain import tool, tool_env
+
+
+__all__ = ["ProofResult", "run_sby"]
+
+
+_SBY_TEMPLATE = """\
+[tasks]
+prove
+cover
+
+[options]
+prove: mode prove
+prove: depth {depth}
+cover: mode cover
+cover: depth {cover_depth}
+multiclock off
+
+[engines]
+smtbmc z3
+
+[script]
+read_rtlil {name}.il
+prep -top {name}
+
+[files]
+{name}.il
+"""
+
+
+@dataclass
+class ProofResult:
+    """Outcome of one SymbiYosys task."""
+    name: str
+    task: str           # "prove" or "cover"
+    status: str         # "PASS", "FAIL", "ERROR", "UNKNOWN", …
+    seconds: float
+    workdir: Path
+    #: Assertions that failed, or covers that were not reached, as sby reported them.
+    failed: list = field(default_factory=list)
+
+    @property
+    def passed(self):
+        return self.status == "PASS"
+
+
+def run_sby(harness, name, workdir, *, depth, cover_depth, tasks=("prove", "cover"),
+            timeout=1800):
+    """Prove ``harness`` (an elaboratable with Assert/Cover) and reach its covers.
+
+    Files go to ``workdir/name``; YoWASP tools cannot see absolute paths outside their working
+    folder, so they run with it as ``cwd`` and relative paths. Returns the prove and cover
+    :class:`ProofResult` of each of ``tasks``.
+    """
+    folder = Path(workdir) / name
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{name}.il").write_text(rtlil.convert(harness, name=name, platform="formal", ports=[ClockSignal("sync")]))
+    (folder / f"{name}.sby").write_text(
+        _SBY_TEMPLATE.format(name=name, depth=depth, cover_depth=cover_depth))
+
+    results = []
+    for task in tasks:
+        start = time.monotonic()
+        proc = subprocess.run(
+            [tool("yowasp-sby"), "-f", f"{name}.sby", task],
+            cwd=folder, env=tool_env(proofs=True), timeout=timeout,
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        seconds = time.monotonic() - start
+        (folder / f"{task}.log").write_text(proc.stdout)
+        status_file = folder / f"{name}_{task}" / "status"
+        status = status_file.read_text().split()[0] if status_file.exists() else "ERROR"
+        failed = sorted(set(
+            re.findall(r"(?:Assert failed in|Unreached cover statement at|"
+                       r"failed assertion|cover \S+ not reached)[^\n]*", proc.stdout)))
+        results.append(ProofResult(name, task, status, seconds, folder, failed))
+    return results

@@ -1,0 +1,153 @@
+"""What an XY2-100 scan head needs from the transmitter, as properties (SPEC §2).
+
+The spec watches only what a scan head and a position source can see: the four wires and the
+position stream. Its monitor is written from the protocol description, not from the PHY, so a
+PHY that differs from the protocol anywhere fails the proof.
+"""
+
+from amaranth.asserts import AnySeq
+from amaranth.hdl import Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux, Signal
+
+from ..gateware.phy.xy2_100 import FRAME_BITS
+from ..gateware.points import FIELD_CENTRE, FieldPoint
+
+
+__all__ = ["XY2TransmitterSpec"]
+
+
+class XY2TransmitterSpec(Elaboratable):
+    """Properties of an XY2 transmitter, for SymbiYosys.
+
+    Proved from power-up, for any sequence of offered positions (free ``valid`` and payload on
+    every clock):
+
+    * **clock**: ``xy2_clk`` toggles every ``clocks_per_bit / 2`` system clocks, for ever;
+    * **edges**: SYNC, X and Y change only together with a rising edge of ``xy2_clk``, so they
+      are stable at every falling edge, where the scan head samples;
+    * **frames**: every frame is 20 clocks; SYNC rises at the first bit of each frame, stays high
+      for bits 1-19 and is low during the parity bit, with no idle clock between frames;
+    * **content**: on each axis, the three control bits are ``control_bits``, the 20 bits have
+      even parity, and the 16 data bits are the position taken from the stream at the start of
+      the frame (the centre until the first one);
+    * **latching**: the stream is ready only on the clock before a frame starts.
+
+    Parameters
+    ----------
+    dut : component with the :class:`~galvoscan.gateware.phy.xy2_100.XY2Transmitter` signature
+    clocks_per_bit : int
+        System clocks per XY2 bit of ``dut``.
+    control_bits : int
+        Control bits the frames must carry.
+    """
+
+    def __init__(self, dut, *, clocks_per_bit, control_bits=0b001):
+        self.dut = dut
+        self.clocks_per_bit = clocks_per_bit
+        self.control_bits = control_bits
+
+    def elaborate(self, platform):
+        m = Module()
+        # Reset is the same as power-up for the PHY: both start from the initial state.
+        m.domains.sync = ClockDomain(reset_less=True)
+        m.submodules.dut = dut = self.dut
+
+        m.d.comb += [
+            dut.position.valid.eq(AnySeq(1)),
+            dut.position.payload.eq(AnySeq(len(dut.position.payload.as_value()))),
+        ]
+
+        half = self.clocks_per_bit // 2
+        clk, sync, x, y = dut.xy2_clk, dut.xy2_sync, dut.xy2_x, dut.xy2_y
+
+        # The wires one clock ago; all low at power-up.
+        clk_q, sync_q, x_q, y_q = (Signal(name=f"{s.name}_q") for s in (clk, sync, x, y))
+        m.d.sync += [clk_q.eq(clk), sync_q.eq(sync), x_q.eq(x), y_q.eq(y)]
+        rise = clk & ~clk_q
+        fall = ~clk & clk_q
+        sync_rise = sync & ~sync_q
+
+        # --- clock ------------------------------------------------------------------------------
+        clk_started = Signal()      # the first rising edge has been seen
+        since_toggle = Signal(range(half + 1))
+        with m.If(clk != clk_q):
+            m.d.sync += [clk_started.eq(1), since_toggle.eq(0)]
+        with m.Elif(since_toggle < half):
+            m.d.sync += since_toggle.eq(since_toggle + 1)
+        with m.If(clk_started):
+            m.d.comb += Assert((clk != clk_q) == (since_toggle == half - 1),
+                               "xy2_clk toggles every clocks_per_bit/2 system clocks")
+        with m.Else():
+            m.d.comb += Assert(rise | (since_toggle == 0),
+                               "xy2_clk starts on the first clock after power-up")
+
+        # --- edges ------------------------------------------------------------------------------
+        m.d.comb += Assert(rise | ((sync == sync_q) & (x == x_q) & (y == y_q)),
+                           "SYNC, X and Y change only with a rising xy2_clk")
+
+        # --- frames -----------------------------------------------------------------------------
+        in_frame = Signal()         # the first SYNC rise has been seen
+        bit_no = Signal(range(FRAME_BITS))  # bit on the wire, 0 = C2 (first after SYNC rises)
+        with m.If(rise):
+            m.d.sync += bit_no.eq(Mux(bit_no == FRAME_BITS - 1, 0, bit_no + 1))
+            with m.If(sync_rise):
+                m.d.sync += [in_frame.eq(1), bit_no.eq(0)]
+        with m.If(rise & in_frame):
+            m.d.comb += [
+                Assert(sync_rise == (bit_no == FRAME_BITS - 1),
+                       "a frame is 20 bits and the next follows with no idle clock"),
+                Assert(sync == (bit_no != FRAME_BITS - 2),
+                       "SYNC is high for bits 1-19 and low for the parity bit"),
+            ]
+        # Frames start with the very first bit: no clock goes by without a frame.
+        with m.If(rise & ~in_frame):
+            m.d.comb += Assert(sync_rise, "the first frame starts with the first clock")
+
+        # --- latching ---------------------------------------------------------------------------
+        ready_q = Signal()
+        m.d.sync += ready_q.eq(dut.position.ready)
+        m.d.comb += Assert(ready_q == sync_rise,
+                           "a position is taken only on the clock before a frame starts")
+
+        taken = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        with m.If(dut.position.valid & dut.position.ready):
+            m.d.sync += taken.eq(dut.position.payload)
+        # By the clock on which SYNC rises, `taken` holds the frame's position.
+        frame_position = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        with m.If(sync_rise):
+            m.d.sync += frame_position.eq(taken)
+
+        # --- content ----------------------------------------------------------------------------
+        # Sample like a scan head: on the falling edge.
+        rx_x = Signal(FRAME_BITS - 1)
+        rx_y = Signal(FRAME_BITS - 1)
+        with m.If(fall):
+            m.d.sync += [rx_x.eq(Cat(x, rx_x)), rx_y.eq(Cat(y, rx_y))]
+        word_x = Cat(x, rx_x)   # the whole frame, valid on the parity bit's falling edge
+        word_y = Cat(y, rx_y)
+        parity_sampled = fall & in_frame & (bit_no == FRAME_BITS - 1)
+        with m.If(parity_sampled):
+            m.d.comb += [
+                Assert(word_x.xor() == 0, "X frame has even parity"),
+                Assert(word_y.xor() == 0, "Y frame has even parity"),
+                Assert(word_x[17:20] == self.control_bits, "X control bits"),
+                Assert(word_y[17:20] == self.control_bits, "Y control bits"),
+                Assert(word_x[1:17] == frame_position.x, "X data is the latched position"),
+                Assert(word_y[1:17] == frame_position.y, "Y data is the latched position"),
+            ]
+
+        # --- covers -----------------------------------------------------------------------------
+        # Two whole frames with different data on both axes, so the proof is not vacuous.
+        frames_done = Signal(2)
+        last_x = Signal(16)
+        with m.If(parity_sampled):
+            m.d.sync += last_x.eq(word_x[1:17])
+            with m.If(frames_done != 3):
+                m.d.sync += frames_done.eq(frames_done + 1)
+        m.d.comb += [
+            Cover(parity_sampled & (frames_done == 1) & (word_x[1:17] != last_x) &
+                  (word_y[1:17] != FIELD_CENTRE), "two frames with new data"),
+            Cover(parity_sampled & (frames_done == 1) & (word_x[1:17] == last_x) &
+                  (last_x != FIELD_CENTRE),
+                  "a position repeated when nothing new is offered"),
+        ]
+        return m
