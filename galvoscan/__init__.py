@@ -1,0 +1,1 @@
+"""galvoscan host side: command line, simulation replay, build and proof runners."""

@@ -1,0 +1,87 @@
+"""Bitstream builds with the YoWASP toolchain, and what nextpnr measured of them."""
+
+from dataclasses import asdict, dataclass
+import json
+from pathlib import Path
+import time
+
+from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform
+from .toolchain import tool_env
+
+
+__all__ = ["BOARDS", "BuildReport", "build_bitstream"]
+
+
+#: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory).
+BOARDS = {
+    "icebreaker": (icebreaker_platform, ICEBreakerScanner),
+}
+
+
+@dataclass
+class BuildReport:
+    """What one build produced and what nextpnr measured."""
+    board: str
+    bitstream: str
+    clock_mhz: float        # the board clock the design must meet
+    fmax_mhz: float         # nextpnr's estimate for the system clock
+    luts: int               # logic cells (ICESTORM_LC) used
+    luts_available: int
+    brams: int              # 4 kbit block RAMs (ICESTORM_RAM) used
+    brams_available: int
+    dsps: int               # multiply-accumulate blocks (ICESTORM_DSP) used
+    dsps_available: int
+    seconds: float          # wall time of synthesis, place and route and packing
+
+    @property
+    def meets_timing(self):
+        return self.fmax_mhz >= self.clock_mhz
+
+    @property
+    def margin(self):
+        """Fmax over the required clock, as a ratio."""
+        return self.fmax_mhz / self.clock_mhz
+
+    def as_dict(self):
+        return {**asdict(self), "meets_timing": self.meets_timing}
+
+
+def _used(utilisation, cell):
+    entry = utilisation.get(cell, {"used": 0, "available": 0})
+    return entry["used"], entry["available"]
+
+
+def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
+                    seed=1):
+    """Synthesise, place and route and pack the full system for ``board``.
+
+    nextpnr runs with a fixed ``seed`` so builds are repeatable. Returns a :class:`BuildReport`.
+    """
+    if board not in BOARDS:
+        raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
+    make_platform, make_top = BOARDS[board]
+    platform = make_platform()
+    build_dir = Path(build_dir)
+    name = f"galvoscan_{board}"
+
+    start = time.monotonic()
+    plan = platform.build(make_top(table=table, settings=settings), name=name,
+                          build_dir=str(build_dir), do_build=False,
+                          nextpnr_opts=f"--seed {seed} --report {name}.report.json")
+    products = plan.execute_local(str(build_dir), env=tool_env())
+    seconds = time.monotonic() - start
+
+    bitstream = build_dir / f"{name}.bin"
+    bitstream.write_bytes(products.get(f"{name}.bin"))
+    report = json.loads(products.get(f"{name}.report.json", mode="t"))
+    clock_mhz = platform.default_clk_frequency / 1e6
+    # One clock domain: the slowest achieved figure is the system's Fmax.
+    fmax_mhz = min(entry["achieved"] for entry in report["fmax"].values())
+    utilisation = report["utilization"]
+    luts, luts_available = _used(utilisation, "ICESTORM_LC")
+    brams, brams_available = _used(utilisation, "ICESTORM_RAM")
+    dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")
+    return BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
+                       fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
+                       brams=brams, brams_available=brams_available, dsps=dsps,
+                       dsps_available=dsps_available, seconds=round(seconds, 1))

