@@ -101,10 +101,10 @@ def _cmd_sim(args):
     if args.csv:
         write_csv(args.csv, received)
     if args.png:
+        sampling = (f"Gaussian sampling, σ = {table.sigma:g}" if table.sampling == "gaussian"
+                    else "uniform sampling")
         plot_path(args.png, received[1:], title=(
-            f"{args.points} points of the {table.sampling} spiral"
-            f"{f' (σ = {table.sigma:g})' if table.sampling == 'gaussian' else ''}, "
-            f"decoded from the XY2-100 wires"))
+            f"{args.points} spiral points, {sampling}\n(decoded from the simulated XY2-100 wires)"))
     summary = {
         "points": args.points, "dwell_frames": args.dwell, "frames": len(received),
         "scan_time_s": len(received) * 10e-6, "sim_seconds": round(seconds, 2),
