@@ -10,7 +10,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out, connect
 
 from .field.scale import GAIN_ONE, ScaleOffset
-from .phy.xy2_100 import XY2Transmitter
+from .phy.xy2_100 import XY2Transmitter, clocks_per_bit
 from .points import FIELD_CENTRE
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
@@ -100,8 +100,8 @@ class GalvoScanTop(wiring.Component):
         if not isinstance(self.settings, ScanSettings):
             raise TypeError(f"settings must be ScanSettings, not {self.settings!r}")
         self.settings.check_ranges(self.table.points)
-        # Built here so that parameter errors show at construction, not deep in elaboration.
-        self.phy = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate)
+        # Checked here so that a bad clock shows at construction, not deep in elaboration.
+        clocks_per_bit(clk_freq, bit_rate)
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         super().__init__()
@@ -112,7 +112,7 @@ class GalvoScanTop(wiring.Component):
 
         m.submodules.spiral = spiral = SpiralSequencer(self.table)
         m.submodules.scale = scale = ScaleOffset()
-        m.submodules.phy = phy = self.phy
+        m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
 
         # The register file will drive these; until then they are the settings at reset.
         m.d.comb += [
