@@ -12,9 +12,11 @@ from .toolchain import tool_env
 __all__ = ["BOARDS", "BuildReport", "build_bitstream"]
 
 
-#: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory).
+#: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory, options for
+#: yosys' synth_ice40). The UP5K has DSP blocks: ``-dsp`` puts the scale stage's multipliers
+#: there instead of in logic cells.
 BOARDS = {
-    "icebreaker": (icebreaker_platform, ICEBreakerScanner),
+    "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
 }
 
 
@@ -59,14 +61,14 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
-    make_platform, make_top = BOARDS[board]
+    make_platform, make_top, synth_opts = BOARDS[board]
     platform = make_platform()
     build_dir = Path(build_dir)
     name = f"galvoscan_{board}"
 
     start = time.monotonic()
     plan = platform.build(make_top(table=table, settings=settings), name=name,
-                          build_dir=str(build_dir), do_build=False,
+                          build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json")
     products = plan.execute_local(str(build_dir), env=tool_env())
     seconds = time.monotonic() - start

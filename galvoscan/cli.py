@@ -195,8 +195,9 @@ def _cmd_export(args):
                        settings=_settings(args, table))
     text = verilog.convert(top, name=args.name, emit_src=False)
     Path(args.output).write_text(text)
-    print(f"wrote {args.output}: module {args.name} (clk, rst, xy2_clk, xy2_sync, xy2_x, "
-          f"xy2_y) for a {args.clk_freq / 1e6:g} MHz clock")
+    ports = ", ".join(["clk", "rst", *top.signature.members])
+    print(f"wrote {args.output}: module {args.name} ({ports}) for a "
+          f"{args.clk_freq / 1e6:g} MHz clock")
 
 
 # --- main ----------------------------------------------------------------------------------------

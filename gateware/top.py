@@ -1,15 +1,22 @@
 """The galvoscan system, independent of any board (SPEC §3).
 
 Its ports are plain one-bit wires with fixed names, so the exported Verilog drops into other
-designs: ``clk``, ``rst`` (synchronous, active high) and ``xy2_clk``, ``xy2_sync``, ``xy2_x``,
-``xy2_y``.
+designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_clk``,
+``xy2_sync``, ``xy2_x``, ``xy2_y``, and the host link ``spi_sck``, ``spi_cs_n``, ``spi_copi``,
+``spi_cipo``, ``uart_rx``, ``uart_tx``.
 """
 
-from amaranth.hdl import Module
+from amaranth.hdl import Module, Signal
 from amaranth.lib import wiring
-from amaranth.lib.wiring import Out, connect
+from amaranth.lib.wiring import In, Out, connect
 
-from .field.scale import GAIN_ONE, ScaleOffset
+from .field.scale import AMP_ONE, ScaleOffset
+from .host.command import CommandDecoder
+from .host.registers import RegisterFile
+from .host.regmap import STATUS_BITS
+from .host.spi_target import SPITarget
+from .host.uart import uart_divisor
+from .host.uart_port import UARTCommandPort
 from .phy.xy2_100 import XY2Transmitter, clocks_per_bit
 from .points import FIELD_CENTRE
 from .sources.spiral import SpiralSequencer
@@ -25,16 +32,17 @@ def _check_int(name, value, low, high, unit=""):
 
 
 class ScanSettings:
-    """The scan settings the system starts with: what the host-writable registers reset to.
+    """The scan settings the system starts with: what the host-writable registers reset to
+    (the register map's defaults unless given).
 
     Parameters
     ----------
     dwell : int
         Frames each spiral point is held, 1 … 65535. At 2 Mbit/s a frame is 10 µs, so the
         default 3 gives the paper's 30 µs between points.
-    gain_x, gain_y : int
+    amp_x, amp_y : int
         Amplitude, unsigned Q1.15 (32768 = the table's full swing reaches the field edge).
-    centre_x, centre_y : int
+    center_x, center_y : int
         Pattern centre in galvo units (32768 = field centre).
     x_range, y_range : tuple of int
         ``(first, last)`` ROM addresses walked by each axis, inclusive. The paper's
@@ -43,20 +51,30 @@ class ScanSettings:
         Start sweeping out of reset.
     """
 
-    def __init__(self, *, dwell=3, gain_x=GAIN_ONE, gain_y=GAIN_ONE,
-                 centre_x=FIELD_CENTRE, centre_y=FIELD_CENTRE,
+    def __init__(self, *, dwell=3, amp_x=AMP_ONE, amp_y=AMP_ONE,
+                 center_x=FIELD_CENTRE, center_y=FIELD_CENTRE,
                  x_range=(0, 127), y_range=(1, 126), run=True):
         _check_int("dwell", dwell, 1, 0xFFFF, " frames")
-        for name, value in (("gain_x", gain_x), ("gain_y", gain_y)):
+        for name, value in (("amp_x", amp_x), ("amp_y", amp_y)):
             _check_int(name, value, 0, 0xFFFF, " (Q1.15, 32768 = 1.0)")
-        for name, value in (("centre_x", centre_x), ("centre_y", centre_y)):
+        for name, value in (("center_x", center_x), ("center_y", center_y)):
             _check_int(name, value, 0, 0xFFFF, " galvo units")
         self.dwell = dwell
-        self.gain_x, self.gain_y = gain_x, gain_y
-        self.centre_x, self.centre_y = centre_x, centre_y
+        self.amp_x, self.amp_y = amp_x, amp_y
+        self.center_x, self.center_y = center_x, center_y
         self.x_range = tuple(x_range)
         self.y_range = tuple(y_range)
         self.run = bool(run)
+
+    def register_resets(self):
+        """Reset values of the registers these settings set."""
+        return {
+            "run": int(self.run), "dwell": self.dwell,
+            "amp_x": self.amp_x, "amp_y": self.amp_y,
+            "center_x": self.center_x, "center_y": self.center_y,
+            "x_first": self.x_range[0], "x_last": self.x_range[1],
+            "y_first": self.y_range[0], "y_last": self.y_range[1],
+        }
 
     def check_ranges(self, points):
         """Raise if the address ranges do not fit a table of ``points`` samples."""
@@ -68,7 +86,12 @@ class ScanSettings:
 
 
 class GalvoScanTop(wiring.Component):
-    """Stand-alone spiral scanner: spiral sequencer → scale/offset → XY2-100 transmitter.
+    """The spiral scanner under host control.
+
+    ::
+
+        SPI ─┐                                          ┌─▶ spiral sequencer ─▶ scale ─▶ XY2-100
+        UART ┴▶ command decoder ─▶ register file ───────┘      (ROMs)          /offset    PHY
 
     Parameters
     ----------
@@ -76,23 +99,36 @@ class GalvoScanTop(wiring.Component):
         Frequency of ``clk`` in Hz.
     bit_rate : int or float
         XY2 bit rate in Hz (2 MHz: XY2-100). ``clk_freq / bit_rate`` must be an even integer.
+    baud : int
+        UART rate (8N1).
     table : :class:`SpiralTable`
         Spiral angle tables (default: 128 Gaussian-sampled points).
     settings : :class:`ScanSettings`
-        Dwell, gain, centre, address ranges and run at reset.
+        What the scan registers reset to.
 
     Interface attributes
     --------------------
     xy2_clk, xy2_sync, xy2_x, xy2_y : ``Out(1)``
         XY2-100 bus to the scan head, single-ended (add an RS-422 driver).
+    spi_sck, spi_cs_n, spi_copi : ``In(1)``; spi_cipo : ``Out(1)``
+        SPI target, mode 0, SCK up to ``clk_freq / 12``.
+    uart_rx : ``In(1)``; uart_tx : ``Out(1)``
+        Serial port, 8N1 at ``baud``.
     """
 
     xy2_clk: Out(1)
     xy2_sync: Out(1)
     xy2_x: Out(1)
     xy2_y: Out(1)
+    spi_sck: In(1)
+    spi_cs_n: In(1, init=1)
+    spi_copi: In(1)
+    spi_cipo: Out(1)
+    uart_rx: In(1, init=1)
+    uart_tx: Out(1, init=1)
 
-    def __init__(self, *, clk_freq, bit_rate=2_000_000, table=None, settings=None):
+    def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
+                 settings=None):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -102,31 +138,56 @@ class GalvoScanTop(wiring.Component):
         self.settings.check_ranges(self.table.points)
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
         clocks_per_bit(clk_freq, bit_rate)
+        self.uart_divisor = uart_divisor(clk_freq, baud)
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
+        self.baud = baud
         super().__init__()
 
     def elaborate(self, platform):
         m = Module()
-        settings = self.settings
 
+        # --- host link ----------------------------------------------------------------------
+        m.submodules.spi = spi = SPITarget()
+        m.submodules.uart = uart = UARTCommandPort(divisor=self.uart_divisor)
+        m.submodules.decoder = decoder = CommandDecoder()
+        last_address = self.table.points - 1
+        m.submodules.registers = regs = RegisterFile(
+            resets=self.settings.register_resets(),
+            highs={name: last_address for name in ("x_first", "x_last", "y_first", "y_last")})
+
+        m.d.comb += [
+            spi.sck.eq(self.spi_sck),
+            spi.cs_n.eq(self.spi_cs_n),
+            spi.copi.eq(self.spi_copi),
+            self.spi_cipo.eq(spi.cipo),
+            uart.rx.eq(self.uart_rx),
+            self.uart_tx.eq(uart.tx),
+        ]
+        connect(m, spi.frames, decoder.spi_frames)
+        connect(m, uart.frames, decoder.uart_frames)
+        connect(m, decoder.spi_replies, spi.replies)
+        connect(m, decoder.uart_replies, uart.replies)
+        connect(m, decoder.bus, regs.bus)
+
+        # --- scan ---------------------------------------------------------------------------
         m.submodules.spiral = spiral = SpiralSequencer(self.table)
         m.submodules.scale = scale = ScaleOffset()
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
 
-        # The register file will drive these; until then they are the settings at reset.
+        spiral_mode = regs.mode == 0
         m.d.comb += [
-            spiral.run.eq(settings.run),
-            spiral.dwell.eq(settings.dwell),
-            spiral.x_first.eq(settings.x_range[0]),
-            spiral.x_last.eq(settings.x_range[1]),
-            spiral.y_first.eq(settings.y_range[0]),
-            spiral.y_last.eq(settings.y_range[1]),
+            spiral.run.eq(regs.run & spiral_mode),
+            spiral.dwell.eq(regs.dwell),
+            spiral.x_first.eq(regs.x_first),
+            spiral.x_last.eq(regs.x_last),
+            spiral.y_first.eq(regs.y_first),
+            spiral.y_last.eq(regs.y_last),
             spiral.frame_strobe.eq(phy.frame_strobe),
-            scale.gain_x.eq(settings.gain_x),
-            scale.gain_y.eq(settings.gain_y),
-            scale.centre_x.eq(settings.centre_x),
-            scale.centre_y.eq(settings.centre_y),
+            scale.amp_x.eq(regs.amp_x),
+            scale.amp_y.eq(regs.amp_y),
+            scale.center_x.eq(regs.center_x),
+            scale.center_y.eq(regs.center_y),
         ]
         connect(m, spiral.points, scale.offsets)
         connect(m, scale.positions, phy.position)
@@ -136,5 +197,18 @@ class GalvoScanTop(wiring.Component):
             self.xy2_sync.eq(phy.xy2_sync),
             self.xy2_x.eq(phy.xy2_x),
             self.xy2_y.eq(phy.xy2_y),
+        ]
+
+        # --- status -------------------------------------------------------------------------
+        clipped_since_read = Signal()
+        with m.If(scale.clipped):
+            m.d.sync += clipped_since_read.eq(1)
+        with m.Elif(decoder.status_read):
+            m.d.sync += clipped_since_read.eq(0)
+        m.d.comb += [
+            regs.status[STATUS_BITS["running"]].eq(spiral.run),
+            regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
+            regs.status[STATUS_BITS["armed"]].eq(regs.arm),
+            regs.errors.eq(decoder.errors),
         ]
         return m

@@ -14,6 +14,18 @@ PMOD  FPGA pin  signal
 6, 12 —         3.3 V
 ====  ========  =========
 
+The host link: the board's USB serial port (FTDI channel B, FPGA pins 6 = rx, 9 = tx), and an
+SPI target on PMOD1B in the usual PMOD SPI order:
+
+====  ========  ===========
+PMOD  FPGA pin  signal
+====  ========  ===========
+1     43        spi_cs_n (pulled up: a loose header reads as deselected)
+2     38        spi_copi
+3     34        spi_cipo
+4     31        spi_sck
+====  ========  ===========
+
 The red LED lights once frames are going out. The four bus lines leave through the I/O cells'
 output flip-flops, one system clock after the PHY's own registers.
 """
@@ -26,11 +38,13 @@ from amaranth_boards.icebreaker import ICEBreakerPlatform
 from ..gateware.top import GalvoScanTop
 
 
-__all__ = ["ICEBreakerScanner", "icebreaker_platform", "XY2_PMOD_PINS"]
+__all__ = ["ICEBreakerScanner", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS"]
 
 
-#: PMOD1A pin of each XY2-100 signal (documented in the README from this table).
+#: PMOD1A pin of each XY2-100 signal (the README's table is checked against these).
 XY2_PMOD_PINS = {"clk": 1, "sync": 2, "x": 3, "y": 4}
+#: PMOD1B pin of each host SPI signal, and its direction.
+SPI_PMOD_PINS = {"cs_n": (1, "i"), "copi": (2, "i"), "cipo": (3, "o"), "sck": (4, "i")}
 
 
 def icebreaker_platform():
@@ -40,6 +54,11 @@ def icebreaker_platform():
         Resource("xy2", 0,
                  *(Subsignal(name, Pins(str(pin), dir="o", conn=("pmod", 0)))
                    for name, pin in XY2_PMOD_PINS.items()),
+                 Attrs(IO_STANDARD="SB_LVCMOS")),
+        Resource("host_spi", 0,
+                 *(Subsignal(name, Pins(str(pin), dir=direction, conn=("pmod", 1)),
+                             Attrs(PULLUP=1) if name == "cs_n" else Attrs())
+                   for name, (pin, direction) in SPI_PMOD_PINS.items()),
                  Attrs(IO_STANDARD="SB_LVCMOS")),
     ])
     return platform
@@ -70,6 +89,19 @@ class ICEBreakerScanner(Elaboratable):
         for name in XY2_PMOD_PINS:
             m.submodules[f"xy2_{name}_pad"] = pad = io.FFBuffer("o", getattr(xy2, name))
             m.d.comb += pad.o.eq(getattr(scanner, f"xy2_{name}"))
+
+        # Host link. The cores synchronise their inputs, so plain buffers here.
+        uart = platform.request("uart", 0, dir="-")
+        spi = platform.request("host_spi", 0, dir="-")
+        inputs = {"uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n,
+                  "spi_copi": spi.copi}
+        outputs = {"uart_tx": uart.tx, "spi_cipo": spi.cipo}
+        for name, port in inputs.items():
+            m.submodules[f"{name}_pad"] = pad = io.Buffer("i", port)
+            m.d.comb += getattr(scanner, name).eq(pad.i)
+        for name, port in outputs.items():
+            m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
+            m.d.comb += pad.o.eq(getattr(scanner, name))
 
         running = Signal()
         with m.If(scanner.xy2_sync):

@@ -16,7 +16,7 @@ def test_signature():
     assert ScaleOffset().signature.members == wiring.SignatureMembers({
         "offsets": In(stream.Signature(OffsetPoint)),
         "positions": Out(stream.Signature(FieldPoint)),
-        "gain_x": In(16), "gain_y": In(16), "centre_x": In(16), "centre_y": In(16),
+        "amp_x": In(16), "amp_y": In(16), "center_x": In(16), "center_y": In(16),
         "clipped": Out(1),
     })
 
@@ -31,10 +31,10 @@ def run_points(vectors, *, sink_stalls=0):
 
     async def source(ctx):
         for ox, oy, gx, gy, cx, cy in vectors:
-            ctx.set(dut.gain_x, gx)
-            ctx.set(dut.gain_y, gy)
-            ctx.set(dut.centre_x, cx)
-            ctx.set(dut.centre_y, cy)
+            ctx.set(dut.amp_x, gx)
+            ctx.set(dut.amp_y, gy)
+            ctx.set(dut.center_x, cx)
+            ctx.set(dut.center_y, cy)
             ctx.set(dut.offsets.payload.x, ox)
             ctx.set(dut.offsets.payload.y, oy)
             ctx.set(dut.offsets.valid, 1)
@@ -42,8 +42,8 @@ def run_points(vectors, *, sink_stalls=0):
             clipped_seen.append(clipped)
             ctx.set(dut.offsets.valid, 0)
             # Registers change after the point was taken: it must not change the point.
-            ctx.set(dut.gain_x, 0)
-            ctx.set(dut.centre_x, 0)
+            ctx.set(dut.amp_x, 0)
+            ctx.set(dut.center_x, 0)
 
     async def sink(ctx):
         for _ in vectors:

@@ -37,14 +37,16 @@ def test_sequencer_rejects_bad_parameters():
 
 def test_top_ports_have_the_fixed_names():
     top = GalvoScanTop(clk_freq=12e6)
-    assert list(top.signature.members) == ["xy2_clk", "xy2_sync", "xy2_x", "xy2_y"]
+    assert list(top.signature.members) == [
+        "xy2_clk", "xy2_sync", "xy2_x", "xy2_y",
+        "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx"]
 
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"dwell": 0}, "dwell must be an integer from 1 to 65535"),
     ({"dwell": 70000}, "dwell must be"),
-    ({"gain_x": -1}, "gain_x must be"),
-    ({"centre_y": 65536}, "centre_y must be"),
+    ({"amp_x": -1}, "amp_x must be"),
+    ({"center_y": 65536}, "center_y must be"),
     ({"dwell": 2.5}, "dwell must be"),
 ])
 def test_settings_reject_bad_values(kwargs, message):
@@ -75,8 +77,8 @@ def replay(table, settings, points, *, clocks_per_bit=2):
 def expected(table, settings, points):
     return spiral_frames(table.x, table.y, points, dwell=settings.dwell,
                          x_range=settings.x_range, y_range=settings.y_range,
-                         gain=(settings.gain_x, settings.gain_y),
-                         centre=(settings.centre_x, settings.centre_y))
+                         gain=(settings.amp_x, settings.amp_y),
+                         centre=(settings.center_x, settings.center_y))
 
 
 @pytest.mark.slow
@@ -102,8 +104,8 @@ def test_dwell(dwell):
 
 def test_ranges_gain_centre_and_saturation():
     table = SpiralTable(sampling="uniform")
-    settings = ScanSettings(dwell=2, x_range=(10, 20), y_range=(3, 40), gain_x=50000,
-                            gain_y=16384, centre_x=60000, centre_y=1000)
+    settings = ScanSettings(dwell=2, x_range=(10, 20), y_range=(3, 40), amp_x=50000,
+                            amp_y=16384, center_x=60000, center_y=1000)
     frames = replay(table, settings, 120)
     assert frames == expected(table, settings, 120)
     # The X axis was pushed past the edge: it sits at 65535, it never wraps to small values.

@@ -7,11 +7,11 @@ from amaranth.lib.wiring import In, Out
 from ..points import FIELD_MAX, FieldPoint, OffsetPoint
 
 
-__all__ = ["ScaleOffset", "GAIN_ONE"]
+__all__ = ["ScaleOffset", "AMP_ONE"]
 
 
 #: The gain register value for a gain of 1.0: gains are unsigned Q1.15.
-GAIN_ONE = 1 << 15
+AMP_ONE = 1 << 15
 
 
 class ScaleOffset(wiring.Component):
@@ -30,10 +30,10 @@ class ScaleOffset(wiring.Component):
         Points from a position source, signed, 0 = field centre.
     positions : ``Out(stream.Signature(FieldPoint))``
         Points in galvo units for the PHY.
-    gain_x, gain_y : ``In(16)``
+    amp_x, amp_y : ``In(16)``
         Gain, unsigned Q1.15: 32768 = 1.0 (the table's full swing reaches the field edge),
         65535 ≈ 2.0. Sampled with each point.
-    centre_x, centre_y : ``In(16)``
+    center_x, center_y : ``In(16)``
         Centre of the pattern in galvo units (32768 = field centre). Sampled with each point.
     clipped : ``Out(1)``
         High for one clock when a point is taken that had to be clamped on either axis.
@@ -41,23 +41,30 @@ class ScaleOffset(wiring.Component):
 
     offsets: In(stream.Signature(OffsetPoint))
     positions: Out(stream.Signature(FieldPoint))
-    gain_x: In(16)
-    gain_y: In(16)
-    centre_x: In(16)
-    centre_y: In(16)
+    amp_x: In(16)
+    amp_y: In(16)
+    center_x: In(16)
+    center_y: In(16)
     clipped: Out(1)
 
     def elaborate(self, platform):
         m = Module()
 
-        def scale(offset, gain, centre):
-            # signed(16) × unsigned(16) → signed(33); >> is arithmetic, so this floors.
-            wide = centre + ((offset * gain) >> 15)
+        def scale(offset, amp, center):
+            # |offset| × amp is a 16 × 16 unsigned product, the size of an iCE40 DSP; the sign
+            # goes back on afterwards, rounding towards minus infinity like the formula.
+            negative = offset < 0
+            magnitude = Mux(negative, -offset, offset).as_unsigned()[:16]
+            product = magnitude * amp                     # unsigned(32)
+            whole = product >> 15
+            inexact = product[:15] != 0
+            step = Mux(negative, -(whole + inexact), whole)
+            wide = center + step
             low, high = wide < 0, wide > FIELD_MAX
             return Mux(low, 0, Mux(high, FIELD_MAX, wide)), low | high
 
-        x, clip_x = scale(self.offsets.payload.x, self.gain_x, self.centre_x)
-        y, clip_y = scale(self.offsets.payload.y, self.gain_y, self.centre_y)
+        x, clip_x = scale(self.offsets.payload.x, self.amp_x, self.center_x)
+        y, clip_y = scale(self.offsets.payload.y, self.amp_y, self.center_y)
 
         take = self.offsets.valid & self.offsets.ready
         m.d.comb += [

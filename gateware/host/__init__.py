@@ -1,0 +1,1 @@
+"""Host link: SPI and UART transports, the command decoder and the register file."""

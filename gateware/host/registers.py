@@ -1,0 +1,92 @@
+"""The register file: state the host writes and reads, built from the register map."""
+
+from amaranth.hdl import Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .regmap import REGISTERS
+
+
+__all__ = ["RegisterBus", "RegisterFile"]
+
+
+class RegisterBus(wiring.Signature):
+    """One access per clock, from the command decoder's side.
+
+    Members
+    -------
+    address : ``Out(7)``
+    write_data : ``Out(16)``
+    write_en : ``Out(1)``
+        Write ``write_data`` to ``address``; only done when ``write_ok``.
+    write_ok : ``In(1)``
+        ``address`` is a writable register and ``write_data`` is in its range.
+    read_data : ``In(16)``
+        The register at ``address``, now.
+    read_ok : ``In(1)``
+        ``address`` is a register.
+    """
+
+    def __init__(self):
+        super().__init__({
+            "address": Out(7),
+            "write_data": Out(16),
+            "write_en": Out(1),
+            "write_ok": In(1),
+            "read_data": In(16),
+            "read_ok": In(1),
+        })
+
+
+class RegisterFile(wiring.Component):
+    """Every register of :data:`~.regmap.REGISTERS`.
+
+    Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
+    on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
+    ``errors``) that the bus reads.
+
+    Parameters
+    ----------
+    resets : dict of str to int
+        Reset values that differ from the map's (the scan settings a build starts with).
+    highs : dict of str to int
+        Upper limits tighter than the map's (the table size bounds the address ranges).
+    """
+
+    def __init__(self, *, resets=None, highs=None):
+        self.resets = {r.name: r.reset for r in REGISTERS}
+        self.highs = {r.name: r.high for r in REGISTERS}
+        for name, value in (resets or {}).items():
+            if name not in self.resets:
+                raise ValueError(f"no register named {name!r}")
+            reg = next(r for r in REGISTERS if r.name == name)
+            if reg.access != "rw" or not reg.low <= value <= reg.high:
+                raise ValueError(f"reset value {value!r} of {name} is outside {reg.low}…{reg.high}")
+            self.resets[name] = value
+        for name, value in (highs or {}).items():
+            if name not in self.highs:
+                raise ValueError(f"no register named {name!r}")
+            self.highs[name] = min(self.highs[name], value)
+        members = {"bus": In(RegisterBus())}
+        for reg in REGISTERS:
+            if reg.access == "rw":
+                members[reg.name] = Out(reg.width, init=self.resets[reg.name])
+            else:
+                members[reg.name] = In(reg.width)
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        bus = self.bus
+        with m.Switch(bus.address):
+            for reg in REGISTERS:
+                with m.Case(reg.address):
+                    value = getattr(self, reg.name)
+                    m.d.comb += [bus.read_ok.eq(1), bus.read_data.eq(value)]
+                    if reg.access == "rw":
+                        in_range = (bus.write_data >= reg.low) & \
+                                   (bus.write_data <= self.highs[reg.name])
+                        m.d.comb += bus.write_ok.eq(in_range)
+                        with m.If(bus.write_en & in_range):
+                            m.d.sync += value.eq(bus.write_data)
+        return m

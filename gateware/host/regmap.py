@@ -1,0 +1,119 @@
+"""The register map: declared once, here. The gateware, the host client, ``galvoscan regs`` and
+the README's table are all made from (or checked against) this list.
+
+A command frame is four bytes, most significant first (SPEC §1, §4)::
+
+    address | data[15:8] | data[7:0] | 0x64
+
+Bit 7 of the address byte selects a read: ``0x80 | address, 0x00, 0x00, 0x64`` asks for a
+register, and the answer is a frame in the same format, ``address, data_hi, data_lo, 0x64``.
+A frame is accepted only if its check byte is 0x64, its address is known, the access is allowed
+(no writes to read-only registers, read requests carry zero data) and the value is in range;
+anything else changes nothing and counts in ``errors``.
+"""
+
+from dataclasses import dataclass
+
+
+__all__ = ["CHECK_BYTE", "READ_FLAG", "Register", "REGISTERS", "BY_NAME", "BY_ADDRESS",
+           "STATUS_BITS", "encode_frame", "decode_frame", "FrameError"]
+
+
+#: The last byte of every frame.
+CHECK_BYTE = 0x64
+#: Set in the address byte of a read request.
+READ_FLAG = 0x80
+
+
+@dataclass(frozen=True)
+class Register:
+    name: str
+    address: int
+    access: str          # "rw" or "ro"
+    reset: int
+    low: int             # smallest value a write may carry
+    high: int            # largest value a write may carry
+    unit: str
+    description: str
+    width: int = 16      # bits that hold state; the frame always carries 16
+
+    def as_dict(self):
+        return {"name": self.name, "address": self.address, "width": self.width,
+                "access": self.access, "reset": self.reset, "min": self.low, "max": self.high,
+                "unit": self.unit, "description": self.description}
+
+
+#: Bits of the ``status`` register.
+STATUS_BITS = {
+    "running": 0,       # the spiral is being swept
+    "clipped": 1,       # a point had to be clamped at the field edge since status was last read
+    "armed": 2,         # the arm register is set
+}
+
+
+REGISTERS = [
+    # --- read-only --------------------------------------------------------------------------
+    Register("status", 0x00, "ro", 0, 0, 0, "flags",
+             "bit 0 running, bit 1 a point was clamped at the field edge since the last read "
+             "of status (cleared by reading), bit 2 armed", width=3),
+    Register("errors", 0x01, "ro", 0, 0, 0, "frames",
+             "rejected command frames since reset (bad check byte, unknown address, write to "
+             "a read-only register, value out of range, cut short, UART framing error); "
+             "stops at 65535"),
+    # --- galvo group ------------------------------------------------------------------------
+    Register("mode", 0x02, "rw", 0, 0, 0, "enum",
+             "scan mode: 0 = spiral (raster and vector modes will take 1 and 2)", width=2),
+    Register("run", 0x03, "rw", 1, 0, 1, "bool",
+             "1 = sweep; 0 = stop (the mirrors hold the last point; the next start begins the "
+             "pattern again)", width=1),
+    Register("dwell", 0x04, "rw", 3, 1, 0xFFFF, "frames (10 µs)",
+             "frames each spiral point is held; 3 = 30 µs, the paper's figure"),
+    Register("amp_x", 0x05, "rw", 0x8000, 0, 0xFFFF, "Q1.15 (32768 = 1.0)",
+             "X amplitude: 32768 makes the table's full swing reach the field edge"),
+    Register("amp_y", 0x06, "rw", 0x8000, 0, 0xFFFF, "Q1.15 (32768 = 1.0)",
+             "Y amplitude"),
+    Register("center_x", 0x07, "rw", 0x8000, 0, 0xFFFF, "galvo units",
+             "X centre of the pattern (32768 = field centre)"),
+    Register("center_y", 0x08, "rw", 0x8000, 0, 0xFFFF, "galvo units",
+             "Y centre of the pattern"),
+    Register("x_first", 0x09, "rw", 0, 0, 127, "ROM address",
+             "first X table address walked (inclusive); if above x_last, X holds x_first",
+             width=7),
+    Register("x_last", 0x0A, "rw", 127, 0, 127, "ROM address",
+             "last X table address walked (inclusive)", width=7),
+    Register("y_first", 0x0B, "rw", 1, 0, 127, "ROM address",
+             "first Y table address walked (inclusive); the paper's 1…126 against X's 0…127 "
+             "makes the ellipse precess", width=7),
+    Register("y_last", 0x0C, "rw", 126, 0, 127, "ROM address",
+             "last Y table address walked (inclusive)", width=7),
+    # --- laser group ------------------------------------------------------------------------
+    Register("arm", 0x10, "rw", 0, 0, 1, "bool",
+             "1 = allow the laser controller to emit (no laser output exists yet)", width=1),
+    Register("laser_power", 0x11, "rw", 0, 0, 255, "1/255 of full power",
+             "laser power for DB25 pins 1-8 (consumed by the laser controller)", width=8),
+]
+
+BY_NAME = {r.name: r for r in REGISTERS}
+BY_ADDRESS = {r.address: r for r in REGISTERS}
+assert len(BY_NAME) == len(BY_ADDRESS) == len(REGISTERS)
+assert all(r.address < READ_FLAG for r in REGISTERS)
+
+
+class FrameError(ValueError):
+    """Bytes that are not a well-formed frame, or a value a register cannot take."""
+
+
+def encode_frame(address, data):
+    """The four bytes of a frame."""
+    if not 0 <= address <= 0xFF or not 0 <= data <= 0xFFFF:
+        raise FrameError(f"address {address} or data {data} does not fit a frame")
+    return bytes([address, data >> 8, data & 0xFF, CHECK_BYTE])
+
+
+def decode_frame(frame):
+    """``(address, data)`` of a four-byte frame with the right check byte."""
+    if len(frame) != 4:
+        raise FrameError(f"a frame is 4 bytes, not {len(frame)}")
+    if frame[3] != CHECK_BYTE:
+        raise FrameError(f"check byte {frame[3]:#04x}, not {CHECK_BYTE:#04x}")
+    return frame[0], (frame[1] << 8) | frame[2]

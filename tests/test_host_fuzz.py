@@ -1,0 +1,161 @@
+"""Random, truncated, corrupted and misaligned command streams (hypothesis) against a model of
+the command rules written here from SPEC §4: no register changes except by a valid frame, every
+rejected frame is counted, and the next valid frame after any garbage is accepted."""
+
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from galvoscan.client import HostClient
+from galvoscan.gateware.host.regmap import BY_ADDRESS, REGISTERS
+
+from sim_board import SimBoard, SimSPITransport, SimUARTTransport
+
+
+RW = [r for r in REGISTERS if r.access == "rw"]
+CHECK = 0x64
+
+
+class CommandModel:
+    """What the board must do with each complete 4-byte frame."""
+
+    def __init__(self):
+        self.values = {r.name: r.reset for r in RW}
+        self.errors = 0
+        self.replies = []            # (address, value or None for read-only registers)
+
+    def frame(self, frame):
+        address, data, check = frame[0], (frame[1] << 8) | frame[2], frame[3]
+        reg = BY_ADDRESS.get(address & 0x7F)
+        if check != CHECK or reg is None:
+            self.errors += 1
+        elif address & 0x80:
+            if data != 0:
+                self.errors += 1
+            else:
+                self.replies.append((reg.address, self.values.get(reg.name)))
+        elif reg.access != "rw" or not reg.low <= data <= reg.high:
+            self.errors += 1
+        else:
+            self.values[reg.name] = data
+
+    def cut_short(self):
+        self.errors += 1
+
+
+def frame_bytes(address, data, check=CHECK):
+    return bytes([address, data >> 8, data & 0xFF, check])
+
+
+rw_regs = st.sampled_from(RW)
+valid_write = rw_regs.flatmap(
+    lambda r: st.integers(r.low, r.high).map(lambda v: frame_bytes(r.address, v)))
+valid_read = st.sampled_from(REGISTERS).map(lambda r: frame_bytes(0x80 | r.address, 0))
+bad_check = st.tuples(valid_write, st.integers(0, 255).filter(lambda c: c != CHECK)).map(
+    lambda t: t[0][:3] + bytes([t[1]]))
+out_of_range = st.sampled_from([r for r in RW if r.high < 0xFFFF or r.low > 0]).flatmap(
+    lambda r: st.one_of(st.integers(r.high + 1, 0xFFFF) if r.high < 0xFFFF else st.nothing(),
+                        st.integers(0, r.low - 1) if r.low > 0 else st.nothing())
+    .map(lambda v: frame_bytes(r.address, v)))
+read_only_write = st.sampled_from([r for r in REGISTERS if r.access == "ro"]).flatmap(
+    lambda r: st.integers(0, 0xFFFF).map(lambda v: frame_bytes(r.address, v)))
+unknown = st.integers(0, 0xFF).filter(lambda a: (a & 0x7F) not in BY_ADDRESS).map(
+    lambda a: frame_bytes(a, 0))
+read_with_data = st.tuples(st.sampled_from(REGISTERS), st.integers(1, 0xFFFF)).map(
+    lambda t: frame_bytes(0x80 | t[0].address, t[1]))
+truncated = st.tuples(st.one_of(valid_write, valid_read), st.integers(1, 3)).map(
+    lambda t: t[0][:t[1]])
+noise = st.binary(min_size=1, max_size=9)
+
+pieces = st.one_of(valid_write, valid_read, bad_check, out_of_range, read_only_write, unknown,
+                   read_with_data, truncated, noise)
+
+
+def check_board(board_client, model, replies):
+    # The model's register values, read back by valid frames (which the model then sees too).
+    for reg in RW:
+        assert board_client.read(reg.name) == model.values[reg.name], reg.name
+    for reg in RW:
+        model.frame(frame_bytes(0x80 | reg.address, 0))
+    assert board_client.read("errors") == model.errors
+    # Every answer the board gave was to a read the model accepted, in order, with its value.
+    assert len(replies) == len(model.replies[:len(replies)])
+    for (address, value), answer in zip(model.replies, replies):
+        assert answer[0] == address and answer[3] == CHECK
+        if value is not None:
+            assert (answer[1] << 8) | answer[2] == value
+
+
+fuzz_settings = settings(max_examples=20, deadline=None,
+                         suppress_health_check=[HealthCheck.too_slow])
+
+
+@fuzz_settings
+@given(st.lists(st.tuples(pieces, st.booleans()), min_size=1, max_size=8), valid_write)
+def test_uart_garbage(stream, then):
+    board = SimBoard()
+    link = SimUARTTransport(board)
+    model = CommandModel()
+
+    pending = b""
+    for data, pause in stream:
+        link.queue(data, pause=pause)
+        for byte in data:
+            pending += bytes([byte])
+            if len(pending) == 4:
+                model.frame(pending)
+                pending = b""
+        if pause and pending:
+            model.cut_short()
+            pending = b""
+    if pending:
+        link.queue(b"")                     # the pause that ends it
+        model.cut_short()
+    link.flush()
+    # Let the answers to the reads in the stream finish going out (up to four are queued).
+    board.run_for(5 * 4 * 10 * board.bit_time)
+    answers_before = bytes(board.uart_from_board)
+
+    # The next valid frame is accepted.
+    link.write_frame(then)
+    model.frame(then)
+    replies = [answers_before[i:i + 4] for i in range(0, len(answers_before), 4)]
+    assert len(answers_before) % 4 == 0 and board.uart_framing_errors == 0
+    check_board(HostClient(link), model, replies)
+
+
+spi_transactions = st.one_of(
+    pieces.map(lambda data: [(b >> (7 - i)) & 1 for b in data for i in range(8)]),
+    st.lists(st.integers(0, 1), max_size=40),
+)
+
+
+@fuzz_settings
+@given(st.lists(spi_transactions, min_size=1, max_size=8), valid_write)
+def test_spi_garbage(transactions, then):
+    board = SimBoard()
+    link = SimSPITransport(board)
+    model = CommandModel()
+    pending_reply = None
+    for bits in transactions:
+        cipo = link.transfer_bits(bits)
+        # CIPO carries the answer to the last accepted read (or zeros), then zeros.
+        want = [0] * 32
+        if pending_reply is not None:
+            address, value = pending_reply
+            word = (address << 24) | ((value or 0) << 8) | CHECK
+            want = [(word >> (31 - i)) & 1 for i in range(32)]
+        if pending_reply is not None and pending_reply[1] is None:
+            assert cipo[:8] == want[:8] and cipo[24:32] == want[24:32]
+        else:
+            assert cipo == (want + [0] * len(bits))[:len(bits)]
+        replies_before = len(model.replies)
+        pending_reply = None
+        if len(bits) == 32:
+            model.frame(bytes(int("".join(map(str, bits[i:i + 8])), 2) for i in range(0, 32, 8)))
+        else:
+            model.cut_short()
+        if len(model.replies) > replies_before:
+            pending_reply = model.replies[-1]
+
+    link.write_frame(then)
+    model.frame(then)
+    check_board(HostClient(link), model, [])
