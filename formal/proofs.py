@@ -4,10 +4,11 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..gateware.phy.xy2_100 import FRAME_BITS, XY2Transmitter
+from .command import CommandPathSpec
 from .xy2_100 import XY2TransmitterSpec
 
 
-__all__ = ["Proof", "PROOFS", "xy2_phy_proof"]
+__all__ = ["Proof", "PROOFS", "xy2_phy_proof", "command_path_proof"]
 
 
 @dataclass(frozen=True)
@@ -18,6 +19,7 @@ class Proof:
     harness: Callable[[], object]   # builds a fresh harness
     depth: int                      # k-induction depth (system clocks)
     cover_depth: int
+    cover_skip: int = 0             # clocks before any cover can be reached
 
 
 def xy2_phy_proof(clocks_per_bit, *, make_phy=None, name=None):
@@ -47,9 +49,29 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, name=None):
         cover_depth=2 * frame + 10)
 
 
+def command_path_proof(*, make_spi=None, make_decoder=None, name="command_path"):
+    """SPI pins → decoder → register file: no write without a complete frame with 0x64.
+
+    Helper invariants make a short induction enough. A write needs a whole 32-bit frame through
+    the synchronisers, 67 clocks at the least, so covers are not searched before clock 66.
+    """
+    kwargs = {}
+    if make_spi is not None:
+        kwargs["make_spi"] = make_spi
+    if make_decoder is not None:
+        kwargs["make_decoder"] = make_decoder
+    return Proof(
+        name=name,
+        description="command path: a register is written only by a complete SPI frame with "
+                    "check byte 0x64; cs_n released mid-frame discards it",
+        harness=lambda: CommandPathSpec(**kwargs),
+        depth=8, cover_depth=74, cover_skip=66)
+
+
 PROOFS = [
     # The smallest divider, as simulated.
     xy2_phy_proof(2),
     # The iCEBreaker's 12 MHz system clock.
     xy2_phy_proof(6),
+    command_path_proof(),
 ]

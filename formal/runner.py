@@ -25,6 +25,7 @@ prove: mode prove
 prove: depth {depth}
 cover: mode cover
 cover: depth {cover_depth}
+cover: skip {cover_skip}
 multiclock off
 
 [engines]
@@ -55,9 +56,12 @@ class ProofResult:
         return self.status == "PASS"
 
 
-def run_sby(harness, name, workdir, *, depth, cover_depth, tasks=("prove", "cover"),
-            timeout=1800):
+def run_sby(harness, name, workdir, *, depth, cover_depth, cover_skip=0,
+            tasks=("prove", "cover"), timeout=1800):
     """Prove ``harness`` (an elaboratable with Assert/Cover) and reach its covers.
+
+    ``cover_skip`` clocks are not searched for covers: a cover that needs a whole command frame
+    cannot be reached sooner, and proving that step by step is what takes a solver long.
 
     Files go to ``workdir/name``; YoWASP tools cannot see absolute paths outside their working
     folder, so they run with it as ``cwd`` and relative paths. Returns the prove and cover
@@ -67,7 +71,8 @@ def run_sby(harness, name, workdir, *, depth, cover_depth, tasks=("prove", "cove
     folder.mkdir(parents=True, exist_ok=True)
     (folder / f"{name}.il").write_text(rtlil.convert(harness, name=name, platform="formal", ports=[ClockSignal("sync")]))
     (folder / f"{name}.sby").write_text(
-        _SBY_TEMPLATE.format(name=name, depth=depth, cover_depth=cover_depth))
+        _SBY_TEMPLATE.format(name=name, depth=depth, cover_depth=cover_depth,
+                             cover_skip=cover_skip))
 
     results = []
     for task in tasks:

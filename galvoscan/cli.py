@@ -159,7 +159,7 @@ def _cmd_prove(args):
     for proof in selected:
         print(f"proving {proof.name} (depth {proof.depth}) …", file=sys.stderr, flush=True)
         for result in run_sby(proof.harness(), proof.name, args.workdir, depth=proof.depth,
-                              cover_depth=proof.cover_depth):
+                              cover_depth=proof.cover_depth, cover_skip=proof.cover_skip):
             rows.append(result)
             print(f"  {result.task:5s} {result.status} in {result.seconds:.1f} s",
                   file=sys.stderr, flush=True)
@@ -198,6 +198,107 @@ def _cmd_export(args):
     ports = ", ".join(["clk", "rst", *top.signature.members])
     print(f"wrote {args.output}: module {args.name} ({ports}) for a "
           f"{args.clk_freq / 1e6:g} MHz clock")
+
+
+# --- registers and the host link --------------------------------------------------------------
+
+def _cmd_regs(args):
+    from .gateware.host.regmap import REGISTERS
+    if args.json:
+        print(json.dumps([r.as_dict() for r in REGISTERS], indent=2, ensure_ascii=False))
+        return
+    print(register_table())
+
+
+def register_table():
+    """The register map as a Markdown table (``galvoscan regs``; the README carries it)."""
+    from .gateware.host.regmap import REGISTERS
+    lines = ["| address | name | access | reset | range | unit | description |",
+             "|---|---|---|---|---|---|---|"]
+    for r in REGISTERS:
+        span = f"{r.low}…{r.high}" if r.access == "rw" else "—"
+        lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {r.reset} | {span} | "
+                     f"{r.unit} | {r.description} |")
+    return "\n".join(lines)
+
+
+def _frames_from(args):
+    from .client import ClientError, encode_read, encode_write, parse_assignment
+    try:
+        if args.read:
+            return [(name, encode_read(name)) for name in args.items]
+        frames = []
+        for item in args.items:
+            name, value = parse_assignment(item)
+            frames.append((f"{name}={value}", encode_write(name, value)))
+        return frames
+    except ClientError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+
+
+def _cmd_encode(args):
+    for _, frame in _frames_from(args):
+        print(frame.hex(" "))
+
+
+def _open_link(args):
+    from .client import ClientError, FTDISPITransport, SerialTransport
+    try:
+        if args.spi:
+            return FTDISPITransport(args.spi, frequency=args.sck)
+        return SerialTransport(args.port, baud=args.baud, timeout=args.timeout)
+    except ClientError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+    except Exception as error:   # serial.SerialException and the like: say what failed
+        raise SystemExit(f"galvoscan: error: cannot open {args.spi or args.port}: {error}")
+
+
+def _cmd_send(args):
+    from .client import ClientError, HostClient, parse_assignment
+    try:
+        assignments = [parse_assignment(item) for item in args.items]
+    except ClientError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+    with _open_link(args) as link:
+        board = HostClient(link)
+        try:
+            for name, value in assignments:
+                if args.verify:
+                    board.write_verified(name, value)
+                else:
+                    board.write(name, value)
+                print(f"{name} = {value}{' (read back)' if args.verify else ''}")
+        except ClientError as error:
+            raise SystemExit(f"galvoscan: error: {error}")
+
+
+def _cmd_read(args):
+    from .client import ClientError, HostClient
+    from .gateware.host.regmap import BY_NAME
+    with _open_link(args) as link:
+        board = HostClient(link)
+        try:
+            values = {name: board.read(name) for name in args.names}
+        except ClientError as error:
+            raise SystemExit(f"galvoscan: error: {error}")
+    if args.json:
+        print(json.dumps(values))
+    else:
+        for name, value in values.items():
+            print(f"{name} = {value} ({BY_NAME[name].unit})")
+
+
+def _add_link_options(parser):
+    link = parser.add_argument_group("link (one of)")
+    where = link.add_mutually_exclusive_group(required=True)
+    where.add_argument("--port", help="serial port of the board (e.g. /dev/ttyUSB1, COM4)")
+    where.add_argument("--spi", metavar="URL", help="pyftdi URL of an FTDI SPI adapter "
+                                                    "(e.g. ftdi://ftdi:2232h/1)")
+    link.add_argument("--baud", type=_int_in(300, 12_000_000, "baud"), default=115_200,
+                      help="serial rate of the bitstream (default: %(default)s)")
+    link.add_argument("--timeout", type=float, default=0.5, help="seconds to wait for an answer")
+    link.add_argument("--sck", type=float, default=1e6, metavar="HZ",
+                      help="SPI clock, at most the board clock / 12 (default: 1e6)")
 
 
 # --- main ----------------------------------------------------------------------------------------
@@ -253,6 +354,35 @@ def _parser():
     prove.add_argument("--only", nargs="+", metavar="NAME", help="run only these proofs")
     prove.add_argument("--json", action="store_true", help="print the results as JSON")
     prove.set_defaults(run=_cmd_prove)
+
+    regs = commands.add_parser("regs", help="print the register map",
+                               description="The register map: addresses, access, reset "
+                                           "values, ranges and units.")
+    regs.add_argument("--json", action="store_true",
+                      help="[{name, address, width, access, reset, min, max, unit, description}]")
+    regs.set_defaults(run=_cmd_regs)
+
+    encode = commands.add_parser(
+        "encode", help="print command frames as hex bytes",
+        description="Print the 4-byte frames (hex, one frame a line) that write or read "
+                    "registers, for any other tool or microcontroller to send.")
+    encode.add_argument("--read", action="store_true", help="read requests for NAMEs")
+    encode.add_argument("items", nargs="+", metavar="NAME=VALUE | NAME")
+    encode.set_defaults(run=_cmd_encode)
+
+    send = commands.add_parser("send", help="write registers on a board",
+                               description="Write registers over the serial port or SPI.")
+    send.add_argument("items", nargs="+", metavar="NAME=VALUE")
+    send.add_argument("--verify", action="store_true", help="read each value back")
+    _add_link_options(send)
+    send.set_defaults(run=_cmd_send)
+
+    read = commands.add_parser("read", help="read registers from a board",
+                               description="Read registers over the serial port or SPI.")
+    read.add_argument("names", nargs="+", metavar="NAME")
+    read.add_argument("--json", action="store_true", help="print {name: value}")
+    _add_link_options(read)
+    read.set_defaults(run=_cmd_read)
 
     export = commands.add_parser("export", help="export the system top as plain Verilog",
                                  description="Export the system top for use in other designs.")

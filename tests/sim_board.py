@@ -33,6 +33,9 @@ class SimBoard:
         self.sim.add_testbench(self._uart_host_tx, background=True)
         self.sim.add_testbench(self._uart_host_rx, background=True)
         self.sim.add_testbench(self._spi_host, background=True)
+        # Start the processes now, in this thread (a simulator never run leaves its testbench
+        # coroutines un-awaited, which Python reports at garbage collection).
+        self.run_for(1 / clk_freq)
 
     # --- processes ---------------------------------------------------------------------------
 

@@ -114,3 +114,39 @@ def test_build_icebreaker(tmp_path, capsys):
     assert report["meets_timing"] and report["fmax_mhz"] >= 1.5 * 12
     assert report["brams"] == 2                                 # the two spiral ROMs
     assert 0 < report["luts"] < report["luts_available"]
+
+
+def test_regs_json_is_the_map(capsys):
+    from galvoscan.gateware.host.regmap import REGISTERS
+    code, out, _ = run(capsys, "regs", "--json")
+    assert code == 0
+    entries = json.loads(out)
+    assert [e["name"] for e in entries] == [r.name for r in REGISTERS]
+    for entry in entries:
+        assert {"name", "address", "width", "access", "reset", "unit", "description"} <= set(entry)
+    names = {e["name"] for e in entries}
+    assert {"mode", "run", "arm", "dwell", "amp_x", "amp_y", "center_x", "center_y", "x_first",
+            "x_last", "y_first", "y_last", "laser_power", "status", "errors"} <= names
+    assert len({e["address"] for e in entries}) == len(entries)
+
+
+def test_encode_prints_frames(capsys):
+    code, out, _ = run(capsys, "encode", "dwell=5", "center_y=0xABCD")
+    assert code == 0
+    # dwell is at 0x04, center_y at 0x08 (the map); data MSB first; check byte 0x64.
+    assert out.splitlines() == ["04 00 05 64", "08 ab cd 64"]
+    code, out, _ = run(capsys, "encode", "--read", "status", "y_last")
+    assert out.splitlines() == ["80 00 00 64", "8c 00 00 64"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["encode", "dwell=0"], "dwell takes an integer from 1 to 65535"),
+    (["encode", "dwell=five"], "is not an integer"),
+    (["encode", "status=1"], "status is read-only"),
+    (["encode", "--read", "speed"], "no register named"),
+    (["send", "dwell=3"], "one of the arguments --port --spi is required"),
+])
+def test_host_commands_reject_bad_input(argv, message, capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(argv)
+    assert message in str(exit.value.code) + capsys.readouterr().err

@@ -5,16 +5,18 @@ import re
 
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
-from galvoscan.platforms.icebreaker import XY2_PMOD_PINS
+from galvoscan.cli import register_table
+from galvoscan.platforms.icebreaker import SPI_PMOD_PINS, XY2_PMOD_PINS
 
 
 ROOT = Path(__file__).parent.parent
 README = (ROOT / "README.md").read_text()
 
 
-def pmod1a_fpga_pin(pmod_pin):
-    """FPGA pin of a PMOD1A pin, from amaranth-boards' iCEBreaker definition."""
-    connector, = (c for c in ICEBreakerPlatform.connectors if (c.name, c.number) == ("pmod", 0))
+def pmod_fpga_pin(number, pmod_pin):
+    """FPGA pin of a PMOD pin, from amaranth-boards' iCEBreaker definition."""
+    connector, = (c for c in ICEBreakerPlatform.connectors
+                  if (c.name, c.number) == ("pmod", number))
     return int(connector.mapping[str(pmod_pin)])
 
 
@@ -22,7 +24,19 @@ def test_pin_table_matches_the_platform():
     rows = re.findall(r"^\| (\d+) \| (\d+) \| `xy2_(\w+)` \|$", README, re.M)
     assert {signal: int(pmod) for pmod, _, signal in rows} == XY2_PMOD_PINS
     for pmod, fpga, _ in rows:
-        assert pmod1a_fpga_pin(pmod) == int(fpga)
+        assert pmod_fpga_pin(0, pmod) == int(fpga)
+
+
+def test_spi_pin_table_matches_the_platform():
+    rows = re.findall(r"^\| (\d+) \| (\d+) \| `spi_(\w+)`", README, re.M)
+    assert {signal: int(pmod) for pmod, _, signal in rows} == \
+        {name: pin for name, (pin, _) in SPI_PMOD_PINS.items()}
+    for pmod, fpga, _ in rows:
+        assert pmod_fpga_pin(1, pmod) == int(fpga)
+
+
+def test_register_table_is_the_register_map():
+    assert register_table() in README
 
 
 def test_ci_runs_the_readme_test_command():
