@@ -90,7 +90,9 @@ class SimBoard:
             if not self.spi_queue:
                 await ctx.delay(5e-6)
                 continue
-            bits, results, half_period = self.spi_queue.popleft()
+            bits, results, half_period, phase = self.spi_queue.popleft()
+            if phase:
+                await ctx.delay(phase)      # the host's clock is not the board's
             ctx.set(top.spi_cs_n, 0)
             for bit in bits:
                 ctx.set(top.spi_copi, bit)
@@ -167,13 +169,15 @@ class SimSPITransport:
     """Frames clocked in on ``spi_copi`` with SCK at ``clk_freq / clocks_per_sck``; the answer
     to a read is clocked out during the next frame (a read of ``errors``)."""
 
-    def __init__(self, board, *, clocks_per_sck=12):
+    def __init__(self, board, *, clocks_per_sck=12, phase=0.37):
         self.board = board
         self.half_period = clocks_per_sck / board.clk_freq / 2
+        # Offset of the host's SCK edges from the board's clock edges, in board clocks.
+        self.phase = phase / board.clk_freq
 
     def transfer_bits(self, bits):
         results = []
-        self.board.spi_queue.append((list(bits), results, self.half_period))
+        self.board.spi_queue.append((list(bits), results, self.half_period, self.phase))
         self.board.run_until(lambda: results and results[-1] == "done", timeout=0.01)
         return results[:-1]
 

@@ -155,3 +155,25 @@ def test_spi_frames_of_the_wrong_length_are_discarded_whole():
     assert client.read("errors") == 3
     link.transfer_bits(bits)
     assert client.read("dwell") == 13
+
+
+@pytest.mark.parametrize("phase", [0.0, 0.2, 0.5, 0.9])
+def test_spi_at_1mhz_on_the_boards_12mhz_clock(phase):
+    """The stated maximum: SCK = system clock / 12, at any phase to the system clock."""
+    board = SimBoard(clk_freq=12e6)
+    link = SimSPITransport(board, clocks_per_sck=12, phase=phase)
+    assert link.half_period == pytest.approx(0.5e-6)          # 1 MHz
+    client = HostClient(link)
+    for name, value in (("dwell", 0xBEEF), ("center_y", 0x1234), ("amp_x", 0x8001)):
+        client.write(name, value)
+        assert client.read(name) == value
+    assert client.read("errors") == 0
+
+
+@pytest.mark.parametrize("clk_freq, baud", [(4e6, 115_200), (12e6, 115_200), (12e6, 1_000_000)])
+def test_uart_rates(clk_freq, baud):
+    board = SimBoard(clk_freq=clk_freq, baud=baud)
+    client = HostClient(SimUARTTransport(board))
+    client.write("dwell", 0x4321)
+    assert client.read("dwell") == 0x4321
+    assert client.read("errors") == 0
