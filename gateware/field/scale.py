@@ -1,6 +1,6 @@
 """Scale and offset: source offsets to galvo positions, saturating (SPEC §3, §4)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Module, Mux
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -10,14 +10,14 @@ from ..points import FIELD_MAX, FieldPoint, OffsetPoint
 __all__ = ["ScaleOffset", "AMP_ONE"]
 
 
-#: The gain register value for a gain of 1.0: gains are unsigned Q1.15.
+#: The amplitude register value for a gain of 1.0: amplitudes are unsigned Q1.15.
 AMP_ONE = 1 << 15
 
 
 class ScaleOffset(wiring.Component):
-    """Per-axis gain and centre, saturating at the field edges.
+    """Per-axis amplitude and centre, saturating at the field edges.
 
-    For each axis ``position = clamp(centre + floor(offset × gain / 32768), 0, 65535)``. A
+    For each axis ``position = clamp(center + floor(offset × amp / 32768), 0, 65535)``. A
     point that had to be clamped is still sent, at the field edge, and flagged on
     :attr:`clipped`: positions never wrap around.
 
@@ -31,7 +31,7 @@ class ScaleOffset(wiring.Component):
     positions : ``Out(stream.Signature(FieldPoint))``
         Points in galvo units for the PHY.
     amp_x, amp_y : ``In(16)``
-        Gain, unsigned Q1.15: 32768 = 1.0 (the table's full swing reaches the field edge),
+        Amplitude, unsigned Q1.15: 32768 = 1.0 (the table's full swing reaches the field edge),
         65535 ≈ 2.0. Sampled with each point.
     center_x, center_y : ``In(16)``
         Centre of the pattern in galvo units (32768 = field centre). Sampled with each point.

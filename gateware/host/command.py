@@ -1,6 +1,6 @@
 """Command decoder: checks each frame and turns it into a register write or a read reply."""
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.hdl import Cat, Const, Module, Mux
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
