@@ -32,7 +32,7 @@ def _register(name):
 def encode_write(name, value):
     """The frame that writes ``value`` to register ``name``; checked against the map."""
     reg = _register(name)
-    if reg.access != "rw":
+    if reg.access == "ro":
         raise ClientError(f"{name} is read-only")
     if isinstance(value, bool) or not isinstance(value, int) or not reg.low <= value <= reg.high:
         raise ClientError(f"{name} takes an integer from {reg.low} to {reg.high} ({reg.unit}), "

@@ -2,8 +2,9 @@
 
 Its ports are plain one-bit wires with fixed names, so the exported Verilog drops into other
 designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_clk``,
-``xy2_sync``, ``xy2_x``, ``xy2_y``, and the host link ``spi_sck``, ``spi_cs_n``, ``spi_copi``,
-``spi_cipo``, ``uart_rx``, ``uart_tx``.
+``xy2_sync``, ``xy2_x``, ``xy2_y``, the host link ``spi_sck``, ``spi_cs_n``, ``spi_copi``,
+``spi_cipo``, ``uart_rx``, ``uart_tx``, and the laser's DB25 signals ``laser_power[7:0]``,
+``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr`` with the ``interlock_open`` input.
 """
 
 from amaranth.hdl import Module, Signal
@@ -17,6 +18,7 @@ from .host.regmap import STATUS_BITS
 from .host.spi_target import SPITarget
 from .host.uart import uart_divisor
 from .host.uart_port import UARTCommandPort
+from .laser.controller import FAULT_BITS, LaserController
 from .phy.xy2_100 import XY2Transmitter, clocks_per_bit
 from .points import FIELD_CENTRE
 from .sources.spiral import SpiralSequencer
@@ -105,6 +107,8 @@ class GalvoScanTop(wiring.Component):
         Spiral angle tables (default: 128 Gaussian-sampled points).
     settings : :class:`ScanSettings`
         What the scan registers reset to.
+    mo_lead : float
+        Seconds the laser's master oscillator leads emission (5 ms, as the paper).
 
     Interface attributes
     --------------------
@@ -114,6 +118,10 @@ class GalvoScanTop(wiring.Component):
         SPI target, mode 0, SCK up to ``clk_freq / 12``.
     uart_rx : ``In(1)``; uart_tx : ``Out(1)``
         Serial port, 8N1 at ``baud``.
+    laser_power : ``Out(8)``; laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
+        DB25 pins 1-8, 9, 18, 19, 20 of a fiber laser (through 5 V TTL buffers).
+    interlock_open : ``In(1, init=1)``
+        1 = interlock open (give the pin a pull-up, so a broken loop reads open).
     """
 
     xy2_clk: Out(1)
@@ -126,9 +134,15 @@ class GalvoScanTop(wiring.Component):
     spi_cipo: Out(1)
     uart_rx: In(1, init=1)
     uart_tx: Out(1, init=1)
+    laser_power: Out(8)
+    laser_latch: Out(1)
+    laser_mo: Out(1)
+    laser_am: Out(1)
+    laser_prr: Out(1)
+    interlock_open: In(1, init=1)
 
     def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
-                 settings=None):
+                 settings=None, mo_lead=5e-3):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -139,6 +153,9 @@ class GalvoScanTop(wiring.Component):
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
         clocks_per_bit(clk_freq, bit_rate)
         self.uart_divisor = uart_divisor(clk_freq, baud)
+        if not mo_lead > 0:
+            raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
+        self.mo_lead = mo_lead
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -199,6 +216,34 @@ class GalvoScanTop(wiring.Component):
             self.xy2_y.eq(phy.xy2_y),
         ]
 
+        # --- laser --------------------------------------------------------------------------
+        m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
+                                                     mo_lead=self.mo_lead)
+        # Marking: the spiral is running and has put out its first point (not parked).
+        marking = Signal()
+        with m.If(~spiral.run):
+            m.d.sync += marking.eq(0)
+        with m.Elif(spiral.points.valid & spiral.points.ready):
+            m.d.sync += marking.eq(1)
+        m.d.comb += [
+            laser.arm.eq(regs.arm),
+            laser.power.eq(regs.laser_power),
+            laser.prr.eq(regs.laser_prr),
+            laser.watchdog_ms.eq(regs.watchdog),
+            laser.alive.eq(decoder.accepted),
+            laser.fault_clear.eq(regs.fault_clear),
+            laser.marking.eq(marking),
+            laser.interlock_open.eq(self.interlock_open),
+            self.laser_power.eq(laser.laser_power),
+            self.laser_latch.eq(laser.laser_latch),
+            self.laser_mo.eq(laser.laser_mo),
+            self.laser_am.eq(laser.laser_am),
+            self.laser_prr.eq(laser.laser_prr),
+        ]
+        pulses = Signal(16)
+        with m.If(laser.pulse):
+            m.d.sync += pulses.eq(pulses + 1)
+
         # --- status -------------------------------------------------------------------------
         clipped_since_read = Signal()
         with m.If(scale.clipped):
@@ -209,6 +254,12 @@ class GalvoScanTop(wiring.Component):
             regs.status[STATUS_BITS["running"]].eq(spiral.run),
             regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
             regs.status[STATUS_BITS["armed"]].eq(regs.arm),
+            regs.status[STATUS_BITS["fault_interlock"]].eq(laser.faults[FAULT_BITS["interlock"]]),
+            regs.status[STATUS_BITS["fault_watchdog"]].eq(laser.faults[FAULT_BITS["watchdog"]]),
+            regs.status[STATUS_BITS["mo_on"]].eq(laser.laser_mo),
+            regs.status[STATUS_BITS["emitting"]].eq(laser.laser_am),
+            regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
             regs.errors.eq(decoder.errors),
+            regs.pulses.eq(pulses),
         ]
         return m

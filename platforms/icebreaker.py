@@ -26,6 +26,22 @@ PMOD  FPGA pin  signal
 4     31        spi_sck
 ====  ========  ===========
 
+The fiber laser's DB25 signals (3.3 V here: the laser wants 5 V TTL, so buffer them with a
+74HCT245 or 74AHCT125 run from 5 V, whose inputs take 3.3 V logic; remove the iCEBreaker's
+button/LED snap-off board from PMOD2):
+
+=============  ========  =================  =========
+PMOD pin       FPGA pin  signal             DB25 pin
+=============  ========  =================  =========
+PMOD2 1-4      27 25 21 19  laser_power[0:4]   1-4
+PMOD2 7-10     26 23 20 18  laser_power[4:8]   5-8
+PMOD1A 7       3         laser_latch        9
+PMOD1A 8       48        laser_mo           18
+PMOD1A 9       46        laser_am           19
+PMOD1A 10      44        laser_prr          20
+PMOD1B 7       42        interlock_open     (loop; pulled up: a broken loop reads open)
+=============  ========  =================  =========
+
 The red LED lights once frames are going out. The four bus lines leave through the I/O cells'
 output flip-flops, one system clock after the PHY's own registers.
 """
@@ -38,13 +54,24 @@ from amaranth_boards.icebreaker import ICEBreakerPlatform
 from ..gateware.top import GalvoScanTop
 
 
-__all__ = ["ICEBreakerScanner", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS"]
+__all__ = ["ICEBreakerScanner", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
+           "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN"]
 
 
 #: PMOD1A pin of each XY2-100 signal (the README's table is checked against these).
 XY2_PMOD_PINS = {"clk": 1, "sync": 2, "x": 3, "y": 4}
 #: PMOD1B pin of each host SPI signal, and its direction.
 SPI_PMOD_PINS = {"cs_n": (1, "i"), "copi": (2, "i"), "cipo": (3, "o"), "sck": (4, "i")}
+#: Laser signals: name → (PMOD number, PMOD pins, DB25 pins).
+LASER_PMOD_PINS = {
+    "power": (2, "1 2 3 4 7 8 9 10", "1-8"),
+    "latch": (0, "7", "9"),
+    "mo": (0, "8", "18"),
+    "am": (0, "9", "19"),
+    "prr": (0, "10", "20"),
+}
+#: The interlock loop input: (PMOD number, PMOD pin).
+INTERLOCK_PMOD_PIN = (1, "7")
 
 
 def icebreaker_platform():
@@ -60,6 +87,13 @@ def icebreaker_platform():
                              Attrs(PULLUP=1) if name == "cs_n" else Attrs())
                    for name, (pin, direction) in SPI_PMOD_PINS.items()),
                  Attrs(IO_STANDARD="SB_LVCMOS")),
+        Resource("laser", 0,
+                 *(Subsignal(name, Pins(pins, dir="o", conn=("pmod", pmod)))
+                   for name, (pmod, pins, _) in LASER_PMOD_PINS.items()),
+                 Attrs(IO_STANDARD="SB_LVCMOS")),
+        Resource("interlock", 0,
+                 Pins(INTERLOCK_PMOD_PIN[1], dir="i", conn=("pmod", INTERLOCK_PMOD_PIN[0])),
+                 Attrs(IO_STANDARD="SB_LVCMOS", PULLUP=1)),
     ])
     return platform
 
@@ -102,6 +136,16 @@ class ICEBreakerScanner(Elaboratable):
         for name, port in outputs.items():
             m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
             m.d.comb += pad.o.eq(getattr(scanner, name))
+
+        # Laser. Plain buffers, no I/O flip-flops: the interlock pin gates MO, modulation and
+        # PRR inside the core without a clock, and that must reach the pins as it is.
+        laser = platform.request("laser", 0, dir="-")
+        for name in LASER_PMOD_PINS:
+            m.submodules[f"laser_{name}_pad"] = pad = io.Buffer("o", getattr(laser, name))
+            m.d.comb += pad.o.eq(getattr(scanner, f"laser_{name}"))
+        m.submodules.interlock_pad = interlock = io.Buffer(
+            "i", platform.request("interlock", 0, dir="-"))
+        m.d.comb += scanner.interlock_open.eq(interlock.i)
 
         running = Signal()
         with m.If(scanner.xy2_sync):

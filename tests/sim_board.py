@@ -14,7 +14,8 @@ from wires import frames_from_samples
 
 
 class SimBoard:
-    def __init__(self, *, clk_freq=4e6, baud=500_000, **top_kwargs):
+    def __init__(self, *, clk_freq=4e6, baud=500_000, interlock_closed=True, record_laser=False,
+                 **top_kwargs):
         self.top = top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
         self.clk_freq = clk_freq
         self.bit_time = 1 / baud
@@ -33,6 +34,12 @@ class SimBoard:
         self.sim.add_testbench(self._uart_host_tx, background=True)
         self.sim.add_testbench(self._uart_host_rx, background=True)
         self.sim.add_testbench(self._spi_host, background=True)
+        self.interlock_closed = interlock_closed
+        self.sim.add_testbench(self._interlock, background=True)
+        #: (laser_mo, laser_am, laser_prr, interlock_open) on every clock, if recorded.
+        self.laser_pins = []
+        if record_laser:
+            self.sim.add_testbench(self._laser_recorder, background=True)
         # Start the processes now, in this thread (a simulator never run leaves its testbench
         # coroutines un-awaited, which Python reports at garbage collection).
         self.run_for(1 / clk_freq)
@@ -47,6 +54,19 @@ class SimBoard:
             if not sync:
                 # The end of the run_for() step in which the frame ended.
                 self.parity_times.append(self.now)
+
+    async def _laser_recorder(self, ctx):
+        top = self.top
+        while True:
+            self.laser_pins.append((ctx.get(top.laser_mo), ctx.get(top.laser_am),
+                                    ctx.get(top.laser_prr), ctx.get(top.interlock_open)))
+            await ctx.tick()
+
+    async def _interlock(self, ctx):
+        # The interlock loop; a test opens or closes it by setting `interlock_closed`.
+        while True:
+            ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
+            await ctx.delay(1e-6)
 
     async def _uart_host_tx(self, ctx):
         ctx.set(self.top.uart_rx, 1)
@@ -109,6 +129,8 @@ class SimBoard:
     # --- driving the simulation ------------------------------------------------------------------
 
     def run_for(self, seconds):
+        if seconds <= 0:
+            return
         self.now += seconds
         self.sim.run_until(self.now)
 

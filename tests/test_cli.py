@@ -93,7 +93,9 @@ def test_export_verilog(tmp_path, capsys):
     header = module[:module.index(");")]
     ports = {p.strip() for p in header[header.index("(") + 1:].split(",")}
     assert ports == {"clk", "rst", "xy2_clk", "xy2_sync", "xy2_x", "xy2_y",
-                     "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx"}
+                     "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx",
+                     "laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr",
+                     "interlock_open"}
 
 
 @pytest.mark.toolchain

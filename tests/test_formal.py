@@ -7,10 +7,13 @@ import re
 
 import pytest
 
-from galvoscan.formal.proofs import PROOFS, command_path_proof, xy2_phy_proof
+from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
+                                    laser_safety_proof, xy2_phy_proof)
+from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
 from broken_command import BROKEN_COMMAND_PATHS
+from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_phys import FAULTS, TamperedPHY
 
 
@@ -61,3 +64,19 @@ def test_broken_command_path_fails_the_proof(fault, tmp_path):
     # proof fails in its induction step, naming the property it can no longer show.
     assert prove.status != "PASS"
     assert property in failed_properties(prove), (fault, prove.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(LASER_FAULTS))
+def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
+    if fault == "short_lead":
+        # The real controller with a lead one clock shorter than the spec demands.
+        params = dict(LASER_PROOF_PARAMETERS, mo_lead=1.25e-3)
+        assert clocks_at_least(1.25e-3, 4000) == clocks_at_least(1.5e-3, 4000) - 1
+        make = lambda: LaserController(**params)
+    else:
+        make = partial(TamperedLaser, fault, **LASER_PROOF_PARAMETERS)
+    proof = laser_safety_proof(make_controller=make, name=f"broken_{fault}")
+    prove, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
+                     cover_depth=proof.cover_depth, tasks=("prove",))
+    assert prove.status == "FAIL"
+    assert LASER_FAULTS[fault] in failed_properties(prove), (fault, prove.failed)

@@ -11,6 +11,7 @@ from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 
 
 RW = [r for r in REGISTERS if r.access == "rw"]
+STROBES = [r for r in REGISTERS if r.access == "strobe"]
 CHECK = 0x64
 
 
@@ -30,11 +31,13 @@ class CommandModel:
         elif address & 0x80:
             if data != 0:
                 self.errors += 1
+            elif reg.access == "strobe":
+                self.replies.append((reg.address, 0))      # strobes read 0
             else:
                 self.replies.append((reg.address, self.values.get(reg.name)))
-        elif reg.access != "rw" or not reg.low <= data <= reg.high:
+        elif reg.access == "ro" or not reg.low <= data <= reg.high:
             self.errors += 1
-        else:
+        elif reg.access == "rw":
             self.values[reg.name] = data
 
     def cut_short(self):
@@ -45,13 +48,13 @@ def frame_bytes(address, data, check=CHECK):
     return bytes([address, data >> 8, data & 0xFF, check])
 
 
-rw_regs = st.sampled_from(RW)
+rw_regs = st.sampled_from(RW + STROBES)
 valid_write = rw_regs.flatmap(
     lambda r: st.integers(r.low, r.high).map(lambda v: frame_bytes(r.address, v)))
 valid_read = st.sampled_from(REGISTERS).map(lambda r: frame_bytes(0x80 | r.address, 0))
 bad_check = st.tuples(valid_write, st.integers(0, 255).filter(lambda c: c != CHECK)).map(
     lambda t: t[0][:3] + bytes([t[1]]))
-out_of_range = st.sampled_from([r for r in RW if r.high < 0xFFFF or r.low > 0]).flatmap(
+out_of_range = st.sampled_from([r for r in RW + STROBES if r.high < 0xFFFF or r.low > 0]).flatmap(
     lambda r: st.one_of(st.integers(r.high + 1, 0xFFFF) if r.high < 0xFFFF else st.nothing(),
                         st.integers(0, r.low - 1) if r.low > 0 else st.nothing())
     .map(lambda v: frame_bytes(r.address, v)))

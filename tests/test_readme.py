@@ -6,7 +6,8 @@ import re
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
 from galvoscan.cli import register_table
-from galvoscan.platforms.icebreaker import SPI_PMOD_PINS, XY2_PMOD_PINS
+from galvoscan.platforms.icebreaker import (INTERLOCK_PMOD_PIN, LASER_PMOD_PINS, SPI_PMOD_PINS,
+                                           XY2_PMOD_PINS)
 
 
 ROOT = Path(__file__).parent.parent
@@ -51,3 +52,19 @@ def test_ci_runs_the_readme_test_command():
 def test_pictures_exist():
     for picture in re.findall(r"\]\((docs/[^)]+\.png)\)", README):
         assert (ROOT / picture).is_file(), picture
+
+
+def test_laser_pin_table_matches_the_platform():
+    rows = re.findall(r"^\| PMOD(\w+) ([\d, ]+) \| ([\d, ]+) \| `(\w+)[^`]*`", README, re.M)
+    connectors = {"2": 2, "1A": 0, "1B": 1}
+    seen = {}
+    for connector, pmod_pins, fpga_pins, signal in rows:
+        pmod_pins = [int(p) for p in pmod_pins.split(",")]
+        fpga_pins = [int(p) for p in fpga_pins.split(",")]
+        number = connectors[connector]
+        for pmod, fpga in zip(pmod_pins, fpga_pins):
+            assert pmod_fpga_pin(number, pmod) == fpga
+        seen.setdefault(signal, []).extend((number, p) for p in pmod_pins)
+    for name, (number, pins, _) in LASER_PMOD_PINS.items():
+        assert seen[f"laser_{name}"] == [(number, int(p)) for p in pins.split()]
+    assert seen["interlock_open"] == [(INTERLOCK_PMOD_PIN[0], int(INTERLOCK_PMOD_PIN[1]))]

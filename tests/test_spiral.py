@@ -39,7 +39,8 @@ def test_top_ports_have_the_fixed_names():
     top = GalvoScanTop(clk_freq=12e6)
     assert list(top.signature.members) == [
         "xy2_clk", "xy2_sync", "xy2_x", "xy2_y",
-        "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx"]
+        "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx",
+        "laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "interlock_open"]
 
 
 @pytest.mark.parametrize("kwargs, message", [

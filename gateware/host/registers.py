@@ -43,7 +43,8 @@ class RegisterFile(wiring.Component):
 
     Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
     on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
-    ``errors``) that the bus reads.
+    ``errors``) that the bus reads; a strobe register is an output that is high for one clock
+    when 1 is written to it, and reads 0.
 
     Parameters
     ----------
@@ -71,6 +72,8 @@ class RegisterFile(wiring.Component):
         for reg in REGISTERS:
             if reg.access == "rw":
                 members[reg.name] = Out(reg.width, init=self.resets[reg.name])
+            elif reg.access == "strobe":
+                members[reg.name] = Out(reg.width)
             else:
                 members[reg.name] = In(reg.width)
         super().__init__(members)
@@ -82,7 +85,14 @@ class RegisterFile(wiring.Component):
             for reg in REGISTERS:
                 with m.Case(reg.address):
                     value = getattr(self, reg.name)
-                    m.d.comb += [bus.read_ok.eq(1), bus.read_data.eq(value)]
+                    m.d.comb += bus.read_ok.eq(1)
+                    if reg.access != "strobe":
+                        m.d.comb += bus.read_data.eq(value)
+                    if reg.access == "strobe":
+                        m.d.comb += [
+                            bus.write_ok.eq(bus.write_data <= reg.high),
+                            value.eq(bus.write_en & (bus.write_data == 1)),
+                        ]
                     if reg.access == "rw":
                         in_range = (bus.write_data >= reg.low) & \
                                    (bus.write_data <= self.highs[reg.name])

@@ -10,6 +10,9 @@ register, and the answer is a frame in the same format, ``address, data_hi, data
 A frame is accepted only if its check byte is 0x64, its address is known, the access is allowed
 (no writes to read-only registers, read requests carry zero data) and the value is in range;
 anything else changes nothing and counts in ``errors``.
+
+Access: ``rw`` registers hold what was written; ``ro`` ones report state; a ``strobe`` register
+acts on a write of 1 (a write of 0 does nothing) and always reads 0.
 """
 
 from dataclasses import dataclass
@@ -29,7 +32,7 @@ READ_FLAG = 0x80
 class Register:
     name: str
     address: int
-    access: str          # "rw" or "ro"
+    access: str          # "rw", "ro" or "strobe"
     reset: int
     low: int             # smallest value a write may carry
     high: int            # largest value a write may carry
@@ -45,9 +48,14 @@ class Register:
 
 #: Bits of the ``status`` register.
 STATUS_BITS = {
-    "running": 0,       # the spiral is being swept
-    "clipped": 1,       # a point had to be clamped at the field edge since status was last read
-    "armed": 2,         # the arm register is set
+    "running": 0,           # the spiral is being swept
+    "clipped": 1,           # a point had to be clamped at the field edge since status was read
+    "armed": 2,             # the arm register is set
+    "fault_interlock": 3,   # latched: the interlock opened
+    "fault_watchdog": 4,    # latched: no valid command for the watchdog time while armed
+    "mo_on": 5,             # the master oscillator is on
+    "emitting": 6,          # modulation is on: the laser is firing
+    "interlock_open": 7,    # the interlock is open now
 }
 
 
@@ -55,7 +63,9 @@ REGISTERS = [
     # --- read-only --------------------------------------------------------------------------
     Register("status", 0x00, "ro", 0, 0, 0, "flags",
              "bit 0 running, bit 1 a point was clamped at the field edge since the last read "
-             "of status (cleared by reading), bit 2 armed", width=3),
+             "of status (cleared by reading), bit 2 armed, bit 3 interlock fault (latched), "
+             "bit 4 watchdog fault (latched), bit 5 MO on, bit 6 emitting, bit 7 interlock "
+             "open now", width=8),
     Register("errors", 0x01, "ro", 0, 0, 0, "frames",
              "rejected command frames since reset (bad check byte, unknown address, write to "
              "a read-only register, value out of range, cut short, UART framing error); "
@@ -88,9 +98,23 @@ REGISTERS = [
              "last Y table address walked (inclusive)", width=7),
     # --- laser group ------------------------------------------------------------------------
     Register("arm", 0x10, "rw", 0, 0, 1, "bool",
-             "1 = allow the laser controller to emit (no laser output exists yet)", width=1),
+             "1 = arm the laser: latch power, MO on, modulation after the MO lead (5 ms) "
+             "while the spiral runs; 0 = modulation off, then MO off", width=1),
     Register("laser_power", 0x11, "rw", 0, 0, 255, "1/255 of full power",
-             "laser power for DB25 pins 1-8 (consumed by the laser controller)", width=8),
+             "laser power on DB25 pins 1-8, latched by pin 9 on arming and on every change "
+             "while armed", width=8),
+    Register("laser_prr", 0x12, "rw", 500, 200, 2000, "100 Hz",
+             "pulse repetition rate on DB25 pin 20, 20.0 … 200.0 kHz (500 = 50 kHz), 50 % duty",
+             width=11),
+    Register("watchdog", 0x13, "rw", 1000, 1, 60000, "ms",
+             "while armed, no accepted command frame for this long switches the laser off and "
+             "latches a watchdog fault"),
+    Register("fault_clear", 0x14, "strobe", 0, 0, 1, "write 1",
+             "clears latched faults if the interlock is closed; the laser then stays off until "
+             "arm is written 0 and 1 again", width=1),
+    Register("pulses", 0x15, "ro", 0, 0, 0, "pulses",
+             "laser pulses emitted (PRR rising edges while modulating) since reset, modulo "
+             "65536"),
 ]
 
 BY_NAME = {r.name: r for r in REGISTERS}

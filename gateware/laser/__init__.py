@@ -1,0 +1,1 @@
+"""Laser control: the DB25 fiber laser interface and its interlocks."""

@@ -1,0 +1,234 @@
+"""Pulsed fiber laser over its DB25 port: power latch, MO, PRR and modulation, with interlocks
+(SPEC §1 "Marking controller (003)", §4)."""
+
+import math
+
+from amaranth.hdl import Module, Signal
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+
+__all__ = ["LaserController", "PRR_UNIT_HZ", "PRR_RANGE", "FAULT_BITS", "clocks_at_least"]
+
+
+#: The ``laser_prr`` register counts in steps of this many hertz.
+PRR_UNIT_HZ = 100
+#: Legal ``laser_prr`` values: 20 kHz … 200 kHz.
+PRR_RANGE = (200, 2000)
+#: Bits of :attr:`LaserController.faults`.
+FAULT_BITS = {"interlock": 0, "watchdog": 1}
+
+# Phase accumulator width for the PRR clock.
+_PHASE_BITS = 28
+
+
+def clocks_at_least(seconds, clk_freq):
+    """Whole clocks lasting at least ``seconds`` (and at least one)."""
+    return max(1, math.ceil(round(seconds * clk_freq, 9)))
+
+
+class LaserController(wiring.Component):
+    """The 003 laser sequence, made safe.
+
+    Emission needs, all at once: ``arm`` set, no latched fault, the interlock closed, and the
+    master oscillator on for at least ``mo_lead`` seconds. Then modulation (the emission gate,
+    DB25 pin 19) follows ``marking``. The sequence:
+
+    1. **arm** rises (with no fault): the power goes onto pins 1-8 and, ``latch_setup`` later, a
+       ``latch_pulse`` long pulse on pin 9 takes it; ``latch_setup`` of hold follows;
+    2. **MO** (pin 18) goes high; the **PRR** clock (pin 20, 50 % duty) starts;
+    3. after ``mo_lead`` (5 ms, as the paper), **modulation** follows ``marking``;
+    4. **arm** falls: modulation drops, MO and PRR one clock later; the power pins return to 0.
+
+    A power change while armed goes out through a new latch pulse; the power pins never change
+    without one following.
+
+    Safety: an open interlock switches MO, modulation and PRR off *at once* (the pin gates the
+    outputs without going through a flip-flop) and, if armed, latches a fault. No accepted command frame
+    for ``watchdog_ms`` while armed latches a fault too. A fault switches the laser off and stays
+    latched until ``fault_clear`` is pulsed with the interlock closed; even then the laser stays
+    off until ``arm`` has been seen low and set again. Reset switches everything off.
+
+    Parameters
+    ----------
+    clk_freq : float
+        System clock in Hz.
+    mo_lead : float
+        Seconds MO leads modulation (the laser's warm-up); 5 ms by default.
+    latch_setup, latch_pulse : float
+        Seconds the power pins are stable before the latch pulse (and held after it), and the
+        latch pulse width. 1 µs each by default, well inside TTL lasers' needs (tens of ns).
+
+    Interface attributes
+    --------------------
+    arm : ``In(1)``
+    power : ``In(8)``
+        Power, 0 … 255 of full scale.
+    prr : ``In(11)``
+        Pulse repetition rate in units of :data:`PRR_UNIT_HZ` (checked by the register map).
+    watchdog_ms : ``In(16)``
+        Milliseconds without an accepted frame before a fault, while armed.
+    alive : ``In(1)``
+        Pulses with each accepted command frame.
+    fault_clear : ``In(1)``
+        Pulse: clear latched faults if the interlock is closed.
+    marking : ``In(1)``
+        The scan wants emission now (running and marking, not jumping or parked).
+    interlock_open : ``In(1)``
+        The interlock pin, asynchronous; 1 = open (unsafe).
+    laser_power : ``Out(8)``, laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
+        The DB25 signals (pins 1-8, 9, 18, 19, 20), for 5 V TTL buffers.
+    faults : ``Out(2)``
+        Latched fault causes (:data:`FAULT_BITS`).
+    mo_ready : ``Out(1)``
+        MO has led long enough: modulation may follow ``marking``.
+    pulse : ``Out(1)``
+        One clock per laser pulse emitted (PRR rising edge while modulating).
+    """
+
+    arm: In(1)
+    power: In(8)
+    prr: In(11)
+    watchdog_ms: In(16)
+    alive: In(1)
+    fault_clear: In(1)
+    marking: In(1)
+    interlock_open: In(1, init=1)
+    laser_power: Out(8)
+    laser_latch: Out(1)
+    laser_mo: Out(1)
+    laser_am: Out(1)
+    laser_prr: Out(1)
+    faults: Out(2)
+    mo_ready: Out(1)
+    pulse: Out(1)
+
+    def __init__(self, *, clk_freq, mo_lead=5e-3, latch_setup=1e-6, latch_pulse=1e-6):
+        for name, value in (("mo_lead", mo_lead), ("latch_setup", latch_setup),
+                            ("latch_pulse", latch_pulse)):
+            if not value > 0:
+                raise ValueError(f"{name} must be a positive time in seconds, not {value!r}")
+        self.clk_freq = clk_freq
+        #: Clocks MO leads modulation (at least ``mo_lead``).
+        self.lead_clocks = clocks_at_least(mo_lead, clk_freq)
+        self.setup_clocks = clocks_at_least(latch_setup, clk_freq)
+        self.pulse_clocks = clocks_at_least(latch_pulse, clk_freq)
+        self.ms_clocks = round(clk_freq / 1000)
+        super().__init__()
+        # State the proofs refer to in their helper invariants (made here, not in elaborate,
+        # so the proof harness can name them).
+        self._mo = Signal()                 # MO, before the interlock gate
+        # Clocks of MO still to go before modulation may start on the next clock.
+        self._lead_left = Signal(range(self.lead_clocks), init=self.lead_clocks - 1)
+
+    def elaborate(self, platform):
+        m = Module()
+
+        # Two synchroniser stages, built here rather than with FFSynchronizer because the
+        # output gate below uses both: from the clock the pin opens until the fault is latched,
+        # the outputs stay off without a gap, even for a glitch on the pin.
+        interlock_meta = Signal(init=1)
+        interlock_open = Signal(init=1)
+        m.d.sync += [interlock_meta.eq(self.interlock_open), interlock_open.eq(interlock_meta)]
+
+        # --- faults -------------------------------------------------------------------------
+        watchdog_fired = Signal()
+        faults = self.faults
+        with m.If(self.fault_clear & ~interlock_open):
+            m.d.sync += faults.eq(0)
+        # Opening the interlock while disarmed (to load a part) is no fault: nothing can emit
+        # then, and arming needs it closed.
+        with m.If(interlock_open & self.arm):
+            m.d.sync += faults[FAULT_BITS["interlock"]].eq(1)
+        with m.If(watchdog_fired):
+            m.d.sync += faults[FAULT_BITS["watchdog"]].eq(1)
+
+        # After a fault, arm must be seen low before the laser may start again.
+        rearm_needed = Signal()
+        with m.If(faults.any() | interlock_open):
+            m.d.sync += rearm_needed.eq(1)
+        with m.Elif(~self.arm):
+            m.d.sync += rearm_needed.eq(0)
+
+        enabled = self.arm & ~faults.any() & ~interlock_open & ~rearm_needed
+
+        # --- watchdog -----------------------------------------------------------------------
+        tick_ms = Signal(range(self.ms_clocks))
+        ms_left = Signal(16)
+        with m.If(self.alive | ~self.arm):
+            m.d.sync += [tick_ms.eq(0), ms_left.eq(self.watchdog_ms)]
+        with m.Elif(tick_ms == self.ms_clocks - 1):
+            m.d.sync += tick_ms.eq(0)
+            with m.If(ms_left != 0):
+                m.d.sync += ms_left.eq(ms_left - 1)
+        with m.Else():
+            m.d.sync += tick_ms.eq(tick_ms + 1)
+        m.d.comb += watchdog_fired.eq(self.arm & (ms_left == 0) & ~self.alive)
+
+        # --- power latch --------------------------------------------------------------------
+        # The power on the pins, and the value the laser last latched.
+        latched = Signal(8)
+        latch_timer = Signal(range(2 * self.setup_clocks + self.pulse_clocks + 1))
+        latching = latch_timer != 0
+        power_latched = Signal()    # the laser holds the current power
+        with m.If(~enabled):
+            m.d.sync += [self.laser_power.eq(0), latch_timer.eq(0), power_latched.eq(0),
+                         self.laser_latch.eq(0)]
+        with m.Elif(~latching & (~power_latched | (self.power != latched))):
+            # New power: onto the pins now, latch pulse after the set-up time.
+            m.d.sync += [
+                self.laser_power.eq(self.power),
+                latched.eq(self.power),
+                latch_timer.eq(2 * self.setup_clocks + self.pulse_clocks),
+                power_latched.eq(0),
+            ]
+        with m.Elif(latching):
+            m.d.sync += latch_timer.eq(latch_timer - 1)
+            # Pulse high from set-up time on, for the pulse width; then the hold time.
+            in_pulse = (latch_timer <= self.setup_clocks + self.pulse_clocks) & \
+                       (latch_timer > self.setup_clocks)
+            m.d.sync += self.laser_latch.eq(in_pulse)
+            with m.If(latch_timer == 1):
+                m.d.sync += power_latched.eq(1)
+
+        # --- master oscillator and lead time ---------------------------------------------------
+        mo, lead_left = self._mo, self._lead_left
+        am_on = Signal()    # modulation is on now (registered below)
+        with m.If(~enabled):
+            # Modulation drops first; MO follows a clock later.
+            m.d.sync += [mo.eq(mo & am_on), lead_left.eq(self.lead_clocks - 1)]
+        with m.Elif(power_latched | mo):
+            m.d.sync += mo.eq(1)
+            with m.If(mo & (lead_left != 0)):
+                m.d.sync += lead_left.eq(lead_left - 1)
+        m.d.comb += self.mo_ready.eq(mo & (lead_left == 0))
+
+        # --- PRR clock: a phase accumulator, 50 % duty ---------------------------------------
+        step = round(PRR_UNIT_HZ * 2 ** _PHASE_BITS / self.clk_freq)   # per unit of prr
+        # The increment has a register of its own, so the multiply and the add do not share
+        # a clock.
+        increment = Signal(_PHASE_BITS)
+        m.d.sync += increment.eq(self.prr * step)
+        phase = Signal(_PHASE_BITS)
+        with m.If(mo):
+            m.d.sync += phase.eq(phase + increment)
+        with m.Else():
+            m.d.sync += phase.eq(0)
+        prr_clock = phase[-1]
+        prr_q = Signal()
+        m.d.sync += prr_q.eq(prr_clock)
+
+        # --- outputs ------------------------------------------------------------------------
+        am = am_on
+        m.d.sync += am.eq(self.mo_ready & enabled & self.marking)
+        # The interlock pin itself gates the outputs: off at once, whatever the registers say,
+        # and kept off through the synchroniser until the latched fault takes over.
+        safe = ~(self.interlock_open | interlock_meta | interlock_open |
+                 faults[FAULT_BITS["interlock"]])
+        m.d.comb += [
+            self.laser_mo.eq(mo & safe),
+            self.laser_am.eq(am & safe),
+            self.laser_prr.eq(prr_clock & mo & safe),
+            self.pulse.eq(am & safe & prr_clock & ~prr_q),
+        ]
+        return m

@@ -1,0 +1,226 @@
+# amaranth: UnusedElaboratable=no
+# (parameter checks build components without elaborating them)
+"""The laser controller on its pins: the 003 sequence, PRR accuracy, interlock, watchdog, and
+fuzzed command streams with the interlock toggling, checked on every clock."""
+
+import pytest
+from amaranth.sim import Simulator
+from hypothesis import HealthCheck, event, given, settings, strategies as st
+
+from galvoscan.client import HostClient, encode_write
+from galvoscan.gateware.host.regmap import STATUS_BITS
+from galvoscan.gateware.laser.controller import LaserController
+
+from sim_board import SimBoard, SimUARTTransport
+
+
+CLK = 4e6
+
+
+def test_bad_parameters():
+    with pytest.raises(ValueError, match="mo_lead must be a positive time"):
+        LaserController(clk_freq=CLK, mo_lead=0)
+    with pytest.raises(ValueError, match="latch_pulse must be a positive time"):
+        LaserController(clk_freq=CLK, latch_pulse=-1e-6)
+
+
+def run_controller(script, cycles):
+    """Run ``script`` against a controller (5 ms lead at 4 MHz); record the pins every clock."""
+    dut = LaserController(clk_freq=CLK)
+    sim = Simulator(dut)
+    sim.add_clock(1 / CLK)
+    pins = []
+
+    async def watch(ctx):
+        for _ in range(cycles):
+            pins.append({name: ctx.get(getattr(dut, f"laser_{name}"))
+                         for name in ("power", "latch", "mo", "am", "prr")})
+            await ctx.tick()
+
+    async def drive(ctx):
+        await script(ctx, dut)
+
+    sim.add_testbench(watch)
+    sim.add_testbench(drive, background=True)
+    sim.run()
+    return dut, pins
+
+
+def edges(pins, name, level=1):
+    return [i for i in range(1, len(pins))
+            if pins[i][name] == level and pins[i - 1][name] != level]
+
+
+def test_the_003_sequence_on_the_pins():
+    disarm_at = 25_000
+
+    async def script(ctx, dut):
+        ctx.set(dut.interlock_open, 0)
+        ctx.set(dut.power, 200)
+        ctx.set(dut.prr, 600)                  # 60.0 kHz
+        ctx.set(dut.watchdog_ms, 1000)
+        ctx.set(dut.marking, 1)
+        await ctx.tick().repeat(20)
+        ctx.set(dut.arm, 1)
+        await ctx.tick().repeat(disarm_at - 20)
+        ctx.set(dut.arm, 0)
+
+    dut, pins = run_controller(script, disarm_at + 200)
+    us = CLK / 1e6                              # clocks per µs
+
+    # Nothing before arming.
+    assert all(p == {"power": 0, "latch": 0, "mo": 0, "am": 0, "prr": 0} for p in pins[:21])
+    # Power first, then the latch pulse after ≥ 1 µs of set-up, ≥ 1 µs wide, ≥ 1 µs of hold.
+    power_set = next(i for i, p in enumerate(pins) if p["power"] == 200)
+    latch_up, = edges(pins, "latch", 1)
+    latch_down, = edges(pins, "latch", 0)
+    mo_up, = edges(pins, "mo", 1)
+    assert latch_up - power_set >= 1 * us
+    assert latch_down - latch_up >= 1 * us
+    assert mo_up - latch_down >= 1 * us
+    assert all(p["power"] == 200 for p in pins[power_set:disarm_at])
+    # Modulation 5 ms after MO (and not a clock sooner).
+    am_up, = edges(pins, "am", 1)
+    assert am_up - mo_up == 5e-3 * CLK
+    # PRR at 60 kHz, 50 % duty, measured on the pin while modulating.
+    window = pins[am_up:disarm_at]
+    rises = edges(window, "prr", 1)
+    frequency = (len(rises) - 1) / ((rises[-1] - rises[0]) / CLK)
+    assert frequency == pytest.approx(60e3, rel=1e-3)
+    periods = [b - a for a, b in zip(rises, rises[1:])]
+    assert max(periods) - min(periods) <= 1                 # one clock of jitter at most
+    high = sum(p["prr"] for p in window[rises[0]:rises[-1]])
+    assert high / (rises[-1] - rises[0]) == pytest.approx(0.5, abs=0.01)
+    # Disarm: modulation drops first, MO a clock later, the power pins return to 0.
+    am_down, = edges(pins, "am", 0)
+    mo_down, = edges(pins, "mo", 0)
+    assert mo_down == am_down + 1
+    assert pins[-1] == {"power": 0, "latch": 0, "mo": 0, "am": 0, "prr": 0}
+
+
+def test_power_change_while_armed_is_latched_again():
+    async def script(ctx, dut):
+        ctx.set(dut.interlock_open, 0)
+        ctx.set(dut.power, 10)
+        ctx.set(dut.prr, 500)
+        ctx.set(dut.watchdog_ms, 1000)
+        await ctx.tick().repeat(5)
+        ctx.set(dut.arm, 1)
+        await ctx.tick().repeat(100)
+        ctx.set(dut.power, 99)
+
+    _, pins = run_controller(script, 200)
+    assert len(edges(pins, "latch", 1)) == 2
+    second_latch = edges(pins, "latch", 1)[1]
+    changed = next(i for i, p in enumerate(pins) if p["power"] == 99)
+    assert 0 < second_latch - changed <= 8
+    assert pins[-1]["mo"] == 1                  # MO stays on through a power change
+
+
+# --- the whole system, from host commands ---------------------------------------------------------
+
+def status_bits(client, *names):
+    status = client.read("status")
+    return {name: bool(status & (1 << STATUS_BITS[name])) for name in names}
+
+
+def test_spiral_and_laser_from_host_commands():
+    board = SimBoard(mo_lead=1e-3, record_laser=True)
+    client = HostClient(SimUARTTransport(board))
+    client.write("laser_power", 128)
+    client.write("laser_prr", 1000)             # 100 kHz
+    start = len(board.laser_pins)
+    client.write("arm", 1)
+    board.run_for(2e-3)
+    assert status_bits(client, "mo_on", "emitting", "running") == \
+        {"mo_on": True, "emitting": True, "running": True}
+    run = board.laser_pins[start:]
+    mo_up = next(i for i, p in enumerate(run) if p[0])
+    am_up = next(i for i, p in enumerate(run) if p[1])
+    assert am_up - mo_up >= 1e-3 * CLK
+    # PRR on the pin during emission, and the pulse counter agrees with it.
+    pulses_before = client.read("pulses")
+    mark = len(board.laser_pins)
+    board.run_for(1e-3)
+    pulses_after = client.read("pulses")
+    window = board.laser_pins[mark:]
+    rises = [i for i in range(1, len(window)) if window[i][2] and not window[i - 1][2]]
+    frequency = (len(rises) - 1) / ((rises[-1] - rises[0]) / CLK)
+    assert frequency == pytest.approx(100e3, rel=2e-3)
+    assert pulses_after - pulses_before >= len(rises)
+
+    # Stopping the scan stops emission; MO stays on; starting again resumes it at once.
+    client.write("run", 0)
+    board.run_for(1e-4)
+    assert status_bits(client, "mo_on", "emitting") == {"mo_on": True, "emitting": False}
+    client.write("run", 1)
+    board.run_for(1e-4)
+    assert status_bits(client, "emitting")["emitting"]
+
+    # The interlock opens: everything off on that very clock, and a fault latches.
+    mark = len(board.laser_pins)
+    board.interlock_closed = False
+    board.run_for(1e-4)
+    for mo, am, prr, open_ in board.laser_pins[mark:]:
+        assert not (open_ and (mo or am or prr))
+    assert status_bits(client, "fault_interlock", "mo_on", "interlock_open") == \
+        {"fault_interlock": True, "mo_on": False, "interlock_open": True}
+    # A clear while it is open does nothing; closed, it clears, but the laser waits for re-arm.
+    client.write("fault_clear", 1)
+    assert status_bits(client, "fault_interlock")["fault_interlock"]
+    board.interlock_closed = True
+    board.run_for(1e-4)
+    client.write("fault_clear", 1)
+    board.run_for(2e-3)
+    assert status_bits(client, "fault_interlock", "mo_on") == \
+        {"fault_interlock": False, "mo_on": False}
+    client.write("arm", 0)
+    client.write("arm", 1)
+    board.run_for(2e-3)
+    assert status_bits(client, "mo_on", "emitting") == {"mo_on": True, "emitting": True}
+
+
+def test_watchdog_switches_the_laser_off():
+    board = SimBoard(mo_lead=2e-4)
+    client = HostClient(SimUARTTransport(board))
+    client.write("watchdog", 2)                 # ms
+    client.write("arm", 1)
+    board.run_for(1e-3)
+    assert status_bits(client, "emitting")["emitting"]
+    board.run_for(3e-3)                         # the host falls silent
+    assert status_bits(client, "fault_watchdog", "mo_on", "emitting") == \
+        {"fault_watchdog": True, "mo_on": False, "emitting": False}
+
+
+# --- fuzzed command streams with the interlock toggling --------------------------------------------
+
+laser_writes = st.sampled_from([encode_write("arm", 1), encode_write("arm", 0),
+                                encode_write("fault_clear", 1), encode_write("run", 1),
+                                encode_write("run", 0), encode_write("laser_power", 77),
+                                encode_write("watchdog", 1)])
+garbage = st.binary(min_size=1, max_size=6)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.one_of(laser_writes, garbage), st.booleans(),
+                          st.integers(0, 400)), min_size=3, max_size=12))
+def test_fuzzed_commands_never_emit_unsafely(steps):
+    lead = 100e-6
+    board = SimBoard(mo_lead=lead, record_laser=True)
+    link = SimUARTTransport(board)
+    link.send_bytes(encode_write("arm", 1))     # start armed, so emission is within reach
+    for data, toggle_interlock, wait_us in steps:
+        if toggle_interlock:
+            board.interlock_closed = not board.interlock_closed
+        link.send_bytes(data)
+        board.run_for(wait_us * 1e-6)
+    board.run_for(2 * lead)
+
+    lead_clocks = lead * CLK
+    event("emitted" if any(am for _, am, _, _ in board.laser_pins) else "did not emit")
+    mo_on_for = 0
+    for mo, am, prr, interlock_open in board.laser_pins:
+        assert not (interlock_open and (mo or am or prr)), "laser on with the interlock open"
+        if am:
+            assert mo and mo_on_for >= lead_clocks, "modulation before the MO lead"
+        mo_on_for = mo_on_for + 1 if mo else 0
