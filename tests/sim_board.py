@@ -36,7 +36,8 @@ class SimBoard:
         self.sim.add_testbench(self._spi_host, background=True)
         self.interlock_closed = interlock_closed
         self.sim.add_testbench(self._interlock, background=True)
-        #: (laser_mo, laser_am, laser_prr, interlock_open) on every clock, if recorded.
+        #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power) on every
+        #: clock, if recorded.
         self.laser_pins = []
         if record_laser:
             self.sim.add_testbench(self._laser_recorder, background=True)
@@ -59,7 +60,8 @@ class SimBoard:
         top = self.top
         while True:
             self.laser_pins.append((ctx.get(top.laser_mo), ctx.get(top.laser_am),
-                                    ctx.get(top.laser_prr), ctx.get(top.interlock_open)))
+                                    ctx.get(top.laser_prr), ctx.get(top.interlock_open),
+                                    ctx.get(top.laser_latch), ctx.get(top.laser_power)))
             await ctx.tick()
 
     async def _interlock(self, ctx):

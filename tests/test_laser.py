@@ -125,19 +125,25 @@ def status_bits(client, *names):
 
 
 def test_spiral_and_laser_from_host_commands():
-    board = SimBoard(mo_lead=1e-3, record_laser=True)
+    board = SimBoard(record_laser=True)         # the default 5 ms MO lead
     client = HostClient(SimUARTTransport(board))
     client.write("laser_power", 128)
     client.write("laser_prr", 1000)             # 100 kHz
     start = len(board.laser_pins)
     client.write("arm", 1)
-    board.run_for(2e-3)
+    board.run_for(6e-3)
     assert status_bits(client, "mo_on", "emitting", "running") == \
         {"mo_on": True, "emitting": True, "running": True}
+    # The 003 sequence on the system's pins: power, latch pulse, MO, 5 ms, modulation.
     run = board.laser_pins[start:]
+    power_set = next(i for i, p in enumerate(run) if p[5] == 128)
+    latch_up = next(i for i, p in enumerate(run) if p[4])
+    latch_down = next(i for i in range(latch_up, len(run)) if not run[i][4])
     mo_up = next(i for i, p in enumerate(run) if p[0])
     am_up = next(i for i, p in enumerate(run) if p[1])
-    assert am_up - mo_up >= 1e-3 * CLK
+    assert power_set < latch_up < latch_down < mo_up < am_up
+    assert latch_up - power_set >= 1e-6 * CLK and latch_down - latch_up >= 1e-6 * CLK
+    assert am_up - mo_up >= 5e-3 * CLK
     # PRR on the pin during emission, and the pulse counter agrees with it.
     pulses_before = client.read("pulses")
     mark = len(board.laser_pins)
@@ -161,7 +167,7 @@ def test_spiral_and_laser_from_host_commands():
     mark = len(board.laser_pins)
     board.interlock_closed = False
     board.run_for(1e-4)
-    for mo, am, prr, open_ in board.laser_pins[mark:]:
+    for mo, am, prr, open_, _, _ in board.laser_pins[mark:]:
         assert not (open_ and (mo or am or prr))
     assert status_bits(client, "fault_interlock", "mo_on", "interlock_open") == \
         {"fault_interlock": True, "mo_on": False, "interlock_open": True}
@@ -176,7 +182,7 @@ def test_spiral_and_laser_from_host_commands():
         {"fault_interlock": False, "mo_on": False}
     client.write("arm", 0)
     client.write("arm", 1)
-    board.run_for(2e-3)
+    board.run_for(6e-3)
     assert status_bits(client, "mo_on", "emitting") == {"mo_on": True, "emitting": True}
 
 
@@ -217,9 +223,9 @@ def test_fuzzed_commands_never_emit_unsafely(steps):
     board.run_for(2 * lead)
 
     lead_clocks = lead * CLK
-    event("emitted" if any(am for _, am, _, _ in board.laser_pins) else "did not emit")
+    event("emitted" if any(pins[1] for pins in board.laser_pins) else "did not emit")
     mo_on_for = 0
-    for mo, am, prr, interlock_open in board.laser_pins:
+    for mo, am, prr, interlock_open, _, _ in board.laser_pins:
         assert not (interlock_open and (mo or am or prr)), "laser on with the interlock open"
         if am:
             assert mo and mo_on_for >= lead_clocks, "modulation before the MO lead"
