@@ -195,26 +195,18 @@ class GalvoScanTop(wiring.Component):
         spiral_mode = regs.mode == 0
         m.d.comb += [
             spiral.run.eq(regs.run & spiral_mode),
-            spiral.dwell.eq(regs.dwell),
-            spiral.x_first.eq(regs.x_first),
-            spiral.x_last.eq(regs.x_last),
-            spiral.y_first.eq(regs.y_first),
-            spiral.y_last.eq(regs.y_last),
             spiral.frame_strobe.eq(phy.frame_strobe),
-            scale.amp_x.eq(regs.amp_x),
-            scale.amp_y.eq(regs.amp_y),
-            scale.center_x.eq(regs.center_x),
-            scale.center_y.eq(regs.center_y),
         ]
+        # Registers and ports of the same name.
+        for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
+            m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
+        for name in ("amp_x", "amp_y", "center_x", "center_y"):
+            m.d.comb += getattr(scale, name).eq(getattr(regs, name))
         connect(m, spiral.points, scale.offsets)
         connect(m, scale.positions, phy.position)
 
-        m.d.comb += [
-            self.xy2_clk.eq(phy.xy2_clk),
-            self.xy2_sync.eq(phy.xy2_sync),
-            self.xy2_x.eq(phy.xy2_x),
-            self.xy2_y.eq(phy.xy2_y),
-        ]
+        for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
+            m.d.comb += getattr(self, name).eq(getattr(phy, name))
 
         # --- laser --------------------------------------------------------------------------
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
@@ -234,12 +226,9 @@ class GalvoScanTop(wiring.Component):
             laser.fault_clear.eq(regs.fault_clear),
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),
-            self.laser_power.eq(laser.laser_power),
-            self.laser_latch.eq(laser.laser_latch),
-            self.laser_mo.eq(laser.laser_mo),
-            self.laser_am.eq(laser.laser_am),
-            self.laser_prr.eq(laser.laser_prr),
         ]
+        for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr"):
+            m.d.comb += getattr(self, name).eq(getattr(laser, name))
         pulses = Signal(16)
         with m.If(laser.pulse):
             m.d.sync += pulses.eq(pulses + 1)
