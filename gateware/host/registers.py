@@ -4,7 +4,7 @@ from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .regmap import REGISTERS
+from .regmap import BY_NAME, REGISTERS
 
 
 __all__ = ["RegisterBus", "RegisterFile"]
@@ -60,7 +60,7 @@ class RegisterFile(wiring.Component):
         for name, value in (resets or {}).items():
             if name not in self.resets:
                 raise ValueError(f"no register named {name!r}")
-            reg = next(r for r in REGISTERS if r.name == name)
+            reg = BY_NAME[name]
             if reg.access != "rw" or not reg.low <= value <= reg.high:
                 raise ValueError(f"reset value {value!r} of {name} is outside {reg.low}…{reg.high}")
             self.resets[name] = value
@@ -86,13 +86,14 @@ class RegisterFile(wiring.Component):
                 with m.Case(reg.address):
                     value = getattr(self, reg.name)
                     m.d.comb += bus.read_ok.eq(1)
-                    if reg.access != "strobe":
-                        m.d.comb += bus.read_data.eq(value)
                     if reg.access == "strobe":
+                        # Reads 0 (read_data's default); a write of 1 pulses the output.
                         m.d.comb += [
                             bus.write_ok.eq(bus.write_data <= reg.high),
                             value.eq(bus.write_en & (bus.write_data == 1)),
                         ]
+                    else:
+                        m.d.comb += bus.read_data.eq(value)
                     if reg.access == "rw":
                         in_range = (bus.write_data >= reg.low) & \
                                    (bus.write_data <= self.highs[reg.name])
