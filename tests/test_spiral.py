@@ -8,6 +8,7 @@ import pytest
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from galvoscan.analysis.patterns import spiral_frames as analysis_spiral_frames
 from galvoscan.gateware.points import OffsetPoint
 from galvoscan.gateware.sources.spiral import SpiralSequencer
 from galvoscan.gateware.sources.spiral_table import SpiralTable
@@ -93,6 +94,10 @@ def test_full_pattern_replays_point_for_point():
     frames = replay(table, settings, points)
     print(f"full replay: {len(frames)} frames in {time.monotonic() - start:.1f} s")
     assert frames == expected(table, settings, points)
+    # The scan analysis' numpy model of the same pattern (galvoscan.analysis) is what the
+    # gateware emits, so its dose figures speak of the real output.
+    model = analysis_spiral_frames(table, dwell=settings.dwell)
+    assert frames[1:] == list(zip(model.x.tolist(), model.y.tolist()))
     # The pattern closes: the next point would be the first again.
     assert expected(table, settings, points + 1)[-1] == frames[1]
 

@@ -1,0 +1,148 @@
+"""``galvoscan analyze``: run the analyses, print the metric table, write the figures."""
+
+import json
+import math
+from pathlib import Path
+import sys
+
+from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
+from .dose import Laser
+from .galvo import GalvoModel
+from .patterns import ScanHead
+from .study import (DEFAULT_FIELD_MM, PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
+                    sigma_sweep, spiral_vs_raster)
+
+
+__all__ = ["ROWS", "format_table", "run_analyze"]
+
+
+#: Metric rows of the printed table: key, label, format.
+ROWS = (
+    ("field_mm", "field (mm)", lambda v: f"{v[0]:g} x {v[1]:g}"),
+    ("dwell", "dwell (frames/point)", "{}"),
+    ("duration_s", "pass time (s)", "{:.3f}"),
+    ("peak_speed_m_s", "peak spot speed (m/s)", "{:.2f}"),
+    ("peak_accel_km_s2", "peak axis accel. (km/s²)", "{:.0f}"),
+    ("dose_mean_j_cm2", "mean dose/pass (J/cm²)", "{:.2f}"),
+    ("cv", "CV, spot scale", "{:.3f}"),
+    ("cv_inner", "CV, inner 80 %", "{:.3f}"),
+    ("cv_1mm", "CV, 1 mm blocks", "{:.3f}"),
+    ("min_max", "min / max", "{:.3f}"),
+    ("edge_centre", "edge / centre (mean)", "{:.3f}"),
+    ("edge_peak", "edge / centre (p99)", "{:.3f}"),
+    ("fill", "fill (≥ 1 spot)", "{:.1%}"),
+    ("overlap50", "overlap ≥ 50 %", "{:.1%}"),
+    ("revisit_p5_ms", "revisit p5 (ms)", "{:.2f}"),
+    ("revisit_median_ms", "revisit median (ms)", "{:.1f}"),
+    ("revisit_under_1ms", "revisited < 1 ms", "{:.1%}"),
+    ("time_to_mean_dose_s", "time to target, mean (s)", "{:.2f}"),
+    ("time_to_dose_1mm_s", "time to target, 1 mm (s)", "{:.2f}"),
+    ("time_to_dose_s", "time to target, 99 % (s)", "{:.2f}"),
+)
+
+
+def _cell(value, style):
+    if value is None:
+        return "-"
+    if isinstance(value, float) and math.isinf(value):
+        return "never"
+    return style(value) if callable(style) else style.format(value)
+
+
+def format_table(runs):
+    """Metrics of several runs as a plain text table, one column per run."""
+    headers = [m["pattern"] for m in runs]
+    rows = [[label] + [_cell(m.get(key), style) for m in runs]
+            for key, label, style in ROWS if any(key in m for m in runs)]
+    widths = [max(len(r[i]) for r in rows + [["metric"] + headers])
+              for i in range(len(headers) + 1)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(["metric"] + headers, widths))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
+    return "\n".join(lines)
+
+
+def _json_ready(metrics):
+    return {k: (None if isinstance(v, float) and math.isinf(v) else v)
+            for k, v in metrics.items()}
+
+
+def run_analyze(args):
+    """The ``analyze`` command (args from the CLI parser)."""
+    from tqdm import tqdm
+    from . import figures
+
+    try:
+        head = ScanHead(args.lens_field)
+        laser = Laser(power_w=args.power, prr_hz=args.prr, spot_mm=args.spot)
+        galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
+        setup = Setup(head=head, laser=laser, galvo=galvo, speed_m_s=args.speed,
+                      line_spacing_mm=args.line_spacing, target_dose_j_cm2=args.target_dose)
+        table = SpiralTable(points=args.table_points, sampling=args.sampling, sigma=args.sigma)
+        other = SpiralTable(points=args.table_points, sampling="uniform") \
+            if table.sampling == "gaussian" else \
+            SpiralTable(points=args.table_points, sigma=DEFAULT_SIGMA)
+        field = tuple(args.field)
+        steps = 2 + (1 + len(SWEEP_SIGMAS) if args.sweep else 0) + \
+            (2 * len(PAPER_FIELDS_MM) if args.compare else 0)
+        bar = tqdm(total=steps, desc="analyse", unit="run", file=sys.stderr,
+                   disable=args.quiet)
+        chosen = run_spiral(setup, field_mm=field, table=table, dwell=args.dwell)
+        bar.update(1)
+        contrast = run_spiral(setup, field_mm=field, table=other, dwell=chosen.dwell)
+        bar.update(1)
+        sweep = sigma_sweep(setup, field_mm=field, progress=bar.update) if args.sweep else []
+        pairs = spiral_vs_raster(setup, progress=bar.update) if args.compare else []
+        bar.close()
+    except ValueError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+
+    written = []
+    if not args.no_plots:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        region = setup.region(field)
+        pair = [contrast, chosen] if table.sampling == "gaussian" else [chosen, contrast]
+        figures.plot_fill(out / "fill.png", pair, head, region)
+        figures.plot_dose_maps(out / "dose.png", pair, region)
+        written += [out / "fill.png", out / "dose.png"]
+        if sweep:
+            figures.plot_sigma_sweep(out / "sigma_sweep.png", sweep, chosen_sigma=DEFAULT_SIGMA)
+            written.append(out / "sigma_sweep.png")
+        if pairs:
+            figures.plot_spiral_vs_raster(out / "spiral_vs_raster.png", pairs, setup)
+            written.append(out / "spiral_vs_raster.png")
+
+    setup_summary = {
+        "lens_field_mm": head.field_mm, "power_w": laser.power_w, "prr_hz": laser.prr_hz,
+        "spot_mm": laser.spot_mm, "speed_m_s": setup.speed_m_s,
+        "line_spacing_mm": setup.line_spacing_mm, "target_dose_j_cm2": setup.target_dose_j_cm2,
+        "galvo": {"omega_n_rad_s": galvo.omega_n, "v_max_units_s": galvo.v_max},
+    }
+    if args.json:
+        print(json.dumps({
+            "setup": _json_ready(setup_summary),
+            "runs": [_json_ready(r.metrics) for r in (chosen, contrast)],
+            "sweep": [_json_ready(r.metrics) for r in sweep],
+            "compare": [[_json_ready(s.metrics), _json_ready(r.metrics)] for s, r in pairs],
+            "figures": [str(p) for p in written],
+        }, indent=2, ensure_ascii=False))
+        return 0
+    print(f"scan head {head.field_mm:g} mm field; laser {laser.power_w:g} W, "
+          f"{laser.prr_hz / 1e3:g} kHz, spot {laser.spot_mm:g} mm; axes held to "
+          f"{setup.speed_m_s:g} m/s; target dose {setup.target_dose_j_cm2:.3g} J/cm²; "
+          + ("ideal mirror" if args.ideal_galvo else
+             f"galvo model: {galvo.omega_n / (2 * math.pi):.0f} Hz, "
+             f"{float(head.mm(galvo.v_max)) / 1e3:.1f} m/s top speed"))
+    print()
+    print(format_table([chosen.metrics, contrast.metrics]))
+    if sweep:
+        print("\nσ sweep (same dwell):")
+        print(format_table([r.metrics for r in sweep]))
+    for spiral, raster in pairs:
+        print(f"\nspiral vs raster, {spiral.metrics['field_mm'][0]:g} x "
+              f"{spiral.metrics['field_mm'][1]:g} mm:")
+        print(format_table([spiral.metrics, raster.metrics]))
+    for path in written:
+        print(f"wrote {path}")
+    return 0
