@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from galvoscan.analysis.dose import Laser, Region, dose_map, pulses_along, revisit_intervals
+from galvoscan.analysis.dose import Laser, Region, pulses_along
 from galvoscan.analysis.galvo import FRAME_PERIOD, GalvoModel
 from galvoscan.analysis.patterns import (Frames, ScanHead, raster_frames, spiral_amplitude,
                                          spiral_frames)

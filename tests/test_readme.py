@@ -68,3 +68,25 @@ def test_laser_pin_table_matches_the_platform():
     for name, (number, pins, _) in LASER_PMOD_PINS.items():
         assert seen[f"laser_{name}"] == [(number, int(p)) for p in pins.split()]
     assert seen["interlock_open"] == [(INTERLOCK_PMOD_PIN[0], int(INTERLOCK_PMOD_PIN[1]))]
+
+
+def test_pictures_exist():
+    for picture in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README):
+        assert (ROOT / picture).is_file(), picture
+
+
+def test_sampling_table_is_what_the_analysis_measures():
+    """The README's Gaussian-against-uniform figures come from `galvoscan analyze`."""
+    from galvoscan.analysis.study import Setup, run_spiral
+    from galvoscan.gateware.sources.spiral_table import SpiralTable
+    setup = Setup()
+    gaussian = run_spiral(setup).metrics
+    uniform = run_spiral(setup, table=SpiralTable(sampling="uniform"),
+                         dwell=gaussian["dwell"]).metrics
+    assert f"| 50 × 20 mm, dwell {gaussian['dwell']} ({gaussian['duration_s']:.2f} s a pattern)" \
+        in README
+    assert f"| CV of 1 mm blocks | **{gaussian['cv_1mm']:.2f}** | {uniform['cv_1mm']:.2f} |" \
+        in README
+    assert (f"| edge / centre dose (mean, p99) | {gaussian['edge_centre']:.2f}, "
+            f"{gaussian['edge_peak']:.2f} | {uniform['edge_centre']:.2f}, "
+            f"{uniform['edge_peak']:.2f} |") in README

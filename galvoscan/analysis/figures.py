@@ -104,30 +104,42 @@ def plot_dose_maps(path, results, region, *, zoom_mm=3.0, title=None):
 
 def plot_sigma_sweep(path, results, *, chosen_sigma):
     """Uniformity against σ and against the mirror's peak acceleration."""
+    from matplotlib.ticker import ScalarFormatter
     plt = _pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4), dpi=110)
     gauss = [r for r in results if r.table.sampling == "gaussian"]
     uniform = [r for r in results if r.table.sampling == "uniform"]
     sigmas = [r.table.sigma for r in gauss]
+    top = 0.0
     for key, label, style in (("cv_1mm", "CV of 1 mm blocks", "o-"),
                               ("cv_inner", "CV, inner 80 % (spot scale)", "s--"),
                               ("edge_centre", "edge / centre dose", "^:")):
-        line, = left.plot(sigmas, [r.metrics[key] for r in gauss], style, label=label,
-                          markersize=4)
-        for r in uniform:
-            left.axhline(r.metrics[key], color=line.get_color(), linewidth=0.6, alpha=0.6)
+        values = [r.metrics[key] for r in gauss]
+        top = max(top, *values)
+        if uniform:
+            label += f" (uniform: {uniform[0].metrics[key]:.2f})"
+        left.plot(sigmas, values, style, label=label, markersize=4)
     left.axvline(chosen_sigma, color="grey", linewidth=0.8)
+    left.annotate(f"default σ = {chosen_sigma:g}", (chosen_sigma, top * 1.05), fontsize=7,
+                  xytext=(3, 0), textcoords="offset points")
     left.set_xscale("log")
-    left.set_xlabel("σ (half-swings); thin lines: uniform sampling")
-    left.legend(fontsize=7)
-    left.set_title("uniformity against σ", fontsize=9)
-    for r in results:
-        label = "uniform" if r.table.sampling == "uniform" else f"σ={r.table.sigma:g}"
-        colour = "tab:red" if r.table.sampling == "uniform" else (
+    left.xaxis.set_major_formatter(ScalarFormatter())
+    left.xaxis.set_minor_formatter(ScalarFormatter())
+    left.tick_params(axis="x", which="both", labelsize=7)
+    left.set_ylim(0, top * 1.15)
+    left.set_xlabel("σ (half-swings)")
+    left.legend(fontsize=7, loc="center right")
+    left.set_title("uniformity against σ (same dwell)", fontsize=9)
+    for n, r in enumerate(results):
+        uniform_run = r.table.sampling == "uniform"
+        label = "uniform" if uniform_run else f"σ={r.table.sigma:g}"
+        colour = "tab:red" if uniform_run else (
             "tab:green" if r.table.sigma == chosen_sigma else "tab:blue")
         right.plot(r.metrics["peak_accel_km_s2"], r.metrics["cv_1mm"], "o", color=colour)
-        right.annotate(label, (r.metrics["peak_accel_km_s2"], r.metrics["cv_1mm"]),
-                       fontsize=7, xytext=(3, 3), textcoords="offset points")
+        if uniform_run or r.table.sigma in (0.4, 0.5, 0.6, 0.8, 1.0, 1.5, chosen_sigma, 5.0):
+            right.annotate(label, (r.metrics["peak_accel_km_s2"], r.metrics["cv_1mm"]),
+                           fontsize=7, xytext=(4, -10 if n % 2 else 3),
+                           textcoords="offset points")
     right.set_xlabel("mirror peak acceleration at the work piece (km/s²)")
     right.set_ylabel("CV of 1 mm blocks")
     right.set_title("uniformity against mirror effort", fontsize=9)

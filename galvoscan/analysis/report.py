@@ -9,7 +9,7 @@ from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser
 from .galvo import GalvoModel
 from .patterns import ScanHead
-from .study import (DEFAULT_FIELD_MM, PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
+from .study import (PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
                     sigma_sweep, spiral_vs_raster)
 
 
@@ -49,9 +49,9 @@ def _cell(value, style):
     return style(value) if callable(style) else style.format(value)
 
 
-def format_table(runs):
+def format_table(runs, headers=None):
     """Metrics of several runs as a plain text table, one column per run."""
-    headers = [m["pattern"] for m in runs]
+    headers = headers or [m["pattern"] for m in runs]
     rows = [[label] + [_cell(m.get(key), style) for m in runs]
             for key, label, style in ROWS if any(key in m for m in runs)]
     widths = [max(len(r[i]) for r in rows + [["metric"] + headers])
@@ -138,7 +138,9 @@ def run_analyze(args):
     print(format_table([chosen.metrics, contrast.metrics]))
     if sweep:
         print("\nσ sweep (same dwell):")
-        print(format_table([r.metrics for r in sweep]))
+        print(format_table([r.metrics for r in sweep],
+                           [r.metrics["pattern"].replace("spiral gaussian ", "")
+                            .replace("spiral ", "") for r in sweep]))
     for spiral, raster in pairs:
         print(f"\nspiral vs raster, {spiral.metrics['field_mm'][0]:g} x "
               f"{spiral.metrics['field_mm'][1]:g} mm:")

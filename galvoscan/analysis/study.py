@@ -10,8 +10,6 @@ Every run uses the same rules, so numbers compare:
   100 kHz).
 """
 
-import numpy as np
-
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser, Region
 from .galvo import FRAME_PERIOD, GalvoModel
