@@ -70,11 +70,6 @@ def test_laser_pin_table_matches_the_platform():
     assert seen["interlock_open"] == [(INTERLOCK_PMOD_PIN[0], int(INTERLOCK_PMOD_PIN[1]))]
 
 
-def test_pictures_exist():
-    for picture in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README):
-        assert (ROOT / picture).is_file(), picture
-
-
 def test_sampling_table_is_what_the_analysis_measures():
     """The README's Gaussian-against-uniform figures come from `galvoscan analyze`."""
     from galvoscan.analysis.study import Setup, run_spiral
