@@ -58,6 +58,8 @@ class LaserController(wiring.Component):
     latch_setup, latch_pulse : float
         Seconds the power pins are stable before the latch pulse (and held after it), and the
         latch pulse width. 1 µs each by default, well inside TTL lasers' needs (tens of ns).
+    lookahead : int
+        Clocks by which :attr:`pulse_ahead` leads the PRR clock's rising edges.
 
     Interface attributes
     --------------------
@@ -84,6 +86,10 @@ class LaserController(wiring.Component):
         MO has led long enough: modulation may follow ``marking``.
     pulse : ``Out(1)``
         One clock per laser pulse emitted (PRR rising edge while modulating).
+    pulse_ahead : ``Out(1)``
+        One clock ``lookahead`` clocks before each rising edge of the PRR clock, whether or not
+        the laser is on: what pulse-synchronous position sources time their points by. Exact
+        while ``prr`` is unchanged (the PRR clock is free-running and gated onto its pin).
     """
 
     arm: In(1)
@@ -102,13 +108,18 @@ class LaserController(wiring.Component):
     faults: Out(2)
     mo_ready: Out(1)
     pulse: Out(1)
+    pulse_ahead: Out(1)
 
-    def __init__(self, *, clk_freq, mo_lead=5e-3, latch_setup=1e-6, latch_pulse=1e-6):
+    def __init__(self, *, clk_freq, mo_lead=5e-3, latch_setup=1e-6, latch_pulse=1e-6,
+                 lookahead=0):
         for name, value in (("mo_lead", mo_lead), ("latch_setup", latch_setup),
                             ("latch_pulse", latch_pulse)):
             if not value > 0:
                 raise ValueError(f"{name} must be a positive time in seconds, not {value!r}")
+        if not isinstance(lookahead, int) or lookahead < 0:
+            raise ValueError(f"lookahead must be a whole number of clocks, not {lookahead!r}")
         self.clk_freq = clk_freq
+        self.lookahead = lookahead
         #: Clocks MO leads modulation (at least ``mo_lead``).
         self.lead_clocks = clocks_at_least(mo_lead, clk_freq)
         self.setup_clocks = clocks_at_least(latch_setup, clk_freq)
@@ -204,19 +215,33 @@ class LaserController(wiring.Component):
         m.d.comb += self.mo_ready.eq(mo & (lead_left == 0))
 
         # --- PRR clock: a phase accumulator, 50 % duty ---------------------------------------
+        # Free-running, so that position sources can time points by the pulses (through
+        # pulse_ahead) whether or not the laser is on; MO gates it onto the pin. Its first high
+        # half after MO rises may be short, but modulation is still off then (MO lead).
         step = round(PRR_UNIT_HZ * 2 ** _PHASE_BITS / self.clk_freq)   # per unit of prr
         # The increment has a register of its own, so the multiply and the add do not share
         # a clock.
         increment = Signal(_PHASE_BITS)
         m.d.sync += increment.eq(self.prr * step)
         phase = Signal(_PHASE_BITS)
-        with m.If(mo):
-            m.d.sync += phase.eq(phase + increment)
-        with m.Else():
-            m.d.sync += phase.eq(0)
+        m.d.sync += phase.eq(phase + increment)
         prr_clock = phase[-1]
         prr_q = Signal()
         m.d.sync += prr_q.eq(prr_clock)
+
+        # The same phase `lookahead` clocks on: its rising edges lead the PRR clock's.
+        # lookahead × increment, as shifted copies of the increment (a constant multiplier in
+        # adders, leaving the DSPs to the scan path).
+        ahead_offset = Signal(_PHASE_BITS)
+        terms = [increment << bit for bit in range(self.lookahead.bit_length())
+                 if self.lookahead >> bit & 1]
+        total = sum(terms[1:], terms[0]) if terms else 0
+        m.d.sync += ahead_offset.eq(total)
+        ahead = Signal(_PHASE_BITS)
+        m.d.sync += ahead.eq(phase + increment + ahead_offset)     # = phase on the next clock
+        ahead_q = Signal()
+        m.d.sync += ahead_q.eq(ahead[-1])
+        m.d.comb += self.pulse_ahead.eq(ahead[-1] & ~ahead_q)
 
         # --- outputs ------------------------------------------------------------------------
         am = am_on
