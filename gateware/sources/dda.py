@@ -1,0 +1,226 @@
+"""Line interpolation at a fixed pitch (SPEC §1 "Line marking (001)", §3 vector mode).
+
+From a start point to an end point, the points ``P_k = round(P_0 + k·p·D/|D|)`` for every
+``k ≥ 1`` with ``k·p < |D|``, then the end point itself. Each step is one pitch ``p`` along the
+line: on the major axis ``p/√(1+m²)`` and on the minor one ``m`` times that (001's DDA, which
+swaps the roles of x and y for ``|m| > 1``); rounding is half up. The end point is always hit
+exactly and no point repeats: a segment of length ``L`` gives ``⌈L/p⌉`` points, one for a
+segment no longer than the pitch, none for a zero-length one.
+
+The per-segment arithmetic is done once, sequentially, at the start of a segment (140 clocks,
+while the segment before is still being marked; a segment of one point after another of one
+point can make the mirrors wait a frame at 12 MHz, see :class:`VectorSequencer`):
+
+* ``D² = dx² + dy²`` and ``p²``, exact, through one shared 16 × 16 multiplier (one DSP);
+* ``L = √D²`` to 16 fractional bits (digit by digit, 33 clocks);
+* the steps ``|dx|·p/L`` and ``|dy|·p/L`` to 32 fractional bits, one after the other
+  (restoring division, 48 clocks each, on the square root's remainder and subtractor).
+
+Then each point costs one clock: the positions are accumulated with 32 fractional bits, and
+whether another point fits (``(k·p)² < D²``) is decided exactly with integers, by adding the
+odd multiples of ``p²``. The accumulated error stays below 2⁻¹⁵ unit, so a point can differ
+from the exact rounding only when the exact value lies that close to a half.
+"""
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..points import FieldPoint
+
+
+__all__ = ["LineDDA", "Segment", "FRACTION_BITS"]
+
+
+#: Fractional bits of the step and of the accumulated positions.
+FRACTION_BITS = 32
+# Fractional bits of the line length.
+_LENGTH_FRACTION = 16
+
+#: A line to interpolate, in galvo units.
+Segment = data.StructLayout({
+    "x0": unsigned(16), "y0": unsigned(16),
+    "x1": unsigned(16), "y1": unsigned(16),
+})
+
+
+class LineDDA(wiring.Component):
+    """Steps along one segment at a time, at the pitch given with it.
+
+    Interface attributes
+    --------------------
+    segment : ``In(stream.Signature(Segment))``
+        The next line; taken when the previous one has given all its points.
+    pitch : ``In(16)``
+        Galvo units between points, 1 … 65535 (0 is taken as 1); sampled when a segment is
+        taken.
+    points : ``Out(stream.Signature(FieldPoint))``
+        The segment's points after its start, the end point last.
+    busy : ``Out(1)``
+        A segment is being set up or stepped.
+    """
+
+    segment: In(stream.Signature(Segment))
+    pitch: In(16)
+    points: Out(stream.Signature(FieldPoint))
+    busy: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+        F = FRACTION_BITS
+        G = _LENGTH_FRACTION
+
+        x1 = Signal(16)
+        y1 = Signal(16)
+        pitch = Signal(16)
+        negative_x = Signal()
+        negative_y = Signal()
+        ax = Signal(16)            # |dx|
+        ay = Signal(16)
+        # One 16 × 16 multiplier (one DSP), shared: operands on one clock, product the next.
+        mul_a = Signal(16)
+        mul_b = Signal(16)
+        product = Signal(32)
+        m.d.sync += product.eq(mul_a * mul_b)
+        d2 = Signal(34)            # |D|², exact
+        p2 = Signal(32)            # p², exact
+        phase = Signal(range(4))
+        # One remainder and one subtractor serve the square root and both divisions.
+        radicand = Signal(34)      # D², then the zero bits that follow it
+        remainder = Signal(36)
+        root = Signal(18 + G)      # ⌊L · 2^G⌋ < 2^(17+G)
+        steps = Signal(range(64))
+        second_axis = Signal()
+        step_x = Signal(16 + F)    # per point, units · 2^F, magnitudes
+        step_y = Signal(16 + F)
+        # Stepping state.
+        acc_x = Signal(17 + F)     # position + ½, units · 2^F
+        acc_y = Signal(17 + F)
+        kp2 = Signal(36)           # (k·p)²
+        odd = Signal(37)           # (2k + 1)·p²
+
+        # Square-root step: bring down two bits, try (root << 2) | 1. Division step: bring
+        # down a zero, try the root. Both subtract from the same remainder.
+        in_sqrt = Signal()
+        brought = Mux(in_sqrt, Cat(radicand[-2:], remainder), remainder << 1)[:37]
+        trial = Mux(in_sqrt, Cat(Const(1, 2), root), root)
+        fits = brought >= trial
+        next_remainder = Mux(fits, brought - trial, brought)[:36]
+
+        # Only the idle state takes a segment.
+        m.d.comb += self.busy.eq(~self.segment.ready)
+
+        with m.FSM():
+            with m.State("IDLE"):
+                m.d.comb += self.segment.ready.eq(1)
+                with m.If(self.segment.valid):
+                    p = self.segment.payload
+                    delta_x = Signal(signed(17))
+                    delta_y = Signal(signed(17))
+                    m.d.comb += [delta_x.eq(p.x1 - p.x0), delta_y.eq(p.y1 - p.y0)]
+                    m.d.sync += [
+                        x1.eq(p.x1),
+                        y1.eq(p.y1),
+                        pitch.eq(Mux(self.pitch == 0, 1, self.pitch)),
+                        negative_x.eq(delta_x[16]),
+                        negative_y.eq(delta_y[16]),
+                        # |d| = (d XOR sign) + sign
+                        ax.eq((delta_x[:16] ^ delta_x[16].replicate(16)) + delta_x[16]),
+                        ay.eq((delta_y[:16] ^ delta_y[16].replicate(16)) + delta_y[16]),
+                        acc_x.eq(Cat(Const(1 << (F - 1), F), p.x0)),   # x0 + ½, for rounding
+                        acc_y.eq(Cat(Const(1 << (F - 1), F), p.y0)),
+                        kp2.eq(0),
+                        phase.eq(0),
+                    ]
+                    m.next = "SQUARES"
+            with m.State("SQUARES"):
+                with m.Switch(phase):
+                    with m.Case(0):
+                        m.d.comb += [mul_a.eq(ax), mul_b.eq(ax)]
+                    with m.Case(1):
+                        m.d.comb += [mul_a.eq(ay), mul_b.eq(ay)]
+                        m.d.sync += d2.eq(product)
+                    with m.Case(2):
+                        m.d.comb += [mul_a.eq(pitch), mul_b.eq(pitch)]
+                        m.d.sync += d2.eq(d2 + product)
+                    with m.Case(3):
+                        m.d.sync += [p2.eq(product), odd.eq(product)]
+                m.d.sync += phase.eq(phase + 1)
+                with m.If(phase == 3):
+                    m.next = "CHECK"
+            with m.State("CHECK"):
+                m.d.sync += [radicand.eq(d2), remainder.eq(0), root.eq(0),
+                             steps.eq(17 + G - 1)]
+                with m.If(d2 == 0):
+                    m.next = "IDLE"                        # zero length: no point
+                with m.Elif(d2 <= p2):
+                    m.next = "END"                         # one pitch or less: the end only
+                with m.Else():
+                    m.next = "SQRT"
+            with m.State("SQRT"):
+                m.d.comb += in_sqrt.eq(1)
+                m.d.sync += [
+                    radicand.eq(radicand << 2),
+                    remainder.eq(next_remainder),
+                    root.eq(Cat(fits, root)),
+                    steps.eq(steps - 1),
+                ]
+                with m.If(steps == 0):
+                    m.d.sync += second_axis.eq(0)
+                    m.next = "PRODUCT"
+            with m.State("PRODUCT"):
+                # |dx|·p (then |dy|·p): the division's dividend.
+                m.d.comb += [mul_a.eq(Mux(second_axis, ay, ax)), mul_b.eq(pitch)]
+                m.next = "LOAD"
+            with m.State("LOAD"):
+                # |dx|·p < L·2^G, so the division starts with the whole product as its
+                # remainder; the quotient |dx|·p·2^F / L < p·2^F has 16 + F bits.
+                m.d.sync += [remainder.eq(product), steps.eq(16 + F - 1)]
+                m.next = "DIVIDE"
+            with m.State("DIVIDE"):
+                m.d.sync += [remainder.eq(next_remainder), steps.eq(steps - 1)]
+                with m.If(second_axis):
+                    m.d.sync += step_y.eq(Cat(fits, step_y))
+                with m.Else():
+                    m.d.sync += step_x.eq(Cat(fits, step_x))
+                with m.If(steps == 0):
+                    m.d.sync += second_axis.eq(1)
+                    with m.If(second_axis):
+                        m.next = "NEXT"
+                    with m.Else():
+                        m.next = "PRODUCT"
+            with m.State("NEXT"):
+                # Is there a point k·p < L before the end?
+                next_kp2 = kp2 + odd
+                with m.If(next_kp2 < d2):
+                    m.d.sync += [
+                        kp2.eq(next_kp2),
+                        odd.eq(odd + (p2 << 1)),
+                        # acc ± step as one adder: add the complement and one to subtract.
+                        acc_x.eq(acc_x + Cat(step_x ^ negative_x.replicate(len(step_x)),
+                                             negative_x.replicate(len(acc_x) - len(step_x)))
+                                 + negative_x),
+                        acc_y.eq(acc_y + Cat(step_y ^ negative_y.replicate(len(step_y)),
+                                             negative_y.replicate(len(acc_y) - len(step_y)))
+                                 + negative_y),
+                    ]
+                    m.next = "STEP"
+                with m.Else():
+                    m.next = "END"
+            with m.State("STEP"):
+                m.d.comb += [
+                    self.points.valid.eq(1),
+                    self.points.payload.x.eq(acc_x[F:F + 16]),
+                    self.points.payload.y.eq(acc_y[F:F + 16]),
+                ]
+                with m.If(self.points.ready):
+                    m.next = "NEXT"
+            with m.State("END"):
+                m.d.comb += [
+                    self.points.valid.eq(1),
+                    self.points.payload.x.eq(x1),
+                    self.points.payload.y.eq(y1),
+                ]
+                with m.If(self.points.ready):
+                    m.next = "IDLE"
+        return m

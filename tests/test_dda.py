@@ -1,0 +1,95 @@
+"""The line DDA alone, against the exact model (tests/vector_model.py), on many lines."""
+
+import random
+
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+from amaranth.sim import Simulator
+from hypothesis import given, settings, strategies as st
+
+from galvoscan.gateware.points import FieldPoint
+from galvoscan.gateware.sources.dda import LineDDA, Segment
+
+from vector_model import dda
+
+
+def test_signature():
+    assert LineDDA().signature.members == wiring.SignatureMembers({
+        "segment": In(stream.Signature(Segment)),
+        "pitch": In(16),
+        "points": Out(stream.Signature(FieldPoint)),
+        "busy": Out(1),
+    })
+
+
+def step_lines(lines):
+    """Points the DDA gives for each (x0, y0, x1, y1, pitch), with a stalling consumer."""
+    dut = LineDDA()
+    results = []
+
+    async def testbench(ctx):
+        stall = random.Random(7)
+        for x0, y0, x1, y1, pitch in lines:
+            ctx.set(dut.pitch, pitch)
+            ctx.set(dut.segment.payload, {"x0": x0, "y0": y0, "x1": x1, "y1": y1})
+            ctx.set(dut.segment.valid, 1)
+            await ctx.tick().until(dut.segment.ready)
+            ctx.set(dut.segment.valid, 0)
+            points = []
+            while True:
+                ready = stall.random() < 0.7
+                ctx.set(dut.points.ready, ready)
+                _, _, valid, x, y, busy = await ctx.tick().sample(
+                    dut.points.valid, dut.points.payload.x, dut.points.payload.y, dut.busy)
+                if valid and ready:
+                    points.append((x, y))
+                if not busy:
+                    break
+            results.append(points)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    return results
+
+
+def check(lines):
+    for line, got in zip(lines, step_lines(lines)):
+        x0, y0, x1, y1, pitch = line
+        assert got == dda((x0, y0), (x1, y1), max(pitch, 1)), line
+
+
+def test_special_lines():
+    check([
+        (100, 100, 700, 100, 60),         # 0°, a whole number of pitches
+        (700, 100, 100, 100, 60),         # 180°
+        (100, 100, 100, 1000, 60),        # 90°
+        (1000, 1000, 1424, 1424, 60),     # 45°
+        (5000, 5000, 5030, 5400, 60),     # steep
+        (40000, 30000, 30000, 31000, 60),  # negative, shallow
+        (300, 300, 300, 300, 60),         # zero length: nothing
+        (10, 10, 20, 10, 60),             # shorter than the pitch: the end only
+        (10, 10, 70, 10, 60),             # exactly one pitch: the end only
+        (0, 0, 65535, 65535, 1000),       # corner to corner
+        (65535, 0, 0, 65535, 0),          # pitch 0 is taken as 1
+        (3, 4, 303, 404, 100),            # a 3-4-5 triangle: exact multiples of the pitch
+    ])
+
+
+def test_random_lines():
+    rng = random.Random(2026)
+    lines = []
+    for _ in range(40):
+        x0, y0 = rng.randrange(65536), rng.randrange(65536)
+        x1 = min(65535, max(0, x0 + rng.randrange(-6000, 6000)))
+        y1 = min(65535, max(0, y0 + rng.randrange(-6000, 6000)))
+        lines.append((x0, y0, x1, y1, rng.choice([7, 30, 60, 61, 997])))
+    check(lines)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.tuples(st.integers(0, 65535), st.integers(0, 65535), st.integers(0, 65535),
+                 st.integers(0, 65535), st.integers(200, 65535)))
+def test_any_line(line):
+    check([line])
