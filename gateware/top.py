@@ -7,25 +7,35 @@ designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_cl
 ``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr`` with the ``interlock_open`` input.
 """
 
-from amaranth.hdl import Module, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
+from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
 from .field.scale import AMP_ONE, ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import STATUS_BITS
+from .host.regmap import BY_NAME, STATUS_BITS
 from .host.spi_target import SPITarget
 from .host.uart import uart_divisor
 from .host.uart_port import UARTCommandPort
 from .laser.controller import FAULT_BITS, LaserController
-from .phy.xy2_100 import XY2Transmitter, clocks_per_bit
+from .phy.xy2_100 import FRAME_BITS, XY2Transmitter, clocks_per_bit
 from .points import FIELD_CENTRE
+from .sources.raster import RasterSequencer
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
+from .sources.vector import VectorCommand, VectorSequencer
 
 
-__all__ = ["GalvoScanTop", "ScanSettings"]
+__all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH"]
+
+
+#: Values of the ``mode`` register.
+MODES = {"spiral": 0, "raster": 1, "vector": 2}
+
+#: Segments the vector queue holds (block RAM).
+VECTOR_QUEUE_DEPTH = 512
 
 
 def _check_int(name, value, low, high, unit=""):
@@ -51,11 +61,16 @@ class ScanSettings:
         ``(0, 127)`` and ``(1, 126)`` make the ellipse precess.
     run : bool
         Start sweeping out of reset.
+    mode : str
+        Scan mode out of reset: ``"spiral"``, ``"raster"`` or ``"vector"``.
     """
 
     def __init__(self, *, dwell=3, amp_x=AMP_ONE, amp_y=AMP_ONE,
                  center_x=FIELD_CENTRE, center_y=FIELD_CENTRE,
-                 x_range=(0, 127), y_range=(1, 126), run=True):
+                 x_range=(0, 127), y_range=(1, 126), run=True, mode="spiral"):
+        if mode not in MODES:
+            raise ValueError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
+        self.mode = mode
         _check_int("dwell", dwell, 1, 0xFFFF, " frames")
         for name, value in (("amp_x", amp_x), ("amp_y", amp_y)):
             _check_int(name, value, 0, 0xFFFF, " (Q1.15, 32768 = 1.0)")
@@ -71,7 +86,7 @@ class ScanSettings:
     def register_resets(self):
         """Reset values of the registers these settings set."""
         return {
-            "run": int(self.run), "dwell": self.dwell,
+            "mode": MODES[self.mode], "run": int(self.run), "dwell": self.dwell,
             "amp_x": self.amp_x, "amp_y": self.amp_y,
             "center_x": self.center_x, "center_y": self.center_y,
             "x_first": self.x_range[0], "x_last": self.x_range[1],
@@ -88,12 +103,14 @@ class ScanSettings:
 
 
 class GalvoScanTop(wiring.Component):
-    """The spiral scanner under host control.
+    """The scan head controller under host control.
 
     ::
 
-        SPI ─┐                                          ┌─▶ spiral sequencer ─▶ scale ─▶ XY2-100
-        UART ┴▶ command decoder ─▶ register file ───────┘      (ROMs)          /offset    PHY
+                                                 ┌─▶ spiral sequencer (ROMs) ─┐
+        SPI ─┐                                   ├─▶ raster fill              ├─▶ scale ─▶ XY2-100
+        UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  /offset   PHY
+                                                  laser controller ◀── marking, pulse timing
 
     Parameters
     ----------
@@ -189,34 +206,101 @@ class GalvoScanTop(wiring.Component):
 
         # --- scan ---------------------------------------------------------------------------
         m.submodules.spiral = spiral = SpiralSequencer(self.table)
+        m.submodules.raster = raster = RasterSequencer()
+        m.submodules.vector = vector = VectorSequencer()
         m.submodules.scale = scale = ScaleOffset()
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
 
-        spiral_mode = regs.mode == 0
+        mode = regs.mode
+        spiral_mode = mode == MODES["spiral"]
+        raster_mode = mode == MODES["raster"]
+        vector_mode = mode == MODES["vector"]
         m.d.comb += [
             spiral.run.eq(regs.run & spiral_mode),
-            spiral.frame_strobe.eq(phy.frame_strobe),
+            raster.run.eq(regs.run & raster_mode),
+            vector.run.eq(regs.run & vector_mode),
         ]
+        for source in (spiral, raster, vector):
+            m.d.comb += source.frame_strobe.eq(phy.frame_strobe)
         # Registers and ports of the same name.
         for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
             m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
-        connect(m, spiral.points, scale.offsets)
+        for name in ("pitch", "pulses_per_point", "jump_delay"):
+            m.d.comb += getattr(vector, name).eq(getattr(regs, name))
+        m.d.comb += [
+            raster.x.eq(regs.ras_x), raster.y.eq(regs.ras_y),
+            raster.width.eq(regs.ras_w), raster.height.eq(regs.ras_h),
+            raster.spacing.eq(regs.ras_spacing), raster.step.eq(regs.ras_step),
+            raster.along_y.eq(regs.ras_flags[0]), raster.one_way.eq(regs.ras_flags[1]),
+            raster.turn_gate.eq(regs.ras_turn_gate),
+        ]
+
+        # The selected source feeds the scale stage; the others are stopped.
+        for selected, source in ((spiral_mode, spiral), (raster_mode, raster),
+                                 (vector_mode, vector)):
+            with m.If(selected):
+                m.d.comb += [
+                    scale.offsets.valid.eq(source.points.valid),
+                    scale.offsets.payload.eq(source.points.payload),
+                    source.points.ready.eq(scale.offsets.ready),
+                ]
         connect(m, scale.positions, phy.position)
 
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
 
+        # --- vector queue -------------------------------------------------------------------
+        # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
+        # queue is full, and the refusal is counted.
+        m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
+                                                      depth=VECTOR_QUEUE_DEPTH)
+        m.d.comb += [
+            queue.w_en.eq(regs.vec_op_push),
+            queue.w_data.eq(Cat(decoder.bus.write_data[0], regs.vec_x, regs.vec_y)),
+            regs.vec_op_ready.eq(queue.w_rdy),
+            vector.commands.valid.eq(queue.r_rdy),
+            vector.commands.payload.eq(queue.r_data),
+            queue.r_en.eq(vector.commands.ready),
+        ]
+        vec_rejected = Signal(16)
+        with m.If(decoder.write_refused & (decoder.bus.address == BY_NAME["vec_op"].address) &
+                  (vec_rejected != 0xFFFF)):
+            m.d.sync += vec_rejected.eq(vec_rejected + 1)
+        vec_underruns = Signal(16)
+        with m.If(vector.underrun & (vec_underruns != 0xFFFF)):
+            m.d.sync += vec_underruns.eq(vec_underruns + 1)
+        vec_stalls = Signal(16)
+        with m.If(vector.stall & (vec_stalls != 0xFFFF)):
+            m.d.sync += vec_stalls.eq(vec_stalls + 1)
+
         # --- laser --------------------------------------------------------------------------
+        # Pulse-synchronous sources count the PRR clock ahead by the two frames a point takes
+        # to reach the head (into the scale stage's buffer, then onto the wires), plus the
+        # clock modulation takes to follow `marking`.
+        frame_clocks = FRAME_BITS * clocks_per_bit(self.clk_freq, self.bit_rate)
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
-                                                     mo_lead=self.mo_lead)
-        # Marking: the spiral is running and has put out its first point (not parked).
-        marking = Signal()
+                                                     mo_lead=self.mo_lead,
+                                                     lookahead=2 * frame_clocks + 1)
+        m.d.comb += vector.pulse_ahead.eq(laser.pulse_ahead)
+        # Spiral: marking while it runs, from its first point on (not while parked).
+        spiral_marking = Signal()
         with m.If(~spiral.run):
-            m.d.sync += marking.eq(0)
+            m.d.sync += spiral_marking.eq(0)
         with m.Elif(spiral.points.valid & spiral.points.ready):
-            m.d.sync += marking.eq(1)
+            m.d.sync += spiral_marking.eq(1)
+        # Raster and vector: each frame's laser decision, from the moment that frame has been
+        # sent: two frame strobes after it was made.
+        decided = Signal()
+        frame_marking = Signal()
+        with m.If(phy.frame_strobe):
+            m.d.sync += [
+                decided.eq((raster_mode & raster.laser) | (vector_mode & vector.laser)),
+                frame_marking.eq(decided),
+            ]
+        marking = Signal()
+        m.d.comb += marking.eq(Mux(spiral_mode, spiral_marking, frame_marking))
         m.d.comb += [
             laser.arm.eq(regs.arm),
             laser.power.eq(regs.laser_power),
@@ -240,7 +324,7 @@ class GalvoScanTop(wiring.Component):
         with m.Elif(decoder.status_read):
             m.d.sync += clipped_since_read.eq(0)
         m.d.comb += [
-            regs.status[STATUS_BITS["running"]].eq(spiral.run),
+            regs.status[STATUS_BITS["running"]].eq(spiral.run | raster.run | vector.run),
             regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
             regs.status[STATUS_BITS["armed"]].eq(regs.arm),
             regs.status[STATUS_BITS["fault_interlock"]].eq(laser.faults[FAULT_BITS["interlock"]]),
@@ -248,7 +332,12 @@ class GalvoScanTop(wiring.Component):
             regs.status[STATUS_BITS["mo_on"]].eq(laser.laser_mo),
             regs.status[STATUS_BITS["emitting"]].eq(laser.laser_am),
             regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
+            regs.status[STATUS_BITS["vector_busy"]].eq(vector.busy),
             regs.errors.eq(decoder.errors),
             regs.pulses.eq(pulses),
+            regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
+            regs.vec_rejected.eq(vec_rejected),
+            regs.vec_underruns.eq(vec_underruns),
+            regs.vec_stalls.eq(vec_stalls),
         ]
         return m

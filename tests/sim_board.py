@@ -39,6 +39,9 @@ class SimBoard:
         #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power) on every
         #: clock, if recorded.
         self.laser_pins = []
+        #: xy2_sync on every clock, if the laser is recorded (frame k's position is in force
+        #: from sync's (k+1)-th rising edge: the end of that frame).
+        self.sync_pins = []
         if record_laser:
             self.sim.add_testbench(self._laser_recorder, background=True)
         # Start the processes now, in this thread (a simulator never run leaves its testbench
@@ -62,6 +65,7 @@ class SimBoard:
             self.laser_pins.append((ctx.get(top.laser_mo), ctx.get(top.laser_am),
                                     ctx.get(top.laser_prr), ctx.get(top.interlock_open),
                                     ctx.get(top.laser_latch), ctx.get(top.laser_power)))
+            self.sync_pins.append(ctx.get(top.xy2_sync))
             await ctx.tick()
 
     async def _interlock(self, ctx):

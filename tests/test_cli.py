@@ -1,11 +1,13 @@
 import csv
 import json
+import math
 from pathlib import Path
 import subprocess
 import sysconfig
 
 import pytest
 
+from galvoscan.gateware.sources.vector import VectorCommand
 from galvoscan.cli import main
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
@@ -113,7 +115,8 @@ def test_build_icebreaker(tmp_path, capsys):
     assert code == 0
     assert Path(report["bitstream"]).stat().st_size > 100_000   # a whole UP5K image
     assert report["meets_timing"] and report["fmax_mhz"] >= 1.5 * 12
-    assert report["brams"] == 2                                 # the two spiral ROMs
+    # The two spiral ROMs, and the vector queue (512 × 33 bits in 512 × 8 blocks).
+    assert report["brams"] == 2 + math.ceil(VectorCommand.size / 8)
     assert 0 < report["luts"] < report["luts_available"]
 
 

@@ -10,7 +10,8 @@ from galvoscan.gateware.host.regmap import BY_ADDRESS, REGISTERS
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 
 
-RW = [r for r in REGISTERS if r.access == "rw"]
+# Writable registers that read back what was written (a queue register reads its last write).
+RW = [r for r in REGISTERS if r.access in ("rw", "queue")]
 STROBES = [r for r in REGISTERS if r.access == "strobe"]
 CHECK = 0x64
 
@@ -37,7 +38,9 @@ class CommandModel:
                 self.replies.append((reg.address, self.values.get(reg.name)))
         elif reg.access == "ro" or not reg.low <= data <= reg.high:
             self.errors += 1
-        elif reg.access == "rw":
+        elif reg.access in ("rw", "queue"):
+            # (A queue write is refused only when the vector queue is full: never here, where
+            # streams carry far fewer than its 512 places.)
             self.values[reg.name] = data
 
     def cut_short(self):

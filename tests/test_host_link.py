@@ -10,7 +10,8 @@ from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 from spiral_model import spiral_frames
 
 
-RW = [r for r in REGISTERS if r.access == "rw"]
+# Writable registers that read back what was written (a queue register reads its last write).
+RW = [r for r in REGISTERS if r.access in ("rw", "queue")]
 
 
 def make_link(kind, board):

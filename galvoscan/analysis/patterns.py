@@ -146,8 +146,12 @@ def spiral_dwell_for_speed(table, *, amp, speed_m_s, head, x_range=None, y_range
 
 
 def raster_frames(*, corner, size, spacing, step, lines_along="x", bidirectional=True,
-                  turn_gate=0):
-    """Line-by-line fill of a rectangle (the paper's baseline), one position per frame.
+                  turn_gate=0, passes=1):
+    """Line-by-line fill of a rectangle (the paper's baseline), one position per frame: the
+    sequence the gateware's raster mode emits (``gateware/sources/raster.py``).
+
+    A line runs ``0, step, 2·step, …`` from its start and ends exactly on the far edge; a line
+    run backwards visits the mirror image of those positions (``along − k·step``, then 0).
 
     Parameters
     ----------
@@ -168,8 +172,13 @@ def raster_frames(*, corner, size, spacing, step, lines_along="x", bidirectional
         Frames at the start of each line after the first with the laser off, while the mirror
         turns round. 0 (default) keeps the laser on, as the paper's raster does: it is what
         over-burns the line ends.
+    passes : int
+        Passes over the rectangle, one after the other (from the second on, the first line is
+        gated too).
     """
     (x0, y0), (width, height) = corner, size
+    if not isinstance(passes, int) or passes < 1:
+        raise ValueError(f"passes must be a positive whole number, not {passes!r}")
     for name, value in (("spacing", spacing), ("step", step)):
         if not isinstance(value, (int, np.integer)) or value < 1:
             raise ValueError(f"{name} must be a positive number of galvo units, not {value!r}")
@@ -184,15 +193,16 @@ def raster_frames(*, corner, size, spacing, step, lines_along="x", bidirectional
     line = line[np.concatenate(([True], np.diff(line) > 0))]    # end exactly, no repeat
     lines = across // spacing + 1
     positions_along, positions_across, laser, points = [], [], [], []
-    for j in range(lines):
-        run = line if not (bidirectional and j % 2) else line[::-1]
+    for n in range(passes * lines):
+        j = n % lines
+        run = line if not (bidirectional and j % 2) else along - line
         positions_along.append(run)
         positions_across.append(np.full(len(run), j * spacing))
         enabled = np.ones(len(run), bool)
-        if j > 0:
+        if n > 0:
             enabled[:turn_gate] = False
         laser.append(enabled)
-        points.append(np.full(len(run), j))
+        points.append(np.full(len(run), n))
     along_pos = np.concatenate(positions_along)
     across_pos = np.concatenate(positions_across)
     if lines_along == "x":

@@ -103,7 +103,8 @@ def run_spiral(setup, *, field_mm=DEFAULT_FIELD_MM, table=None, dwell=None, frac
 
 
 def run_raster(setup, *, field_mm=DEFAULT_FIELD_MM, bidirectional=True, turn_gate=0):
-    """Analyse a line-by-line fill of ``field_mm``, lines along X at the setup's speed."""
+    """Analyse a line-by-line fill of ``field_mm``, lines along X at the setup's speed: the
+    sequence of the gateware's raster mode (its register values are in the metrics)."""
     _check_field(field_mm, setup.head)
     head = setup.head
     size = tuple(int(round(float(head.units(s)))) for s in field_mm)
@@ -115,8 +116,14 @@ def run_raster(setup, *, field_mm=DEFAULT_FIELD_MM, bidirectional=True, turn_gat
     result = analyse(frames, head=head, laser=setup.laser, galvo=setup.galvo,
                      region=setup.region(field_mm), periodic=False,
                      target_dose_j_cm2=setup.target_dose_j_cm2)
+    # The gateware's raster mode draws exactly these frames from these register values
+    # (tests/test_vector.py checks the wires against raster_frames).
+    registers = {"mode": 1, "ras_x": corner[0], "ras_y": corner[1], "ras_w": size[0],
+                 "ras_h": size[1], "ras_spacing": spacing, "ras_step": step, "ras_flags": 0,
+                 "ras_turn_gate": 0}
     result.metrics = {"pattern": "raster", "field_mm": list(field_mm),
-                      "line_spacing_mm": setup.line_spacing_mm, **result.metrics}
+                      "line_spacing_mm": setup.line_spacing_mm, "registers": registers,
+                      **result.metrics}
     return result
 
 

@@ -38,6 +38,9 @@ class CommandDecoder(wiring.Component):
         High for one clock for each accepted frame (the watchdog's sign of life).
     status_read : ``Out(1)``
         High for one clock when ``status`` is read (it clears the sticky flags).
+    write_refused : ``Out(1)``
+        High for one clock when a well-formed write frame is refused by the register file
+        (``bus.address`` tells which register).
     """
 
     spi_frames: In(stream.Signature(CommandFrame))
@@ -48,6 +51,7 @@ class CommandDecoder(wiring.Component):
     errors: Out(16)
     accepted: Out(1)
     status_read: Out(1)
+    write_refused: Out(1)
 
     def elaborate(self, platform):
         m = Module()
@@ -81,6 +85,7 @@ class CommandDecoder(wiring.Component):
         m.d.comb += [
             self.bus.write_en.eq(valid & write_ok),
             self.accepted.eq(valid & (write_ok | read_ok)),
+            self.write_refused.eq(valid & complete & ~is_read & ~self.bus.write_ok),
             self.status_read.eq(valid & read_ok &
                                 (address[0:7] == BY_NAME["status"].address)),
         ]

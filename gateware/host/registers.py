@@ -44,7 +44,9 @@ class RegisterFile(wiring.Component):
     Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
     on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
     ``errors``) that the bus reads; a strobe register is an output that is high for one clock
-    when 1 is written to it, and reads 0.
+    when 1 is written to it, and reads 0; a queue register is an output holding the last value
+    written, with ``<name>_push`` high for one clock per accepted write and ``<name>_ready``
+    (an input) refusing writes while low.
 
     Parameters
     ----------
@@ -74,6 +76,10 @@ class RegisterFile(wiring.Component):
                 members[reg.name] = Out(reg.width, init=self.resets[reg.name])
             elif reg.access == "strobe":
                 members[reg.name] = Out(reg.width)
+            elif reg.access == "queue":
+                members[reg.name] = Out(reg.width, init=self.resets[reg.name])
+                members[f"{reg.name}_push"] = Out(1)
+                members[f"{reg.name}_ready"] = In(1)
             else:
                 members[reg.name] = In(reg.width)
         super().__init__(members)
@@ -94,9 +100,14 @@ class RegisterFile(wiring.Component):
                         ]
                     else:
                         m.d.comb += bus.read_data.eq(value)
-                    if reg.access == "rw":
+                    if reg.access in ("rw", "queue"):
                         in_range = (bus.write_data >= reg.low) & \
                                    (bus.write_data <= self.highs[reg.name])
+                        if reg.access == "queue":
+                            # A full queue refuses the write: nothing is lost silently.
+                            in_range &= getattr(self, f"{reg.name}_ready")
+                            m.d.comb += getattr(self, f"{reg.name}_push").eq(
+                                bus.write_en & in_range)
                         m.d.comb += bus.write_ok.eq(in_range)
                         with m.If(bus.write_en & in_range):
                             m.d.sync += value.eq(bus.write_data)

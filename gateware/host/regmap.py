@@ -12,7 +12,9 @@ A frame is accepted only if its check byte is 0x64, its address is known, the ac
 anything else changes nothing and counts in ``errors``.
 
 Access: ``rw`` registers hold what was written; ``ro`` ones report state; a ``strobe`` register
-acts on a write of 1 (a write of 0 does nothing) and always reads 0.
+acts on a write of 1 (a write of 0 does nothing) and always reads 0; a ``queue`` register
+pushes each write into a queue (the vector FIFO) and reads back the last value written: a
+write when the queue is full is refused (counted in ``errors`` and in the queue's own counter).
 """
 
 from dataclasses import dataclass
@@ -32,7 +34,7 @@ READ_FLAG = 0x80
 class Register:
     name: str
     address: int
-    access: str          # "rw", "ro" or "strobe"
+    access: str          # "rw", "ro", "strobe" or "queue"
     reset: int
     low: int             # smallest value a write may carry
     high: int            # largest value a write may carry
@@ -48,7 +50,7 @@ class Register:
 
 #: Bits of the ``status`` register.
 STATUS_BITS = {
-    "running": 0,           # the spiral is being swept
+    "running": 0,           # the selected scan mode is running
     "clipped": 1,           # a point had to be clamped at the field edge since status was read
     "armed": 2,             # the arm register is set
     "fault_interlock": 3,   # latched: the interlock opened
@@ -56,26 +58,29 @@ STATUS_BITS = {
     "mo_on": 5,             # the master oscillator is on
     "emitting": 6,          # modulation is on: the laser is firing
     "interlock_open": 7,    # the interlock is open now
+    "vector_busy": 8,       # vector mode has segments queued or points still to mark
 }
 
 
 REGISTERS = [
     # --- read-only --------------------------------------------------------------------------
     Register("status", 0x00, "ro", 0, 0, 0, "flags",
-             "bit 0 running, bit 1 a point was clamped at the field edge since the last read "
+             "bit 0 running (the selected mode), bit 1 a point was clamped at the field edge since the last read "
              "of status (cleared by reading), bit 2 armed, bit 3 interlock fault (latched), "
              "bit 4 watchdog fault (latched), bit 5 MO on, bit 6 emitting, bit 7 interlock "
-             "open now", width=8),
+             "open now, bit 8 vector mode busy (segments queued or points still to mark)",
+             width=9),
     Register("errors", 0x01, "ro", 0, 0, 0, "frames",
              "rejected command frames since reset (bad check byte, unknown address, write to "
              "a read-only register, value out of range, cut short, UART framing error); "
              "stops at 65535"),
     # --- galvo group ------------------------------------------------------------------------
-    Register("mode", 0x02, "rw", 0, 0, 0, "enum",
-             "scan mode: 0 = spiral (raster and vector modes will take 1 and 2)", width=2),
+    Register("mode", 0x02, "rw", 0, 0, 2, "enum",
+             "scan mode: 0 = spiral, 1 = raster (line-by-line fill), 2 = vector (queued "
+             "jump/mark segments)", width=2),
     Register("run", 0x03, "rw", 1, 0, 1, "bool",
              "1 = sweep; 0 = stop (the mirrors hold the last point; the next start begins the "
-             "pattern again)", width=1),
+             "spiral or raster again; the vector queue is kept)", width=1),
     Register("dwell", 0x04, "rw", 3, 1, 0xFFFF, "frames (10 µs)",
              "frames each spiral point is held; 3 = 30 µs, the paper's figure"),
     Register("amp_x", 0x05, "rw", 0x8000, 0, 0xFFFF, "Q1.15 (32768 = 1.0)",
@@ -96,6 +101,52 @@ REGISTERS = [
              "makes the ellipse precess", width=7),
     Register("y_last", 0x0C, "rw", 126, 0, 127, "ROM address",
              "last Y table address walked (inclusive)", width=7),
+    # --- vector group -----------------------------------------------------------------------
+    Register("vec_x", 0x20, "rw", 0x8000, 0, 0xFFFF, "galvo units",
+             "X of the next segment's end point (offset binary, 32768 = centre)"),
+    Register("vec_y", 0x21, "rw", 0x8000, 0, 0xFFFF, "galvo units",
+             "Y of the next segment's end point"),
+    Register("vec_op", 0x22, "queue", 0, 0, 1, "enum",
+             "writing queues a segment to (vec_x, vec_y): 0 = jump (laser off, then "
+             "jump_delay), 1 = mark (laser on, points every pitch); refused if the queue is full"
+             , width=1),
+    Register("fifo_free", 0x23, "ro", 0, 0, 0, "segments",
+             "free places in the vector queue"),
+    Register("pitch", 0x24, "rw", 60, 1, 0xFFFF, "galvo units",
+             "distance between marked points; 60 ≈ 0.1 mm on a 110 mm field (001)"),
+    Register("pulses_per_point", 0x25, "rw", 1, 1, 255, "laser pulses",
+             "pulses each marked point gets; the line speed is pitch × PRR / pulses_per_point"
+             , width=8),
+    Register("jump_delay", 0x26, "rw", 50, 1, 0xFFFF, "frames (10 µs)",
+             "laser-off wait after a jump for the mirrors to settle, before marking resumes"),
+    Register("vec_rejected", 0x27, "ro", 0, 0, 0, "writes",
+             "vec_op writes refused because the queue was full; stops at 65535"),
+    Register("vec_underruns", 0x28, "ro", 0, 0, 0, "times",
+             "times the queue ran empty in the middle of marking (the laser stopped and the "
+             "mirrors held until more segments came); stops at 65535"),
+    Register("vec_stalls", 0x29, "ro", 0, 0, 0, "frames",
+             "frames a marked line waited, laser off, for the next segment to be set up (only "
+             "below about 90 system clocks per frame); stops at 65535"),
+    # --- raster group -----------------------------------------------------------------------
+    Register("ras_x", 0x30, "rw", 28768, 0, 0xFFFF, "galvo units",
+             "raster rectangle: X of its lower-left corner"),
+    Register("ras_y", 0x31, "rw", 28768, 0, 0xFFFF, "galvo units",
+             "raster rectangle: Y of its lower-left corner"),
+    Register("ras_w", 0x32, "rw", 8000, 0, 0xFFFF, "galvo units",
+             "raster rectangle: width (positions past 65535 are clamped)"),
+    Register("ras_h", 0x33, "rw", 8000, 0, 0xFFFF, "galvo units",
+             "raster rectangle: height"),
+    Register("ras_spacing", 0x34, "rw", 30, 1, 0xFFFF, "galvo units",
+             "line spacing; 30 ≈ 0.05 mm on a 110 mm field"),
+    Register("ras_step", 0x35, "rw", 30, 1, 0xFFFF, "galvo units per frame",
+             "distance along a line per 10 µs frame: the line speed; 30 ≈ 5 m/s on a 110 mm "
+             "field"),
+    Register("ras_flags", 0x36, "rw", 0, 0, 3, "flags",
+             "bit 0: lines along Y (else X); bit 1: every line in the same direction, with a "
+             "jump back (else serpentine)", width=2),
+    Register("ras_turn_gate", 0x37, "rw", 0, 0, 0xFFFF, "frames (10 µs)",
+             "laser off for this many frames at the start of each line but the first, while the "
+             "mirrors turn; 0 keeps it on, as the paper's raster does"),
     # --- laser group ------------------------------------------------------------------------
     Register("arm", 0x10, "rw", 0, 0, 1, "bool",
              "1 = arm the laser: latch power, MO on, modulation after the MO lead (5 ms) "

@@ -1,0 +1,197 @@
+"""Vector marking: queued jump / mark segments, stepped at a pitch, each point held for a whole
+number of laser pulses (SPEC §1 "Line marking (001)", §3 vector mode).
+
+Two halves:
+
+* the **point generator** turns commands into points: a jump gives its end point (laser off);
+  a mark gives, if the laser was off, the current point first, then the :class:`LineDDA`'s
+  points up to the end point (laser on). Points wait in a one-point slot; the DDA works out
+  the next segment while the slot's point is being held.
+* the **pacer** hands points to the PHY at frame boundaries. A marked point is held until
+  exactly ``pulses_per_point`` laser pulses have fallen on it, then the next one follows in
+  the pulse gap (001: t = N·T − 10 µs before the next pulse, the frame's transmission time;
+  here the pacer counts the laser's PRR clock ahead by the two frames a point takes to reach
+  the head, through ``pulse_ahead``). A jump's point is held ``jump_delay`` frames with the
+  laser off. The line speed is ``pitch × PRR / pulses_per_point``.
+
+This needs at most one pulse per frame: the PRR must not exceed the frame rate (100 kHz at
+XY2-100), as 001 says. Above it a point would get more pulses than asked.
+
+The pacer's decision for a frame, :attr:`laser`, applies from the moment that frame has been
+sent; the system top delays it by two frames to the laser's ``marking`` input.
+"""
+
+from amaranth.hdl import Cat, Module, Signal
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..points import FIELD_CENTRE, OffsetPoint
+from .dda import LineDDA
+
+
+__all__ = ["VectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
+
+
+#: ``op`` of a jump: move with the laser off.
+OP_JUMP = 0
+#: ``op`` of a mark: step a line with the laser on.
+OP_MARK = 1
+
+#: One queued segment: where to go, and how.
+VectorCommand = data.StructLayout({"op": 1, "x": 16, "y": 16})
+
+
+class VectorSequencer(wiring.Component):
+    """Vector marking from a queue of segments.
+
+    Interface attributes
+    --------------------
+    commands : ``In(stream.Signature(VectorCommand))``
+        The queue (a FIFO in the system top).
+    frame_strobe : ``In(1)``
+        The PHY's frame strobe (its position is taken on that clock).
+    pulse_ahead : ``In(1)``
+        The laser's PRR rising edges, two frames and one clock early.
+    run : ``In(1)``
+        Hand points on while high; while low the mirrors hold and the laser is off (the queue
+        and the position are kept).
+    pitch : ``In(16)``
+        Galvo units between marked points.
+    pulses_per_point : ``In(8)``
+        Laser pulses each marked point gets (0 is taken as 1).
+    jump_delay : ``In(16)``
+        Frames a jump's end point is held with the laser off (0 is taken as 1).
+    points : ``Out(stream.Signature(OffsetPoint))``
+        To the scale stage: offsets from the field centre (position − 32768).
+    laser : ``Out(1)``
+        Laser wanted during the frame decided at the last strobe.
+    underrun : ``Out(1)``
+        One clock when a marked point's pulses are done and the queue has run empty (the
+        mirrors hold with the laser off until more segments come).
+    busy : ``Out(1)``
+        Segments are queued, being stepped, or a point is still being held.
+    stall : ``Out(1)``
+        One clock when a marked point's pulses are done and the next segment is still being
+        set up (the mirrors hold with the laser off for a frame). Needs fewer than about 90
+        system clocks per frame: never at 12 MHz and XY2-100 (120).
+    """
+
+    commands: In(stream.Signature(VectorCommand))
+    frame_strobe: In(1)
+    pulse_ahead: In(1)
+    run: In(1)
+    pitch: In(16)
+    pulses_per_point: In(8)
+    jump_delay: In(16)
+    points: Out(stream.Signature(OffsetPoint))
+    laser: Out(1)
+    underrun: Out(1)
+    stall: Out(1)
+    busy: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.dda = dda = LineDDA()
+        m.d.comb += dda.pitch.eq(self.pitch)
+
+        # --- point generator ----------------------------------------------------------------
+        cur_x = Signal(16, init=FIELD_CENTRE)      # where the last command ended
+        cur_y = Signal(16, init=FIELD_CENTRE)
+        pen_down = Signal()                        # the last point handed on was marked
+        slot_valid = Signal()
+        slot_x = Signal(16)
+        slot_y = Signal(16)
+        slot_mark = Signal()
+        taken = Signal()                           # the pacer takes the slot this clock
+
+        with m.If(taken):
+            m.d.sync += slot_valid.eq(0)
+
+        segment_valid = Signal()
+        m.d.comb += dda.segment.valid.eq(segment_valid)
+        with m.If(dda.segment.ready):
+            m.d.sync += segment_valid.eq(0)
+
+        slot_free = ~slot_valid | taken
+        command = self.commands.payload
+        fetching = Signal()
+        with m.FSM():
+            with m.State("FETCH"):
+                m.d.comb += fetching.eq(~segment_valid & ~dda.busy)
+                with m.If(self.commands.valid & slot_free & ~segment_valid & ~dda.busy):
+                    with m.If(command.op == OP_JUMP):
+                        m.d.comb += self.commands.ready.eq(1)
+                        m.d.sync += [
+                            slot_valid.eq(1), slot_x.eq(command.x), slot_y.eq(command.y),
+                            slot_mark.eq(0),
+                            pen_down.eq(0), cur_x.eq(command.x), cur_y.eq(command.y),
+                        ]
+                    with m.Else():
+                        m.d.comb += self.commands.ready.eq(1)
+                        # The line from where we are; its start is marked first if the laser
+                        # was off.
+                        m.d.sync += [
+                            dda.segment.payload.x0.eq(cur_x), dda.segment.payload.y0.eq(cur_y),
+                            dda.segment.payload.x1.eq(command.x),
+                            dda.segment.payload.y1.eq(command.y),
+                            segment_valid.eq(1),
+                            cur_x.eq(command.x), cur_y.eq(command.y),
+                            pen_down.eq(1),
+                        ]
+                        with m.If(~pen_down):
+                            m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x), slot_y.eq(cur_y),
+                                         slot_mark.eq(1)]
+                        m.next = "STEP"
+            with m.State("STEP"):
+                m.d.comb += dda.points.ready.eq(slot_free)
+                with m.If(dda.points.valid & slot_free):
+                    m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
+                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1)]
+                with m.Elif(~segment_valid & ~dda.busy):
+                    m.next = "FETCH"
+
+        # --- pacer --------------------------------------------------------------------------
+        holding_mark = Signal()
+        holding_jump = Signal()
+        pulses = Signal(8)          # early PRR edges since the held point was handed on
+        frames = Signal(16)         # frame strobes since then
+        pulses_now = Signal(8)
+        m.d.comb += pulses_now.eq(pulses + (self.pulse_ahead & (pulses != 0xFF)))
+        need = Signal(8)
+        m.d.comb += need.eq(self.pulses_per_point | (self.pulses_per_point == 0))
+        delay = Signal(16)
+        m.d.comb += delay.eq(self.jump_delay | (self.jump_delay == 0))
+
+        with m.If(self.points.ready):
+            m.d.sync += self.points.valid.eq(0)
+        m.d.comb += self.busy.eq(self.commands.valid | ~fetching | slot_valid | holding_mark |
+                                 holding_jump)
+
+        m.d.sync += pulses.eq(pulses_now)
+        with m.If(self.frame_strobe):
+            done = (~holding_mark | (pulses_now >= need)) & \
+                   (~holding_jump | (frames + 1 >= delay))
+            with m.If(~self.run):
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+            with m.Elif(done & slot_valid):
+                m.d.comb += taken.eq(1)
+                m.d.sync += [
+                    self.points.valid.eq(1),
+                    # Offset binary to an offset from the centre: flip the top bit.
+                    self.points.payload.x.eq(Cat(slot_x[:15], ~slot_x[15])),
+                    self.points.payload.y.eq(Cat(slot_y[:15], ~slot_y[15])),
+                    self.laser.eq(slot_mark),
+                    holding_mark.eq(slot_mark),
+                    holding_jump.eq(~slot_mark),
+                    pulses.eq(0),
+                    frames.eq(0),
+                ]
+            with m.Elif(done):
+                # Nothing to go on with: hold here with the laser off.
+                queue_empty = fetching & ~self.commands.valid
+                m.d.comb += [self.underrun.eq(holding_mark & queue_empty),
+                             self.stall.eq(holding_mark & ~queue_empty)]
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+            with m.Else():
+                m.d.sync += frames.eq(frames + (frames != 0xFFFF))
+        return m

@@ -1,0 +1,206 @@
+"""Vector and raster modes (issue 6): the points decoded from the XY2-100 wires against plain
+Python models written from SPEC §1 (001's DDA) and §3, and the laser pulses on every point
+counted on the DB25 pins."""
+
+# amaranth: UnusedElaboratable=no
+
+import bisect
+
+import pytest
+
+from galvoscan.analysis.patterns import raster_frames
+from galvoscan.client import HostClient
+from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
+
+from sim_board import SimBoard, SimSPITransport
+from vector_model import PARK, dda, job_model, merge
+
+
+def test_model_follows_001():
+    """0.1 mm (60 units) pitch: a 600-unit line has points every 60; a 45° line steps both
+    axes by 60/√2 ≈ 42.4."""
+    assert dda((0, 0), (600, 0), 60) == [(60 * k, 0) for k in range(1, 11)]
+    assert dda((0, 0), (100, 100), 60)[0] == (42, 42)
+    assert dda((0, 0), (0, -130), 60) == [(0, -60), (0, -120), (0, -130)]
+    assert dda((5, 5), (5, 5), 60) == []
+
+
+# --- running a job on the simulated board -------------------------------------------------------
+
+def start_board(clk_freq=4e6, **settings):
+    board = SimBoard(clk_freq=clk_freq, record_laser=True, mo_lead=0.2e-3,
+                     settings=ScanSettings(mode="vector", run=False, **settings))
+    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    return board, client
+
+
+def queue(client, job):
+    for op, x, y in job:
+        client.write("vec_x", x)
+        client.write("vec_y", y)
+        client.write("vec_op", 0 if op == "jump" else 1)
+
+
+def pulses_per_frame(board):
+    """(position, pulses) per frame read off the pins: frames from the tests' XY2 reader, each
+    in force from the end of its frame (the rising SYNC edge that starts the next one); pulses
+    are rising PRR edges while modulation is on, given to the frame in force before them."""
+    frames = [f for _, f in board.xy2_frames()]
+    sync = board.sync_pins
+    starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
+    pins = board.laser_pins
+    counts = [0] * len(frames)
+    for clock in range(1, len(pins)):
+        if pins[clock][2] and not pins[clock - 1][2] and pins[clock][1]:
+            frame = bisect.bisect_left(starts, clock) - 2
+            assert frame >= 0, "a pulse before any frame was sent"
+            counts[frame] += 1
+    return list(zip(frames, counts))
+
+
+def runs_on_the_wires(board):
+    return merge(pulses_per_frame(board))
+
+
+def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e6):
+    board, client = start_board(clk_freq)
+    client.write("laser_prr", prr_100hz)
+    client.write("pulses_per_point", pulses)
+    client.write("pitch", pitch)
+    client.write("jump_delay", 5)
+    client.write("laser_power", 200)
+    queue(client, job)
+    client.write("arm", 1)
+    board.run_for(0.3e-3)                        # MO lead
+    client.write("run", 1)
+    expected = job_model(job, pitch, pulses)
+    frames_needed = sum(max(1, n) for _, n in expected) * (100_000 / (prr_100hz * 100)) + 20
+    board.run_for(seconds or frames_needed * 12e-6 + 1e-3)
+    return board, client, expected
+
+
+LINES = [
+    ("jump", 20000, 20000), ("mark", 20600, 20000),          # 0°
+    ("mark", 21000, 20400),                                  # 45°, straight on from there
+    ("mark", 21050, 21300),                                  # steep
+    ("jump", 40000, 40000), ("mark", 39000, 39300),          # negative both ways
+    ("jump", 10000, 50000), ("mark", 10000, 50000),          # a single point
+    ("mark", 10000, 50000),                                  # zero length: nothing new
+    ("mark", 10030, 49990),                                  # shorter than the pitch
+    ("jump", 32768, 32768),                                  # park, laser off
+]
+
+
+@pytest.mark.parametrize("prr_100hz, pulses", [(600, 1), (300, 3)])
+def test_job_matches_the_model_point_for_point_and_pulse_for_pulse(prr_100hz, pulses):
+    board, client, expected = run_job(LINES, prr_100hz=prr_100hz, pulses=pulses)
+    wires = runs_on_the_wires(board)
+    assert wires[0] == (PARK, 0)                 # parked until run, laser off
+    assert wires[1:] == expected
+    # The job ends with a jump, laser off: running out of segments then is no underrun.
+    assert client.read("vec_underruns") == 0
+    assert client.read("errors") == 0
+
+
+def test_each_point_gets_exactly_n_pulses_at_the_board_clock():
+    """At the iCEBreaker's 12 MHz the next segment is always ready in time: no stall."""
+    job = [("jump", 30000, 30000), ("mark", 30100, 30000), ("mark", 30100, 30100),
+           ("mark", 30000, 30100), ("mark", 30000, 30000)]
+    board, client, expected = run_job(job, prr_100hz=1000, pulses=2, pitch=40, clk_freq=12e6)
+    assert runs_on_the_wires(board)[1:] == expected
+    assert client.read("vec_stalls") == 0
+
+
+@pytest.mark.parametrize("prr_100hz, speed", [(600, 6.0), (300, 3.0)])
+def test_line_speed_of_the_001_table(prr_100hz, speed):
+    """001: 0.1 mm pitch (60 units on a 110 mm field), N = 1: 6 m/s at 60 kHz, 3 m/s at 30."""
+    job = [("jump", 20000, 30000), ("mark", 26000, 30000)]     # 100 points, 10 mm
+    board, client, expected = run_job(job, prr_100hz=prr_100hz)
+    frames = board.xy2_frames()
+    sync = board.sync_pins
+    starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
+    # When the head gets the line's first and last points (frame k in force from start k+1).
+    index = [f for _, f in frames]
+    first = index.index((20060, 30000))
+    last = index.index((26000, 30000))
+    seconds = (starts[last + 1] - starts[first + 1]) / 4e6
+    mm = (26000 - 20060) * 110 / 65536
+    assert mm / seconds / 1e3 == pytest.approx(speed * 1.0067, rel=0.01)   # 60 units = 0.1007 mm
+
+
+def test_full_queue_refuses_and_counts():
+    board, client = start_board()
+    for _ in range(VECTOR_QUEUE_DEPTH + 1):      # the queue, and one in the sequencer's hand
+        client.write("vec_op", 0)
+    assert client.read("fifo_free") == 0
+    assert client.read("errors") == 0
+    client.write("vec_op", 0)                    # refused
+    assert client.read("vec_rejected") == 1
+    assert client.read("errors") == 1
+    # Nothing queued was lost: every jump comes out once the mode runs.
+    client.write("jump_delay", 1)
+    client.write("run", 1)
+    board.run_until(lambda: client.read("fifo_free") == VECTOR_QUEUE_DEPTH, timeout=20e-3)
+
+
+def test_underrun_holds_with_the_laser_off_and_resumes_without_repeating():
+    board, client = start_board()
+    client.write("laser_prr", 500)
+    client.write("jump_delay", 3)
+    client.write("arm", 1)
+    board.run_for(0.3e-3)
+    client.write("run", 1)
+    first = [("jump", 30000, 30000), ("mark", 30300, 30000)]
+    queue(client, first)
+    board.run_for(2e-3)
+    assert client.read("vec_underruns") == 1
+    quiet_from = len(board.laser_pins)
+    board.run_for(1e-3)
+    quiet = board.laser_pins[quiet_from:]
+    assert not any(am for _, am, *_ in quiet)        # no emission while starved
+    second = [("mark", 30300, 30300)]
+    queue(client, second)
+    board.run_for(2e-3)
+    expected = job_model(first + second, 60, 1)
+    assert runs_on_the_wires(board)[1:] == expected
+    assert client.read("vec_underruns") == 2
+
+
+# --- raster ---------------------------------------------------------------------------------------
+
+RASTER_CASES = [
+    # corner, size, spacing, step, flags (bit 0 along y, bit 1 one way), turn gate
+    ((30000, 31000), (95, 40), 20, 30, 0, 0),
+    ((30000, 31000), (95, 40), 20, 30, 2, 2),
+    ((40000, 20000), (33, 70), 25, 10, 1, 3),
+]
+
+
+@pytest.mark.parametrize("corner, size, spacing, step, flags, gate", RASTER_CASES)
+def test_raster_matches_the_analysis_model(corner, size, spacing, step, flags, gate):
+    """The raster the analysis compares with the spiral is the one the gateware draws."""
+    board = SimBoard(record_laser=True, mo_lead=0.2e-3,
+                     settings=ScanSettings(mode="raster", run=False))
+    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    for name, value in (("ras_x", corner[0]), ("ras_y", corner[1]), ("ras_w", size[0]),
+                        ("ras_h", size[1]), ("ras_spacing", spacing), ("ras_step", step),
+                        ("ras_flags", flags), ("ras_turn_gate", gate),
+                        ("laser_prr", 1000), ("arm", 1)):
+        client.write(name, value)
+    board.run_for(0.3e-3)
+    sent = len(board.xy2_frames())
+    client.write("run", 1)
+    model = raster_frames(corner=corner, size=size, spacing=spacing, step=step,
+                          lines_along="y" if flags & 1 else "x",
+                          bidirectional=not flags & 2, turn_gate=gate, passes=2)
+    board.run_for((len(model) + 20) * 10e-6)
+    per_frame = pulses_per_frame(board)
+    first = sent + [f for f, _ in per_frame[sent:]].index((corner[0], corner[1]))
+    got = per_frame[first:first + len(model)]
+    assert [f for f, _ in got] == list(zip(model.x.tolist(), model.y.tolist()))
+    # The laser is off exactly on the gated frames; at 100 kHz the others get a pulse each.
+    counts = [n for _, n in got]
+    assert all(n == 0 for n, on in zip(counts, model.laser) if not on)
+    lit = [n for n, on in zip(counts, model.laser) if on]
+    assert abs(sum(lit) - len(lit)) <= 1 and max(lit) <= 2
+    assert (gate == 0) == all(model.laser)
