@@ -81,9 +81,101 @@ def _cmd_rom(args):
 
 # --- sim -----------------------------------------------------------------------------------------
 
+def _cmd_sim_vector(args):
+    from tqdm import tqdm
+    from .job import JobError, parse_job
+    from .vector_replay import replay_job
+
+    if args.points is not None:
+        raise SystemExit("galvoscan: error: --points is for the spiral; a vector job is as "
+                         "long as its file")
+    try:
+        job = parse_job(Path(args.job).read_text(), name=args.job)
+    except OSError as error:
+        raise SystemExit(f"galvoscan: error: cannot read the job: {error}")
+    except JobError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+    start = time.monotonic()
+    with tqdm(unit="frame", desc="simulating", disable=None, file=sys.stderr) as bar:
+        try:
+            result = replay_job(job, prr_hz=args.prr, pulses_per_point=args.pulses_per_point,
+                                pitch=args.pitch, jump_delay=args.jump_delay,
+                                progress=bar.update)
+        except ValueError as error:
+            raise SystemExit(f"galvoscan: error: {error}")
+    seconds = time.monotonic() - start
+    marked = result.marked()
+    counts = sorted({p[2] for p in marked})
+    # Mean marking speed over chains of marked points one pitch or less apart: from the
+    # arrival of each chain's second point to that of its last (the first point's hold
+    # includes the wait after a jump).
+    distance = held = 0
+    chain_start = True
+    for a, b in zip(result.points, result.points[1:]):
+        step = ((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5
+        if a[2] and b[2] and 0 < step <= args.pitch * 1.001:
+            if not chain_start:
+                distance += step
+                held += a[3]
+            chain_start = False
+        else:
+            chain_start = True
+    mm_per_unit = args.lens_field / 65536
+    speed = distance * mm_per_unit / (held * 10e-6) / 1e3 if held else None
+    if args.csv:
+        with open(args.csv, "w") as f:
+            f.write("frame,x,y,pulses\n")
+            for index, (x, y, n) in enumerate(result.frames):
+                f.write(f"{index},{x},{y},{n}\n")
+    if args.points_csv:
+        with open(args.points_csv, "w") as f:
+            f.write("x,y,pulses,frames\n")
+            for x, y, n, frames in result.points:
+                f.write(f"{x},{y},{n},{frames}\n")
+    if args.png:
+        from .replay import plot_job
+        plot_job(args.png, result, title=f"{args.job}: {len(marked)} marked points, "
+                                         f"{args.pulses_per_point} pulse(s) each at "
+                                         f"{args.prr / 1e3:g} kHz")
+    summary = {
+        "segments": len(job), "frames": len(result.frames), "points": len(result.points),
+        "marked_points": len(marked), "pulses_per_marked_point": counts,
+        "expected_pulses_per_point": args.pulses_per_point,
+        "line_speed_m_s": None if speed is None else round(speed, 4),
+        "expected_line_speed_m_s": round(args.pitch * mm_per_unit * args.prr
+                                         / args.pulses_per_point / 1e3, 4),
+        "sim_seconds": round(seconds, 2), "csv": args.csv, "points_csv": args.points_csv,
+        "png": args.png,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"{len(job)} segments: {len(result.frames)} frames, {len(result.points)} points, "
+          f"{len(marked)} marked, simulated in {seconds:.1f} s")
+    print(f"pulses per marked point: {', '.join(map(str, counts)) or '-'} "
+          f"(asked {args.pulses_per_point})")
+    if speed is not None:
+        print(f"marking speed {speed:.3f} m/s on a {args.lens_field:g} mm field "
+              f"(pitch × PRR / N = {summary['expected_line_speed_m_s']:.3f} m/s)")
+    for what in ("csv", "points_csv", "png"):
+        if summary[what]:
+            print(f"  {what.replace('_', ' ')}: {summary[what]}")
+    return 0 if counts in ([args.pulses_per_point], []) else 1
+
+
 def _cmd_sim(args):
     from tqdm import tqdm
     from .replay import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
+
+    if args.mode == "vector":
+        if not args.job:
+            raise SystemExit("galvoscan: error: --mode vector needs --job FILE")
+        return _cmd_sim_vector(args)
+    if args.job:
+        raise SystemExit("galvoscan: error: --job is for --mode vector")
+    if args.points is None:
+        raise SystemExit("galvoscan: error: the spiral needs --points N (8064 is the whole "
+                         "pattern)")
 
     table = _table(args)
     settings = _settings(args, table)
@@ -216,7 +308,7 @@ def register_table():
     lines = ["| address | name | access | reset | range | unit | description |",
              "|---|---|---|---|---|---|---|"]
     for r in REGISTERS:
-        span = f"{r.low}…{r.high}" if r.access == "rw" else "—"
+        span = f"{r.low}…{r.high}" if r.access in ("rw", "queue") else "—"
         lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {r.reset} | {span} | "
                      f"{r.unit} | {r.description} |")
     return "\n".join(lines)
@@ -398,16 +490,37 @@ def _parser():
     rom.set_defaults(run=_cmd_rom)
 
     sim = commands.add_parser(
-        "sim", help="replay spiral points through the system top in simulation",
+        "sim", help="replay the spiral, or a vector job, through the system top in simulation",
         description="Simulate the system top from power-up, decode the XY2-100 wires like a "
                     "scan head and report the frames. The full precessing pattern is 8064 "
-                    "points (lcm(128, 126)).")
-    sim.add_argument("--points", type=_int_in(1, 1_000_000, "points"), required=True,
+                    "points (lcm(128, 126)). With --mode vector, a job file (one 'jump X Y' "
+                    "or 'mark X Y' a line, galvo units) is sent through the SPI pins and the "
+                    "laser pulses on every point are counted on the DB25 pins.")
+    sim.add_argument("--mode", choices=["spiral", "vector"], default="spiral",
+                     help="what to run (default: %(default)s)")
+    sim.add_argument("--points", type=_int_in(1, 1_000_000, "points"), default=None,
                      help="spiral points to replay")
+    vector = sim.add_argument_group("vector mode")
+    vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
+    vector.add_argument("--prr", type=_positive("prr", 20e3, 200e3), default=60e3,
+                        metavar="HZ", help="laser pulse rate, 20e3 … 200e3 (default: 60e3)")
+    vector.add_argument("--pulses-per-point", type=_int_in(1, 255, "pulses per point"),
+                        default=1, metavar="N", help="pulses on every marked point (default: 1)")
+    vector.add_argument("--pitch", type=_int_in(1, 0xFFFF, "pitch"), default=60,
+                        help="galvo units between marked points (default: 60 ≈ 0.1 mm)")
+    vector.add_argument("--jump-delay", type=_int_in(1, 0xFFFF, "jump delay"), default=50,
+                        metavar="FRAMES", help="laser-off wait after a jump, 10 µs frames "
+                                               "(default: 50)")
+    vector.add_argument("--lens-field", type=_positive("lens field", 1, 2000), default=110.0,
+                        metavar="MM", help="field across 65536 units, for the speed in m/s "
+                                           "(default: 110)")
+    vector.add_argument("--points-csv", metavar="FILE",
+                        help="write one row per point: x,y,pulses,frames")
     sim.add_argument("--dwell", type=_int_in(1, 0xFFFF, "dwell"), default=3,
                      help="10 µs frames each point is held (default: %(default)s = 30 µs)")
     sim.add_argument("--vcd", metavar="FILE", help="write a waveform (large for long runs)")
-    sim.add_argument("--csv", metavar="FILE", help="write one row per frame: frame,x,y")
+    sim.add_argument("--csv", metavar="FILE",
+                     help="write one row per frame: frame,x,y (vector: and pulses)")
     sim.add_argument("--png", metavar="FILE", help="plot the path")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     _add_table_options(sim)

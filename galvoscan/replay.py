@@ -14,7 +14,7 @@ from .gateware.top import GalvoScanTop
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["SIM_CLOCKS_PER_BIT", "replay_spiral", "write_csv", "plot_path"]
+__all__ = ["SIM_CLOCKS_PER_BIT", "replay_spiral", "write_csv", "plot_path", "plot_job"]
 
 
 #: System clocks per XY2 bit in simulation.
@@ -93,6 +93,31 @@ def plot_path(path, frames, *, title="Simulated XY2-100 output"):
     ax.set_xlabel("X (galvo units)")
     ax.set_ylabel("Y (galvo units)")
     ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def plot_job(path, result, *, title):
+    """Plot a vector job's path: jumps grey, marked points coloured by their pulses."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    points = result.points
+    xs = [p[0] for p in points]
+    ys = [p[1] for p in points]
+    fig, ax = plt.subplots(figsize=(6, 6), dpi=120)
+    ax.plot(xs, ys, linewidth=0.4, color="lightgrey")
+    marked = [p for p in points if p[2]]
+    if marked:
+        dots = ax.scatter([p[0] for p in marked], [p[1] for p in marked],
+                          c=[p[2] for p in marked], s=4, cmap="viridis")
+        fig.colorbar(dots, ax=ax, label="pulses on the point", shrink=0.8)
+    ax.set_aspect("equal")
+    ax.set_xlabel("X (galvo units)")
+    ax.set_ylabel("Y (galvo units)")
+    ax.set_title(title, fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

@@ -1,0 +1,187 @@
+"""Run a vector job on the simulated system top, as a host would, and read what comes out.
+
+The job goes in through the SPI pins (frames from the host client's encoder, bit-banged at
+the link's top speed, the queue topped up as ``fifo_free`` allows); the XY2-100 wires are
+decoded as a scan head would; the laser's pulses are counted on the DB25 pins and given to
+the point the head holds when they fire. Simulated at the board's 12 MHz (6 clocks per XY2
+bit), so the timing is the board's.
+"""
+
+import bisect
+
+from amaranth.hdl import Elaboratable, Module, Signal
+from amaranth.sim import Simulator
+
+from .client import encode_read, encode_write
+from .gateware.host.regmap import BY_NAME, STATUS_BITS
+from .gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
+from .job import OPS
+from .xy2_receiver import XY2Receiver
+
+
+__all__ = ["JobResult", "replay_job"]
+
+
+class _Timed(Elaboratable):
+    """The top with a clock counter beside it, so that events can be put in order."""
+
+    def __init__(self, top):
+        self.top = top
+        self.cycles = Signal(48)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.top = self.top
+        m.d.sync += self.cycles.eq(self.cycles + 1)
+        return m
+
+
+class JobResult:
+    """What the head and the laser saw.
+
+    Attributes
+    ----------
+    frames : list of (int, int, int)
+        ``(x, y, pulses)`` per XY2-100 frame from power-up: the position, and the pulses that
+        fell while the head held it.
+    points : list of (int, int, int, int)
+        ``(x, y, pulses, frames)`` per run of frames at one position.
+    clk_freq : float
+    """
+
+    def __init__(self, frames, clk_freq):
+        self.frames = frames
+        self.clk_freq = clk_freq
+        points = []
+        for x, y, pulses in frames:
+            if points and points[-1][:2] == [x, y]:
+                points[-1][2] += pulses
+                points[-1][3] += 1
+            else:
+                points.append([x, y, pulses, 1])
+        self.points = [tuple(p) for p in points]
+
+    def marked(self):
+        """Points that got at least one pulse."""
+        return [p for p in self.points if p[2] > 0]
+
+
+def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
+               clk_freq=12e6, mo_lead=5e-3, progress=None):
+    """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`."""
+    prr = round(prr_hz / 100)
+    if not BY_NAME["laser_prr"].low <= prr <= BY_NAME["laser_prr"].high:
+        raise ValueError(f"PRR must be from 20 to 200 kHz, not {prr_hz:g} Hz")
+    for name, value in (("pulses_per_point", pulses_per_point), ("pitch", pitch),
+                        ("jump_delay", jump_delay)):
+        reg = BY_NAME[name]
+        if not isinstance(value, int) or not reg.low <= value <= reg.high:
+            raise ValueError(f"{name} must be an integer from {reg.low} to {reg.high}, "
+                             f"not {value!r}")
+    top = GalvoScanTop(clk_freq=clk_freq, settings=ScanSettings(mode="vector", run=False),
+                       mo_lead=mo_lead)
+    timed = _Timed(top)
+    sim = Simulator(timed)
+    sim.add_clock(1 / clk_freq)
+    half_sck = 6 / clk_freq                      # SCK at clk / 12, the link's top speed
+
+    frame_ends = []                              # cycle a frame was complete, and its position
+    sync_rises = []
+    pulses = []
+    state = {"done": False}
+
+    async def spi_frame(ctx, frame):
+        """Clock one 4-byte frame out; return the 32 bits that came back."""
+        bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
+        ctx.set(top.spi_cs_n, 0)
+        answer = 0
+        for bit in bits:
+            ctx.set(top.spi_copi, bit)
+            await ctx.delay(half_sck)
+            ctx.set(top.spi_sck, 1)
+            answer = (answer << 1) | ctx.get(top.spi_cipo)
+            await ctx.delay(half_sck)
+            ctx.set(top.spi_sck, 0)
+        await ctx.delay(half_sck)
+        ctx.set(top.spi_cs_n, 1)
+        await ctx.delay(4 * half_sck)
+        return answer
+
+    async def write(ctx, name, value):
+        await spi_frame(ctx, encode_write(name, value))
+
+    async def read(ctx, name):
+        await spi_frame(ctx, encode_read(name))
+        answer = await spi_frame(ctx, encode_read("errors"))    # clocks the answer out
+        return (answer >> 8) & 0xFFFF
+
+    async def host(ctx):
+        ctx.set(top.interlock_open, 0)
+        ctx.set(top.spi_cs_n, 1)
+        for name, value in (("laser_prr", prr), ("pulses_per_point", pulses_per_point),
+                            ("pitch", pitch), ("jump_delay", jump_delay),
+                            ("laser_power", 128), ("watchdog", 60000), ("arm", 1)):
+            await write(ctx, name, value)
+        pending = list(job)
+        free = VECTOR_QUEUE_DEPTH
+        started = False
+        while pending:
+            if free == 0:
+                free = await read(ctx, "fifo_free")
+                if free == 0:
+                    await ctx.delay(100e-6)
+                continue
+            op, x, y = pending.pop(0)
+            await write(ctx, "vec_x", x)
+            await write(ctx, "vec_y", y)
+            await write(ctx, "vec_op", OPS[op])
+            free -= 1
+            if not started and (free == 0 or not pending):
+                # The first batch is in; let the MO lead pass, then run.
+                await ctx.delay(mo_lead + 100e-6)
+                await write(ctx, "run", 1)
+                started = True
+        busy = 1 << STATUS_BITS["vector_busy"]
+        while await read(ctx, "status") & busy:
+            await ctx.delay(100e-6)
+        await ctx.delay(50e-6)                   # the last frames reach the head
+        rejected = await read(ctx, "vec_rejected")
+        errors = await read(ctx, "errors")
+        if rejected or errors:
+            raise RuntimeError(f"the board refused {errors} frames ({rejected} segments)")
+        state["done"] = True
+
+    receiver = XY2Receiver()
+
+    async def scan_head(ctx):
+        async for _, sync, x, y, cycles in ctx.negedge(top.xy2_clk).sample(
+                top.xy2_sync, top.xy2_x, top.xy2_y, timed.cycles):
+            frame = receiver.sample(sync, x, y)
+            if frame is not None:
+                frame_ends.append((cycles, frame.x, frame.y))
+                if progress is not None:
+                    progress(1)
+
+    async def sync_edges(ctx):
+        async for _, cycles in ctx.posedge(top.xy2_sync).sample(timed.cycles):
+            sync_rises.append(cycles)
+
+    async def laser(ctx):
+        async for _, am, cycles in ctx.posedge(top.laser_prr).sample(top.laser_am,
+                                                                      timed.cycles):
+            if am:
+                pulses.append(cycles)
+
+    sim.add_testbench(host)
+    for process in (scan_head, sync_edges, laser):
+        sim.add_testbench(process, background=True)
+    sim.run()
+
+    # Frame k is in force from the SYNC rise that starts frame k + 1; a pulse on that very
+    # clock still falls on frame k - 1's position.
+    counts = [0] * len(frame_ends)
+    for cycle in pulses:
+        k = bisect.bisect_left(sync_rises, cycle) - 2
+        if 0 <= k < len(counts):
+            counts[k] += 1
+    return JobResult([(x, y, n) for (_, x, y), n in zip(frame_ends, counts)], clk_freq)
