@@ -6,6 +6,7 @@ counted on the DB25 pins."""
 
 import bisect
 
+from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
 from galvoscan.analysis.patterns import raster_frames
@@ -94,9 +95,8 @@ LINES = [
 @pytest.mark.parametrize("prr_100hz, pulses", [(600, 1), (300, 3)])
 def test_job_matches_the_model_point_for_point_and_pulse_for_pulse(prr_100hz, pulses):
     board, client, expected = run_job(LINES, prr_100hz=prr_100hz, pulses=pulses)
-    wires = runs_on_the_wires(board)
-    assert wires[0] == (PARK, 0)                 # parked until run, laser off
-    assert wires[1:] == expected
+    # Parked until run, laser off; then the model's points and pulses.
+    assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
     # The job ends with a jump, laser off: running out of segments then is no underrun.
     assert client.read("vec_underruns") == 0
     assert client.read("errors") == 0
@@ -107,7 +107,7 @@ def test_each_point_gets_exactly_n_pulses_at_the_board_clock():
     job = [("jump", 30000, 30000), ("mark", 30100, 30000), ("mark", 30100, 30100),
            ("mark", 30000, 30100), ("mark", 30000, 30000)]
     board, client, expected = run_job(job, prr_100hz=1000, pulses=2, pitch=40, clk_freq=12e6)
-    assert runs_on_the_wires(board)[1:] == expected
+    assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
     assert client.read("vec_stalls") == 0
 
 
@@ -162,7 +162,7 @@ def test_underrun_holds_with_the_laser_off_and_resumes_without_repeating():
     queue(client, second)
     board.run_for(2e-3)
     expected = job_model(first + second, 60, 1)
-    assert runs_on_the_wires(board)[1:] == expected
+    assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
     assert client.read("vec_underruns") == 2
 
 
@@ -204,3 +204,23 @@ def test_raster_matches_the_analysis_model(corner, size, spacing, step, flags, g
     lit = [n for n, on in zip(counts, model.laser) if on]
     assert abs(sum(lit) - len(lit)) <= 1 and max(lit) <= 2
     assert (gate == 0) == all(model.laser)
+
+
+# --- random jobs ----------------------------------------------------------------------------------
+
+coordinate = st.integers(20000, 20400)
+segment = st.tuples(st.sampled_from(["jump", "mark", "mark"]), coordinate, coordinate)
+
+
+# Each example simulates a few milliseconds of the whole board: few examples, no shrinking.
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+          phases=[Phase.explicit, Phase.reuse, Phase.generate])
+@given(st.lists(segment, min_size=1, max_size=5), st.sampled_from([1, 2]),
+       st.sampled_from([45, 60, 150]))
+def test_random_jobs_match_the_model(job, pulses, pitch):
+    """Short random jobs (repeated points, zero-length marks, jumps onto the current point)
+    give the model's points with exactly the model's pulses."""
+    job = job + [("jump", 32768, 32768)]          # end with the laser off
+    board, client, expected = run_job(job, prr_100hz=500, pulses=pulses, pitch=pitch)
+    assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
+    assert client.read("errors") == 0
