@@ -100,4 +100,8 @@ PROOFS = [
     xy2_phy_proof(6),
     command_path_proof(),
     laser_safety_proof(),
+    # As built with vector mode: the PRR clock runs free and leads pulse_ahead (MO gates it).
+    laser_safety_proof(
+        make_controller=lambda: LaserController(**LASER_PROOF_PARAMETERS, lookahead=3),
+        name="laser_safety_free_prr"),
 ]

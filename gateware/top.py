@@ -7,7 +7,7 @@ designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_cl
 ``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr`` with the ``interlock_open`` input.
 """
 
-from amaranth.hdl import Cat, Module, Mux, Signal
+from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
@@ -15,7 +15,7 @@ from amaranth.lib.wiring import In, Out, connect
 from .field.scale import AMP_ONE, ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import BY_NAME, STATUS_BITS
+from .host.regmap import BY_NAME, MODE_REGISTERS, STATUS_BITS
 from .host.spi_target import SPITarget
 from .host.uart import uart_divisor
 from .host.uart_port import UARTCommandPort
@@ -159,7 +159,7 @@ class GalvoScanTop(wiring.Component):
     interlock_open: In(1, init=1)
 
     def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
-                 settings=None, mo_lead=5e-3):
+                 settings=None, mo_lead=5e-3, modes=tuple(MODES)):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -167,6 +167,13 @@ class GalvoScanTop(wiring.Component):
         if not isinstance(self.settings, ScanSettings):
             raise TypeError(f"settings must be ScanSettings, not {self.settings!r}")
         self.settings.check_ranges(self.table.points)
+        modes = tuple(modes)
+        if not modes or any(mode not in MODES for mode in modes) or len(set(modes)) != len(modes):
+            raise ValueError(f"modes must be some of {', '.join(MODES)}, each once, not {modes!r}")
+        if self.settings.mode not in modes:
+            raise ValueError(f"the settings start in {self.settings.mode} mode, which modes "
+                             f"{modes!r} leaves out")
+        self.modes = modes
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
         clocks_per_bit(clk_freq, bit_rate)
         self.uart_divisor = uart_divisor(clk_freq, baud)
@@ -188,7 +195,10 @@ class GalvoScanTop(wiring.Component):
         last_address = self.table.points - 1
         m.submodules.registers = regs = RegisterFile(
             resets=self.settings.register_resets(),
-            highs={name: last_address for name in ("x_first", "x_last", "y_first", "y_last")})
+            highs={name: last_address for name in ("x_first", "x_last", "y_first", "y_last")},
+            choices={"mode": {MODES[mode] for mode in self.modes}},
+            leave_out=[name for mode, names in MODE_REGISTERS.items() if mode not in self.modes
+                       for name in names])
 
         m.d.comb += [
             spi.sck.eq(self.spi_sck),
@@ -205,46 +215,48 @@ class GalvoScanTop(wiring.Component):
         connect(m, decoder.bus, regs.bus)
 
         # --- scan ---------------------------------------------------------------------------
-        m.submodules.spiral = spiral = SpiralSequencer(self.table)
-        m.submodules.raster = raster = RasterSequencer()
-        m.submodules.vector = vector = VectorSequencer()
         m.submodules.scale = scale = ScaleOffset()
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
-
-        mode = regs.mode
-        spiral_mode = mode == MODES["spiral"]
-        raster_mode = mode == MODES["raster"]
-        vector_mode = mode == MODES["vector"]
-        m.d.comb += [
-            spiral.run.eq(regs.run & spiral_mode),
-            raster.run.eq(regs.run & raster_mode),
-            vector.run.eq(regs.run & vector_mode),
-        ]
-        for source in (spiral, raster, vector):
-            m.d.comb += source.frame_strobe.eq(phy.frame_strobe)
-        # Registers and ports of the same name.
-        for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
-            m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
-        for name in ("pitch", "pulses_per_point", "jump_delay"):
-            m.d.comb += getattr(vector, name).eq(getattr(regs, name))
-        m.d.comb += [
-            raster.x.eq(regs.ras_x), raster.y.eq(regs.ras_y),
-            raster.width.eq(regs.ras_w), raster.height.eq(regs.ras_h),
-            raster.spacing.eq(regs.ras_spacing), raster.step.eq(regs.ras_step),
-            raster.along_y.eq(regs.ras_flags[0]), raster.one_way.eq(regs.ras_flags[1]),
-            raster.turn_gate.eq(regs.ras_turn_gate),
-        ]
+
+        sources = {}
+        if "spiral" in self.modes:
+            m.submodules.spiral = spiral = SpiralSequencer(self.table)
+            # Registers and ports of the same name.
+            for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
+                m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
+            sources["spiral"] = spiral
+        if "raster" in self.modes:
+            m.submodules.raster = raster = RasterSequencer()
+            m.d.comb += [
+                raster.x.eq(regs.ras_x), raster.y.eq(regs.ras_y),
+                raster.width.eq(regs.ras_w), raster.height.eq(regs.ras_h),
+                raster.spacing.eq(regs.ras_spacing), raster.step.eq(regs.ras_step),
+                raster.along_y.eq(regs.ras_flags[0]), raster.one_way.eq(regs.ras_flags[1]),
+                raster.turn_gate.eq(regs.ras_turn_gate),
+            ]
+            sources["raster"] = raster
+        if "vector" in self.modes:
+            m.submodules.vector = vector = VectorSequencer()
+            for name in ("pitch", "pulses_per_point", "jump_delay"):
+                m.d.comb += getattr(vector, name).eq(getattr(regs, name))
+            sources["vector"] = vector
 
         # The selected source feeds the scale stage; the others are stopped.
-        for selected, source in ((spiral_mode, spiral), (raster_mode, raster),
-                                 (vector_mode, vector)):
+        running = Signal()
+        for name, source in sources.items():
+            selected = regs.mode == MODES[name]
+            m.d.comb += [
+                source.run.eq(regs.run & selected),
+                source.frame_strobe.eq(phy.frame_strobe),
+            ]
             with m.If(selected):
                 m.d.comb += [
                     scale.offsets.valid.eq(source.points.valid),
                     scale.offsets.payload.eq(source.points.payload),
                     source.points.ready.eq(scale.offsets.ready),
+                    running.eq(source.run),
                 ]
         connect(m, scale.positions, phy.position)
 
@@ -252,55 +264,64 @@ class GalvoScanTop(wiring.Component):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
 
         # --- vector queue -------------------------------------------------------------------
-        # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
-        # queue is full, and the refusal is counted.
-        m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
-                                                      depth=VECTOR_QUEUE_DEPTH)
-        m.d.comb += [
-            queue.w_en.eq(regs.vec_op_push),
-            queue.w_data.eq(Cat(decoder.bus.write_data[0], regs.vec_x, regs.vec_y)),
-            regs.vec_op_ready.eq(queue.w_rdy),
-            vector.commands.valid.eq(queue.r_rdy),
-            vector.commands.payload.eq(queue.r_data),
-            queue.r_en.eq(vector.commands.ready),
-        ]
-        vec_rejected = Signal(16)
-        with m.If(decoder.write_refused & (decoder.bus.address == BY_NAME["vec_op"].address) &
-                  (vec_rejected != 0xFFFF)):
-            m.d.sync += vec_rejected.eq(vec_rejected + 1)
-        vec_underruns = Signal(16)
-        with m.If(vector.underrun & (vec_underruns != 0xFFFF)):
-            m.d.sync += vec_underruns.eq(vec_underruns + 1)
-        vec_stalls = Signal(16)
-        with m.If(vector.stall & (vec_stalls != 0xFFFF)):
-            m.d.sync += vec_stalls.eq(vec_stalls + 1)
+        if "vector" in self.modes:
+            # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when
+            # the queue is full, and the refusal is counted.
+            m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
+                                                          depth=VECTOR_QUEUE_DEPTH)
+            m.d.comb += [
+                queue.w_en.eq(regs.vec_op_push),
+                queue.w_data.eq(Cat(decoder.bus.write_data[0], regs.vec_x, regs.vec_y)),
+                regs.vec_op_ready.eq(queue.w_rdy),
+                vector.commands.valid.eq(queue.r_rdy),
+                vector.commands.payload.eq(queue.r_data),
+                queue.r_en.eq(vector.commands.ready),
+                regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
+                regs.status[STATUS_BITS["vector_busy"]].eq(vector.busy),
+            ]
+            counters = (("vec_rejected", decoder.write_refused &
+                         (decoder.bus.address == BY_NAME["vec_op"].address)),
+                        ("vec_underruns", vector.underrun), ("vec_stalls", vector.stall))
+            for name, event in counters:
+                count = Signal(16, name=name)
+                with m.If(event & (count != 0xFFFF)):
+                    m.d.sync += count.eq(count + 1)
+                m.d.comb += getattr(regs, name).eq(count)
 
         # --- laser --------------------------------------------------------------------------
         # Pulse-synchronous sources count the PRR clock ahead by the two frames a point takes
         # to reach the head (into the scale stage's buffer, then onto the wires), plus the
         # clock modulation takes to follow `marking`.
         frame_clocks = FRAME_BITS * clocks_per_bit(self.clk_freq, self.bit_rate)
+        lookahead = 2 * frame_clocks + 1 if "vector" in self.modes else 0
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
-                                                     mo_lead=self.mo_lead,
-                                                     lookahead=2 * frame_clocks + 1)
-        m.d.comb += vector.pulse_ahead.eq(laser.pulse_ahead)
-        # Spiral: marking while it runs, from its first point on (not while parked).
-        spiral_marking = Signal()
-        with m.If(~spiral.run):
-            m.d.sync += spiral_marking.eq(0)
-        with m.Elif(spiral.points.valid & spiral.points.ready):
-            m.d.sync += spiral_marking.eq(1)
+                                                     mo_lead=self.mo_lead, lookahead=lookahead)
+        marking = Signal()
+        if "spiral" in self.modes:
+            # Spiral: marking while it runs, from its first point on (not while parked).
+            spiral_marking = Signal()
+            with m.If(~spiral.run):
+                m.d.sync += spiral_marking.eq(0)
+            with m.Elif(spiral.points.valid & spiral.points.ready):
+                m.d.sync += spiral_marking.eq(1)
+            with m.If(regs.mode == MODES["spiral"]):
+                m.d.comb += marking.eq(spiral_marking)
+        if "vector" in self.modes:
+            m.d.comb += vector.pulse_ahead.eq(laser.pulse_ahead)
         # Raster and vector: each frame's laser decision, from the moment that frame has been
         # sent: two frame strobes after it was made.
-        decided = Signal()
-        frame_marking = Signal()
-        with m.If(phy.frame_strobe):
-            m.d.sync += [
-                decided.eq((raster_mode & raster.laser) | (vector_mode & vector.laser)),
-                frame_marking.eq(decided),
-            ]
-        marking = Signal()
-        m.d.comb += marking.eq(Mux(spiral_mode, spiral_marking, frame_marking))
+        framed = [sources[name] for name in ("raster", "vector") if name in sources]
+        if framed:
+            decided = Signal()
+            frame_marking = Signal()
+            with m.If(phy.frame_strobe):
+                m.d.sync += [
+                    decided.eq(Cat((regs.mode == MODES[name]) & sources[name].laser
+                                   for name in ("raster", "vector") if name in sources).any()),
+                    frame_marking.eq(decided),
+                ]
+            with m.If(regs.mode != MODES["spiral"]):
+                m.d.comb += marking.eq(frame_marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),
             laser.power.eq(regs.laser_power),
@@ -324,7 +345,7 @@ class GalvoScanTop(wiring.Component):
         with m.Elif(decoder.status_read):
             m.d.sync += clipped_since_read.eq(0)
         m.d.comb += [
-            regs.status[STATUS_BITS["running"]].eq(spiral.run | raster.run | vector.run),
+            regs.status[STATUS_BITS["running"]].eq(running),
             regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
             regs.status[STATUS_BITS["armed"]].eq(regs.arm),
             regs.status[STATUS_BITS["fault_interlock"]].eq(laser.faults[FAULT_BITS["interlock"]]),
@@ -332,12 +353,7 @@ class GalvoScanTop(wiring.Component):
             regs.status[STATUS_BITS["mo_on"]].eq(laser.laser_mo),
             regs.status[STATUS_BITS["emitting"]].eq(laser.laser_am),
             regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
-            regs.status[STATUS_BITS["vector_busy"]].eq(vector.busy),
             regs.errors.eq(decoder.errors),
             regs.pulses.eq(pulses),
-            regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
-            regs.vec_rejected.eq(vec_rejected),
-            regs.vec_underruns.eq(vec_underruns),
-            regs.vec_stalls.eq(vec_stalls),
         ]
         return m

@@ -1,3 +1,6 @@
+# amaranth: UnusedElaboratable=no
+# (the signature check builds a DDA without elaborating it)
+
 """The line DDA alone, against the exact model (tests/vector_model.py), on many lines."""
 
 import random

@@ -1,8 +1,9 @@
+# amaranth: UnusedElaboratable=no
+# (the parameter checks build tops that are never elaborated)
+
 """Vector and raster modes (issue 6): the points decoded from the XY2-100 wires against plain
 Python models written from SPEC §1 (001's DDA) and §3, and the laser pulses on every point
 counted on the DB25 pins."""
-
-# amaranth: UnusedElaboratable=no
 
 import bisect
 
@@ -10,7 +11,7 @@ from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
 from galvoscan.analysis.patterns import raster_frames
-from galvoscan.client import HostClient
+from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
 from sim_board import SimBoard, SimSPITransport
@@ -224,3 +225,35 @@ def test_random_jobs_match_the_model(job, pulses, pitch):
     board, client, expected = run_job(job, prr_100hz=500, pulses=pulses, pitch=pitch)
     assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
     assert client.read("errors") == 0
+
+
+# --- builds with fewer modes ----------------------------------------------------------------------
+
+def test_a_spiral_only_build_refuses_the_other_modes():
+    """The modes left out, and their registers, do not exist: frames for them are refused and
+    counted, like frames for unknown addresses."""
+    board = SimBoard(modes=("spiral",))
+    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    client.write("mode", 2)                     # not built: refused
+    client.write("mode", 1)
+    client.write("vec_op", 1)                   # no such register in this build
+    client.write("ras_w", 100)
+    assert client.read("mode") == 0
+    assert client.read("errors") == 4
+    with pytest.raises(ClientError):
+        client.read("fifo_free")                # no answer but the refusal
+    assert client.read("errors") == 5
+    client.write("mode", 0)                     # still fine
+    assert client.read("errors") == 5
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"modes": ()}, "modes must be some of"),
+    ({"modes": ("spiral", "laser")}, "modes must be some of"),
+    ({"modes": ("vector", "vector")}, "each once"),
+    ({"modes": ("raster",)}, "start in spiral mode"),
+])
+def test_top_rejects_bad_mode_sets(kwargs, message):
+    from galvoscan.gateware.top import GalvoScanTop
+    with pytest.raises(ValueError, match=message):
+        GalvoScanTop(clk_freq=4e6, **kwargs)

@@ -1,6 +1,6 @@
 """The register file: state the host writes and reads, built from the register map."""
 
-from amaranth.hdl import Module
+from amaranth.hdl import Cat, Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -52,11 +52,16 @@ class RegisterFile(wiring.Component):
     ----------
     resets : dict of str to int
         Reset values that differ from the map's (the scan settings a build starts with).
+    choices : dict of str to set of int
+        Registers that take only some values of their range (the scan modes a build has).
+    leave_out : iterable of str
+        Registers this build does not have (those of scan modes left out): their addresses
+        are unknown, so frames for them are refused and counted.
     highs : dict of str to int
         Upper limits tighter than the map's (the table size bounds the address ranges).
     """
 
-    def __init__(self, *, resets=None, highs=None):
+    def __init__(self, *, resets=None, highs=None, choices=None, leave_out=()):
         self.resets = {r.name: r.reset for r in REGISTERS}
         self.highs = {r.name: r.high for r in REGISTERS}
         for name, value in (resets or {}).items():
@@ -70,8 +75,21 @@ class RegisterFile(wiring.Component):
             if name not in self.highs:
                 raise ValueError(f"no register named {name!r}")
             self.highs[name] = min(self.highs[name], value)
+        self.choices = {}
+        for name, values in (choices or {}).items():
+            if name not in self.highs:
+                raise ValueError(f"no register named {name!r}")
+            values = sorted(set(values))
+            if not values or not all(BY_NAME[name].low <= v <= self.highs[name] for v in values):
+                raise ValueError(f"choices for {name} must lie in its range, not {values!r}")
+            self.choices[name] = values
+        for name in leave_out:
+            if name not in BY_NAME:
+                raise ValueError(f"no register named {name!r}")
+        #: The registers this build has.
+        self.registers = [r for r in REGISTERS if r.name not in set(leave_out)]
         members = {"bus": In(RegisterBus())}
-        for reg in REGISTERS:
+        for reg in self.registers:
             if reg.access == "rw":
                 members[reg.name] = Out(reg.width, init=self.resets[reg.name])
             elif reg.access == "strobe":
@@ -88,7 +106,7 @@ class RegisterFile(wiring.Component):
         m = Module()
         bus = self.bus
         with m.Switch(bus.address):
-            for reg in REGISTERS:
+            for reg in self.registers:
                 with m.Case(reg.address):
                     value = getattr(self, reg.name)
                     m.d.comb += bus.read_ok.eq(1)
@@ -103,6 +121,9 @@ class RegisterFile(wiring.Component):
                     if reg.access in ("rw", "queue"):
                         in_range = (bus.write_data >= reg.low) & \
                                    (bus.write_data <= self.highs[reg.name])
+                        if reg.name in self.choices:
+                            in_range &= Cat(bus.write_data == v
+                                            for v in self.choices[reg.name]).any()
                         if reg.access == "queue":
                             # A full queue refuses the write: nothing is lost silently.
                             in_range &= getattr(self, f"{reg.name}_ready")

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 
 __all__ = ["CHECK_BYTE", "READ_FLAG", "Register", "REGISTERS", "BY_NAME", "BY_ADDRESS",
+           "MODE_REGISTERS",
            "STATUS_BITS", "encode_frame", "decode_frame", "FrameError"]
 
 
@@ -168,10 +169,21 @@ REGISTERS = [
              "65536"),
 ]
 
+#: Registers that only a build with that scan mode has (see ``GalvoScanTop(modes=...)``); a
+#: build without the mode answers their addresses as unknown.
+MODE_REGISTERS = {
+    "spiral": ("dwell", "x_first", "x_last", "y_first", "y_last"),
+    "raster": ("ras_x", "ras_y", "ras_w", "ras_h", "ras_spacing", "ras_step", "ras_flags",
+               "ras_turn_gate"),
+    "vector": ("vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
+               "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"),
+}
+
 BY_NAME = {r.name: r for r in REGISTERS}
 BY_ADDRESS = {r.address: r for r in REGISTERS}
 assert len(BY_NAME) == len(BY_ADDRESS) == len(REGISTERS)
 assert all(r.address < READ_FLAG for r in REGISTERS)
+assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 
 
 class FrameError(ValueError):

@@ -215,33 +215,39 @@ class LaserController(wiring.Component):
         m.d.comb += self.mo_ready.eq(mo & (lead_left == 0))
 
         # --- PRR clock: a phase accumulator, 50 % duty ---------------------------------------
-        # Free-running, so that position sources can time points by the pulses (through
-        # pulse_ahead) whether or not the laser is on; MO gates it onto the pin. Its first high
-        # half after MO rises may be short, but modulation is still off then (MO lead).
+        # With a lookahead it runs free, so that position sources can time points by the
+        # pulses (through pulse_ahead) whether or not the laser is on; MO gates it onto the
+        # pin. Its first high half after MO rises may then be short, but modulation is still
+        # off then (MO lead).
         step = round(PRR_UNIT_HZ * 2 ** _PHASE_BITS / self.clk_freq)   # per unit of prr
         # The increment has a register of its own, so the multiply and the add do not share
         # a clock.
         increment = Signal(_PHASE_BITS)
         m.d.sync += increment.eq(self.prr * step)
         phase = Signal(_PHASE_BITS)
-        m.d.sync += phase.eq(phase + increment)
+        if self.lookahead:
+            m.d.sync += phase.eq(phase + increment)
+            # The same phase `lookahead` clocks on: its rising edges lead the PRR clock's.
+            # lookahead × increment, as shifted copies of the increment (a constant multiplier
+            # in adders, leaving the DSPs to the scan path).
+            ahead_offset = Signal(_PHASE_BITS)
+            terms = [increment << bit for bit in range(self.lookahead.bit_length())
+                     if self.lookahead >> bit & 1]
+            m.d.sync += ahead_offset.eq(sum(terms[1:], terms[0]))
+            ahead = Signal(_PHASE_BITS)
+            m.d.sync += ahead.eq(phase + increment + ahead_offset)     # = phase, next clock
+            ahead_q = Signal()
+            m.d.sync += ahead_q.eq(ahead[-1])
+            m.d.comb += self.pulse_ahead.eq(ahead[-1] & ~ahead_q)
+        else:
+            # Nobody times points by the pulses: the clock starts with MO, at phase 0.
+            with m.If(mo):
+                m.d.sync += phase.eq(phase + increment)
+            with m.Else():
+                m.d.sync += phase.eq(0)
         prr_clock = phase[-1]
         prr_q = Signal()
         m.d.sync += prr_q.eq(prr_clock)
-
-        # The same phase `lookahead` clocks on: its rising edges lead the PRR clock's.
-        # lookahead × increment, as shifted copies of the increment (a constant multiplier in
-        # adders, leaving the DSPs to the scan path).
-        ahead_offset = Signal(_PHASE_BITS)
-        terms = [increment << bit for bit in range(self.lookahead.bit_length())
-                 if self.lookahead >> bit & 1]
-        total = sum(terms[1:], terms[0]) if terms else 0
-        m.d.sync += ahead_offset.eq(total)
-        ahead = Signal(_PHASE_BITS)
-        m.d.sync += ahead.eq(phase + increment + ahead_offset)     # = phase on the next clock
-        ahead_q = Signal()
-        m.d.sync += ahead_q.eq(ahead[-1])
-        m.d.comb += self.pulse_ahead.eq(ahead[-1] & ~ahead_q)
 
         # --- outputs ------------------------------------------------------------------------
         am = am_on
