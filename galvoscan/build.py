@@ -54,10 +54,11 @@ def _used(utilisation, cell):
 
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
-                    seed=1):
+                    modes=None, seed=1):
     """Synthesise, place and route and pack the full system for ``board``.
 
-    nextpnr runs with a fixed ``seed`` so builds are repeatable. Returns a :class:`BuildReport`.
+    nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: all) picks
+    the scan modes built. Returns a :class:`BuildReport`.
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
@@ -67,7 +68,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     name = f"galvoscan_{board}"
 
     start = time.monotonic()
-    plan = platform.build(make_top(table=table, settings=settings), name=name,
+    plan = platform.build(make_top(table=table, settings=settings, modes=modes), name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json")
     products = plan.execute_local(str(build_dir), env=tool_env())

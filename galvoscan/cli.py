@@ -217,11 +217,25 @@ def _cmd_sim(args):
 
 # --- build ---------------------------------------------------------------------------------------
 
+def _modes(text):
+    from .gateware.top import MODES
+    modes = tuple(part.strip() for part in text.split(","))
+    if not all(mode in MODES for mode in modes) or len(set(modes)) != len(modes):
+        raise argparse.ArgumentTypeError(f"modes must be some of {', '.join(MODES)}, "
+                                         f"comma-separated, each once, not {text!r}")
+    return modes
+
+
 def _cmd_build(args):
     from .build import build_bitstream
     table = _table(args)
+    settings = _settings(args, table)
+    if args.modes and "spiral" not in args.modes:
+        from .gateware.top import ScanSettings
+        # Start, stopped, in the first mode built.
+        settings = ScanSettings(mode=args.modes[0], run=False)
     report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
-                             settings=_settings(args, table))
+                             settings=settings, modes=args.modes)
     if args.json:
         print(json.dumps(report.as_dict(), indent=2))
     else:
@@ -534,6 +548,9 @@ def _parser():
                        help="target board (default: %(default)s)")
     build.add_argument("--build-dir", default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
+    build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
+                       help="scan modes to build: spiral, raster, vector (default: all); "
+                            "fewer take less of the FPGA")
     build.add_argument("--json", action="store_true", help="print the report as JSON")
     _add_table_options(build)
     build.set_defaults(run=_cmd_build)

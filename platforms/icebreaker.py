@@ -103,19 +103,21 @@ class ICEBreakerScanner(Elaboratable):
 
     Parameters
     ----------
-    table, settings
+    table, settings, modes
         As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
     """
 
-    def __init__(self, *, table=None, settings=None):
+    def __init__(self, *, table=None, settings=None, modes=None):
         self.table = table
         self.settings = settings
+        self.modes = modes
 
     def elaborate(self, platform):
         m = Module()
+        extra = {} if self.modes is None else {"modes": self.modes}
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=int(platform.default_clk_frequency), table=self.table,
-            settings=self.settings)
+            settings=self.settings, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.

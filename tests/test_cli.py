@@ -120,6 +120,23 @@ def test_build_icebreaker(tmp_path, capsys):
     assert 0 < report["luts"] < report["luts_available"]
 
 
+@pytest.mark.toolchain
+def test_build_with_the_spiral_only(tmp_path, capsys):
+    code, out, _ = run(capsys, "build", "--modes", "spiral", "--build-dir", str(tmp_path),
+                       "--json")
+    report = json.loads(out)
+    assert code == 0 and report["meets_timing"]
+    assert report["brams"] == 2                                 # no vector queue
+    assert report["luts"] < 0.5 * report["luts_available"]
+
+
+@pytest.mark.parametrize("modes", ["laser", "spiral,spiral", "spiral;vector", ""])
+def test_build_rejects_bad_modes(modes, capsys):
+    with pytest.raises(SystemExit):
+        main(["build", "--modes", modes])
+    assert "modes must be some of" in capsys.readouterr().err
+
+
 def test_regs_json_is_the_map(capsys):
     from galvoscan.gateware.host.regmap import REGISTERS
     code, out, _ = run(capsys, "regs", "--json")
