@@ -88,7 +88,6 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
     frame_ends = []                              # cycle a frame was complete, and its position
     sync_rises = []
     pulses = []
-    state = {"done": False}
 
     async def spi_frame(ctx, frame):
         """Clock one 4-byte frame out; return the 32 bits that came back."""
@@ -149,7 +148,6 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
         errors = await read(ctx, "errors")
         if rejected or errors:
             raise RuntimeError(f"the board refused {errors} frames ({rejected} segments)")
-        state["done"] = True
 
     receiver = XY2Receiver()
 

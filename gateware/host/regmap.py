@@ -126,8 +126,8 @@ REGISTERS = [
              "times the queue ran empty in the middle of marking (the laser stopped and the "
              "mirrors held until more segments came); stops at 65535"),
     Register("vec_stalls", 0x29, "ro", 0, 0, 0, "frames",
-             "frames a marked line waited, laser off, for the next segment to be set up (only "
-             "below about 90 system clocks per frame); stops at 65535"),
+             "frames a marked line waited, laser off, for the next segment to be set up (140 "
+             "clocks: at 12 MHz only after two one-point segments in a row); stops at 65535"),
     # --- raster group -----------------------------------------------------------------------
     Register("ras_x", 0x30, "rw", 28768, 0, 0xFFFF, "galvo units",
              "raster rectangle: X of its lower-left corner"),

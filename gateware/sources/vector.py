@@ -72,8 +72,9 @@ class VectorSequencer(wiring.Component):
         Segments are queued, being stepped, or a point is still being held.
     stall : ``Out(1)``
         One clock when a marked point's pulses are done and the next segment is still being
-        set up (the mirrors hold with the laser off for a frame). Needs fewer than about 90
-        system clocks per frame: never at 12 MHz and XY2-100 (120).
+        set up (the mirrors hold with the laser off for a frame). Set-up takes 140 clocks,
+        so at 12 MHz and XY2-100 (120 clocks a frame) only a one-point segment after another
+        one-point segment can stall.
     """
 
     commands: In(stream.Signature(VectorCommand))
