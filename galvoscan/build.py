@@ -5,11 +5,13 @@ import json
 from pathlib import Path
 import time
 
+from .gateware.field.correction_table import CorrectionTable
+from .gateware.top import DEFAULT_CORRECTION_NODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform
 from .toolchain import tool_env
 
 
-__all__ = ["BOARDS", "BuildReport", "build_bitstream"]
+__all__ = ["BOARDS", "DEFAULT_MODES", "BuildReport", "build_bitstream"]
 
 
 #: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory, options for
@@ -17,6 +19,13 @@ __all__ = ["BOARDS", "BuildReport", "build_bitstream"]
 #: there instead of in logic cells.
 BOARDS = {
     "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
+}
+
+#: Scan modes a board's bitstream has unless told otherwise. The UP5K holds spiral and vector
+#: with the correction stage (88 % of its logic cells), or all three modes without it; all
+#: three with correction need about 5370 of its 5280 cells (README "Resources").
+DEFAULT_MODES = {
+    "icebreaker": ("spiral", "vector"),
 }
 
 
@@ -34,6 +43,8 @@ class BuildReport:
     dsps: int               # multiply-accumulate blocks (ICESTORM_DSP) used
     dsps_available: int
     seconds: float          # wall time of synthesis, place and route and packing
+    modes: tuple = ()       # scan modes built
+    correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
 
     @property
     def meets_timing(self):
@@ -54,21 +65,26 @@ def _used(utilisation, cell):
 
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
-                    modes=None, seed=1):
+                    modes=None, correction="identity", seed=1):
     """Synthesise, place and route and pack the full system for ``board``.
 
-    nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: all) picks
-    the scan modes built. Returns a :class:`BuildReport`.
+    nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
+    :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
+    RAM starts with (``None``: no correction stage). Returns a :class:`BuildReport`.
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
+    modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
+    if isinstance(correction, str) and correction == "identity":
+        correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()
     build_dir = Path(build_dir)
     name = f"galvoscan_{board}"
 
     start = time.monotonic()
-    plan = platform.build(make_top(table=table, settings=settings, modes=modes), name=name,
+    plan = platform.build(make_top(table=table, settings=settings, modes=modes,
+                                  correction=correction), name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json")
     products = plan.execute_local(str(build_dir), env=tool_env())
@@ -87,4 +103,5 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     return BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
-                       dsps_available=dsps_available, seconds=round(seconds, 1))
+                       dsps_available=dsps_available, seconds=round(seconds, 1),
+                       modes=modes, correction_nodes=correction.n if correction else 0)

@@ -165,6 +165,7 @@ def _cmd_sim_vector(args):
 
 def _cmd_sim(args):
     from tqdm import tqdm
+    from .gateware.sources.spiral import PARK_FRAMES
     from .replay import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
 
     if args.mode == "vector":
@@ -179,9 +180,9 @@ def _cmd_sim(args):
 
     table = _table(args)
     settings = _settings(args, table)
-    # The first frame after power-up parks the mirrors at the centre; then each point is held
+    # The first frames after power-up park the mirrors at the centre; then each point is held
     # for `dwell` frames.
-    frames = 1 + args.points * args.dwell
+    frames = PARK_FRAMES + args.points * args.dwell
     start = time.monotonic()
     with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
               file=sys.stderr) as bar:
@@ -195,7 +196,7 @@ def _cmd_sim(args):
     if args.png:
         sampling = (f"Gaussian sampling, σ = {table.sigma:g}" if table.sampling == "gaussian"
                     else "uniform sampling")
-        plot_path(args.png, received[1:], title=(
+        plot_path(args.png, received[PARK_FRAMES:], title=(
             f"{args.points} spiral points, {sampling}\n(decoded from the simulated XY2-100 wires)"))
     summary = {
         "points": args.points, "dwell_frames": args.dwell, "frames": len(received),
@@ -207,7 +208,7 @@ def _cmd_sim(args):
         print(json.dumps(summary, indent=2))
     else:
         print(f"{len(received)} frames decoded from the XY2-100 wires "
-              f"({args.points} points × {args.dwell} frames + 1 park frame, "
+              f"({args.points} points × {args.dwell} frames + {PARK_FRAMES} park frames, "
               f"{summary['scan_time_s'] * 1e3:.2f} ms of scanning) in {seconds:.1f} s "
               f"({summary['sim_cycles_per_s']:,} system clocks/s)")
         for what in ("csv", "png", "vcd"):
@@ -226,6 +227,27 @@ def _modes(text):
     return modes
 
 
+def _build_correction(args):
+    """The correction table for a build: None (no stage), a file's, or the identity."""
+    from .correction.files import TableFileError, load_table
+    from .gateware.field.correction_table import TABLE_SIZES, CorrectionTable
+    from .gateware.top import DEFAULT_CORRECTION_NODES
+    nodes = args.correction_nodes or DEFAULT_CORRECTION_NODES
+    if nodes not in TABLE_SIZES:
+        raise SystemExit(f"galvoscan: error: --correction-nodes must be one of "
+                         f"{', '.join(map(str, TABLE_SIZES))}, not {nodes}")
+    if args.no_correction:
+        if args.correction_nodes:
+            raise SystemExit("galvoscan: error: --correction-nodes with --no-correction")
+        return None
+    if args.correction:
+        try:
+            return load_table(args.correction, nodes=nodes)
+        except TableFileError as error:
+            raise SystemExit(f"galvoscan: error: {error}")
+    return CorrectionTable.identity(nodes)
+
+
 def _cmd_build(args):
     from .build import build_bitstream
     table = _table(args)
@@ -234,12 +256,15 @@ def _cmd_build(args):
         from .gateware.top import ScanSettings
         # Start, stopped, in the first mode built.
         settings = ScanSettings(mode=args.modes[0], run=False)
+    correction = _build_correction(args)
     report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
-                             settings=settings, modes=args.modes)
+                             settings=settings, modes=args.modes, correction=correction)
     if args.json:
         print(json.dumps(report.as_dict(), indent=2))
     else:
         print(f"{report.board}: {report.bitstream}")
+        print(f"  modes        {', '.join(report.modes)}; correction "
+              f"{f'{report.correction_nodes} x {report.correction_nodes} nodes' if report.correction_nodes else 'none'}")
         print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
         print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
         print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")
@@ -549,8 +574,17 @@ def _parser():
     build.add_argument("--build-dir", default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
-                       help="scan modes to build: spiral, raster, vector (default: all); "
-                            "fewer take less of the FPGA")
+                       help="scan modes to build: spiral, raster, vector (default: the "
+                            "board's, see README); fewer take less of the FPGA")
+    correction = build.add_mutually_exclusive_group()
+    correction.add_argument("--correction", metavar="FILE",
+                            help="distortion correction table the bitstream starts with "
+                                 "(.json, .ctb or .cor; default: the identity)")
+    correction.add_argument("--no-correction", action="store_true",
+                            help="build without the correction stage")
+    build.add_argument("--correction-nodes", type=_int_in(5, 65, "nodes"), default=None,
+                       metavar="N", help="table nodes per axis in the RAM: 5, 9, 17, 33 or "
+                                         "65 (default 17)")
     build.add_argument("--json", action="store_true", help="print the report as JSON")
     _add_table_options(build)
     build.set_defaults(run=_cmd_build)
@@ -607,6 +641,9 @@ def _parser():
                         help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
     _add_table_options(export)
     export.set_defaults(run=_cmd_export)
+
+    from .correction.commands import add_parser as add_correct_parser
+    add_correct_parser(commands, positive=_positive, link_options=_add_link_options)
     return parser
 
 

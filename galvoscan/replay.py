@@ -30,7 +30,8 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     Parameters
     ----------
     frames : int
-        Frames to collect, counted from power-up (the first one is the park position).
+        Frames to collect, counted from power-up (the first ``PARK_FRAMES`` are the park
+        position).
     table, settings
         As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
     vcd : path, optional

@@ -12,10 +12,12 @@ from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
+from .field.correction import FieldCorrection
+from .field.correction_table import CorrectionTable
 from .field.scale import AMP_ONE, ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import BY_NAME, MODE_REGISTERS, STATUS_BITS
+from .host.regmap import BY_NAME, CORRECTION_REGISTERS, MODE_REGISTERS, STATUS_BITS
 from .host.spi_target import SPITarget
 from .host.uart import uart_divisor
 from .host.uart_port import UARTCommandPort
@@ -28,7 +30,8 @@ from .sources.spiral_table import SpiralTable
 from .sources.vector import VectorCommand, VectorSequencer
 
 
-__all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH"]
+__all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
+           "DEFAULT_CORRECTION_NODES"]
 
 
 #: Values of the ``mode`` register.
@@ -36,6 +39,13 @@ MODES = {"spiral": 0, "raster": 1, "vector": 2}
 
 #: Segments the vector queue holds (block RAM).
 VECTOR_QUEUE_DEPTH = 512
+
+#: Nodes per axis of the default (identity) correction table.
+DEFAULT_CORRECTION_NODES = 17
+
+# The correction stage finishes a point within the shortest possible frame (two clocks per
+# bit), so a point taken at a frame boundary is always ready for the next one.
+assert FieldCorrection.CLOCKS + 1 < 2 * FRAME_BITS
 
 
 def _check_int(name, value, low, high, unit=""):
@@ -108,8 +118,8 @@ class GalvoScanTop(wiring.Component):
     ::
 
                                                  ┌─▶ spiral sequencer (ROMs) ─┐
-        SPI ─┐                                   ├─▶ raster fill              ├─▶ scale ─▶ XY2-100
-        UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  /offset   PHY
+        SPI ─┐                                   ├─▶ raster fill              ├─▶ scale ─▶ correction ─▶ XY2-100
+        UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  /offset   (n×n table)   PHY
                                                   laser controller ◀── marking, pulse timing
 
     Parameters
@@ -126,6 +136,11 @@ class GalvoScanTop(wiring.Component):
         What the scan registers reset to.
     mo_lead : float
         Seconds the laser's master oscillator leads emission (5 ms, as the paper).
+    modes : tuple of str
+        Scan modes built in (some of ``"spiral"``, ``"raster"``, ``"vector"``).
+    correction : :class:`CorrectionTable` or None
+        Distortion correction table the RAM starts with (default: the identity on
+        :data:`DEFAULT_CORRECTION_NODES` nodes per axis); ``None`` builds no correction stage.
 
     Interface attributes
     --------------------
@@ -159,7 +174,7 @@ class GalvoScanTop(wiring.Component):
     interlock_open: In(1, init=1)
 
     def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
-                 settings=None, mo_lead=5e-3, modes=tuple(MODES)):
+                 settings=None, mo_lead=5e-3, modes=tuple(MODES), correction="identity"):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -176,6 +191,11 @@ class GalvoScanTop(wiring.Component):
         self.modes = modes
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
         clocks_per_bit(clk_freq, bit_rate)
+        if isinstance(correction, str) and correction == "identity":
+            correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
+        if correction is not None and not isinstance(correction, CorrectionTable):
+            raise TypeError(f"correction must be a CorrectionTable or None, not {correction!r}")
+        self.correction = correction
         self.uart_divisor = uart_divisor(clk_freq, baud)
         if not mo_lead > 0:
             raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
@@ -195,10 +215,12 @@ class GalvoScanTop(wiring.Component):
         last_address = self.table.points - 1
         m.submodules.registers = regs = RegisterFile(
             resets=self.settings.register_resets(),
-            highs={name: last_address for name in ("x_first", "x_last", "y_first", "y_last")},
+            highs={**{name: last_address for name in ("x_first", "x_last", "y_first", "y_last")},
+                   **({"cor_node": self.correction.n ** 2 - 1} if self.correction else {})},
             choices={"mode": {MODES[mode] for mode in self.modes}},
             leave_out=[name for mode, names in MODE_REGISTERS.items() if mode not in self.modes
-                       for name in names])
+                       for name in names] +
+                      (list(CORRECTION_REGISTERS) if self.correction is None else []))
 
         m.d.comb += [
             spi.sck.eq(self.spi_sck),
@@ -215,7 +237,9 @@ class GalvoScanTop(wiring.Component):
         connect(m, decoder.bus, regs.bus)
 
         # --- scan ---------------------------------------------------------------------------
-        m.submodules.scale = scale = ScaleOffset()
+        # With a correction stage, it holds the point between frames, and the scale stage is
+        # combinational in front of it: either way one point waits for the PHY, never two.
+        m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None)
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
@@ -258,7 +282,23 @@ class GalvoScanTop(wiring.Component):
                     source.points.ready.eq(scale.offsets.ready),
                     running.eq(source.run),
                 ]
-        connect(m, scale.positions, phy.position)
+        clipped = Signal()
+        if self.correction is None:
+            connect(m, scale.positions, phy.position)
+            m.d.comb += clipped.eq(scale.clipped)
+        else:
+            m.submodules.correction = correction = FieldCorrection(self.correction)
+            connect(m, scale.positions, correction.positions_in)
+            connect(m, correction.positions_out, phy.position)
+            m.d.comb += [
+                correction.enable.eq(regs.cor_enable),
+                correction.write_node.eq(regs.cor_node),
+                correction.write_dx.eq(regs.cor_dx),
+                correction.write_dy.eq(regs.cor_dy),
+                correction.write_en.eq(regs.cor_write),
+                regs.cor_nodes.eq(self.correction.n),
+                clipped.eq(scale.clipped | correction.clipped),
+            ]
 
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
@@ -340,7 +380,7 @@ class GalvoScanTop(wiring.Component):
 
         # --- status -------------------------------------------------------------------------
         clipped_since_read = Signal()
-        with m.If(scale.clipped):
+        with m.If(clipped):
             m.d.sync += clipped_since_read.eq(1)
         with m.Elif(decoder.status_read):
             m.d.sync += clipped_since_read.eq(0)

@@ -103,21 +103,23 @@ class ICEBreakerScanner(Elaboratable):
 
     Parameters
     ----------
-    table, settings, modes
-        As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
+    table, settings, modes, correction
+        As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
+        ``correction`` ``"identity"``: the default identity table).
     """
 
-    def __init__(self, *, table=None, settings=None, modes=None):
+    def __init__(self, *, table=None, settings=None, modes=None, correction="identity"):
         self.table = table
         self.settings = settings
         self.modes = modes
+        self.correction = correction
 
     def elaborate(self, platform):
         m = Module()
         extra = {} if self.modes is None else {"modes": self.modes}
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=int(platform.default_clk_frequency), table=self.table,
-            settings=self.settings, **extra)
+            settings=self.settings, correction=self.correction, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.

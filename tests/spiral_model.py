@@ -24,8 +24,9 @@ def spiral_points(table_x, table_y, count, *, x_range, y_range, gain=(32768, 327
 
 
 def spiral_frames(table_x, table_y, count, *, dwell, **kwargs):
-    """Frames from power-up: one park frame, then each point for ``dwell`` frames."""
-    frames = [PARK]
+    """Frames from power-up: two park frames (the first point is due at the end of the first
+    frame and goes out at the end of the second), then each point for ``dwell`` frames."""
+    frames = [PARK, PARK]
     for point in spiral_points(table_x, table_y, count, **kwargs):
         frames.extend([point] * dwell)
     return frames

@@ -37,7 +37,9 @@ def test_every_register_resets_and_reads_back(kind):
     # Write a new in-range value to every writable register and read them all back.
     values = {}
     for i, reg in enumerate(RW):
-        values[reg.name] = reg.low + (7919 * (i + 3)) % (reg.high - reg.low + 1)
+        # The build narrows some ranges (cor_node: the table's nodes).
+        high = board.top.correction.n ** 2 - 1 if reg.name == "cor_node" else reg.high
+        values[reg.name] = reg.low + (7919 * (i + 3)) % (high - reg.low + 1)
     values["run"] = 0                              # keep the scanner still meanwhile
     for name, value in values.items():
         client.write(name, value)

@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 
 from galvoscan.analysis.patterns import spiral_frames as analysis_spiral_frames
 from galvoscan.gateware.points import OffsetPoint
-from galvoscan.gateware.sources.spiral import SpiralSequencer
+from galvoscan.gateware.sources.spiral import PARK_FRAMES, SpiralSequencer
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
@@ -72,7 +72,7 @@ def replay(table, settings, points, *, clocks_per_bit=2):
     """Frames decoded from the system top's wires, enough for ``points`` spiral points."""
     clk_freq = clocks_per_bit * 2e6
     top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings)
-    samples = record_falling_edges(top, clk_freq, frames=1 + points * settings.dwell)
+    samples = record_falling_edges(top, clk_freq, frames=PARK_FRAMES + points * settings.dwell)
     return frames_from_samples(samples)
 
 
@@ -97,9 +97,9 @@ def test_full_pattern_replays_point_for_point():
     # The scan analysis' numpy model of the same pattern (galvoscan.analysis) is what the
     # gateware emits, so its dose figures speak of the real output.
     model = analysis_spiral_frames(table, dwell=settings.dwell)
-    assert frames[1:] == list(zip(model.x.tolist(), model.y.tolist()))
+    assert frames[2:] == list(zip(model.x.tolist(), model.y.tolist()))
     # The pattern closes: the next point would be the first again.
-    assert expected(table, settings, points + 1)[-1] == frames[1]
+    assert expected(table, settings, points + 1)[-1] == frames[2]
 
 
 @pytest.mark.parametrize("dwell", [1, 2, 5])

@@ -1,6 +1,6 @@
 """Scale and offset: source offsets to galvo positions, saturating (SPEC §3, §4)."""
 
-from amaranth.hdl import Module, Mux
+from amaranth.hdl import Module, Mux, Signal, signed
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -21,8 +21,15 @@ class ScaleOffset(wiring.Component):
     point that had to be clamped is still sent, at the field edge, and flagged on
     :attr:`clipped`: positions never wrap around.
 
-    One point is held at a time: the stage takes a point when its output is empty or being
-    taken, so it never adds a frame of latency to points paced by frame strobes.
+    Buffered (the default), one point is held at a time: the stage takes a point when its output
+    is empty or being taken, so it never adds a frame of latency to points paced by frame
+    strobes. Unbuffered, it is combinational between two streams, for a following stage that
+    holds the point instead (the distortion correction).
+
+    Parameters
+    ----------
+    buffered : bool
+        Hold the point in a register (True) or pass it straight through (False).
 
     Interface attributes
     --------------------
@@ -47,26 +54,37 @@ class ScaleOffset(wiring.Component):
     center_y: In(16)
     clipped: Out(1)
 
+    def __init__(self, *, buffered=True):
+        self.buffered = bool(buffered)
+        super().__init__()
+
     def elaborate(self, platform):
         m = Module()
 
         def scale(offset, amp, center):
-            # |offset| × amp is a 16 × 16 unsigned product, the size of an iCE40 DSP; the sign
-            # goes back on afterwards, rounding towards minus infinity like the formula.
-            negative = offset < 0
-            magnitude = Mux(negative, -offset, offset).as_unsigned()[:16]
-            product = magnitude * amp                     # unsigned(32)
-            whole = product >> 15
-            inexact = product[:15] != 0
-            step = Mux(negative, -(whole + inexact), whole)
-            wide = center + step
+            # A signed × unsigned 16 × 16-bit product: one iCE40 DSP, which takes the two
+            # operands' signedness separately. The arithmetic shift rounds towards minus
+            # infinity, like the formula.
+            step = (offset * amp) >> 15
+            wide = Signal(signed(19))
+            m.d.comb += wide.eq(center + step)
             low, high = wide < 0, wide > FIELD_MAX
-            return Mux(low, 0, Mux(high, FIELD_MAX, wide)), low | high
+            return Mux(low, 0, Mux(high, FIELD_MAX, wide[:16])), low | high
 
         x, clip_x = scale(self.offsets.payload.x, self.amp_x, self.center_x)
         y, clip_y = scale(self.offsets.payload.y, self.amp_y, self.center_y)
 
         take = self.offsets.valid & self.offsets.ready
+        if not self.buffered:
+            m.d.comb += [
+                self.positions.payload.x.eq(x),
+                self.positions.payload.y.eq(y),
+                self.positions.valid.eq(self.offsets.valid),
+                self.offsets.ready.eq(self.positions.ready),
+                self.clipped.eq(take & (clip_x | clip_y)),
+            ]
+            return m
+
         m.d.comb += [
             self.offsets.ready.eq(~self.positions.valid | self.positions.ready),
             self.clipped.eq(take & (clip_x | clip_y)),

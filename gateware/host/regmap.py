@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 
 __all__ = ["CHECK_BYTE", "READ_FLAG", "Register", "REGISTERS", "BY_NAME", "BY_ADDRESS",
-           "MODE_REGISTERS",
+           "MODE_REGISTERS", "CORRECTION_REGISTERS",
            "STATUS_BITS", "encode_frame", "decode_frame", "FrameError"]
 
 
@@ -52,7 +52,7 @@ class Register:
 #: Bits of the ``status`` register.
 STATUS_BITS = {
     "running": 0,           # the selected scan mode is running
-    "clipped": 1,           # a point had to be clamped at the field edge since status was read
+    "clipped": 1,           # a point was clamped at the field edge (scale or correction) since read
     "armed": 2,             # the arm register is set
     "fault_interlock": 3,   # latched: the interlock opened
     "fault_watchdog": 4,    # latched: no valid command for the watchdog time while armed
@@ -66,8 +66,8 @@ STATUS_BITS = {
 REGISTERS = [
     # --- read-only --------------------------------------------------------------------------
     Register("status", 0x00, "ro", 0, 0, 0, "flags",
-             "bit 0 running (the selected mode), bit 1 a point was clamped at the field edge since the last read "
-             "of status (cleared by reading), bit 2 armed, bit 3 interlock fault (latched), "
+             "bit 0 running (the selected mode), bit 1 a point was clamped at the field edge (by the scale or "
+             "the correction stage) since the last read of status (cleared by reading), bit 2 armed, bit 3 interlock fault (latched), "
              "bit 4 watchdog fault (latched), bit 5 MO on, bit 6 emitting, bit 7 interlock "
              "open now, bit 8 vector mode busy (segments queued or points still to mark)",
              width=9),
@@ -148,6 +148,22 @@ REGISTERS = [
     Register("ras_turn_gate", 0x37, "rw", 0, 0, 0xFFFF, "frames (10 µs)",
              "laser off for this many frames at the start of each line but the first, while the "
              "mirrors turn; 0 keeps it on, as the paper's raster does"),
+    # --- distortion correction group ------------------------------------------------------
+    Register("cor_enable", 0x40, "rw", 1, 0, 1, "bool",
+             "1 = add the correction table's interpolated offset to every point (the identity "
+             "table changes nothing); 0 = positions pass unchanged", width=1),
+    Register("cor_node", 0x41, "rw", 0, 0, 65 * 65 - 1, "node index",
+             "table node the next cor_write stores: iy × n + ix, n = cor_nodes (node (ix, iy) "
+             "sits at galvo position (ix, iy) × 65536 / (n - 1)); up to n × n - 1", width=13),
+    Register("cor_dx", 0x42, "rw", 0, 0, 0xFFFF, "galvo units, two's complement",
+             "X offset for cor_write (65535 = -1): added to positions at that node"),
+    Register("cor_dy", 0x43, "rw", 0, 0, 0xFFFF, "galvo units, two's complement",
+             "Y offset for cor_write"),
+    Register("cor_write", 0x44, "strobe", 0, 0, 1, "write 1",
+             "stores (cor_dx, cor_dy) at node cor_node, both at once and between two points, so "
+             "no point is made from a half-written node", width=1),
+    Register("cor_nodes", 0x45, "ro", 0, 0, 0, "nodes",
+             "correction table nodes per axis in this build (5, 9, 17, 33 or 65)", width=7),
     # --- laser group ------------------------------------------------------------------------
     Register("arm", 0x10, "rw", 0, 0, 1, "bool",
              "1 = arm the laser: latch power, MO on, modulation after the MO lead (5 ms) "
@@ -179,11 +195,15 @@ MODE_REGISTERS = {
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"),
 }
 
+#: Registers only a build with the distortion correction stage has.
+CORRECTION_REGISTERS = ("cor_enable", "cor_node", "cor_dx", "cor_dy", "cor_write", "cor_nodes")
+
 BY_NAME = {r.name: r for r in REGISTERS}
 BY_ADDRESS = {r.address: r for r in REGISTERS}
 assert len(BY_NAME) == len(BY_ADDRESS) == len(REGISTERS)
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
+assert all(name in BY_NAME for name in CORRECTION_REGISTERS)
 
 
 class FrameError(ValueError):

@@ -9,7 +9,11 @@ from .frames import BROKEN, FRAME_BITS, CommandFrame
 from .uart import UARTReceiver, UARTTransmitter
 
 
-__all__ = ["UARTCommandPort"]
+__all__ = ["UARTCommandPort", "REPLY_QUEUE_DEPTH"]
+
+
+#: Replies the UART port queues (block RAM).
+REPLY_QUEUE_DEPTH = 257
 
 
 class UARTCommandPort(wiring.Component):
@@ -21,8 +25,9 @@ class UARTCommandPort(wiring.Component):
     loses only that frame, as long as it pauses before the next. A byte with a bad stop bit
     spoils the frame it belongs to.
 
-    Replies (four bytes each) are queued four deep; the decoder does not answer a read while the
-    queue is full.
+    Replies (four bytes each) are queued in block RAM, :data:`REPLY_QUEUE_DEPTH` deep (a queue
+    that deep costs two RAM blocks and fewer logic cells than a four-deep one in flip-flops); the
+    decoder does not answer a read while the queue is full.
 
     Parameters
     ----------
@@ -93,7 +98,7 @@ class UARTCommandPort(wiring.Component):
             hand_on(word, Mux(broken, BROKEN, count * 8))
 
         # --- replies → bytes ----------------------------------------------------------------
-        m.submodules.queue = queue = SyncFIFOBuffered(width=32, depth=4)
+        m.submodules.queue = queue = SyncFIFOBuffered(width=32, depth=REPLY_QUEUE_DEPTH)
         m.d.comb += [
             queue.w_data.eq(self.replies.payload),
             queue.w_en.eq(self.replies.valid),

@@ -9,7 +9,12 @@ from ..points import OffsetPoint
 from .spiral_table import SpiralTable
 
 
-__all__ = ["SpiralSequencer"]
+__all__ = ["SpiralSequencer", "PARK_FRAMES"]
+
+
+#: Frames the head holds the park position after power-up before the first point: that point
+#: is due at the end of the first frame and goes out at the end of the second.
+PARK_FRAMES = 2
 
 
 class SpiralSequencer(wiring.Component):
@@ -108,8 +113,12 @@ class SpiralSequencer(wiring.Component):
         m.d.sync += fetched.eq(~restart & ~issued)
 
         # Frame strobes still to pass before the next point is due.
+        # The first point after a start waits for a frame strobe too, like every other one: a
+        # point always arrives just after a frame boundary, a whole frame before it is sent.
         frames_left = Signal(16)
-        with m.If(issued):
+        with m.If(restart):
+            m.d.sync += frames_left.eq(1)
+        with m.Elif(issued):
             m.d.sync += frames_left.eq(Mux(self.dwell == 0, 1, self.dwell))
         with m.Elif(self.frame_strobe & (frames_left != 0)):
             m.d.sync += frames_left.eq(frames_left - 1)

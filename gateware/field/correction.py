@@ -1,0 +1,208 @@
+"""Field-distortion correction: bilinear offsets from an n × n table on every point (SPEC §3).
+
+The arithmetic is defined, and documented, in :mod:`.correction_table`; this module is its
+sequential implementation: one block RAM holding the table, one 16 × 16-bit multiplier with an
+accumulator, fourteen clocks per point.
+"""
+
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
+from amaranth.lib import stream, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from ..points import FIELD_MAX, FieldPoint
+from .correction_table import CorrectionTable
+
+
+__all__ = ["FieldCorrection"]
+
+
+class FieldCorrection(wiring.Component):
+    """Adds the table's interpolated offset to each position, saturating at the field edges.
+
+    A point is taken when the stage is idle and its output is empty or being taken, so, like the
+    buffer it replaces, it holds one point and adds no frame of latency: the result is ready
+    :attr:`CLOCKS` clocks after the point came in, long before the next frame boundary.
+
+    The table is in block RAM, initialised from ``table`` and rewritten one node at a time
+    through ``write_*``. A node's ``dx`` and ``dy`` are one RAM word, written in one clock, and
+    writes are made only between points: every point is interpolated from one table, never from
+    a half-written node or a table that changed while its corners were read.
+
+    Parameters
+    ----------
+    table : :class:`CorrectionTable`
+        What the RAM holds after configuration.
+
+    Interface attributes
+    --------------------
+    positions_in : ``In(stream.Signature(FieldPoint))``
+        Positions in galvo units.
+    positions_out : ``Out(stream.Signature(FieldPoint))``
+        Corrected positions for the PHY.
+    enable : ``In(1)``
+        1 = correct; 0 = pass positions unchanged (with the same timing). Sampled with each point.
+    write_node : ``In(range(n * n))``; write_dx, write_dy : ``In(16)``
+        Node ``iy × n + ix`` and its new offsets (two's complement galvo units).
+    write_en : ``In(1)``
+        A pulse asks for the write; it is made at the first clock between points, within
+        :attr:`CLOCKS` + 1 clocks. ``write_node``, ``write_dx`` and ``write_dy`` must hold until
+        then (the register file holds them until the next command frame, hundreds of clocks).
+    write_pending : ``Out(1)``
+        A write was asked for and is not made yet.
+    clipped : ``Out(1)``
+        High for one clock when a corrected point had to be clamped at the field edge.
+    """
+
+    #: Clocks from taking a point to presenting it (correction enabled).
+    CLOCKS = 15
+
+    def __init__(self, table=None):
+        self.table = CorrectionTable.identity() if table is None else table
+        if not isinstance(self.table, CorrectionTable):
+            raise TypeError(f"table must be a CorrectionTable, not {self.table!r}")
+        nodes = self.table.n ** 2
+        super().__init__({
+            "positions_in": In(stream.Signature(FieldPoint)),
+            "positions_out": Out(stream.Signature(FieldPoint)),
+            "enable": In(1),
+            "write_node": In(range(nodes)),
+            "write_dx": In(16),
+            "write_dy": In(16),
+            "write_en": In(1),
+            "write_pending": Out(1),
+            "clipped": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        n, s = self.table.n, self.table.shift
+        whole, half = 1 << s, 1 << (s - 1)
+
+        m.submodules.ram = ram = Memory(shape=32, depth=n * n, init=self.table.words())
+        read = ram.read_port()                       # data the clock after the address
+        write = ram.write_port()
+
+        # --- one point at a time ------------------------------------------------------------
+        x = Signal(16)
+        y = Signal(16)
+        busy = Signal()
+        step = Signal(range(16))
+        take = self.positions_in.valid & self.positions_in.ready
+        out_free = ~self.positions_out.valid | self.positions_out.ready
+        # A pending write goes first: it can only wait a clock for the point, never the other
+        # way round for longer than that.
+        m.d.comb += self.positions_in.ready.eq(~busy & out_free & ~self.write_pending)
+
+        with m.If(self.positions_out.valid & self.positions_out.ready):
+            m.d.sync += self.positions_out.valid.eq(0)
+
+        # --- table writes, only between points ----------------------------------------------
+        with m.If(self.write_en):
+            m.d.sync += self.write_pending.eq(1)
+        with m.Elif(self.write_pending & ~busy):
+            m.d.sync += self.write_pending.eq(0)
+        m.d.comb += [
+            write.addr.eq(self.write_node),
+            write.data.eq(Cat(self.write_dx, self.write_dy)),
+            write.en.eq(self.write_pending & ~busy & ~self.write_en),
+        ]
+
+        # --- addresses of the cell's corners --------------------------------------------------
+        ix, fx = x[s:], x[:s]
+        iy, fy = y[s:], y[:s]
+        base = Signal(range(n * n))
+        m.d.comb += base.eq((iy << (n - 1).bit_length() - 1) + iy + ix)     # iy × n + ix
+        corner = {"00": base, "10": base + 1, "01": base + n, "11": base + n + 1}
+
+        # --- the multiply-accumulate ----------------------------------------------------------
+        # acc = a × w (first) or acc + a × w (second); rounded results go to top/bottom/result.
+        operand = Signal(signed(16))
+        weight = Signal(signed(16))
+        accumulate = Signal()
+        acc = Signal(signed(32))
+        product = Signal(signed(32))
+        m.d.comb += product.eq(operand * weight)
+        # The first product of a pair starts from W/2 rather than 0, so that rounding is a plain
+        # shift; yosys folds this multiply-add into the DSP block's own accumulator.
+        with m.If(busy):
+            m.d.sync += acc.eq(Mux(accumulate, acc, half) + product)
+        rounded = Signal(signed(16))
+        m.d.comb += rounded.eq(acc >> s)
+        top = Signal(signed(16))
+        bottom = Signal(signed(16))
+        offset_x = Signal(signed(16))
+
+        word_x = read.data[:16].as_signed()
+        word_y = read.data[16:].as_signed()
+
+        # The schedule: step -> (corner to read for the next step, operand, weight, first of a
+        # pair?, where the rounded previous pair goes). The same for X (steps 1-6, reading the
+        # low halves) and Y (steps 7-12, high halves).
+        left, right = whole - fx, fx
+        down, up = whole - fy, fy
+        schedule = {
+            0: ("00", None, None, None, None),
+            1: ("10", word_x, left, True, None),
+            2: ("01", word_x, right, False, None),
+            3: ("11", word_x, left, True, top),
+            4: (None, word_x, right, False, None),
+            5: (None, top, down, True, bottom),
+            6: ("00", bottom, up, False, None),
+            7: ("10", word_y, left, True, offset_x),
+            8: ("01", word_y, right, False, None),
+            9: ("11", word_y, left, True, top),
+            10: (None, word_y, right, False, None),
+            11: (None, top, down, True, bottom),
+            12: (None, bottom, up, False, None),
+        }
+        with m.Switch(step):
+            for index, (read_corner, source, w, first, store) in schedule.items():
+                with m.Case(index):
+                    if read_corner is not None:
+                        m.d.comb += read.addr.eq(corner[read_corner])
+                    if source is not None:
+                        m.d.comb += [
+                            operand.eq(source),
+                            weight.eq(w),
+                            accumulate.eq(~first),
+                        ]
+                    if store is not None:
+                        m.d.sync += store.eq(rounded)
+
+        # --- final sum and saturation ---------------------------------------------------------
+        def saturate(position, offset):
+            wide = Signal(signed(18))
+            m.d.comb += wide.eq(position + offset)
+            low, high = wide < 0, wide > FIELD_MAX
+            return Mux(low, 0, Mux(high, FIELD_MAX, wide[:16])), low | high
+
+        out_x, clip_x = saturate(x, offset_x)
+        out_y, clip_y = saturate(y, rounded)
+
+        # The point's own registers hold the result too: the output is (x, y) once valid.
+        m.d.comb += [
+            self.positions_out.payload.x.eq(x),
+            self.positions_out.payload.y.eq(y),
+        ]
+        with m.If(take):
+            m.d.sync += [
+                x.eq(self.positions_in.payload.x),
+                y.eq(self.positions_in.payload.y),
+            ]
+            with m.If(self.enable):
+                m.d.sync += [busy.eq(1), step.eq(0)]
+            with m.Else():
+                m.d.sync += self.positions_out.valid.eq(1)
+        with m.Elif(busy):
+            m.d.sync += step.eq(step + 1)
+            with m.If(step == 13):
+                m.d.sync += [
+                    busy.eq(0),
+                    x.eq(out_x),
+                    y.eq(out_y),
+                    self.positions_out.valid.eq(1),
+                ]
+                m.d.comb += self.clipped.eq(clip_x | clip_y)
+
+        return m
