@@ -98,7 +98,8 @@ def _cmd_sim_vector(args):
     start = time.monotonic()
     with tqdm(unit="frame", desc="simulating", disable=None, file=sys.stderr) as bar:
         try:
-            result = replay_job(job, prr_hz=args.prr, pulses_per_point=args.pulses_per_point,
+            result = replay_job(job, correction=_sim_correction(args),
+                                prr_hz=args.prr, pulses_per_point=args.pulses_per_point,
                                 pitch=args.pitch, jump_delay=args.jump_delay,
                                 progress=bar.update)
         except ValueError as error:
@@ -163,6 +164,18 @@ def _cmd_sim_vector(args):
     return 0 if counts in ([args.pulses_per_point], []) else 1
 
 
+def _sim_correction(args):
+    """The correction table a simulation starts with: a file's, or the identity."""
+    if not args.correction:
+        return "identity"
+    from .correction.files import TableFileError, load_table
+    from .gateware.top import DEFAULT_CORRECTION_NODES
+    try:
+        return load_table(args.correction, nodes=DEFAULT_CORRECTION_NODES)
+    except TableFileError as error:
+        raise SystemExit(f"galvoscan: error: {error}")
+
+
 def _cmd_sim(args):
     from tqdm import tqdm
     from .gateware.sources.spiral import PARK_FRAMES
@@ -187,7 +200,7 @@ def _cmd_sim(args):
     with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
               file=sys.stderr) as bar:
         received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
-                                 progress=bar.update)
+                                 progress=bar.update, correction=_sim_correction(args))
     seconds = time.monotonic() - start
     cycles = frames * 20 * SIM_CLOCKS_PER_BIT
 
@@ -557,6 +570,9 @@ def _parser():
                         help="write one row per point: x,y,pulses,frames")
     sim.add_argument("--dwell", type=_int_in(1, 0xFFFF, "dwell"), default=3,
                      help="10 µs frames each point is held (default: %(default)s = 30 µs)")
+    sim.add_argument("--correction", metavar="FILE",
+                     help="distortion correction table (.json, .ctb, .cor) the top starts with "
+                          "(default: the identity); the wires carry corrected positions")
     sim.add_argument("--vcd", metavar="FILE", help="write a waveform (large for long runs)")
     sim.add_argument("--csv", metavar="FILE",
                      help="write one row per frame: frame,x,y (vector: and pulses)")

@@ -24,7 +24,7 @@ SIM_CLOCKS_PER_BIT = 2
 
 
 def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=None,
-                  progress=None):
+                  progress=None, correction="identity"):
     """Simulate the system top and return the first ``frames`` frames read off the wires.
 
     Parameters
@@ -32,7 +32,7 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     frames : int
         Frames to collect, counted from power-up (the first ``PARK_FRAMES`` are the park
         position).
-    table, settings
+    table, settings, correction
         As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
     vcd : path, optional
         Write a waveform of the whole run.
@@ -49,7 +49,7 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     # The spiral alone: the other modes, idle, change none of its frames (the tests replay
     # the full build too), and leaving them out makes the simulation half again as fast.
     top = GalvoScanTop(clk_freq=clk_freq, bit_rate=bit_rate, table=table, settings=settings,
-                       modes=("spiral",))
+                       modes=("spiral",), correction=correction)
     sim = Simulator(top)
     sim.add_clock(1 / clk_freq)
 

@@ -67,7 +67,7 @@ class JobResult:
 
 
 def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
-               clk_freq=12e6, mo_lead=5e-3, progress=None):
+               clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity"):
     """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`."""
     prr = round(prr_hz / 100)
     if not BY_NAME["laser_prr"].low <= prr <= BY_NAME["laser_prr"].high:
@@ -79,7 +79,7 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
             raise ValueError(f"{name} must be an integer from {reg.low} to {reg.high}, "
                              f"not {value!r}")
     top = GalvoScanTop(clk_freq=clk_freq, settings=ScanSettings(mode="vector", run=False),
-                       mo_lead=mo_lead)
+                       mo_lead=mo_lead, correction=correction)
     timed = _Timed(top)
     sim = Simulator(timed)
     sim.add_clock(1 / clk_freq)

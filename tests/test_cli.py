@@ -9,6 +9,7 @@ import pytest
 
 from galvoscan.gateware.sources.vector import VectorCommand
 from galvoscan.cli import main
+from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
 from spiral_model import spiral_frames
@@ -76,9 +77,9 @@ def test_sim_writes_frames_and_plot(tmp_path, capsys):
                        "--png", str(png_path), "--json")
     assert code == 0
     summary = json.loads(out)
-    assert summary["frames"] == 81
+    assert summary["frames"] == PARK_FRAMES + 80
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
-    assert [int(r["frame"]) for r in rows] == list(range(81))
+    assert [int(r["frame"]) for r in rows] == list(range(PARK_FRAMES + 80))
     table = SpiralTable()
     want = spiral_frames(table.x, table.y, 40, dwell=2, x_range=(0, 127), y_range=(1, 126))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
@@ -106,18 +107,36 @@ def test_export_rejects_bad_clock(tmp_path):
         main(["export", "verilog", "-o", str(tmp_path / "x.v"), "--clk-freq", "13e6"])
 
 
+# Block RAMs each part takes: the spiral ROMs (2 × 128 × 16 bits), the vector queue (512 × 33
+# bits in 512 × 8 blocks), the UART reply queue (256 × 32 bits) and a 17 × 17 correction table
+# (289 × 32 bits in two 256-deep halves).
+SPIRAL_RAMS, QUEUE_RAMS, REPLY_RAMS, CORRECTION_RAMS = 2, math.ceil(VectorCommand.size / 8), 2, 4
+
+
 @pytest.mark.toolchain
 def test_build_icebreaker(tmp_path, capsys):
+    """The default bitstream (spiral, vector, correction), started with a model table."""
+    table = tmp_path / "lens.json"
+    assert main(["correct", "model", "--field", "110", "--focal", "160", "-o", str(table)]) == 0
     code, out, _ = run(capsys, "build", "--board", "icebreaker", "--build-dir",
-                       str(tmp_path), "--json")
+                       str(tmp_path), "--correction", str(table), "--json")
     report = json.loads(out)
     print(report)
     assert code == 0
     assert Path(report["bitstream"]).stat().st_size > 100_000   # a whole UP5K image
     assert report["meets_timing"] and report["fmax_mhz"] >= 1.5 * 12
-    # The two spiral ROMs, and the vector queue (512 × 33 bits in 512 × 8 blocks).
-    assert report["brams"] == 2 + math.ceil(VectorCommand.size / 8)
+    assert report["modes"] == ["spiral", "vector"] and report["correction_nodes"] == 17
+    assert report["brams"] == SPIRAL_RAMS + QUEUE_RAMS + REPLY_RAMS + CORRECTION_RAMS
     assert 0 < report["luts"] < report["luts_available"]
+
+
+@pytest.mark.toolchain
+def test_build_all_modes_without_correction(tmp_path, capsys):
+    code, out, _ = run(capsys, "build", "--modes", "spiral,raster,vector", "--no-correction",
+                       "--build-dir", str(tmp_path), "--json")
+    report = json.loads(out)
+    assert code == 0 and report["meets_timing"] and report["correction_nodes"] == 0
+    assert report["brams"] == SPIRAL_RAMS + QUEUE_RAMS + REPLY_RAMS
 
 
 @pytest.mark.toolchain
@@ -126,8 +145,19 @@ def test_build_with_the_spiral_only(tmp_path, capsys):
                        "--json")
     report = json.loads(out)
     assert code == 0 and report["meets_timing"]
-    assert report["brams"] == 2                                 # no vector queue
+    assert report["brams"] == SPIRAL_RAMS + REPLY_RAMS + CORRECTION_RAMS   # no vector queue
     assert report["luts"] < 0.5 * report["luts_available"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--correction", "missing.json"], "No such file"),
+    (["--correction-nodes", "16"], "--correction-nodes must be one of"),
+    (["--no-correction", "--correction-nodes", "33"], "--correction-nodes with --no-correction"),
+])
+def test_build_rejects_bad_correction_options(argv, message, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit, match=message):
+        main(["build", *argv])
 
 
 @pytest.mark.parametrize("modes", ["laser", "spiral,spiral", "spiral;vector", ""])

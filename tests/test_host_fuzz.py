@@ -6,6 +6,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from galvoscan.client import HostClient
 from galvoscan.gateware.host.regmap import BY_ADDRESS, REGISTERS
+from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
 
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 
@@ -13,6 +14,9 @@ from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 # Writable registers that read back what was written (a queue register reads its last write).
 RW = [r for r in REGISTERS if r.access in ("rw", "queue")]
 STROBES = [r for r in REGISTERS if r.access == "strobe"]
+# Largest value each register takes in the simulated build: the map's, except the correction
+# table's node index, which the build's table size bounds.
+HIGH = {**{r.name: r.high for r in REGISTERS}, "cor_node": DEFAULT_CORRECTION_NODES ** 2 - 1}
 CHECK = 0x64
 
 
@@ -36,7 +40,7 @@ class CommandModel:
                 self.replies.append((reg.address, 0))      # strobes read 0
             else:
                 self.replies.append((reg.address, self.values.get(reg.name)))
-        elif reg.access == "ro" or not reg.low <= data <= reg.high:
+        elif reg.access == "ro" or not reg.low <= data <= HIGH[reg.name]:
             self.errors += 1
         elif reg.access in ("rw", "queue"):
             # (A queue write is refused only when the vector queue is full: never here, where
@@ -53,12 +57,13 @@ def frame_bytes(address, data, check=CHECK):
 
 rw_regs = st.sampled_from(RW + STROBES)
 valid_write = rw_regs.flatmap(
-    lambda r: st.integers(r.low, r.high).map(lambda v: frame_bytes(r.address, v)))
+    lambda r: st.integers(r.low, HIGH[r.name]).map(lambda v: frame_bytes(r.address, v)))
 valid_read = st.sampled_from(REGISTERS).map(lambda r: frame_bytes(0x80 | r.address, 0))
 bad_check = st.tuples(valid_write, st.integers(0, 255).filter(lambda c: c != CHECK)).map(
     lambda t: t[0][:3] + bytes([t[1]]))
-out_of_range = st.sampled_from([r for r in RW + STROBES if r.high < 0xFFFF or r.low > 0]).flatmap(
-    lambda r: st.one_of(st.integers(r.high + 1, 0xFFFF) if r.high < 0xFFFF else st.nothing(),
+out_of_range = st.sampled_from([r for r in RW + STROBES if HIGH[r.name] < 0xFFFF or r.low > 0]).flatmap(
+    lambda r: st.one_of(st.integers(HIGH[r.name] + 1, 0xFFFF) if HIGH[r.name] < 0xFFFF
+                        else st.nothing(),
                         st.integers(0, r.low - 1) if r.low > 0 else st.nothing())
     .map(lambda v: frame_bytes(r.address, v)))
 read_only_write = st.sampled_from([r for r in REGISTERS if r.access == "ro"]).flatmap(

@@ -4,6 +4,7 @@ import pytest
 
 from galvoscan.client import ClientError, HostClient, encode_read, encode_write
 from galvoscan.gateware.host.regmap import BY_NAME, REGISTERS, STATUS_BITS, encode_frame
+from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
@@ -74,7 +75,7 @@ def test_host_starts_stops_and_reshapes_the_spiral(kind):
     board.run_for(3e-3)
     after = [f for _, f in board.xy2_frames()[-400:]]
     want = spiral_frames(table.x, table.y, 80, dwell=2, x_range=(4, 60), y_range=(9, 50),
-                         gain=(20000, 40000), centre=(30000, 36000))[1:]
+                         gain=(20000, 40000), centre=(30000, 36000))[PARK_FRAMES:]
     assert contains_run(after, want)
     assert started_at > stopped_at
 

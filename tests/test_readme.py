@@ -85,3 +85,14 @@ def test_sampling_table_is_what_the_analysis_measures():
     assert (f"| edge / centre dose (mean, p99) | {gaussian['edge_centre']:.2f}, "
             f"{gaussian['edge_peak']:.2f} | {uniform['edge_centre']:.2f}, "
             f"{uniform['edge_peak']:.2f} |") in README
+
+
+def test_correction_table_is_what_the_study_measures():
+    """The README's residual table and photo figures come from `galvoscan correct study`."""
+    from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
+    study = run_study()
+    assert markdown_table(study) in README
+    values = photo_sentence_values(study)
+    assert (f"to within {values['PHOTO_MAX']} units (mean {values['PHOTO_MEAN']}; "
+            f"{values['PHOTO_UPP']} units a pixel)") in README
+    assert f"removes {values['PHOTO_REMOVED']} of the mean error" in README

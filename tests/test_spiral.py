@@ -116,7 +116,7 @@ def test_ranges_gain_centre_and_saturation():
     assert frames == expected(table, settings, 120)
     # The X axis was pushed past the edge: it sits at 65535, it never wraps to small values.
     assert max(x for x, _ in frames) == 65535
-    assert min(x for x, _ in frames[1:]) > 32768
+    assert min(x for x, _ in frames[PARK_FRAMES:]) > 32768
 
 
 def test_smaller_table():
@@ -133,4 +133,4 @@ def test_board_clock_ratio_gives_the_same_frames():
 
 def test_stopped_scanner_stays_parked():
     table, settings = SpiralTable(), ScanSettings(run=False)
-    assert replay(table, settings, 20) == [PARK] * 61
+    assert replay(table, settings, 20) == [PARK] * (PARK_FRAMES + 60)

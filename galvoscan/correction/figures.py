@@ -43,12 +43,13 @@ def plot_study(study, out):
     paths = []
 
     fig, ax = plt.subplots(figsize=(6.4, 4))
-    for method, marker in (("bilinear", "o"), ("polynomial", "s")):
+    for method, marker, colour in (("bilinear", "o", "tab:blue"),
+                                   ("polynomial", "s", "tab:green")):
         rows = [r for r in study["grids"] if r["method"] == method]
         ax.plot([r["grid"] for r in rows], [r["after_mean"] for r in rows], marker=marker,
-                label=f"{method}: mean")
+                color=colour, label=f"{method}: mean")
         ax.plot([r["grid"] for r in rows], [r["after_max"] for r in rows], marker=marker,
-                linestyle="--", label=f"{method}: max")
+                color=colour, linestyle="--", label=f"{method}: max")
     ax.axhline(36.5, color="grey", linestyle=":", label="004 mean after (36.5)")
     ax.axhline(194, color="grey", linestyle="-.", label="004 max after (194)")
     ax.set_yscale("log")

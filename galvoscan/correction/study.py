@@ -14,7 +14,7 @@ from .model import ftheta_table, synthetic_head
 from .photo import calibration_job, measure_photo, render_photo
 
 
-__all__ = ["PAPER_004", "run_study", "markdown_table", "NOISE_UNITS"]
+__all__ = ["PAPER_004", "run_study", "markdown_table", "photo_sentence_values", "NOISE_UNITS"]
 
 
 #: 004's result: errors before and after its bilinear correction, galvo units.
@@ -69,6 +69,15 @@ def run_study(*, nodes=17, seed=1, photo_grid=9, progress=None):
     return {"head": {"field_mm": head.field_mm, "focal_mm": head.focal_mm, **before},
             "nodes": nodes, "noise_units": NOISE_UNITS, "grids": rows, "model": model,
             "photo": photo, "photo_image": image, "photo_table": table}
+
+
+def photo_sentence_values(study):
+    """The photo figures the README quotes, formatted as it quotes them."""
+    photo = study["photo"]
+    return {"PHOTO_MAX": f"{photo['centre_error_max']:.0f}",
+            "PHOTO_MEAN": f"{photo['centre_error_mean']:.0f}",
+            "PHOTO_UPP": f"{photo['units_per_px']:.0f}",
+            "PHOTO_REMOVED": f"{photo['removed']:.0%}"}
 
 
 def markdown_table(study):
