@@ -118,6 +118,7 @@ def test_build_icebreaker(tmp_path, capsys):
     """The default bitstream (spiral, vector, correction), started with a model table."""
     table = tmp_path / "lens.json"
     assert main(["correct", "model", "--field", "110", "--focal", "160", "-o", str(table)]) == 0
+    capsys.readouterr()
     code, out, _ = run(capsys, "build", "--board", "icebreaker", "--build-dir",
                        str(tmp_path), "--correction", str(table), "--json")
     report = json.loads(out)

@@ -8,11 +8,13 @@ import re
 import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
-                                    laser_safety_proof, xy2_phy_proof)
+                                    correction_proof, laser_safety_proof, xy2_phy_proof)
+from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
 from broken_command import BROKEN_COMMAND_PATHS
+from broken_correction import CORRECTION_FAULTS
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_phys import FAULTS, TamperedPHY
 
@@ -80,3 +82,14 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
                      cover_depth=proof.cover_depth, tasks=("prove",))
     assert prove.status == "FAIL"
     assert LASER_FAULTS[fault] in failed_properties(prove), (fault, prove.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(CORRECTION_FAULTS, key=lambda f: f.__name__),
+                         ids=lambda f: f.__name__)
+def test_broken_correction_stage_fails_the_proof(fault, tmp_path):
+    proof = correction_proof(make_stage=lambda: fault(CorrectionTable.identity(5)),
+                             name=f"broken_{fault.__name__}")
+    prove, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
+                     cover_depth=proof.cover_depth, tasks=("prove",))
+    assert prove.status != "PASS"
+    assert CORRECTION_FAULTS[fault] in failed_properties(prove), (fault, prove.failed)

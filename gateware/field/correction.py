@@ -45,11 +45,12 @@ class FieldCorrection(wiring.Component):
     write_node : ``In(range(n * n))``; write_dx, write_dy : ``In(16)``
         Node ``iy × n + ix`` and its new offsets (two's complement galvo units).
     write_en : ``In(1)``
-        A pulse asks for the write; it is made at the first clock between points, within
-        :attr:`CLOCKS` + 1 clocks. ``write_node``, ``write_dx`` and ``write_dy`` must hold until
-        then (the register file holds them until the next command frame, hundreds of clocks).
+        A pulse asks for the write; it is made on that clock if no point is being made, else
+        on the clock the point is done, within :attr:`CLOCKS` clocks. ``write_node``,
+        ``write_dx`` and ``write_dy`` must hold until then (the register file holds them until
+        the next command frame, hundreds of clocks).
     write_pending : ``Out(1)``
-        A write was asked for and is not made yet.
+        A write was asked for while a point was being made, and waits for it.
     clipped : ``Out(1)``
         High for one clock when a corrected point had to be clamped at the field edge.
     """
@@ -62,6 +63,10 @@ class FieldCorrection(wiring.Component):
         if not isinstance(self.table, CorrectionTable):
             raise TypeError(f"table must be a CorrectionTable, not {self.table!r}")
         nodes = self.table.n ** 2
+        # Internal state the formal spec observes (formal/correction.py): a point is being
+        # made; the table RAM is being written.
+        self._busy = Signal()
+        self._ram_write = Signal()
         super().__init__({
             "positions_in": In(stream.Signature(FieldPoint)),
             "positions_out": Out(stream.Signature(FieldPoint)),
@@ -73,6 +78,17 @@ class FieldCorrection(wiring.Component):
             "write_pending": Out(1),
             "clipped": Out(1),
         })
+
+    # The two rules the formal spec checks, as methods, so that the tests can show that a stage
+    # breaking either fails the proof (tests/broken_correction.py).
+
+    def _may_take(self, busy, out_free):
+        """A point is taken only between points, into a free output."""
+        return ~busy & out_free
+
+    def _may_write(self, busy):
+        """The table is written only between points."""
+        return ~busy
 
     def elaborate(self, platform):
         m = Module()
@@ -86,26 +102,25 @@ class FieldCorrection(wiring.Component):
         # --- one point at a time ------------------------------------------------------------
         x = Signal(16)
         y = Signal(16)
-        busy = Signal()
+        busy = self._busy
         step = Signal(range(16))
         take = self.positions_in.valid & self.positions_in.ready
         out_free = ~self.positions_out.valid | self.positions_out.ready
-        # A pending write goes first: it can only wait a clock for the point, never the other
-        # way round for longer than that.
-        m.d.comb += self.positions_in.ready.eq(~busy & out_free & ~self.write_pending)
+        m.d.comb += self.positions_in.ready.eq(self._may_take(busy, out_free))
 
         with m.If(self.positions_out.valid & self.positions_out.ready):
             m.d.sync += self.positions_out.valid.eq(0)
 
         # --- table writes, only between points ----------------------------------------------
-        with m.If(self.write_en):
-            m.d.sync += self.write_pending.eq(1)
-        with m.Elif(self.write_pending & ~busy):
-            m.d.sync += self.write_pending.eq(0)
+        # Made at once when no point is being made, else kept until the point is done. (A point
+        # taken on the clock of a write reads its corners afterwards: it sees the new node.)
+        asked = self.write_pending | self.write_en
+        m.d.sync += self.write_pending.eq(asked & busy)
         m.d.comb += [
             write.addr.eq(self.write_node),
             write.data.eq(Cat(self.write_dx, self.write_dy)),
-            write.en.eq(self.write_pending & ~busy & ~self.write_en),
+            write.en.eq(asked & self._may_write(busy)),
+            self._ram_write.eq(write.en),
         ]
 
         # --- addresses of the cell's corners --------------------------------------------------
