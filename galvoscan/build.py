@@ -7,7 +7,7 @@ import time
 
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES
-from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform
+from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
 from .toolchain import tool_env
 
 
@@ -44,6 +44,7 @@ class BuildReport:
     dsps_available: int
     seconds: float          # wall time of synthesis, place and route and packing
     modes: tuple = ()       # scan modes built
+    bit_rate_mhz: float = 2.0   # XY2 bit rate (2: XY2-100, 4: XY2-200)
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
 
     @property
@@ -65,16 +66,20 @@ def _used(utilisation, cell):
 
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
-                    modes=None, correction="identity", seed=1):
+                    modes=None, correction="identity", clock=None, bit_rate=2_000_000,
+                    seed=1):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
     :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
-    RAM starts with (``None``: no correction stage). Returns a :class:`BuildReport`.
+    RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
+    the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200).
+    Returns a :class:`BuildReport`.
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
+    system_clock(clock, bit_rate)        # a clock the board cannot run raises here, first
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
@@ -84,16 +89,17 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
 
     start = time.monotonic()
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
-                                  correction=correction), name=name,
+                                  correction=correction, clock=clock, bit_rate=bit_rate), name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
-                          nextpnr_opts=f"--seed {seed} --report {name}.report.json")
+                          nextpnr_opts=f"--seed {seed} --report {name}.report.json" +
+                                       (f" --freq {clock / 1e6:g}" if clock else ""))
     products = plan.execute_local(str(build_dir), env=tool_env())
     seconds = time.monotonic() - start
 
     bitstream = build_dir / f"{name}.bin"
     bitstream.write_bytes(products.get(f"{name}.bin"))
     report = json.loads(products.get(f"{name}.report.json", mode="t"))
-    clock_mhz = platform.default_clk_frequency / 1e6
+    clock_mhz = (clock or platform.default_clk_frequency) / 1e6
     # One clock domain: the slowest achieved figure is the system's Fmax.
     fmax_mhz = min(entry["achieved"] for entry in report["fmax"].values())
     utilisation = report["utilization"]
@@ -104,4 +110,5 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
-                       modes=modes, correction_nodes=correction.n if correction else 0)
+                       modes=modes, correction_nodes=correction.n if correction else 0,
+                       bit_rate_mhz=bit_rate / 1e6)

@@ -270,12 +270,19 @@ def _cmd_build(args):
         # Start, stopped, in the first mode built.
         settings = ScanSettings(mode=args.modes[0], run=False)
     correction = _build_correction(args)
-    report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
-                             settings=settings, modes=args.modes, correction=correction)
+    try:
+        report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
+                                 settings=settings, modes=args.modes, correction=correction,
+                                 clock=args.clock, bit_rate=args.bit_rate)
+    except ValueError as error:          # a clock the PLL cannot make, an odd clock ratio
+        raise SystemExit(f"galvoscan: error: {error}")
     if args.json:
         print(json.dumps(report.as_dict(), indent=2))
     else:
         print(f"{report.board}: {report.bitstream}")
+        print(f"  XY2 rate     {report.bit_rate_mhz:g} Mbit/s "
+              f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
+              f"system clock")
         print(f"  modes        {', '.join(report.modes)}; correction "
               f"{f'{report.correction_nodes} x {report.correction_nodes} nodes' if report.correction_nodes else 'none'}")
         print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
@@ -472,6 +479,23 @@ def _field(text):
     return width, height
 
 
+def _cmd_bench(args):
+    from .bench import run_bench, table
+    full = not args.quick
+
+    def progress(text):
+        print(f"bench: {text}", file=sys.stderr, flush=True)
+
+    result = run_bench(builds=full, proofs=full, replay=full, progress=progress)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        machine = result["machine"]
+        print(f"galvoscan bench, {result['date']}, {machine['system']}, {machine['cpus']} "
+              f"cores, Python {machine['python']}\n")
+        print(table(result))
+
+
 def _cmd_analyze(args):
     from .analysis.report import run_analyze
     return run_analyze(args)
@@ -598,6 +622,12 @@ def _parser():
                                  "(.json, .ctb or .cor; default: the identity)")
     correction.add_argument("--no-correction", action="store_true",
                             help="build without the correction stage")
+    build.add_argument("--clock", type=_positive("clock", 16e6, 275e6), default=None,
+                       metavar="HZ", help="system clock from the FPGA's PLL (default: the "
+                                          "board's 12 MHz crystal); must meet timing")
+    build.add_argument("--bit-rate", type=_positive("bit rate", 0.1e6, 20e6), default=2e6,
+                       metavar="HZ", help="XY2 bit rate: 2e6 = XY2-100 (default), 4e6 = "
+                                          "XY2-200; the clock must be an even multiple")
     build.add_argument("--correction-nodes", type=_int_in(5, 65, "nodes"), default=None,
                        metavar="N", help="table nodes per axis in the RAM: 5, 9, 17, 33 or "
                                          "65 (default 17)")
@@ -657,6 +687,18 @@ def _parser():
                         help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
     _add_table_options(export)
     export.set_defaults(run=_cmd_export)
+
+    bench = commands.add_parser(
+        "bench", help="measure resources, Fmax, frame rate, link speed, simulator and proofs",
+        description="One run (under 10 minutes on 2 cores) that builds each board "
+                    "configuration, runs every proof, and simulates the PHY, the host link and "
+                    "the full spiral; prints a table (README 'Benchmarks').")
+    bench.add_argument("--json", action="store_true",
+                       help="print the figures as JSON (frames_per_s, idle_clocks, boards: "
+                            "luts, brams, fmax_mhz, …)")
+    bench.add_argument("--quick", action="store_true",
+                       help="simulations only: no builds, proofs or full replay (seconds)")
+    bench.set_defaults(run=_cmd_bench)
 
     from .correction.commands import add_parser as add_correct_parser
     add_correct_parser(commands, positive=_positive, link_options=_add_link_options)

@@ -336,6 +336,10 @@ class GalvoScanTop(wiring.Component):
         lookahead = 2 * frame_clocks + 1 if "vector" in self.modes else 0
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
                                                      mo_lead=self.mo_lead, lookahead=lookahead)
+        # The watchdog hears of an accepted frame a clock later: that takes the decoder's
+        # checks off the path into the laser's timers (the longest path otherwise).
+        command_seen = Signal()
+        m.d.sync += command_seen.eq(decoder.accepted)
         marking = Signal()
         if "spiral" in self.modes:
             # Spiral: marking while it runs, from its first point on (not while parked).
@@ -367,7 +371,7 @@ class GalvoScanTop(wiring.Component):
             laser.power.eq(regs.laser_power),
             laser.prr.eq(regs.laser_prr),
             laser.watchdog_ms.eq(regs.watchdog),
-            laser.alive.eq(decoder.accepted),
+            laser.alive.eq(command_seen),
             laser.fault_clear.eq(regs.fault_clear),
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),

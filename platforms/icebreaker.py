@@ -47,14 +47,19 @@ output flip-flops, one system clock after the PHY's own registers.
 """
 
 from amaranth.build import Attrs, Pins, Resource, Subsignal
-from amaranth.hdl import Elaboratable, Module, Signal
+from amaranth.hdl import ClockDomain, Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
+from ..gateware.phy.xy2_100 import clocks_per_bit
 from ..gateware.top import GalvoScanTop
+from .pll import ICE40PLL, pll_settings
 
 
-__all__ = ["ICEBreakerScanner", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
+#: The iCEBreaker's crystal.
+CRYSTAL_HZ = 12_000_000
+
+__all__ = ["CRYSTAL_HZ", "ICEBreakerScanner", "system_clock", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
            "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN"]
 
 
@@ -98,27 +103,49 @@ def icebreaker_platform():
     return platform
 
 
+def system_clock(clock, bit_rate):
+    """``(clk_freq, pll_settings or None)`` for a requested system clock (None: the crystal).
+
+    Raises ``ValueError`` if the PLL cannot make ``clock`` or the XY2 bit rate does not divide
+    it by an even integer; called before anything is built, so the error comes first.
+    """
+    pll = None if clock is None else pll_settings(CRYSTAL_HZ, clock)
+    clk_freq = CRYSTAL_HZ if clock is None else clock
+    clocks_per_bit(clk_freq, bit_rate)
+    return clk_freq, pll
+
+
 class ICEBreakerScanner(Elaboratable):
     """The system top on the iCEBreaker's 12 MHz clock.
 
     Parameters
     ----------
-    table, settings, modes, correction
+    table, settings, modes, correction, bit_rate
         As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
         ``correction`` ``"identity"``: the default identity table).
+    clock : float or None
+        System clock in Hz: None runs on the 12 MHz crystal, anything else from the PLL
+        (:func:`~galvoscan.platforms.pll.pll_settings` must reach it exactly).
     """
 
-    def __init__(self, *, table=None, settings=None, modes=None, correction="identity"):
+    def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
+                 bit_rate=2_000_000, clock=None):
         self.table = table
         self.settings = settings
         self.modes = modes
         self.correction = correction
+        self.bit_rate = bit_rate
+        self.clk_freq, self.pll = system_clock(clock, bit_rate)
 
     def elaborate(self, platform):
         m = Module()
         extra = {} if self.modes is None else {"modes": self.modes}
+        if self.pll is not None:
+            m.domains.sync = sync = ClockDomain()
+            crystal = platform.request(platform.default_clk, dir="-")
+            m.submodules.pll = ICE40PLL(crystal, self.pll, sync)
         m.submodules.scanner = scanner = GalvoScanTop(
-            clk_freq=int(platform.default_clk_frequency), table=self.table,
+            clk_freq=self.clk_freq, bit_rate=self.bit_rate, table=self.table,
             settings=self.settings, correction=self.correction, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within

@@ -1,6 +1,7 @@
 import csv
 import json
 import math
+import re
 from pathlib import Path
 import subprocess
 import sysconfig
@@ -213,3 +214,49 @@ def test_prove_runs_a_proof_and_reports_it(tmp_path, capsys):
     assert [(r["proof"], r["task"], r["status"]) for r in results] == [
         ("laser_safety", "prove", "PASS"), ("laser_safety", "cover", "PASS")]
     assert "proving laser_safety" in err
+
+
+def test_pll_settings():
+    from galvoscan.platforms.pll import pll_settings
+    for mhz in (24, 36, 48, 96):
+        s = pll_settings(12e6, mhz * 1e6)
+        assert s.f_out == mhz * 1e6
+        assert s.f_in * (s.divf + 1) / ((s.divr + 1) * 2 ** s.divq) == mhz * 1e6
+        assert 10e6 <= s.f_pfd <= 133e6 and 533e6 <= s.f_vco <= 1066e6
+    with pytest.raises(ValueError, match="cannot make 16 MHz from 12 MHz; the closest is 15.9375"):
+        pll_settings(12e6, 16e6)
+    with pytest.raises(ValueError, match="makes 16 to 275 MHz"):
+        pll_settings(12e6, 300e6)
+
+
+@pytest.mark.toolchain
+@pytest.mark.parametrize("mhz", [24, 36, 48])
+def test_pll_settings_agree_with_icepll(mhz, tmp_path):
+    """The divider search against icestorm's own icepll (yowasp-icepll)."""
+    import subprocess
+    from galvoscan.platforms.pll import pll_settings
+    from galvoscan.toolchain import tool, tool_env
+    out = subprocess.run([tool("yowasp-icepll"), "-i", "12", "-o", str(mhz)], cwd=tmp_path,
+                         env=tool_env(), capture_output=True, text=True, check=True).stdout
+    values = {key: int(value) for key, value in
+              re.findall(r"^(DIVR|DIVF|DIVQ|FILTER_RANGE):\s*(\d+)", out, re.M)}
+    s = pll_settings(12e6, mhz * 1e6)
+    assert values == {"DIVR": s.divr, "DIVF": s.divf, "DIVQ": s.divq,
+                      "FILTER_RANGE": s.filter_range}
+
+
+def test_build_rejects_clocks_it_cannot_use(capsys):
+    with pytest.raises(SystemExit, match="cannot make 16 MHz"):
+        main(["build", "--clock", "16e6"])
+    with pytest.raises(SystemExit, match="even integer multiple"):
+        main(["build", "--clock", "36e6", "--bit-rate", "4e6"])
+
+
+@pytest.mark.toolchain
+def test_build_xy2_200_on_the_pll(tmp_path, capsys):
+    """XY2-200 (4 Mbit/s) needs a clock that is an even multiple: 24 MHz from the PLL."""
+    code, out, _ = run(capsys, "build", "--modes", "spiral", "--clock", "24e6", "--bit-rate",
+                       "4e6", "--build-dir", str(tmp_path), "--json")
+    report = json.loads(out)
+    assert code == 0 and report["meets_timing"]
+    assert report["clock_mhz"] == 24 and report["bit_rate_mhz"] == 4

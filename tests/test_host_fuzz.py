@@ -155,7 +155,10 @@ def test_spi_garbage(transactions, then):
             word = (address << 24) | ((value or 0) << 8) | CHECK
             want = [(word >> (31 - i)) & 1 for i in range(32)]
         if pending_reply is not None and pending_reply[1] is None:
-            assert cipo[:8] == want[:8] and cipo[24:32] == want[24:32]
+            # A read-only value is unknown here: check the address and the check byte, as far
+            # as this transaction clocks them out.
+            n = len(bits)
+            assert cipo[:8] == want[:min(8, n)] and cipo[24:32] == want[24:min(32, n)]
         else:
             assert cipo == (want + [0] * len(bits))[:len(bits)]
         replies_before = len(model.replies)

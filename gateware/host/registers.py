@@ -44,7 +44,7 @@ class RegisterFile(wiring.Component):
     Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
     on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
     ``errors``) that the bus reads; a strobe register is an output that is high for one clock
-    when 1 is written to it, and reads 0; a queue register is an output holding the last value
+    after 1 is written to it (the clock after the write), and reads 0; a queue register is an output holding the last value
     written, with ``<name>_push`` high for one clock per accepted write and ``<name>_ready``
     (an input) refusing writes while low.
 
@@ -105,17 +105,20 @@ class RegisterFile(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         bus = self.bus
+        for reg in self.registers:
+            if reg.access == "strobe":
+                m.d.sync += getattr(self, reg.name).eq(0)     # a pulse, unless written below
         with m.Switch(bus.address):
             for reg in self.registers:
                 with m.Case(reg.address):
                     value = getattr(self, reg.name)
                     m.d.comb += bus.read_ok.eq(1)
                     if reg.access == "strobe":
-                        # Reads 0 (read_data's default); a write of 1 pulses the output.
-                        m.d.comb += [
-                            bus.write_ok.eq(bus.write_data <= reg.high),
-                            value.eq(bus.write_en & (bus.write_data == 1)),
-                        ]
+                        # Reads 0 (read_data's default); a write of 1 pulses the output on
+                        # the next clock (from a flip-flop: the decoder's checks stay off the
+                        # paths into whatever the strobe acts on).
+                        m.d.comb += bus.write_ok.eq(bus.write_data <= reg.high)
+                        m.d.sync += value.eq(bus.write_en & (bus.write_data == 1))
                     else:
                         m.d.comb += bus.read_data.eq(value)
                     if reg.access in ("rw", "queue"):

@@ -170,7 +170,11 @@ class VectorSequencer(wiring.Component):
 
         m.d.sync += pulses.eq(pulses_now)
         with m.If(self.frame_strobe):
-            done = (~holding_mark | (pulses_now >= need)) & \
+            # pulses_now >= need, with the late-arriving pulse_ahead kept off the adder and the
+            # comparator (a long path otherwise): the count so far reaches it, or falls one
+            # short and a pulse is coming now.
+            enough = (pulses >= need) | (self.pulse_ahead & (pulses >= need - 1))
+            done = (~holding_mark | enough) & \
                    (~holding_jump | (frames + 1 >= delay))
             with m.If(~self.run):
                 m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
