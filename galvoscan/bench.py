@@ -36,6 +36,7 @@ BUILDS = {
                                             "correction": None}),
     "icebreaker_xy2_200": ("icebreaker", {"modes": ("spiral",), "clock": 24e6,
                                           "bit_rate": 4e6}),
+    "icestick": ("icestick", {}),
 }
 
 

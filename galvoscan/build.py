@@ -8,6 +8,8 @@ import time
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
+from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_clock, \
+    icestick_platform
 from .toolchain import tool_env
 
 
@@ -19,13 +21,18 @@ __all__ = ["BOARDS", "DEFAULT_MODES", "BuildReport", "build_bitstream"]
 #: there instead of in logic cells.
 BOARDS = {
     "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
+    "icestick": (icestick_platform, ICEStickScanner, "-dffe_min_ce_use 8"),
 }
+
+#: Each board's check of a requested system clock and XY2 bit rate (raises ValueError).
+CLOCKS = {"icebreaker": system_clock, "icestick": icestick_clock}
 
 #: Scan modes a board's bitstream has unless told otherwise. The UP5K holds spiral and vector
 #: with the correction stage (88 % of its logic cells), or all three modes without it; all
 #: three with correction need about 5370 of its 5280 cells (README "Resources").
 DEFAULT_MODES = {
     "icebreaker": ("spiral", "vector"),
+    "icestick": ICESTICK_MODES,
 }
 
 
@@ -79,8 +86,10 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
-    system_clock(clock, bit_rate)        # a clock the board cannot run raises here, first
+    CLOCKS[board](clock, bit_rate)       # a clock the board cannot run raises here, first
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
+    if board == "icestick":
+        correction = None                # no room for it (platforms/icestick.py)
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()
@@ -105,7 +114,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     utilisation = report["utilization"]
     luts, luts_available = _used(utilisation, "ICESTORM_LC")
     brams, brams_available = _used(utilisation, "ICESTORM_RAM")
-    dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")
+    dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
     return BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,

@@ -609,7 +609,7 @@ def _parser():
         "build", help="build a bitstream and report resources and Fmax",
         description="Synthesise, place and route the full system with the YoWASP toolchain; "
                     "report logic cells, block RAMs, DSPs and nextpnr's Fmax.")
-    build.add_argument("--board", choices=["icebreaker"], default="icebreaker",
+    build.add_argument("--board", choices=["icebreaker", "icestick"], default="icebreaker",
                        help="target board (default: %(default)s)")
     build.add_argument("--build-dir", default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")

@@ -17,10 +17,11 @@ from .field.correction_table import CorrectionTable
 from .field.scale import AMP_ONE, ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import BY_NAME, CORRECTION_REGISTERS, MODE_REGISTERS, STATUS_BITS
+from .host.regmap import BY_NAME, CORRECTION_REGISTERS, LASER_REGISTERS, MODE_REGISTERS, \
+    STATUS_BITS
 from .host.spi_target import SPITarget
 from .host.uart import uart_divisor
-from .host.uart_port import UARTCommandPort
+from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
 from .laser.controller import FAULT_BITS, LaserController
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter, clocks_per_bit
 from .points import FIELD_CENTRE
@@ -174,7 +175,9 @@ class GalvoScanTop(wiring.Component):
     interlock_open: In(1, init=1)
 
     def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
-                 settings=None, mo_lead=5e-3, modes=tuple(MODES), correction="identity"):
+                 settings=None, mo_lead=5e-3, modes=tuple(MODES), correction="identity",
+                 multiplier="dsp", links=("spi", "uart"), laser=True,
+                 uart_reply_depth=REPLY_QUEUE_DEPTH):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -196,6 +199,22 @@ class GalvoScanTop(wiring.Component):
         if correction is not None and not isinstance(correction, CorrectionTable):
             raise TypeError(f"correction must be a CorrectionTable or None, not {correction!r}")
         self.correction = correction
+        if multiplier not in ("dsp", "serial"):
+            raise ValueError(f"multiplier must be dsp or serial, not {multiplier!r}")
+        if multiplier == "serial" and correction is not None:
+            raise ValueError("the serial multiplier is for FPGAs without DSP blocks, where the "
+                             "correction stage does not fit: build it with correction=None")
+        self.multiplier = multiplier
+        links = tuple(links)
+        if not links or any(link not in ("spi", "uart") for link in links) or \
+                len(set(links)) != len(links):
+            raise ValueError(f"links must be some of spi, uart, each once, not {links!r}")
+        self.links = links
+        self.laser = bool(laser)
+        self.uart_reply_depth = uart_reply_depth
+        if not self.laser and "vector" in modes:
+            raise ValueError("vector mode times its points by the laser's pulses: it needs the "
+                             "laser controller")
         self.uart_divisor = uart_divisor(clk_freq, baud)
         if not mo_lead > 0:
             raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
@@ -209,8 +228,6 @@ class GalvoScanTop(wiring.Component):
         m = Module()
 
         # --- host link ----------------------------------------------------------------------
-        m.submodules.spi = spi = SPITarget()
-        m.submodules.uart = uart = UARTCommandPort(divisor=self.uart_divisor)
         m.submodules.decoder = decoder = CommandDecoder()
         last_address = self.table.points - 1
         m.submodules.registers = regs = RegisterFile(
@@ -220,26 +237,38 @@ class GalvoScanTop(wiring.Component):
             choices={"mode": {MODES[mode] for mode in self.modes}},
             leave_out=[name for mode, names in MODE_REGISTERS.items() if mode not in self.modes
                        for name in names] +
-                      (list(CORRECTION_REGISTERS) if self.correction is None else []))
+                      (list(CORRECTION_REGISTERS) if self.correction is None else []) +
+                      ([] if self.laser else list(LASER_REGISTERS)))
 
-        m.d.comb += [
-            spi.sck.eq(self.spi_sck),
-            spi.cs_n.eq(self.spi_cs_n),
-            spi.copi.eq(self.spi_copi),
-            self.spi_cipo.eq(spi.cipo),
-            uart.rx.eq(self.uart_rx),
-            self.uart_tx.eq(uart.tx),
-        ]
-        connect(m, spi.frames, decoder.spi_frames)
-        connect(m, uart.frames, decoder.uart_frames)
-        connect(m, decoder.spi_replies, spi.replies)
-        connect(m, decoder.uart_replies, uart.replies)
+        # A link left out of the build: its pins are unused (the outputs idle) and the decoder
+        # never hears from it.
+        if "spi" in self.links:
+            m.submodules.spi = spi = SPITarget()
+            m.d.comb += [
+                spi.sck.eq(self.spi_sck),
+                spi.cs_n.eq(self.spi_cs_n),
+                spi.copi.eq(self.spi_copi),
+                self.spi_cipo.eq(spi.cipo),
+            ]
+            connect(m, spi.frames, decoder.spi_frames)
+            connect(m, decoder.spi_replies, spi.replies)
+        else:
+            m.d.comb += decoder.spi_replies.ready.eq(1)
+        if "uart" in self.links:
+            m.submodules.uart = uart = UARTCommandPort(divisor=self.uart_divisor,
+                                                       reply_depth=self.uart_reply_depth)
+            m.d.comb += [uart.rx.eq(self.uart_rx), self.uart_tx.eq(uart.tx)]
+            connect(m, uart.frames, decoder.uart_frames)
+            connect(m, decoder.uart_replies, uart.replies)
+        else:
+            m.d.comb += [decoder.uart_replies.ready.eq(1), self.uart_tx.eq(1)]
         connect(m, decoder.bus, regs.bus)
 
         # --- scan ---------------------------------------------------------------------------
         # With a correction stage, it holds the point between frames, and the scale stage is
         # combinational in front of it: either way one point waits for the PHY, never two.
-        m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None)
+        m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None,
+                                                 multiplier=self.multiplier)
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
@@ -329,6 +358,27 @@ class GalvoScanTop(wiring.Component):
                 m.d.comb += getattr(regs, name).eq(count)
 
         # --- laser --------------------------------------------------------------------------
+        # A build without the laser controller (the smallest boards) leaves the laser pins
+        # low: nothing can switch a laser on.
+        if self.laser:
+            self._elaborate_laser(m, decoder, regs, phy, sources)
+
+        # --- status -------------------------------------------------------------------------
+        clipped_since_read = Signal()
+        with m.If(clipped):
+            m.d.sync += clipped_since_read.eq(1)
+        with m.Elif(decoder.status_read):
+            m.d.sync += clipped_since_read.eq(0)
+        m.d.comb += [
+            regs.status[STATUS_BITS["running"]].eq(running),
+            regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
+            regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
+            regs.errors.eq(decoder.errors),
+        ]
+        return m
+
+    def _elaborate_laser(self, m, decoder, regs, phy, sources):
+        """The laser controller, its marking signal, pulse counter and status bits."""
         # Pulse-synchronous sources count the PRR clock ahead by the two frames a point takes
         # to reach the head (into the scale stage's buffer, then onto the wires), plus the
         # clock modulation takes to follow `marking`.
@@ -344,6 +394,7 @@ class GalvoScanTop(wiring.Component):
         if "spiral" in self.modes:
             # Spiral: marking while it runs, from its first point on (not while parked).
             spiral_marking = Signal()
+            spiral = sources["spiral"]
             with m.If(~spiral.run):
                 m.d.sync += spiral_marking.eq(0)
             with m.Elif(spiral.points.valid & spiral.points.ready):
@@ -351,7 +402,7 @@ class GalvoScanTop(wiring.Component):
             with m.If(regs.mode == MODES["spiral"]):
                 m.d.comb += marking.eq(spiral_marking)
         if "vector" in self.modes:
-            m.d.comb += vector.pulse_ahead.eq(laser.pulse_ahead)
+            m.d.comb += sources["vector"].pulse_ahead.eq(laser.pulse_ahead)
         # Raster and vector: each frame's laser decision, from the moment that frame has been
         # sent: two frame strobes after it was made.
         framed = [sources[name] for name in ("raster", "vector") if name in sources]
@@ -381,23 +432,12 @@ class GalvoScanTop(wiring.Component):
         pulses = Signal(16)
         with m.If(laser.pulse):
             m.d.sync += pulses.eq(pulses + 1)
-
-        # --- status -------------------------------------------------------------------------
-        clipped_since_read = Signal()
-        with m.If(clipped):
-            m.d.sync += clipped_since_read.eq(1)
-        with m.Elif(decoder.status_read):
-            m.d.sync += clipped_since_read.eq(0)
         m.d.comb += [
-            regs.status[STATUS_BITS["running"]].eq(running),
-            regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
+            regs.pulses.eq(pulses),
             regs.status[STATUS_BITS["armed"]].eq(regs.arm),
             regs.status[STATUS_BITS["fault_interlock"]].eq(laser.faults[FAULT_BITS["interlock"]]),
             regs.status[STATUS_BITS["fault_watchdog"]].eq(laser.faults[FAULT_BITS["watchdog"]]),
             regs.status[STATUS_BITS["mo_on"]].eq(laser.laser_mo),
             regs.status[STATUS_BITS["emitting"]].eq(laser.laser_am),
-            regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
-            regs.errors.eq(decoder.errors),
-            regs.pulses.eq(pulses),
         ]
-        return m
+

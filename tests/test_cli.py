@@ -260,3 +260,15 @@ def test_build_xy2_200_on_the_pll(tmp_path, capsys):
     report = json.loads(out)
     assert code == 0 and report["meets_timing"]
     assert report["clock_mhz"] == 24 and report["bit_rate_mhz"] == 4
+
+
+@pytest.mark.toolchain
+def test_build_icestick(tmp_path, capsys):
+    """The HX1K build: spiral, UART, serial multipliers, no laser; it places and meets 12 MHz."""
+    code, out, _ = run(capsys, "build", "--board", "icestick", "--build-dir", str(tmp_path),
+                       "--json")
+    report = json.loads(out)
+    assert code == 0 and report["meets_timing"]
+    assert report["luts_available"] == 1280 and report["luts"] < 1280
+    assert report["modes"] == ["spiral"] and report["correction_nodes"] == 0
+    assert report["dsps"] == 0 and report["brams"] == 2          # the two spiral ROMs

@@ -1,6 +1,6 @@
 """Scale and offset: source offsets to galvo positions, saturating (SPEC §3, §4)."""
 
-from amaranth.hdl import Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -26,10 +26,18 @@ class ScaleOffset(wiring.Component):
     strobes. Unbuffered, it is combinational between two streams, for a following stage that
     holds the point instead (the distortion correction).
 
+    With ``multiplier="serial"`` (for FPGAs without DSP blocks, such as the iCEstick's HX1K)
+    the products are made by shift-and-add, one amplitude bit a clock, both axes at once: the
+    point is presented 17 clocks after it was taken (a frame is at least 40), with the same
+    results. Amplitude and centre are sampled when the point is taken.
+
     Parameters
     ----------
     buffered : bool
-        Hold the point in a register (True) or pass it straight through (False).
+        Hold the point in a register (True) or pass it straight through (False; only with the
+        DSP multiplier).
+    multiplier : str
+        ``"dsp"`` (a 16 × 16 product per axis, one iCE40 DSP each) or ``"serial"``.
 
     Interface attributes
     --------------------
@@ -54,11 +62,21 @@ class ScaleOffset(wiring.Component):
     center_y: In(16)
     clipped: Out(1)
 
-    def __init__(self, *, buffered=True):
+    #: Clocks from taking a point to presenting it, with the serial multiplier.
+    SERIAL_CLOCKS = 17
+
+    def __init__(self, *, buffered=True, multiplier="dsp"):
+        if multiplier not in ("dsp", "serial"):
+            raise ValueError(f"multiplier must be dsp or serial, not {multiplier!r}")
+        if multiplier == "serial" and not buffered:
+            raise ValueError("the serial multiplier holds its point: it is always buffered")
         self.buffered = bool(buffered)
+        self.multiplier = multiplier
         super().__init__()
 
     def elaborate(self, platform):
+        if self.multiplier == "serial":
+            return self._elaborate_serial()
         m = Module()
 
         def scale(offset, amp, center):
@@ -98,4 +116,53 @@ class ScaleOffset(wiring.Component):
         with m.Elif(self.positions.ready):
             m.d.sync += self.positions.valid.eq(0)
 
+        return m
+
+    def _elaborate_serial(self):
+        m = Module()
+        busy = Signal()
+        steps = Signal(range(17))
+        out_free = ~self.positions.valid | self.positions.ready
+        take = self.offsets.valid & self.offsets.ready
+        m.d.comb += self.offsets.ready.eq(~busy & out_free)
+        with m.If(self.positions.valid & self.positions.ready):
+            m.d.sync += self.positions.valid.eq(0)
+
+        # Shift-and-add, high half first: each clock adds the offset to the upper part of the
+        # product when the next amplitude bit is 1, and halves it; the bit that falls off the
+        # bottom goes into the top of the amplitude register as its used bits leave at the
+        # bottom. After 16 clocks the product is {high, bits}: its 17 bits above bit 15 are the
+        # step (the arithmetic shift floors, as the formula).
+        axes = []
+        for axis in ("x", "y"):
+            offset = Signal(signed(16), name=f"offset_{axis}")
+            high = Signal(signed(18), name=f"high_{axis}")       # product >> 16 so far
+            bits = Signal(16, name=f"bits_{axis}")     # amplitude bits left | product's low bits
+            center = Signal(16, name=f"center_{axis}")
+            total = Signal(signed(19), name=f"total_{axis}")
+            m.d.comb += total.eq(high + Mux(bits[0], offset, 0))
+            with m.If(take):
+                m.d.sync += [
+                    offset.eq(getattr(self.offsets.payload, axis)),
+                    high.eq(0),
+                    bits.eq(getattr(self, f"amp_{axis}")),
+                    center.eq(getattr(self, f"center_{axis}")),
+                ]
+            with m.Elif(busy & (steps != 16)):
+                m.d.sync += [high.eq(total >> 1), bits.eq(Cat(bits[1:], total[0]))]
+            step = Cat(bits[15], high).as_signed()                # product >> 15
+            wide = Signal(signed(19), name=f"wide_{axis}")
+            m.d.comb += wide.eq(center + step)
+            low, above = wide < 0, wide > FIELD_MAX
+            axes.append((axis, Mux(low, 0, Mux(above, FIELD_MAX, wide[:16])), low | above))
+
+        with m.If(take):
+            m.d.sync += [busy.eq(1), steps.eq(0)]
+        with m.Elif(busy):
+            m.d.sync += steps.eq(steps + 1)
+            with m.If(steps == 16):
+                m.d.sync += [busy.eq(0), self.positions.valid.eq(1)]
+                for axis, value, _ in axes:
+                    m.d.sync += getattr(self.positions.payload, axis).eq(value)
+                m.d.comb += self.clipped.eq(axes[0][2] | axes[1][2])
         return m

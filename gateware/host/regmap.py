@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 
 __all__ = ["CHECK_BYTE", "READ_FLAG", "Register", "REGISTERS", "BY_NAME", "BY_ADDRESS",
-           "MODE_REGISTERS", "CORRECTION_REGISTERS",
+           "MODE_REGISTERS", "CORRECTION_REGISTERS", "LASER_REGISTERS",
            "STATUS_BITS", "encode_frame", "decode_frame", "FrameError"]
 
 
@@ -195,6 +195,9 @@ MODE_REGISTERS = {
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"),
 }
 
+#: Registers only a build with the laser controller has.
+LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses")
+
 #: Registers only a build with the distortion correction stage has.
 CORRECTION_REGISTERS = ("cor_enable", "cor_node", "cor_dx", "cor_dy", "cor_write", "cor_nodes")
 
@@ -203,7 +206,7 @@ BY_ADDRESS = {r.address: r for r in REGISTERS}
 assert len(BY_NAME) == len(BY_ADDRESS) == len(REGISTERS)
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
-assert all(name in BY_NAME for name in CORRECTION_REGISTERS)
+assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS)
 
 
 class FrameError(ValueError):

@@ -26,13 +26,16 @@ class UARTCommandPort(wiring.Component):
     spoils the frame it belongs to.
 
     Replies (four bytes each) are queued in block RAM, :data:`REPLY_QUEUE_DEPTH` deep (a queue
-    that deep costs two RAM blocks and fewer logic cells than a four-deep one in flip-flops); the
-    decoder does not answer a read while the queue is full.
+    that deep costs two RAM blocks and fewer logic cells than a four-deep one in flip-flops), or
+    ``reply_depth`` deep; the decoder does not answer a read while the queue is full (a host
+    that waits for each answer, as the client does, never meets that).
 
     Parameters
     ----------
     divisor : int
         System clocks per bit.
+    reply_depth : int
+        Replies queued (1: one being sent; the smallest boards).
     gap_chars : int
         Pause, in character times (10 bits), that ends a frame.
 
@@ -51,11 +54,14 @@ class UARTCommandPort(wiring.Component):
     frames: Out(stream.Signature(CommandFrame))
     replies: In(stream.Signature(32))
 
-    def __init__(self, *, divisor, gap_chars=3):
+    def __init__(self, *, divisor, gap_chars=3, reply_depth=REPLY_QUEUE_DEPTH):
         if not isinstance(gap_chars, int) or gap_chars < 2:
             raise ValueError(f"gap_chars must be an integer of at least 2, not {gap_chars!r}")
+        if not isinstance(reply_depth, int) or reply_depth < 1:
+            raise ValueError(f"reply_depth must be a positive integer, not {reply_depth!r}")
         self.divisor = divisor
         self.gap_chars = gap_chars
+        self.reply_depth = reply_depth
         super().__init__()
 
     def elaborate(self, platform):
@@ -98,7 +104,7 @@ class UARTCommandPort(wiring.Component):
             hand_on(word, Mux(broken, BROKEN, count * 8))
 
         # --- replies → bytes ----------------------------------------------------------------
-        m.submodules.queue = queue = SyncFIFOBuffered(width=32, depth=REPLY_QUEUE_DEPTH)
+        m.submodules.queue = queue = SyncFIFOBuffered(width=32, depth=self.reply_depth)
         m.d.comb += [
             queue.w_data.eq(self.replies.payload),
             queue.w_en.eq(self.replies.valid),
