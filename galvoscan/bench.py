@@ -22,8 +22,9 @@ import platform as host_platform
 import tempfile
 import time
 
-from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.sim import Simulator
+
+from .vector_replay import Timed, spi_transfer
 
 
 __all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures"]
@@ -40,20 +41,6 @@ BUILDS = {
 }
 
 
-class _Counted(Elaboratable):
-    """A design with a clock counter beside it, to time events in clocks."""
-
-    def __init__(self, design):
-        self.design = design
-        self.cycles = Signal(48)
-
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.design = self.design
-        m.d.sync += self.cycles.eq(self.cycles + 1)
-        return m
-
-
 # --- XY2-100 -------------------------------------------------------------------------------------
 
 def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
@@ -65,7 +52,7 @@ def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
     from .gateware.phy.xy2_100 import XY2Transmitter, clocks_per_bit
     from .xy2_receiver import XY2Receiver
     phy = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate)
-    counted = _Counted(phy)
+    counted = Timed(phy)
     sim = Simulator(counted)
     sim.add_clock(1 / clk_freq)
     sent, received, starts = [], [], []
@@ -114,29 +101,15 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
     from .xy2_receiver import XY2Receiver
     top = GalvoScanTop(clk_freq=clk_freq, baud=baud,
                        settings=ScanSettings(mode="vector", run=True))
-    counted = _Counted(top)
+    counted = Timed(top)
     sim = Simulator(counted)
     sim.add_clock(1 / clk_freq)
-    half_sck = 6 / clk_freq                          # SCK at clk / 12
     bit_time = 1 / baud
     results = {}
     frame_ends = []                                  # (cycle, x, y) of each XY2 frame
 
     async def spi_frame(ctx, frame):
-        """Clock a frame in; return the 32 bits clocked out (the last read's answer)."""
-        answer = 0
-        ctx.set(top.spi_cs_n, 0)
-        for bit in ((byte >> (7 - i)) & 1 for byte in frame for i in range(8)):
-            ctx.set(top.spi_copi, bit)
-            await ctx.delay(half_sck)
-            ctx.set(top.spi_sck, 1)
-            answer = (answer << 1) | ctx.get(top.spi_cipo)
-            await ctx.delay(half_sck)
-            ctx.set(top.spi_sck, 0)
-        await ctx.delay(half_sck)
-        ctx.set(top.spi_cs_n, 1)
-        await ctx.delay(4 * half_sck)
-        return answer
+        return await spi_transfer(ctx, top, frame, clk_freq)
 
     async def uart_frame(ctx, frame):
         for byte in frame:

@@ -19,11 +19,11 @@ from .job import OPS
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["JobResult", "replay_job"]
+__all__ = ["JobResult", "replay_job", "spi_transfer", "Timed"]
 
 
-class _Timed(Elaboratable):
-    """The top with a clock counter beside it, so that events can be put in order."""
+class Timed(Elaboratable):
+    """A design with a clock counter beside it, so that events can be put in order."""
 
     def __init__(self, top):
         self.top = top
@@ -66,6 +66,27 @@ class JobResult:
         return [p for p in self.points if p[2] > 0]
 
 
+async def spi_transfer(ctx, top, frame, clk_freq):
+    """Clock one 4-byte frame into the top's SPI pins, as a host at the link's top speed does
+    (SCK = clk / 12, mode 0, ``cs_n`` high for four half periods after); return the 32 bits
+    that came back on CIPO (the answer to the previous read)."""
+    half_sck = 6 / clk_freq
+    bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
+    ctx.set(top.spi_cs_n, 0)
+    answer = 0
+    for bit in bits:
+        ctx.set(top.spi_copi, bit)
+        await ctx.delay(half_sck)
+        ctx.set(top.spi_sck, 1)
+        answer = (answer << 1) | ctx.get(top.spi_cipo)
+        await ctx.delay(half_sck)
+        ctx.set(top.spi_sck, 0)
+    await ctx.delay(half_sck)
+    ctx.set(top.spi_cs_n, 1)
+    await ctx.delay(4 * half_sck)
+    return answer
+
+
 def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
                clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity"):
     """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`."""
@@ -80,31 +101,16 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
                              f"not {value!r}")
     top = GalvoScanTop(clk_freq=clk_freq, settings=ScanSettings(mode="vector", run=False),
                        mo_lead=mo_lead, correction=correction)
-    timed = _Timed(top)
+    timed = Timed(top)
     sim = Simulator(timed)
     sim.add_clock(1 / clk_freq)
-    half_sck = 6 / clk_freq                      # SCK at clk / 12, the link's top speed
 
     frame_ends = []                              # cycle a frame was complete, and its position
     sync_rises = []
     pulses = []
 
     async def spi_frame(ctx, frame):
-        """Clock one 4-byte frame out; return the 32 bits that came back."""
-        bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
-        ctx.set(top.spi_cs_n, 0)
-        answer = 0
-        for bit in bits:
-            ctx.set(top.spi_copi, bit)
-            await ctx.delay(half_sck)
-            ctx.set(top.spi_sck, 1)
-            answer = (answer << 1) | ctx.get(top.spi_cipo)
-            await ctx.delay(half_sck)
-            ctx.set(top.spi_sck, 0)
-        await ctx.delay(half_sck)
-        ctx.set(top.spi_cs_n, 1)
-        await ctx.delay(4 * half_sck)
-        return answer
+        return await spi_transfer(ctx, top, frame, clk_freq)
 
     async def write(ctx, name, value):
         await spi_frame(ctx, encode_write(name, value))
