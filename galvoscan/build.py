@@ -8,7 +8,7 @@ import time
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
-from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_clock, \
+from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check, \
     icestick_platform
 from .toolchain import tool_env
 
@@ -23,9 +23,6 @@ BOARDS = {
     "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
     "icestick": (icestick_platform, ICEStickScanner, "-dffe_min_ce_use 8"),
 }
-
-#: Each board's check of a requested system clock and XY2 bit rate (raises ValueError).
-CLOCKS = {"icebreaker": system_clock, "icestick": icestick_clock}
 
 #: Scan modes a board's bitstream has unless told otherwise. The UP5K holds spiral and vector
 #: with the correction stage (88 % of its logic cells), or all three modes without it; all
@@ -86,10 +83,13 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
-    CLOCKS[board](clock, bit_rate)       # a clock the board cannot run raises here, first
-    modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
+    # What the board cannot run raises here, before anything is built.
     if board == "icestick":
-        correction = None                # no room for it (platforms/icestick.py)
+        icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate)
+        correction = None               # the build has no correction stage at all
+    else:
+        system_clock(clock, bit_rate)
+    modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()

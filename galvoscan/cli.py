@@ -241,7 +241,8 @@ def _modes(text):
 
 
 def _build_correction(args):
-    """The correction table for a build: None (no stage), a file's, or the identity."""
+    """The correction table for a build: None (no stage), a file's, or the identity
+    (``"identity"``: the board's default)."""
     from .correction.files import TableFileError, load_table
     from .gateware.field.correction_table import TABLE_SIZES, CorrectionTable
     from .gateware.top import DEFAULT_CORRECTION_NODES
@@ -258,6 +259,8 @@ def _build_correction(args):
             return load_table(args.correction, nodes=nodes)
         except TableFileError as error:
             raise SystemExit(f"galvoscan: error: {error}")
+    if args.correction_nodes is None:
+        return "identity"
     return CorrectionTable.identity(nodes)
 
 

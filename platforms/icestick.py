@@ -34,7 +34,8 @@ from ..gateware.top import GalvoScanTop
 from .icebreaker import XY2_PMOD_PINS
 
 
-__all__ = ["ICEStickScanner", "icestick_platform", "ICESTICK_MODES", "ICESTICK_CRYSTAL_HZ"]
+__all__ = ["ICEStickScanner", "icestick_platform", "icestick_check", "ICESTICK_MODES",
+           "ICESTICK_CRYSTAL_HZ"]
 
 
 #: The scan modes that fit.
@@ -65,6 +66,18 @@ def icestick_clock(clock, bit_rate):
     return ICESTICK_CRYSTAL_HZ, None
 
 
+def icestick_check(*, modes=None, correction=None, clock=None, bit_rate=2_000_000):
+    """Raise ``ValueError`` for anything the iCEstick build cannot hold: checked before any
+    build starts."""
+    if modes is not None and tuple(modes) != ICESTICK_MODES:
+        raise ValueError(f"the iCEstick holds the spiral mode only, not {tuple(modes)!r}")
+    if correction is not None and not (isinstance(correction, str) and
+                                       correction == "identity"):
+        raise ValueError("the iCEstick has no room for the correction stage: build without "
+                         "a correction table")
+    return icestick_clock(clock, bit_rate)
+
+
 class ICEStickScanner(Elaboratable):
     """The spiral scanner on the iCEstick (see the module).
 
@@ -79,11 +92,8 @@ class ICEStickScanner(Elaboratable):
 
     def __init__(self, *, table=None, settings=None, modes=None, correction=None,
                  bit_rate=2_000_000, clock=None):
-        if modes is not None and tuple(modes) != ICESTICK_MODES:
-            raise ValueError(f"the iCEstick holds the spiral mode only, not {tuple(modes)!r}")
-        if correction is not None and correction != "identity":
-            raise ValueError("the iCEstick has no room for the correction stage")
-        self.clk_freq, _ = icestick_clock(clock, bit_rate)
+        self.clk_freq, _ = icestick_check(modes=modes, correction=correction, clock=clock,
+                                          bit_rate=bit_rate)
         self.table = table
         self.settings = settings
         self.bit_rate = bit_rate

@@ -272,3 +272,13 @@ def test_build_icestick(tmp_path, capsys):
     assert report["luts_available"] == 1280 and report["luts"] < 1280
     assert report["modes"] == ["spiral"] and report["correction_nodes"] == 0
     assert report["dsps"] == 0 and report["brams"] == 2          # the two spiral ROMs
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--modes", "spiral,vector"], "holds the spiral mode only"),
+    (["--correction-nodes", "9"], "no room for the correction stage"),
+    (["--clock", "24e6"], "12 MHz oscillator only"),
+])
+def test_build_icestick_refuses_what_does_not_fit(argv, message):
+    with pytest.raises(SystemExit, match=message):
+        main(["build", "--board", "icestick", *argv])
