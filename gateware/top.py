@@ -142,6 +142,16 @@ class GalvoScanTop(wiring.Component):
     correction : :class:`CorrectionTable` or None
         Distortion correction table the RAM starts with (default: the identity on
         :data:`DEFAULT_CORRECTION_NODES` nodes per axis); ``None`` builds no correction stage.
+    multiplier : str
+        The scale stage's products: ``"dsp"`` (one DSP block per axis) or ``"serial"``
+        (shift-and-add, for FPGAs without DSPs; needs ``correction=None``).
+    links : tuple of str
+        Host links built: ``"spi"`` and/or ``"uart"``. The pins of a link left out do nothing.
+    laser : bool
+        Build the laser controller. Without it the laser pins stay low, its registers are
+        unknown addresses, and vector mode (timed by the laser's pulses) cannot be built.
+    uart_reply_depth : int
+        Read answers the UART port queues (1 on the smallest boards).
 
     Interface attributes
     --------------------
