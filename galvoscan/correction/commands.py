@@ -206,8 +206,8 @@ def _cmd_show(args):
 
 def _cmd_study(args):
     from tqdm import tqdm
-    from .study import markdown_table, run_study
-    with tqdm(total=12, desc="correction study", disable=args.quiet or None,
+    from .study import STUDY_STEPS, markdown_table, run_study
+    with tqdm(total=STUDY_STEPS, desc="correction study", disable=args.quiet or None,
               file=sys.stderr) as bar:
         study = run_study(nodes=args.nodes, progress=bar.update)
     if args.json:
