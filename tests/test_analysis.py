@@ -14,7 +14,8 @@ from galvoscan.analysis.patterns import (Frames, ScanHead, raster_frames, spiral
                                          spiral_frames)
 from galvoscan.analysis.scan import analyse
 from galvoscan.analysis.study import Setup, run_spiral
-from galvoscan.cli import _field, main
+from galvoscan.cli import main
+from galvoscan.cli.args import field_mm as _field
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
 from spiral_model import spiral_points

@@ -282,3 +282,17 @@ def test_build_icestick(tmp_path, capsys):
 def test_build_icestick_refuses_what_does_not_fit(argv, message):
     with pytest.raises(SystemExit, match=message):
         main(["build", "--board", "icestick", *argv])
+
+
+@pytest.mark.toolchain
+def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, capsys):
+    # 120 MHz is far beyond any of the design's paths (about 27 MHz for the spiral alone), so
+    # nextpnr finishes with an Fmax below the clock: one line, no traceback, no .bin to flash.
+    with pytest.raises(SystemExit) as exit:
+        main(["build", "--modes", "spiral", "--no-correction", "--clock", "120e6",
+              "--build-dir", str(tmp_path)])
+    message = str(exit.value.code)
+    assert message.startswith("galvoscan: error: timing not met: ") and "\n" not in message
+    achieved = float(re.search(r"not met: ([\d.]+) MHz < 120 MHz", message).group(1))
+    assert 5 < achieved < 120
+    assert not list(tmp_path.glob("*.bin"))

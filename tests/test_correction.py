@@ -11,7 +11,7 @@ from amaranth.sim import Simulator
 from hypothesis import given, settings, strategies as st, HealthCheck, Phase
 
 from galvoscan.client import HostClient
-from galvoscan.correction.commands import upload_table
+from galvoscan.correction.upload import upload_table
 from galvoscan.gateware.field.correction import FieldCorrection
 from galvoscan.gateware.field.correction_table import TABLE_SIZES, CorrectionTable
 from galvoscan.gateware.points import FieldPoint

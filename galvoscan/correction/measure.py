@@ -10,13 +10,15 @@ by fixed-point iteration: the spot is sent to where it must be aimed for it to l
 Positions are galvo units throughout.
 """
 
+import csv
+
 import numpy as np
 
 from ..gateware.field.correction_table import OFFSET_MAX, OFFSET_MIN, CorrectionTable
 from .model import FIELD_CENTRE
 
 
-__all__ = ["METHODS", "GRID_SIZES", "MeasurementError", "calibration_grid", "error_model",
+__all__ = ["METHODS", "GRID_SIZES", "MeasurementError", "read_pairs", "calibration_grid", "error_model",
            "table_from_measurement", "residuals"]
 
 
@@ -32,6 +34,37 @@ DEFAULT_SPAN = 50_000
 
 class MeasurementError(ValueError):
     """Measured points that cannot make a table; the message says why."""
+
+
+def read_pairs(path):
+    """Commanded and measured grids ``(cx, cy, mx, my)``, each n × n, from a CSV of
+    ``cmd_x, cmd_y, meas_x, meas_y`` rows (galvo units; a header line and ``#`` comments are
+    skipped). Rows may come in any order: the grid is sorted by commanded Y, then X."""
+    rows = []
+    try:
+        with open(path, newline="", encoding="utf-8") as file:
+            for number, row in enumerate(csv.reader(file), start=1):
+                if not row or row[0].strip().startswith("#"):
+                    continue
+                try:
+                    values = [float(v) for v in row]
+                except ValueError:
+                    if number == 1:
+                        continue                     # a header line
+                    raise MeasurementError(f"{path}, line {number}: not four numbers: {row!r}")
+                if len(values) != 4 or not np.all(np.isfinite(values)):
+                    raise MeasurementError(f"{path}, line {number}: a row is four finite "
+                                           f"numbers cmd_x, cmd_y, meas_x, meas_y, not {row!r}")
+                rows.append(values)
+    except UnicodeDecodeError:
+        raise MeasurementError(f"{path}: not UTF-8 text") from None
+    except OSError as error:
+        raise MeasurementError(f"{path}: {error.strerror or error}") from None
+    n = round(len(rows) ** 0.5)
+    if n < 2 or n * n != len(rows):
+        raise MeasurementError(f"{path}: {len(rows)} points do not make a square grid")
+    data = np.array(sorted(rows, key=lambda r: (r[1], r[0])))
+    return [data[:, k].reshape(n, n) for k in range(4)]
 
 
 def calibration_grid(n, span=DEFAULT_SPAN, centre=FIELD_CENTRE):

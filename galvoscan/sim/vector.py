@@ -8,32 +8,19 @@ bit), so the timing is the board's.
 """
 
 import bisect
+import contextlib
 
-from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
-from .client import encode_read, encode_write
-from .gateware.host.regmap import BY_NAME, STATUS_BITS
-from .gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
-from .job import OPS
+from ..client import encode_read, encode_write
+from ..gateware.host.regmap import BY_NAME, STATUS_BITS
+from ..gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
+from ..job import OPS
+from .link import Timed, spi_transfer
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["JobResult", "replay_job", "spi_transfer", "Timed"]
-
-
-class Timed(Elaboratable):
-    """A design with a clock counter beside it, so that events can be put in order."""
-
-    def __init__(self, top):
-        self.top = top
-        self.cycles = Signal(48)
-
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.top = self.top
-        m.d.sync += self.cycles.eq(self.cycles + 1)
-        return m
+__all__ = ["JobResult", "replay_job"]
 
 
 class JobResult:
@@ -66,30 +53,13 @@ class JobResult:
         return [p for p in self.points if p[2] > 0]
 
 
-async def spi_transfer(ctx, top, frame, clk_freq):
-    """Clock one 4-byte frame into the top's SPI pins, as a host at the link's top speed does
-    (SCK = clk / 12, mode 0, ``cs_n`` high for four half periods after); return the 32 bits
-    that came back on CIPO (the answer to the previous read)."""
-    half_sck = 6 / clk_freq
-    bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
-    ctx.set(top.spi_cs_n, 0)
-    answer = 0
-    for bit in bits:
-        ctx.set(top.spi_copi, bit)
-        await ctx.delay(half_sck)
-        ctx.set(top.spi_sck, 1)
-        answer = (answer << 1) | ctx.get(top.spi_cipo)
-        await ctx.delay(half_sck)
-        ctx.set(top.spi_sck, 0)
-    await ctx.delay(half_sck)
-    ctx.set(top.spi_cs_n, 1)
-    await ctx.delay(4 * half_sck)
-    return answer
-
-
 def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
-               clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity"):
-    """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`."""
+               clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity", vcd=None):
+    """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`.
+
+    ``vcd``, a path, writes a waveform of the whole run; ``progress`` is called with the
+    number of new frames as they reach the head.
+    """
     prr = round(prr_hz / 100)
     if not BY_NAME["laser_prr"].low <= prr <= BY_NAME["laser_prr"].high:
         raise ValueError(f"PRR must be from 20 to 200 kHz, not {prr_hz:g} Hz")
@@ -179,7 +149,8 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
     sim.add_testbench(host)
     for process in (scan_head, sync_edges, laser):
         sim.add_testbench(process, background=True)
-    sim.run()
+    with sim.write_vcd(vcd) if vcd else contextlib.nullcontext():
+        sim.run()
 
     # Frame k is in force from the SYNC rise that starts frame k + 1; a pulse on that very
     # clock still falls on frame k - 1's position.

@@ -1,17 +1,15 @@
 """``galvoscan correct …``: make, convert, inspect and upload distortion correction tables."""
 
 import argparse
-import csv
 import json
 from pathlib import Path
 import sys
 
+from .args import add_link_options, fail as _fail, int_in, number_in as positive, open_link, \
+    output_dir, output_file
 
-__all__ = ["add_parser"]
 
-
-def _fail(message):
-    raise SystemExit(f"galvoscan: error: {message}")
+__all__ = ["add_parsers"]
 
 
 def _nodes(text):
@@ -37,7 +35,7 @@ def _grid(text):
 
 
 def _save(path, table, *, source, units_per_mm=None):
-    from .files import TableFileError, save_table
+    from ..correction.files import TableFileError, save_table
     try:
         for warning in save_table(path, table, source=source, units_per_mm=units_per_mm):
             print(f"galvoscan: warning: {warning}", file=sys.stderr)
@@ -51,7 +49,7 @@ def _save(path, table, *, source, units_per_mm=None):
 
 
 def _load(path, nodes=None):
-    from .files import TableFileError, load_table
+    from ..correction.files import TableFileError, load_table
     try:
         return load_table(path, nodes=nodes)
     except TableFileError as error:
@@ -61,19 +59,19 @@ def _load(path, nodes=None):
 # --- model / table1 ----------------------------------------------------------------------------
 
 def _cmd_model(args):
-    from .model import ftheta_table
+    from ..correction.model import ftheta_table
     try:
         table = ftheta_table(args.nodes, field_mm=args.field, focal_mm=args.focal, k=args.k,
                              method="polynomial" if args.polynomial else "exact")
     except ValueError as error:
         _fail(error)
     _save(args.output, table, units_per_mm=65536 / args.field,
-          source=f"003 f-theta {'polynomial' if args.polynomial else 'exact'} model, "
+          source=f"Liao & Chen f-theta {'polynomial' if args.polynomial else 'exact'} model, "
                  f"f = {args.focal} mm, field {args.field} mm, k = {args.k}")
 
 
 def _cmd_table1(args):
-    from .ftheta import PRINTED_COEFFICIENTS, TABLE_1, fit_polynomial, table_1_rows
+    from ..correction.ftheta import PRINTED_COEFFICIENTS, TABLE_1, fit_polynomial, table_1_rows
     rows = table_1_rows()
     printed = table_1_rows(PRINTED_COEFFICIENTS)
     if args.json:
@@ -81,7 +79,7 @@ def _cmd_table1(args):
                                              "residual_x", "residual_y"), r)) for r in rows],
                           "paper": TABLE_1, "fit": fit_polynomial()}, indent=2))
         return
-    print("003 Table 1, recomputed (rad). Paper's values in brackets.")
+    print("Liao & Chen (2016) Table 1, recomputed (rad). Paper's values in brackets.")
     print(f"{'X mm':>6} {'Y mm':>6} {'exact dphi_x':>22} {'exact dphi_y':>22} "
           f"{'residual x':>22} {'residual y':>22}")
     for row, paper in zip(rows, TABLE_1):
@@ -89,7 +87,7 @@ def _cmd_table1(args):
                          zip(row[2:], paper[2:]))
         print(f"{row[0]:>6} {row[1]:>6} {cells}")
     worst = max(abs(r[4]) for r in printed)
-    print(f"\nWith the coefficients as printed in 003 the largest X residual is {worst:.4f} rad:"
+    print(f"\nWith the coefficients as printed in the paper the largest X residual is {worst:.4f} rad:"
           f" the cubic terms and the Y linear term are 10x too large there.")
     a, b, c, d = fit_polynomial()
     print(f"Least-squares fit of the same terms over +-150 mm: a = {a:.4g}, b = {b:.4g}, "
@@ -98,39 +96,13 @@ def _cmd_table1(args):
 
 # --- measure / convert / job ------------------------------------------------------------------
 
-def _read_pairs(path):
-    """Commanded and measured grids from a CSV of cmd_x, cmd_y, meas_x, meas_y rows."""
-    import numpy as np
-    rows = []
-    try:
-        with open(path, newline="") as file:
-            for number, row in enumerate(csv.reader(file), start=1):
-                if not row or row[0].strip().startswith("#"):
-                    continue
-                try:
-                    values = [float(v) for v in row]
-                except ValueError:
-                    if number == 1:
-                        continue                     # a header line
-                    _fail(f"{path}, line {number}: not four numbers: {row!r}")
-                if len(values) != 4:
-                    _fail(f"{path}, line {number}: {len(values)} values; a row is cmd_x, "
-                          f"cmd_y, meas_x, meas_y")
-                rows.append(values)
-    except OSError as error:
-        _fail(f"{path}: {error.strerror}")
-    n = round(len(rows) ** 0.5)
-    if n < 2 or n * n != len(rows):
-        _fail(f"{path}: {len(rows)} points do not make a square grid")
-    # Rows of the grid: sorted by commanded Y, then X.
-    data = np.array(sorted(rows, key=lambda r: (r[1], r[0])))
-    return [data[:, k].reshape(n, n) for k in range(4)]
-
-
 def _cmd_measure(args):
     import numpy as np
-    from .measure import MeasurementError, table_from_measurement
-    cx, cy, mx, my = _read_pairs(args.pairs)
+    from ..correction.measure import MeasurementError, read_pairs, table_from_measurement
+    try:
+        cx, cy, mx, my = read_pairs(args.pairs)
+    except MeasurementError as error:
+        _fail(error)
     try:
         table = table_from_measurement(cx, cy, mx, my, nodes=args.nodes, method=args.method)
     except MeasurementError as error:
@@ -148,8 +120,8 @@ def _cmd_convert(args):
 
 
 def _cmd_job(args):
-    from .measure import MeasurementError
-    from .photo import calibration_job, job_text
+    from ..correction.measure import MeasurementError
+    from ..correction.photo import calibration_job, job_text
     try:
         segments = calibration_job(args.grid, span=args.span, line_width=args.line_width)
     except MeasurementError as error:
@@ -165,7 +137,7 @@ def _cmd_job(args):
 
 def _cmd_photo(args):
     import matplotlib.image
-    from .photo import PhotoError, table_from_photo
+    from ..correction.photo import PhotoError, table_from_photo
     try:
         image = matplotlib.image.imread(args.image)
     except (OSError, ValueError, SyntaxError) as error:
@@ -182,8 +154,8 @@ def _cmd_synth_photo(args):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from .model import synthetic_head
-    from .photo import calibration_job, render_photo
+    from ..correction.model import synthetic_head
+    from ..correction.photo import calibration_job, render_photo
     head = synthetic_head(args.max_error)
     image, _ = render_photo(calibration_job(args.grid), head.land, grid=args.grid,
                             seed=args.seed)
@@ -199,14 +171,14 @@ def _cmd_show(args):
     print(f"{args.table}: {table.n} × {table.n} nodes, {table.node_spacing} units apart; dx "
           f"{table.dx.min()} … {table.dx.max()}, dy {table.dy.min()} … {table.dy.max()}")
     if args.png:
-        from .figures import plot_table
+        from ..correction.figures import plot_table
         plot_table(args.png, table, title=str(args.table))
         print(f"  png: {args.png}")
 
 
 def _cmd_study(args):
     from tqdm import tqdm
-    from .study import STUDY_STEPS, markdown_table, run_study
+    from ..correction.study import STUDY_STEPS, markdown_table, run_study
     with tqdm(total=STUDY_STEPS, desc="correction study", disable=args.quiet or None,
               file=sys.stderr) as bar:
         study = run_study(nodes=args.nodes, progress=bar.update)
@@ -215,7 +187,7 @@ def _cmd_study(args):
                           if k not in ("photo_image", "photo_table")}, indent=2))
     else:
         head = study["head"]
-        print(f"Synthetic head: 003 f-theta distortion, f = {head['focal_mm']:g} mm on a "
+        print(f"Synthetic head: Liao & Chen f-theta distortion, f = {head['focal_mm']:g} mm on a "
               f"{head['field_mm']:.1f} mm field; measurement noise {study['noise_units']:g} "
               f"units per axis; tables of {study['nodes']} × {study['nodes']} nodes.\n")
         print(markdown_table(study))
@@ -224,16 +196,16 @@ def _cmd_study(args):
               f"circle centres within {photo['centre_error_max']:.0f} units (mean "
               f"{photo['centre_error_mean']:.1f}).")
     if not args.no_plots:
-        from .figures import plot_study
+        from ..correction.figures import plot_study
         for path in plot_study(study, args.out):
             print(f"  figure: {path}", file=sys.stderr)
 
 
 def _cmd_upload(args):
-    from ..cli import _open_link
     from ..client import ClientError, HostClient
+    from ..correction.upload import upload_table
     table = _load(args.table)
-    with _open_link(args) as link:
+    with open_link(args) as link:
         board = HostClient(link)
         try:
             nodes = board.read("cor_nodes")
@@ -246,108 +218,127 @@ def _cmd_upload(args):
     print(f"{args.table}: {table.n * table.n} nodes written")
 
 
-def upload_table(board, table, *, verify=False):
-    """Write every node of ``table`` through a :class:`HostClient` (4 frames a node)."""
-    for iy in range(table.n):
-        for ix in range(table.n):
-            board.write("cor_node", iy * table.n + ix)
-            board.write("cor_dx", int(table.dx[iy, ix]) & 0xFFFF)
-            board.write("cor_dy", int(table.dy[iy, ix]) & 0xFFFF)
-            board.write("cor_write", 1)
-    if verify and board.read("errors"):
-        raise ValueError(f"the board counts {board.read('errors')} rejected frames")
-
-
-def add_parser(commands, *, positive, link_options):
-    """The ``correct`` command and its sub-commands."""
+def add_parsers(commands):
+    """The ``correct`` command and its steps."""
     correct = commands.add_parser(
         "correct", help="make, convert, inspect and upload distortion correction tables",
-        description="Field-distortion correction tables: from the 003 f-theta model, from "
-                    "measured points or a photo of a calibration plate (004), from SCANLAB "
-                    ".ctb and JCZ .cor files. Tables are galvoscan .json, .ctb or .cor by the "
-                    "file name's suffix.")
+        description="Field-distortion correction tables: from the f-theta lens model (Liao & "
+                    "Chen 2016), from measured points or a photo of a calibration plate (Zhu & "
+                    "Zhang), from SCANLAB .ctb and JCZ .cor files. Tables are galvoscan .json, "
+                    ".ctb or .cor by the file name's suffix.")
     steps = correct.add_subparsers(dest="step", required=True, metavar="STEP")
+    nodes_help = "nodes per axis of the table: 5, 9, 17, 33 or 65 (default: %(default)s)"
+    method_help = ("bilinear grid of the measured errors, or a least-squares cubic polynomial "
+                   "(default: %(default)s)")
 
-    model = steps.add_parser("model", help="table from the 003 f-theta lens model")
+    def output(parser, what, metavar="FILE"):
+        parser.add_argument("-o", "--output", type=output_file, required=True, metavar=metavar,
+                            help=f"{what} to write (its folder is made if missing)")
+
+    model = steps.add_parser("model", help="table from the f-theta lens model",
+                             description="A table from the f-theta lens model of Liao & Chen "
+                                         "(2016): its exact formula, or its fitted polynomial.")
     model.add_argument("--field", type=positive("field", 1, 2000), required=True, metavar="MM",
                        help="lens field: the width 65536 galvo units span")
     model.add_argument("--focal", type=positive("focal length", 10, 5000), default=300.0,
                        metavar="MM", help="f-theta focal length (default: %(default)s)")
     model.add_argument("--k", type=positive("k", 0.5, 2.0), default=1.0,
-                       help="003's trim factor for --polynomial (0.9706 … 1.0306)")
+                       help="the model's focal-length trim factor for --polynomial "
+                            "(0.9706 … 1.0306; default: %(default)s)")
     model.add_argument("--polynomial", action="store_true",
-                       help="use 003's fitted polynomial instead of its exact formula")
-    model.add_argument("--nodes", type=_nodes, default=17, help="nodes per axis (default 17)")
-    model.add_argument("-o", "--output", required=True, metavar="FILE")
+                       help="use the paper's fitted polynomial instead of its exact formula")
+    model.add_argument("--nodes", type=_nodes, default=17, help=nodes_help)
+    output(model, "the table (.json, .ctb or .cor)")
     model.set_defaults(run=_cmd_model)
 
-    table1 = steps.add_parser("table1", help="recompute 003's Table 1")
-    table1.add_argument("--json", action="store_true")
+    table1 = steps.add_parser("table1", help="recompute the f-theta model's Table 1",
+                              description="Recompute Table 1 of Liao & Chen (2016) and show "
+                                          "where its printed coefficients are off.")
+    table1.add_argument("--json", action="store_true", help="print the rows as JSON")
     table1.set_defaults(run=_cmd_table1)
 
     measure = steps.add_parser("measure", help="table from measured grid points (CSV)",
                                description="PAIRS: CSV rows cmd_x, cmd_y, meas_x, meas_y in "
                                            "galvo units, one per point of an n x n grid.")
-    measure.add_argument("pairs", metavar="PAIRS")
-    measure.add_argument("--method", choices=["bilinear", "polynomial"], default="bilinear")
-    measure.add_argument("--nodes", type=_nodes, default=17)
-    measure.add_argument("-o", "--output", required=True, metavar="FILE")
+    measure.add_argument("pairs", metavar="PAIRS", help="the CSV of commanded and measured "
+                                                        "points")
+    measure.add_argument("--method", choices=["bilinear", "polynomial"], default="bilinear",
+                         help=method_help)
+    measure.add_argument("--nodes", type=_nodes, default=17, help=nodes_help)
+    output(measure, "the table (.json, .ctb or .cor)")
     measure.set_defaults(run=_cmd_measure)
 
-    convert = steps.add_parser("convert", help="convert between .json, .ctb and .cor")
-    convert.add_argument("input", metavar="IN")
-    convert.add_argument("-o", "--output", required=True, metavar="OUT")
+    convert = steps.add_parser("convert", help="convert between .json, .ctb and .cor",
+                               description="Read a table and write it in the format of the "
+                                           "output's suffix.")
+    convert.add_argument("input", metavar="IN", help="the table to read (.json, .ctb, .cor)")
+    output(convert, "the table (.json, .ctb or .cor)", metavar="OUT")
     convert.add_argument("--nodes", type=_nodes, default=None,
-                         help="resample to this many nodes per axis")
+                         help="resample to this many nodes per axis (default: keep)")
     convert.add_argument("--units-per-mm", type=positive("units per mm", 1e-3, 1e6),
                          default=None, help="lens scale recorded in a .cor file")
     convert.set_defaults(run=_cmd_convert)
 
-    job = steps.add_parser("job", help="write the calibration job (spiral-filled circles)")
-    job.add_argument("--grid", type=_grid, default=9, help="circles per side (default 9)")
+    job = steps.add_parser("job", help="write the calibration job (spiral-filled circles)",
+                           description="A vector job that marks an n x n grid of spiral-filled "
+                                       "circles and four reference marks (Zhu & Zhang's plate).")
+    job.add_argument("--grid", type=_grid, default=9, help="circles per side (default: 9)")
     job.add_argument("--span", type=positive("span", 1000, 65000), default=50000.0,
-                     help="calibrated square in galvo units (default 50000)")
-    job.add_argument("--line-width", type=int, default=60,
-                     help="galvo units between spiral turns (default 60 = the pitch)")
-    job.add_argument("-o", "--output", required=True, metavar="FILE")
+                     help="calibrated square in galvo units (default: 50000)")
+    job.add_argument("--line-width", type=int_in(1, 10000, "line width"), default=60,
+                     help="galvo units between spiral turns (default: 60 = the pitch)")
+    output(job, "the job")
     job.set_defaults(run=_cmd_job)
 
-    photo = steps.add_parser("photo", help="table from a photo of the calibration plate")
+    photo = steps.add_parser("photo", help="table from a photo of the calibration plate",
+                             description="Find the circles and reference marks on a photo of "
+                                         "the marked plate, and make a table from them.")
     photo.add_argument("image", metavar="PHOTO", help="PNG of the marked plate")
     photo.add_argument("--grid", type=_grid, required=True, help="circles per side")
-    photo.add_argument("--span", type=positive("span", 1000, 65000), default=50000.0)
-    photo.add_argument("--method", choices=["bilinear", "polynomial"], default="bilinear")
-    photo.add_argument("--nodes", type=_nodes, default=17)
+    photo.add_argument("--span", type=positive("span", 1000, 65000), default=50000.0,
+                       help="calibrated square the job spanned, galvo units (default: 50000)")
+    photo.add_argument("--method", choices=["bilinear", "polynomial"], default="bilinear",
+                       help=method_help)
+    photo.add_argument("--nodes", type=_nodes, default=17, help=nodes_help)
     photo.add_argument("--light-marks", action="store_true",
                        help="marks are lighter than the plate (default: darker)")
-    photo.add_argument("-o", "--output", required=True, metavar="FILE")
+    output(photo, "the table (.json, .ctb or .cor)")
     photo.set_defaults(run=_cmd_photo)
 
-    synth = steps.add_parser("synth-photo", help="render a synthetic calibration photo")
-    synth.add_argument("--grid", type=_grid, default=9)
+    synth = steps.add_parser("synth-photo", help="render a synthetic calibration photo",
+                             description="Render the plate a distorting head would mark, as a "
+                                         "photo, to try the photo step without a camera.")
+    synth.add_argument("--grid", type=_grid, default=9, help="circles per side (default: 9)")
     synth.add_argument("--max-error", type=positive("max error", 1, 10000), default=1400.0,
-                       help="head distortion at worst, galvo units (default 1400, as 004)")
-    synth.add_argument("--seed", type=int, default=0)
-    synth.add_argument("-o", "--output", required=True, metavar="PNG")
+                       help="head distortion at worst, galvo units (default: 1400, as Zhu & "
+                            "Zhang measured)")
+    synth.add_argument("--seed", type=int_in(0, 2**32 - 1, "seed"), default=0,
+                       help="noise seed (default: 0)")
+    output(synth, "the photo", metavar="PNG")
     synth.set_defaults(run=_cmd_synth_photo)
 
-    show = steps.add_parser("show", help="summarise (and plot) a table")
-    show.add_argument("table", metavar="FILE")
-    show.add_argument("--png", metavar="FILE", help="plot the offsets")
+    show = steps.add_parser("show", help="summarise (and plot) a table",
+                            description="Print a table's size and offsets; plot them.")
+    show.add_argument("table", metavar="FILE", help="the table (.json, .ctb, .cor)")
+    show.add_argument("--png", type=output_file, metavar="FILE", help="plot the offsets")
     show.set_defaults(run=_cmd_show)
 
-    study = steps.add_parser("study", help="the README's calibration study (synthetic head)")
-    study.add_argument("--nodes", type=_nodes, default=17)
-    study.add_argument("--out", default="build/correction", metavar="DIR")
-    study.add_argument("--no-plots", action="store_true")
-    study.add_argument("--json", action="store_true")
+    study = steps.add_parser("study", help="the README's calibration study (synthetic head)",
+                             description="Calibrate a synthetic head every way galvoscan can "
+                                         "and tabulate the residual errors.")
+    study.add_argument("--nodes", type=_nodes, default=17, help=nodes_help)
+    study.add_argument("--out", type=output_dir, default="build/correction", metavar="DIR",
+                       help="where figures go (default: %(default)s)")
+    study.add_argument("--no-plots", action="store_true", help="write no figures")
+    study.add_argument("--json", action="store_true", help="print the numbers as JSON")
     study.add_argument("--quiet", action="store_true", help="no progress bar")
     study.set_defaults(run=_cmd_study)
 
-    upload = steps.add_parser("upload", help="write a table into a running board")
-    upload.add_argument("table", metavar="FILE")
+    upload = steps.add_parser("upload", help="write a table into a running board",
+                              description="Write every node of a table through the host link "
+                                          "(resampled to the board's node count).")
+    upload.add_argument("table", metavar="FILE", help="the table (.json, .ctb, .cor)")
     upload.add_argument("--verify", action="store_true",
                         help="check the board rejected no frame")
-    link_options(upload)
+    add_link_options(upload)
     upload.set_defaults(run=_cmd_upload)
-    return correct

@@ -1,0 +1,55 @@
+"""``galvoscan``: build, simulate, prove and export the scan head controller, and talk to a board.
+
+One module per command group, each adding its own parsers (``add_parsers(commands)``):
+:mod:`.sim` (``rom``, ``sim``), :mod:`.build` (``build``, ``export``), :mod:`.prove`,
+:mod:`.link` (``regs``, ``encode``, ``send``, ``read``), :mod:`.analyze`, :mod:`.correct`,
+:mod:`.bench`; :mod:`.args` holds what they share.
+"""
+
+import argparse
+import sys
+
+from . import analyze, bench, build, correct, link, prove, sim
+
+
+__all__ = ["main", "parser"]
+
+
+#: The command groups, in the order ``--help`` lists them.
+GROUPS = (sim, build, prove, link, analyze, correct, bench)
+
+
+def _version():
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("galvoscan")
+    except PackageNotFoundError:                 # run from a source tree, not installed
+        return "unknown (not installed)"
+
+
+def parser():
+    """The whole command line."""
+    top = argparse.ArgumentParser(
+        prog="galvoscan",
+        description="Open FPGA gateware that drives a laser scan head over XY2-100: "
+                    "precessing Gaussian spiral fill, vector marking, raster fill and field "
+                    "correction, simulated end to end and proved.")
+    top.add_argument("--version", action="version", version=f"galvoscan {_version()}",
+                     help="print the installed version and exit")
+    commands = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for group in GROUPS:
+        group.add_parsers(commands)
+    return top
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
+    try:
+        return args.run(args) or 0
+    except BrokenPipeError:
+        # Output piped into `head` and the like: stop quietly.
+        sys.stderr.close()
+        return 0
+    except KeyboardInterrupt:
+        print("galvoscan: stopped (Ctrl-C)", file=sys.stderr)
+        return 130

@@ -1,0 +1,8 @@
+"""``python -m galvoscan.cli``."""
+
+import sys
+
+from . import main
+
+
+sys.exit(main())

@@ -1,0 +1,59 @@
+"""``galvoscan analyze``: how a scan pattern doses a part, before burning one."""
+
+from .args import (add_table_options, field_mm, number_in, output_dir, register_int)
+
+
+__all__ = ["add_parsers"]
+
+
+def _cmd_analyze(args):
+    from ..analysis.report import run_analyze
+    return run_analyze(args)
+
+
+def add_parsers(commands):
+    analyze = commands.add_parser(
+        "analyze", help="measure how a scan pattern doses a part (before burning one)",
+        description="Run the spiral the gateware emits (its Python model, proved equal by the "
+                    "full replay test) through a galvo model and a pulsed laser; print dose "
+                    "uniformity, speed, revisit and time figures and write plots. The "
+                    "comparison column is the other sampling at the same dwell.")
+    add_table_options(analyze)
+    job = analyze.add_argument_group("pattern and machine")
+    job.add_argument("--field", type=field_mm, default=(50.0, 20.0), metavar="WxH",
+                     help="field to clean, mm (default: 50x20, the paper's test piece)")
+    job.add_argument("--dwell", type=register_int("dwell"), default=None,
+                     help="frames per spiral point (default: the smallest that keeps each "
+                          "axis at --speed)")
+    job.add_argument("--speed", type=number_in("speed", 0.01, 100), default=5.0,
+                     metavar="M_S", help="per-axis speed limit for the patterns, m/s "
+                                         "(default: 5, the paper's galvo maximum)")
+    job.add_argument("--lens-field", type=number_in("lens field", 1, 2000), default=110.0,
+                     metavar="MM", help="scan head field across 65536 units, mm "
+                                        "(default: 110)")
+    job.add_argument("--spot", type=number_in("spot", 0.001, 100), default=0.05, metavar="MM",
+                     help="spot 1/e² diameter, mm (default: 0.05)")
+    job.add_argument("--power", type=number_in("power", 0.001, 1e5), default=50.0,
+                     metavar="W", help="average laser power, W (default: 50)")
+    job.add_argument("--prr", type=number_in("prr", 1, 100e6), default=100e3, metavar="HZ",
+                     help="pulse repetition rate, Hz (default: 100e3)")
+    job.add_argument("--line-spacing", type=number_in("line spacing", 0.0001, 10),
+                     default=None, metavar="MM",
+                     help="raster line spacing, mm (default: the spot diameter)")
+    job.add_argument("--target-dose", type=number_in("target dose", 1e-6, 1e6), default=None,
+                     metavar="J_CM2", help="dose to reach for the time figures, J/cm² "
+                                           "(default: one raster pass)")
+    job.add_argument("--ideal-galvo", action="store_true",
+                     help="mirror exactly where commanded (no speed limit, no lag)")
+    what = analyze.add_argument_group("what to run")
+    what.add_argument("--sweep", action="store_true",
+                      help="also sweep σ (and uniform) at one dwell: uniformity against "
+                           "mirror acceleration")
+    what.add_argument("--compare", action="store_true",
+                      help="also spiral against line-by-line raster on 50x20 and 20x80 mm")
+    what.add_argument("--out", type=output_dir, default="build/analysis", metavar="DIR",
+                      help="where figures go (default: %(default)s)")
+    what.add_argument("--no-plots", action="store_true", help="write no figures")
+    what.add_argument("--json", action="store_true", help="print the numbers as JSON")
+    what.add_argument("--quiet", action="store_true", help="no progress bar")
+    analyze.set_defaults(run=_cmd_analyze)

@@ -1,0 +1,188 @@
+"""What the command groups share: argument types, one-line errors, the spiral table options,
+output paths and the host link.
+
+Every check here runs while the command line is parsed, so a wrong argument is one line and a
+non-zero exit before any simulation, build or byte to a board.
+"""
+
+import argparse
+import math
+import os
+from pathlib import Path
+
+
+__all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
+           "output_file", "output_dir", "read_text", "add_table_options", "table_from",
+           "settings_from", "add_link_options", "open_link"]
+
+
+class CLIError(SystemExit):
+    """A one-line error: ``galvoscan: error: …`` on stderr and exit status 1."""
+
+    def __init__(self, message):
+        super().__init__(f"galvoscan: error: {message}")
+
+
+def fail(message):
+    raise CLIError(message)
+
+
+# --- numbers -------------------------------------------------------------------------------------
+
+def int_in(low, high, what):
+    """An integer (decimal, 0x… or 0b…) from ``low`` to ``high``."""
+    def parse(text):
+        try:
+            value = int(text, 0)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be an integer, not {text!r}")
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{what} must be from {low} to {high}, not {value}")
+        return value
+    return parse
+
+
+def number_in(what, low, high):
+    """A finite number from ``low`` to ``high`` (``1e6`` and the like accepted)."""
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be a number, not {text!r}")
+        if not math.isfinite(value) or not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{what} must be from {low:g} to {high:g}, "
+                                             f"not {text}")
+        return value
+    return parse
+
+
+def register_int(name, what=None):
+    """An integer in the writable range of register ``name``, as the register map declares it."""
+    from ..gateware.host.regmap import BY_NAME
+    reg = BY_NAME[name]
+    return int_in(reg.low, reg.high, what or name.replace("_", " "))
+
+
+def sigma(text):
+    """Width of the Gaussian sampling, in half-swings."""
+    return number_in("sigma", 0.05, 100)(text)
+
+
+def field_mm(text):
+    """``WIDTHxHEIGHT`` in mm (``50x20``, ``50×20``)."""
+    parts = text.lower().replace("×", "x").split("x")
+    try:
+        width, height = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"field must be WIDTHxHEIGHT in mm (e.g. 50x20), "
+                                         f"not {text!r}")
+    if not all(math.isfinite(v) and 0.5 <= v <= 2000 for v in (width, height)):
+        raise argparse.ArgumentTypeError(f"field sides must be from 0.5 to 2000 mm, not {text}")
+    return width, height
+
+
+# --- files ---------------------------------------------------------------------------------------
+
+def _writable_folder(folder, what):
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise argparse.ArgumentTypeError(f"cannot make the folder {str(folder)!r} for {what}: "
+                                         f"{error.strerror or error}")
+    if not os.access(folder, os.W_OK):
+        raise argparse.ArgumentTypeError(f"cannot write into {str(folder)!r} (permission)")
+
+
+def output_file(text):
+    """A file to write: its folder is made now (or refused now), not after a long run."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
+    _writable_folder(path.parent, text)
+    return text
+
+
+def output_dir(text):
+    """A folder to write into, made now if missing."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a folder")
+    _writable_folder(path, "the output")
+    return text
+
+
+def read_text(path, what="file"):
+    """The UTF-8 text of ``path``, or a one-line error naming it."""
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        fail(f"{path}: the {what} is not UTF-8 text (byte {error.start})")
+    except OSError as error:
+        fail(f"cannot read the {what} {path}: {error.strerror or error}")
+
+
+# --- spiral tables -------------------------------------------------------------------------------
+
+def add_table_options(parser):
+    from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SAMPLINGS
+    group = parser.add_argument_group("spiral tables")
+    group.add_argument("--sampling", choices=SAMPLINGS, default="gaussian",
+                       help="how one sine period is sampled (default: %(default)s)")
+    group.add_argument("--sigma", type=sigma, default=DEFAULT_SIGMA,
+                       help="width of the Gaussian sampling in half-swings "
+                            "(default: %(default)s)")
+    group.add_argument("--table-points", type=int_in(8, 4096, "table points"), default=128,
+                       metavar="N", help="samples per sine period, a multiple of 4 "
+                                         "(default: %(default)s, as in the paper)")
+
+
+def table_from(args):
+    from ..gateware.sources.spiral_table import SpiralTable
+    try:
+        return SpiralTable(points=args.table_points, sampling=args.sampling, sigma=args.sigma)
+    except ValueError as error:
+        fail(error)
+
+
+def settings_from(args, table, **overrides):
+    """The scan settings a build or simulation starts with, for ``table``'s size: the paper's
+    ranges (X over the whole table, Y one short at each end) scaled to it."""
+    from ..gateware.top import ScanSettings
+    settings = dict(x_range=(0, table.points - 1), y_range=(1, table.points - 2))
+    if getattr(args, "dwell", None) is not None:
+        settings["dwell"] = args.dwell
+    settings.update(overrides)
+    try:
+        return ScanSettings(**settings)
+    except ValueError as error:
+        fail(error)
+
+
+# --- host link -----------------------------------------------------------------------------------
+
+def add_link_options(parser):
+    link = parser.add_argument_group("link (one of)")
+    where = link.add_mutually_exclusive_group(required=True)
+    where.add_argument("--port", help="serial port of the board (e.g. /dev/ttyUSB1, COM4)")
+    where.add_argument("--spi", metavar="URL", help="pyftdi URL of an FTDI SPI adapter "
+                                                    "(e.g. ftdi://ftdi:2232h/1)")
+    link.add_argument("--baud", type=int_in(300, 12_000_000, "baud"), default=115_200,
+                      help="serial rate of the bitstream (default: %(default)s)")
+    link.add_argument("--timeout", type=number_in("timeout", 0.01, 60), default=0.5,
+                      metavar="S", help="seconds to wait for an answer (default: 0.5)")
+    link.add_argument("--sck", type=number_in("SPI clock", 1e3, 30e6), default=1e6,
+                      metavar="HZ", help="SPI clock, at most the board clock / 12 "
+                                         "(default: 1e6)")
+
+
+def open_link(args):
+    """The transport the link options name, opened; one line if it cannot be."""
+    from ..client import ClientError, FTDISPITransport, SerialTransport
+    try:
+        if args.spi:
+            return FTDISPITransport(args.spi, frequency=args.sck)
+        return SerialTransport(args.port, baud=args.baud, timeout=args.timeout)
+    except ClientError as error:
+        fail(error)
+    except Exception as error:   # serial.SerialException and the like: say what failed
+        fail(f"cannot open {args.spi or args.port}: {error}")

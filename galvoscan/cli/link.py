@@ -1,0 +1,130 @@
+"""``galvoscan regs``, ``encode``, ``send`` and ``read``: the register map, and registers
+written and read over the serial port or SPI."""
+
+import json
+
+from .args import add_link_options, fail, open_link
+
+
+__all__ = ["add_parsers", "register_table"]
+
+
+def register_table():
+    """The register map as a Markdown table (``galvoscan regs``; the README carries it)."""
+    from ..gateware.host.regmap import REGISTERS
+    lines = ["| address | name | access | reset | range | unit | description |",
+             "|---|---|---|---|---|---|---|"]
+    for r in REGISTERS:
+        span = f"{r.low}…{r.high}" if r.access in ("rw", "queue") else "—"
+        lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {r.reset} | {span} | "
+                     f"{r.unit} | {r.description} |")
+    return "\n".join(lines)
+
+
+def _cmd_regs(args):
+    from ..gateware.host.regmap import REGISTERS
+    if args.json:
+        print(json.dumps([r.as_dict() for r in REGISTERS], indent=2, ensure_ascii=False))
+    else:
+        print(register_table())
+    return 0
+
+
+def _assignments(items):
+    """``[(name, value)]`` of NAME=VALUE items, every one checked against the map first."""
+    from ..client import ClientError, encode_write, parse_assignment
+    try:
+        assignments = [parse_assignment(item) for item in items]
+        for name, value in assignments:
+            encode_write(name, value)            # the name, the access and the range
+    except ClientError as error:
+        fail(error)
+    return assignments
+
+
+def _cmd_encode(args):
+    from ..client import ClientError, encode_read, encode_write
+    try:
+        if args.read:
+            frames = [encode_read(name) for name in args.items]
+        else:
+            frames = [encode_write(name, value) for name, value in _assignments(args.items)]
+    except ClientError as error:
+        fail(error)
+    for frame in frames:
+        print(frame.hex(" "))
+    return 0
+
+
+def _cmd_send(args):
+    from ..client import ClientError, HostClient
+    # Every assignment is checked before the link is even opened: a typo in the last one must
+    # not leave the first ones (arm=1, say) written.
+    assignments = _assignments(args.items)
+    with open_link(args) as link:
+        board = HostClient(link)
+        try:
+            for name, value in assignments:
+                if args.verify:
+                    board.write_verified(name, value)
+                else:
+                    board.write(name, value)
+                print(f"{name} = {value}{' (read back)' if args.verify else ''}")
+        except ClientError as error:
+            fail(error)
+    return 0
+
+
+def _cmd_read(args):
+    from ..client import ClientError, HostClient
+    from ..gateware.host.regmap import BY_NAME
+    unknown = [name for name in args.names if name not in BY_NAME]
+    if unknown:
+        fail(f"no register named {', '.join(unknown)} (galvoscan regs lists them)")
+    with open_link(args) as link:
+        board = HostClient(link)
+        try:
+            values = {name: board.read(name) for name in args.names}
+        except ClientError as error:
+            fail(error)
+    if args.json:
+        print(json.dumps(values))
+    else:
+        for name, value in values.items():
+            print(f"{name} = {value} ({BY_NAME[name].unit})")
+    return 0
+
+
+def add_parsers(commands):
+    regs = commands.add_parser("regs", help="print the register map",
+                               description="The register map: addresses, access, reset "
+                                           "values, ranges and units.")
+    regs.add_argument("--json", action="store_true",
+                      help="[{name, address, width, access, reset, min, max, unit, description}]")
+    regs.set_defaults(run=_cmd_regs)
+
+    encode = commands.add_parser(
+        "encode", help="print command frames as hex bytes",
+        description="Print the 4-byte frames (hex, one frame a line) that write or read "
+                    "registers, for any other tool or microcontroller to send.")
+    encode.add_argument("--read", action="store_true", help="read requests for NAMEs")
+    encode.add_argument("items", nargs="+", metavar="NAME=VALUE | NAME",
+                        help="registers to write (NAME=VALUE) or, with --read, to read")
+    encode.set_defaults(run=_cmd_encode)
+
+    send = commands.add_parser("send", help="write registers on a board",
+                               description="Write registers over the serial port or SPI. "
+                                           "Every NAME=VALUE is checked before the first "
+                                           "frame is sent.")
+    send.add_argument("items", nargs="+", metavar="NAME=VALUE",
+                      help="registers to write, in order")
+    send.add_argument("--verify", action="store_true", help="read each value back")
+    add_link_options(send)
+    send.set_defaults(run=_cmd_send)
+
+    read = commands.add_parser("read", help="read registers from a board",
+                               description="Read registers over the serial port or SPI.")
+    read.add_argument("names", nargs="+", metavar="NAME", help="registers to read")
+    read.add_argument("--json", action="store_true", help="print {name: value}")
+    add_link_options(read)
+    read.set_defaults(run=_cmd_read)

@@ -1,0 +1,244 @@
+"""``galvoscan rom`` and ``galvoscan sim``: the spiral tables, and the system top simulated from
+its pins (the spiral, or a vector job sent through the SPI link)."""
+
+import json
+import sys
+import time
+
+from .args import (add_table_options, fail, int_in, number_in, output_file, read_text,
+                   register_int, settings_from, table_from)
+
+
+__all__ = ["add_parsers"]
+
+
+# --- rom -----------------------------------------------------------------------------------------
+
+def _cmd_rom(args):
+    table = table_from(args)
+    if args.csv:
+        print("address,x,y")
+        for address, (x, y) in enumerate(zip(table.x, table.y)):
+            print(f"{address},{x},{y}")
+    else:
+        print(f"# {table!r}: signed offsets from the field centre, ±32767 = full half-swing")
+        print(f"{'addr':>4} {'x':>7} {'y':>7}")
+        for address, (x, y) in enumerate(zip(table.x, table.y)):
+            print(f"{address:4d} {x:7d} {y:7d}")
+
+
+# --- sim -----------------------------------------------------------------------------------------
+
+def _correction(args):
+    """The correction table a simulation starts with: a file's, or the identity."""
+    if not args.correction:
+        return "identity"
+    from ..correction.files import TableFileError, load_table
+    from ..gateware.top import DEFAULT_CORRECTION_NODES
+    try:
+        return load_table(args.correction, nodes=DEFAULT_CORRECTION_NODES)
+    except TableFileError as error:
+        fail(error)
+
+
+def _marking_speed(points, pitch):
+    """Mean marking speed over chains of marked points one pitch or less apart, galvo units per
+    frame: from the arrival of each chain's second point to that of its last (the first
+    point's hold includes the wait after a jump)."""
+    distance = held = 0
+    chain_start = True
+    for a, b in zip(points, points[1:]):
+        step = ((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5
+        if a[2] and b[2] and 0 < step <= pitch * 1.001:
+            if not chain_start:
+                distance += step
+                held += a[3]
+            chain_start = False
+        else:
+            chain_start = True
+    return distance / held if held else None
+
+
+def _sim_vector(args):
+    from ..job import JobError, parse_job
+
+    if args.points is not None:
+        fail("--points is for the spiral; a vector job is as long as its file")
+    try:
+        job = parse_job(read_text(args.job, "job"), name=args.job)
+    except JobError as error:
+        fail(error)
+    correction = _correction(args)
+    # The simulator only once every input is known good.
+    from tqdm import tqdm
+    from ..sim import plot_job, replay_job
+    start = time.monotonic()
+    with tqdm(unit="frame", desc="simulating", disable=None, file=sys.stderr) as bar:
+        try:
+            result = replay_job(job, correction=correction, prr_hz=args.prr,
+                                pulses_per_point=args.pulses_per_point, pitch=args.pitch,
+                                jump_delay=args.jump_delay, vcd=args.vcd, progress=bar.update)
+        except ValueError as error:
+            fail(error)
+    seconds = time.monotonic() - start
+    marked = result.marked()
+    counts = sorted({p[2] for p in marked})
+    mm_per_unit = args.lens_field / 65536
+    units_per_frame = _marking_speed(result.points, args.pitch)
+    speed = None if units_per_frame is None else units_per_frame * mm_per_unit / 10e-6 / 1e3
+    if args.csv:
+        with open(args.csv, "w") as f:
+            f.write("frame,x,y,pulses\n")
+            for index, (x, y, n) in enumerate(result.frames):
+                f.write(f"{index},{x},{y},{n}\n")
+    if args.points_csv:
+        with open(args.points_csv, "w") as f:
+            f.write("x,y,pulses,frames\n")
+            for x, y, n, frames in result.points:
+                f.write(f"{x},{y},{n},{frames}\n")
+    if args.png:
+        plot_job(args.png, result, title=f"{args.job}: {len(marked)} marked points, "
+                                         f"{args.pulses_per_point} pulse(s) each at "
+                                         f"{args.prr / 1e3:g} kHz")
+    summary = {
+        "segments": len(job), "frames": len(result.frames), "points": len(result.points),
+        "marked_points": len(marked), "pulses_per_marked_point": counts,
+        "expected_pulses_per_point": args.pulses_per_point,
+        "line_speed_m_s": None if speed is None else round(speed, 4),
+        "expected_line_speed_m_s": round(args.pitch * mm_per_unit * args.prr
+                                         / args.pulses_per_point / 1e3, 4),
+        "sim_seconds": round(seconds, 2), "csv": args.csv, "points_csv": args.points_csv,
+        "png": args.png, "vcd": args.vcd,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"{len(job)} segments: {len(result.frames)} frames, {len(result.points)} points, "
+          f"{len(marked)} marked, simulated in {seconds:.1f} s")
+    print(f"pulses per marked point: {', '.join(map(str, counts)) or '-'} "
+          f"(asked {args.pulses_per_point})")
+    if speed is not None:
+        print(f"marking speed {speed:.3f} m/s on a {args.lens_field:g} mm field "
+              f"(pitch × PRR / N = {summary['expected_line_speed_m_s']:.3f} m/s)")
+    for what in ("csv", "points_csv", "png", "vcd"):
+        if summary[what]:
+            print(f"  {what.replace('_', ' ')}: {summary[what]}")
+    return 0 if counts in ([args.pulses_per_point], []) else 1
+
+
+def _sim_spiral(args):
+    from tqdm import tqdm
+    from ..gateware.sources.spiral import PARK_FRAMES
+    from ..sim import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
+
+    if args.job:
+        fail("--job is for --mode vector")
+    if args.points is None:
+        fail("the spiral needs --points N (8064 is the whole pattern)")
+    table = table_from(args)
+    settings = settings_from(args, table)
+    correction = _correction(args)
+    # The first frames after power-up park the mirrors at the centre; then each point is held
+    # for `dwell` frames.
+    frames = PARK_FRAMES + args.points * settings.dwell
+    start = time.monotonic()
+    with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
+              file=sys.stderr) as bar:
+        received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
+                                 progress=bar.update, correction=correction)
+    seconds = time.monotonic() - start
+    cycles = frames * 20 * SIM_CLOCKS_PER_BIT
+
+    if args.csv:
+        write_csv(args.csv, received)
+    if args.png:
+        sampling = (f"Gaussian sampling, σ = {table.sigma:g}" if table.sampling == "gaussian"
+                    else "uniform sampling")
+        plot_path(args.png, received[PARK_FRAMES:], title=(
+            f"{args.points} spiral points, {sampling}\n(decoded from the simulated XY2-100 wires)"))
+    summary = {
+        "points": args.points, "dwell_frames": settings.dwell, "frames": len(received),
+        "table_points": table.points, "x_range": list(settings.x_range),
+        "y_range": list(settings.y_range),
+        "scan_time_s": len(received) * 10e-6, "sim_seconds": round(seconds, 2),
+        "sim_cycles_per_s": round(cycles / seconds),
+        "csv": args.csv, "png": args.png, "vcd": args.vcd,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    print(f"{len(received)} frames decoded from the XY2-100 wires "
+          f"({args.points} points × {settings.dwell} frames + {PARK_FRAMES} park frames, "
+          f"{summary['scan_time_s'] * 1e3:.2f} ms of scanning) in {seconds:.1f} s "
+          f"({summary['sim_cycles_per_s']:,} system clocks/s)")
+    for what in ("csv", "png", "vcd"):
+        if summary[what]:
+            print(f"  {what}: {summary[what]}")
+    return 0
+
+
+def _cmd_sim(args):
+    if args.mode == "vector":
+        if not args.job:
+            fail("--mode vector needs --job FILE")
+        return _sim_vector(args)
+    return _sim_spiral(args)
+
+
+def add_parsers(commands):
+    from ..gateware.host.regmap import BY_NAME
+
+    rom = commands.add_parser("rom", help="print the two spiral angle tables",
+                              description="Print the X and Y spiral tables as the ROMs hold "
+                                          "them: signed offsets from the field centre.")
+    rom.add_argument("--csv", action="store_true", help="comma-separated: address,x,y")
+    add_table_options(rom)
+    rom.set_defaults(run=_cmd_rom)
+
+    sim = commands.add_parser(
+        "sim", help="replay the spiral, or a vector job, through the system top in simulation",
+        description="Simulate the system top from power-up, decode the XY2-100 wires like a "
+                    "scan head and report the frames. The full precessing pattern is 8064 "
+                    "points (lcm(128, 126)). With --mode vector, a job file (one 'jump X Y' "
+                    "or 'mark X Y' a line, galvo units) is sent through the SPI pins and the "
+                    "laser pulses on every point are counted on the DB25 pins. Output folders "
+                    "are made before the simulation starts.")
+    sim.add_argument("--mode", choices=["spiral", "vector"], default="spiral",
+                     help="what to run (default: %(default)s)")
+    sim.add_argument("--points", type=int_in(1, 1_000_000, "points"), default=None,
+                     help="spiral points to replay (8064 = the whole pattern)")
+    dwell = BY_NAME["dwell"]
+    sim.add_argument("--dwell", type=register_int("dwell"), default=None,
+                     help=f"10 µs frames each spiral point is held, {dwell.low} … {dwell.high} "
+                          f"(default: the register's {dwell.reset})")
+    sim.add_argument("--correction", metavar="FILE",
+                     help="distortion correction table (.json, .ctb, .cor) the top starts with "
+                          "(default: the identity); the wires carry corrected positions")
+    sim.add_argument("--vcd", type=output_file, metavar="FILE",
+                     help="write a waveform (large for long runs)")
+    sim.add_argument("--csv", type=output_file, metavar="FILE",
+                     help="write one row per frame: frame,x,y (vector: and pulses)")
+    sim.add_argument("--png", type=output_file, metavar="FILE", help="plot the path")
+    sim.add_argument("--json", action="store_true", help="print the summary as JSON")
+    vector = sim.add_argument_group("vector mode")
+    vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
+    prr = BY_NAME["laser_prr"]       # in 100 Hz steps
+    vector.add_argument("--prr", type=number_in("prr", prr.low * 100, prr.high * 100),
+                        default=60e3, metavar="HZ",
+                        help=f"laser pulse rate, {prr.low * 100:g} … {prr.high * 100:g} "
+                             f"(default: 60e3)")
+    vector.add_argument("--pulses-per-point", type=register_int("pulses_per_point"),
+                        default=BY_NAME["pulses_per_point"].reset, metavar="N",
+                        help="pulses on every marked point (default: %(default)s)")
+    vector.add_argument("--pitch", type=register_int("pitch"), default=BY_NAME["pitch"].reset,
+                        help="galvo units between marked points (default: %(default)s)")
+    vector.add_argument("--jump-delay", type=register_int("jump_delay", "jump delay"),
+                        default=BY_NAME["jump_delay"].reset, metavar="FRAMES",
+                        help="laser-off wait after a jump, 10 µs frames (default: %(default)s)")
+    vector.add_argument("--lens-field", type=number_in("lens field", 1, 2000), default=110.0,
+                        metavar="MM", help="field across 65536 units, for the speed in m/s "
+                                           "(default: 110)")
+    vector.add_argument("--points-csv", type=output_file, metavar="FILE",
+                        help="write one row per point: x,y,pulses,frames")
+    add_table_options(sim)
+    sim.set_defaults(run=_cmd_sim)

@@ -1,0 +1,127 @@
+"""The command line's shared parts (``galvoscan/cli/args.py``): every option explained, output
+folders made or refused before any work, unreadable inputs one line."""
+
+import argparse
+
+import pytest
+from hypothesis import given, strategies as st
+
+from galvoscan.cli import main, parser
+from galvoscan.cli.args import int_in, number_in, output_dir, output_file, register_int
+from galvoscan.gateware.host.regmap import BY_NAME
+
+
+def _parsers(top, prefix=("galvoscan",)):
+    yield " ".join(prefix), top
+    for action in top._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _parsers(sub, prefix + (name,))
+
+
+def test_every_option_has_help():
+    missing = []
+    for where, p in _parsers(parser()):
+        for action in p._actions:
+            if isinstance(action, (argparse._HelpAction, argparse._SubParsersAction)):
+                continue
+            if not action.help:
+                missing.append(f"{where} {'/'.join(action.option_strings) or action.dest}")
+    assert not missing, missing
+
+
+def _one_line_error(capsys, argv):
+    with pytest.raises(SystemExit) as exit:
+        main(argv)
+    assert exit.value.code not in (0, None)
+    err = capsys.readouterr().err.strip() or str(exit.value.code)
+    lines = err.splitlines()
+    assert "Traceback" not in err
+    return lines[-1]
+
+
+def test_job_that_is_not_utf8_is_one_line(tmp_path, capsys):
+    job = tmp_path / "latin1.job"
+    job.write_bytes("mark 100 100  # café\n".encode("latin-1"))
+    line = _one_line_error(capsys, ["sim", "--mode", "vector", "--job", str(job)])
+    assert "not UTF-8" in line and "latin1.job" in line
+
+
+def test_missing_job_is_one_line(tmp_path, capsys):
+    line = _one_line_error(capsys, ["sim", "--mode", "vector", "--job",
+                                    str(tmp_path / "nope.job")])
+    assert "cannot read the job" in line
+
+
+@pytest.mark.parametrize("option", ["--csv", "--png", "--vcd"])
+def test_output_folder_is_made_before_the_simulation(tmp_path, option, capsys):
+    target = tmp_path / "deep" / "er" / "out.file"
+    # A bad --points value stops the run at once, after the output option was parsed: the
+    # folder already exists then, so it is made before any simulation could start.
+    _one_line_error(capsys, ["sim", option, str(target), "--points", "0"])
+    assert target.parent.is_dir()
+
+
+def test_output_under_a_file_is_refused_before_work(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    line = _one_line_error(capsys, ["sim", "--points", "8064", "--csv",
+                                    str(blocker / "out.csv")])
+    assert "cannot make the folder" in line
+
+
+def test_output_that_is_a_folder_is_refused(tmp_path, capsys):
+    line = _one_line_error(capsys, ["export", "verilog", "-o", str(tmp_path)])
+    assert "is a folder" in line
+
+
+def test_build_dir_that_is_a_file_is_refused(tmp_path, capsys):
+    blocker = tmp_path / "build"
+    blocker.write_text("")
+    line = _one_line_error(capsys, ["build", "--build-dir", str(blocker)])
+    assert "is a file" in line
+
+
+def test_output_helpers(tmp_path):
+    assert output_file(str(tmp_path / "a" / "b.csv")) == str(tmp_path / "a" / "b.csv")
+    assert (tmp_path / "a").is_dir()
+    assert output_dir(str(tmp_path / "c" / "d")) == str(tmp_path / "c" / "d")
+    assert (tmp_path / "c" / "d").is_dir()
+
+
+@pytest.mark.parametrize("name", ["dwell", "pitch", "pulses_per_point", "jump_delay"])
+def test_register_arguments_take_the_maps_range(name):
+    reg = BY_NAME[name]
+    parse = register_int(name)
+    assert parse(str(reg.low)) == reg.low and parse(str(reg.high)) == reg.high
+    for bad in (reg.low - 1, reg.high + 1):
+        with pytest.raises(argparse.ArgumentTypeError):
+            parse(str(bad))
+
+
+@given(st.text(max_size=12))
+def test_number_types_refuse_junk_with_a_message(text):
+    for parse in (int_in(0, 10, "n"), number_in("x", 0, 10)):
+        try:
+            value = parse(text)
+        except argparse.ArgumentTypeError as error:
+            assert str(error)
+        else:
+            assert 0 <= value <= 10
+
+
+def test_send_checks_every_assignment_before_opening_the_link(capsys):
+    # The port does not exist: had the link been opened first, the error would name it.
+    line = _one_line_error(capsys, ["send", "--port", "/dev/nonexistent-galvoscan",
+                                    "arm=1", "laser_powr=10"])
+    assert "laser_powr" in line
+    line = _one_line_error(capsys, ["send", "--port", "/dev/nonexistent-galvoscan",
+                                    "run=0", "dwell=0"])
+    assert "dwell" in line
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(["--version"])
+    assert exit.value.code == 0
+    assert capsys.readouterr().out.startswith("galvoscan ")
