@@ -5,7 +5,7 @@ import re
 
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
-from galvoscan.cli import register_table
+from galvoscan.cli.link import register_table
 from galvoscan.platforms.icebreaker import (INTERLOCK_PMOD_PIN, LASER_PMOD_PINS, SPI_PMOD_PINS,
                                            XY2_PMOD_PINS)
 
@@ -96,3 +96,30 @@ def test_correction_table_is_what_the_study_measures():
     assert (f"to within {values['PHOTO_MAX']} units (mean {values['PHOTO_MEAN']}; "
             f"{values['PHOTO_UPP']} units a pixel)") in README
     assert f"removes {values['PHOTO_REMOVED']} of the mean error" in README
+
+
+def test_benchmark_table_is_what_bench_recorded():
+    """One benchmark table, written by `galvoscan bench --readme` from docs/bench.json."""
+    import json
+    from galvoscan.bench import readme_block
+    result = json.loads((ROOT / "docs" / "bench.json").read_text())
+    assert readme_block(result) in README
+    assert README.count("| what | figure |") == 1
+
+
+def test_every_port_of_the_top_is_listed():
+    from galvoscan.gateware.top import GalvoScanTop
+    top = GalvoScanTop(clk_freq=12e6)
+    paragraph = README[README.index("- **System top**"):]
+    paragraph = paragraph[:paragraph.index("\n\n")]
+    for name in top.signature.members:
+        assert f"`{name}" in paragraph, name
+
+
+def test_readme_cites_papers_not_private_files():
+    """A reader can follow every reference: the papers by name, no files outside the repo."""
+    assert "SPEC" not in README
+    assert not re.search(r"\b00[0134]'s\b|\(00[0134]\)|\b00[0134] \(paper\)", README)
+    assert "## References" in README
+    for author in ("Dai Jinyue", "Wan Hui", "Liao Ping", "Zhu Tieshuang"):
+        assert author in README

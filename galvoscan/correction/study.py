@@ -89,7 +89,7 @@ def markdown_table(study):
              "|---|---:|---:|---:|",
              f"| none (synthetic head) | {head['before_max']:.0f} | {head['before_mean']:.1f} "
              f"| — |",
-             f"| 004 (paper), bilinear grid | {PAPER_004['after_max']} | "
+             f"| Zhu & Zhang (paper), bilinear grid | {PAPER_004['after_max']} | "
              f"{PAPER_004['after_mean']} | "
              f"{1 - PAPER_004['after_mean'] / PAPER_004['before_mean']:.0%} |"]
     for row in study["grids"]:
@@ -97,7 +97,7 @@ def markdown_table(study):
                      f"{row['after_max']:.0f} | {row['after_mean']:.1f} | "
                      f"{row['removed']:.1%} |")
     model, photo = study["model"], study["photo"]
-    lines.append(f"| 003 exact model table | {model['after_max']:.0f} | "
+    lines.append(f"| f-theta model table (Liao & Chen, exact) | {model['after_max']:.0f} | "
                  f"{model['after_mean']:.1f} | {model['removed']:.1%} |")
     lines.append(f"| photo, {photo['grid']} × {photo['grid']} bilinear | "
                  f"{photo['after_max']:.0f} | {photo['after_mean']:.1f} | "
