@@ -3,7 +3,6 @@ and ``galvoscan correct``."""
 
 import csv
 import json
-import math
 import struct
 
 import numpy as np
@@ -18,8 +17,7 @@ from galvoscan.correction.measure import GRID_SIZES, MeasurementError, calibrati
     error_model, residuals, table_from_measurement
 from galvoscan.correction.model import ScanHeadModel, ftheta_table, synthetic_head
 from galvoscan.correction.photo import PhotoError, apply_homography, calibration_job, \
-    find_marks, homography, measure_photo, minimum_enclosing_circle, render_photo, \
-    table_from_photo
+    find_marks, homography, measure_photo, render_photo, table_from_photo
 from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.job import parse_job
 
@@ -254,35 +252,6 @@ def test_json_errors(document, message):
 
 # --- the photo pipeline -------------------------------------------------------------------------
 
-@settings(max_examples=100, deadline=None)
-@given(st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)), min_size=1,
-                max_size=25))
-def test_minimum_enclosing_circle_against_brute_force(points):
-    x, y, r = minimum_enclosing_circle(points)
-    pts = np.array(points)
-    assert np.all(np.hypot(pts[:, 0] - x, pts[:, 1] - y) <= r + 1e-6 * max(1.0, r))
-    # No circle through two or three of the points that holds them all is smaller.
-    best = math.inf
-    n = len(points)
-    for i in range(n):
-        for j in range(i, n):
-            cx, cy = (pts[i] + pts[j]) / 2
-            rr = np.hypot(*(pts[i] - pts[j])) / 2
-            if np.all(np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) <= rr + 1e-6 * max(1, rr)):
-                best = min(best, rr)
-            for k in range(j + 1, n):
-                a, b, c = pts[i], pts[j], pts[k]
-                d = 2 * (a[0] * (b[1] - c[1]) + b[0] * (c[1] - a[1]) + c[0] * (a[1] - b[1]))
-                if abs(d) < 1e-9:
-                    continue
-                ux = (a @ a * (b[1] - c[1]) + b @ b * (c[1] - a[1]) + c @ c * (a[1] - b[1])) / d
-                uy = (a @ a * (c[0] - b[0]) + b @ b * (a[0] - c[0]) + c @ c * (b[0] - a[0])) / d
-                rr = np.hypot(a[0] - ux, a[1] - uy)
-                if np.all(np.hypot(pts[:, 0] - ux, pts[:, 1] - uy) <= rr + 1e-6 * max(1, rr)):
-                    best = min(best, rr)
-    assert r <= best + 1e-6 * max(1.0, best)
-
-
 def test_homography_recovers_a_known_one():
     truth = np.array([[1.2, 0.1, 30.0], [-0.05, 0.9, -12.0], [1e-4, -2e-4, 1.0]])
     source = np.random.default_rng(1).uniform(-500, 500, (9, 2))
@@ -311,17 +280,19 @@ def photo_9():
 
 
 def test_photo_centres_and_table(photo_9):
-    """Circle centres from a blurred, noisy, tilted synthetic photo are within 80 galvo units
-    (mean under 30: under a pixel at 36 units per pixel) of where the head really put them, and
-    the table built from them removes at least 86 % of the mean error (004's figure)."""
+    """Circle centres from a blurred, noisy, tilted synthetic photo are within 25 galvo units
+    (mean under 12: a third of a pixel at 36 units per pixel) of where the head really put them,
+    and the table built from them removes at least 93 % of the mean error (Zhu & Zhang's
+    figure is 86 %). The blob centroids measure 13 / 7 here; the minimum enclosing circle the
+    paper uses measured 45 / 17 on the same photo."""
     head, image, _ = photo_9
     cx, cy, mx, my = measure_photo(image, 9)
     lx, ly = head.land(cx, cy)
     error = np.hypot(mx - lx, my - ly)
-    assert error.max() < 80 and error.mean() < 30
+    assert error.max() < 25 and error.mean() < 12
     table = table_from_photo(image, 9)
     result = residuals(head.land, table)
-    assert result["removed"] >= 0.86, result
+    assert result["removed"] >= 0.93, result
 
 
 def test_photo_turned_and_mirrored_still_pairs(photo_9):
