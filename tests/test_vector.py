@@ -1,16 +1,15 @@
 # amaranth: UnusedElaboratable=no
 # (the parameter checks build tops that are never elaborated)
 
-"""Vector and raster modes (issue 6): the points decoded from the XY2-100 wires against plain
-Python models written from SPEC §1 (001's DDA) and §3, and the laser pulses on every point
-counted on the DB25 pins."""
+"""Vector mode (issue 6): the points decoded from the XY2-100 wires against plain Python models
+written from SPEC §1 (001's DDA) and §3, and the laser pulses on every point counted on the DB25
+pins. (Raster mode: tests/test_raster.py.)"""
 
 import bisect
 
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
-from galvoscan.analysis.patterns import raster_frames
 from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
@@ -165,46 +164,6 @@ def test_underrun_holds_with_the_laser_off_and_resumes_without_repeating():
     expected = job_model(first + second, 60, 1)
     assert runs_on_the_wires(board) == merge([(PARK, 0)] + expected)
     assert client.read("vec_underruns") == 2
-
-
-# --- raster ---------------------------------------------------------------------------------------
-
-RASTER_CASES = [
-    # corner, size, spacing, step, flags (bit 0 along y, bit 1 one way), turn gate
-    ((30000, 31000), (95, 40), 20, 30, 0, 0),
-    ((30000, 31000), (95, 40), 20, 30, 2, 2),
-    ((40000, 20000), (33, 70), 25, 10, 1, 3),
-]
-
-
-@pytest.mark.parametrize("corner, size, spacing, step, flags, gate", RASTER_CASES)
-def test_raster_matches_the_analysis_model(corner, size, spacing, step, flags, gate):
-    """The raster the analysis compares with the spiral is the one the gateware draws."""
-    board = SimBoard(record_laser=True, mo_lead=0.2e-3,
-                     settings=ScanSettings(mode="raster", run=False))
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    for name, value in (("ras_x", corner[0]), ("ras_y", corner[1]), ("ras_w", size[0]),
-                        ("ras_h", size[1]), ("ras_spacing", spacing), ("ras_step", step),
-                        ("ras_flags", flags), ("ras_turn_gate", gate),
-                        ("laser_prr", 1000), ("arm", 1)):
-        client.write(name, value)
-    board.run_for(0.3e-3)
-    sent = len(board.xy2_frames())
-    client.write("run", 1)
-    model = raster_frames(corner=corner, size=size, spacing=spacing, step=step,
-                          lines_along="y" if flags & 1 else "x",
-                          bidirectional=not flags & 2, turn_gate=gate, passes=2)
-    board.run_for((len(model) + 20) * 10e-6)
-    per_frame = pulses_per_frame(board)
-    first = sent + [f for f, _ in per_frame[sent:]].index((corner[0], corner[1]))
-    got = per_frame[first:first + len(model)]
-    assert [f for f, _ in got] == list(zip(model.x.tolist(), model.y.tolist()))
-    # The laser is off exactly on the gated frames; at 100 kHz the others get a pulse each.
-    counts = [n for _, n in got]
-    assert all(n == 0 for n, on in zip(counts, model.laser) if not on)
-    lit = [n for n, on in zip(counts, model.laser) if on]
-    assert abs(sum(lit) - len(lit)) <= 1 and max(lit) <= 2
-    assert (gate == 0) == all(model.laser)
 
 
 # --- random jobs ----------------------------------------------------------------------------------
