@@ -189,9 +189,6 @@ def test_stopping_starts_again_at_the_first_line_ungated():
     assert first == raster_model(**params, frames=7)
 
 
-@pytest.mark.xfail(strict=True, reason="first_line resets to 0, and is only set while run is "
-                   "low: with run high straight out of reset the first line is gated too (the "
-                   "top cannot do that: it resets in spiral mode, so raster's run starts low)")
 def test_first_line_ungated_with_run_high_from_reset():
     dut = RasterSequencer()
     lasers = []

@@ -175,9 +175,6 @@ def test_pauses_of_up_to_two_character_times_keep_a_frame(idle):
     assert frames == [(0x12345678, 32)]
 
 
-@pytest.mark.xfail(strict=True, reason="the pause is timed from the middle of the last byte's "
-                   "stop bit to the end of the next byte, so about 2.1 character times of idle "
-                   "line already end a frame, not more than three as README and docstring say")
 @pytest.mark.parametrize("idle", [2.5 * CHAR, 2.9 * CHAR])
 def test_pauses_of_under_three_character_times_keep_a_frame(idle):
     events = frame_events(b"\x12\x34\x56\x78", first_idle=1, idle=idle)
@@ -191,6 +188,14 @@ def test_a_pause_of_more_than_three_character_times_ends_a_frame(gathered):
     events = frame_events(data, first_idle=1) + frame_events(b"\x04\x00\x09\x64")
     frames, _, _ = run_port(events)
     check_frames(frames, [(int.from_bytes(data, "big"), 8 * gathered), (0x04000964, 32)])
+
+
+@pytest.mark.parametrize("idle", [3.2 * CHAR, 4 * CHAR])
+def test_a_pause_just_over_three_character_times_splits_a_frame(idle):
+    events = frame_events(b"\x12\x34", first_idle=1) + \
+        frame_events(b"\x56\x78\x9a\xbc", first_idle=idle)
+    frames, _, _ = run_port(events)
+    check_frames(frames, [(0x1234, 16), (0x56789abc, 32)])
 
 
 def test_a_lone_pause_makes_no_frame():

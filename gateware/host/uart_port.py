@@ -71,7 +71,10 @@ class UARTCommandPort(wiring.Component):
         m.d.comb += [receiver.rx.eq(self.rx), self.tx.eq(transmitter.tx)]
 
         # --- bytes → frames -----------------------------------------------------------------
-        gap = self.gap_chars * 10 * self.divisor
+        # `quiet` restarts when a byte is received, in the middle of its stop bit, and the next
+        # byte is received a character time after its start bit: counting one character more
+        # than the pause makes the idle line itself, not idle plus a character, what ends a frame.
+        gap = (self.gap_chars + 1) * 10 * self.divisor
         count = Signal(range(4))        # bytes gathered
         word = Signal(FRAME_BITS)
         broken = Signal()               # a byte of this frame had a bad stop bit

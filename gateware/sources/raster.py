@@ -78,7 +78,9 @@ class RasterSequencer(wiring.Component):
         across = Signal(17)           # distance of this line from the first
         backwards = Signal()          # this line runs from the far end
         line_frames = Signal(16)      # frames since this line started
-        first_line = Signal()         # the first line since run rose (never gated)
+        # The first line since run rose, or since reset (never gated): a raster that runs
+        # straight out of reset starts on its first line too.
+        first_line = Signal(init=1)
 
         with m.If(self.points.ready):
             m.d.sync += self.points.valid.eq(0)
