@@ -3,7 +3,7 @@
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, ClockDomain, Cover, Elaboratable, Module, ResetSignal, Signal
 
-from ..gateware.laser.controller import FAULT_BITS
+from ..gateware.laser.controller import Faults
 
 
 __all__ = ["LaserSafetySpec"]
@@ -71,13 +71,13 @@ class LaserSafetySpec(Elaboratable):
         interlock_d1 = Signal(init=1)
         interlock_d2 = Signal(init=1)
         m.d.sync += [interlock_d1.eq(dut.interlock_open), interlock_d2.eq(interlock_d1)]
-        faults_q = Signal.like(dut.faults)
+        faults_q = Signal(Faults)
         cleared_q = Signal()
         m.d.sync += [faults_q.eq(dut.faults), cleared_q.eq(dut.fault_clear & ~interlock_d2)]
-        for cause, bit in FAULT_BITS.items():
-            m.d.comb += Assert(~faults_q[bit] | dut.faults[bit] | cleared_q,
+        for cause, _ in Faults:
+            m.d.comb += Assert(~faults_q[cause] | dut.faults[cause] | cleared_q,
                                "a fault stays latched until cleared")
-        m.d.comb += Assert(~faults_q.any() | ~am, "a latched fault stops modulation")
+        m.d.comb += Assert(~faults_q.as_value().any() | ~am, "a latched fault stops modulation")
 
         # --- covers -------------------------------------------------------------------------
         emitted = Signal()
@@ -85,9 +85,9 @@ class LaserSafetySpec(Elaboratable):
             m.d.sync += emitted.eq(1)
         m.d.comb += [
             Cover(am & (dut.laser_power != 0), "modulation with power latched"),
-            Cover(emitted & dut.faults[FAULT_BITS["interlock"]] & ~am,
+            Cover(emitted & dut.faults.interlock & ~am,
                   "interlock opened after emission: fault latched, modulation off"),
-            Cover(emitted & (faults_q != 0) & (dut.faults == 0),
+            Cover(emitted & faults_q.as_value().any() & ~dut.faults.as_value().any(),
                   "a fault cleared after emission"),
             Cover(dut.pulse, "a laser pulse"),
         ]

@@ -12,20 +12,21 @@ from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
+from .clocking import DEFAULT_BAUD, XY2_100_BIT_RATE, check_clocks
 from .field.correction import FieldCorrection
 from .field.correction_table import CorrectionTable
-from .field.scale import AMP_ONE, ScaleOffset
+from .field.scale import ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import BY_NAME, CORRECTION_REGISTERS, LASER_REGISTERS, MODE_REGISTERS, \
-    STATUS_BITS
+from .host.regmap import DEFAULT_CORRECTION_NODES, Mode, register_map
 from .host.spi_target import SPITarget
-from .host.uart import uart_divisor
+from .host.status import StatusBlock
 from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
-from .laser.controller import FAULT_BITS, LaserController
-from .phy.xy2_100 import FRAME_BITS, XY2Transmitter, clocks_per_bit
-from .points import FIELD_CENTRE
+from .laser.controller import LaserController
+from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
+from .settings import ScanSettings
 from .sources.raster import RasterSequencer
+from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
 from .sources.vector import VectorCommand, VectorSequencer
@@ -35,82 +36,15 @@ __all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
            "DEFAULT_CORRECTION_NODES"]
 
 
-#: Values of the ``mode`` register.
-MODES = {"spiral": 0, "raster": 1, "vector": 2}
+#: Names of the scan modes, in the order of their ``mode`` register values (:class:`Mode`).
+MODES = tuple(mode.label for mode in Mode)
 
 #: Segments the vector queue holds (block RAM).
 VECTOR_QUEUE_DEPTH = 512
 
-#: Nodes per axis of the default (identity) correction table.
-DEFAULT_CORRECTION_NODES = 17
-
 # The correction stage finishes a point within the shortest possible frame (two clocks per
 # bit), so a point taken at a frame boundary is always ready for the next one.
 assert FieldCorrection.CLOCKS + 1 < 2 * FRAME_BITS
-
-
-def _check_int(name, value, low, high, unit=""):
-    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
-        raise ValueError(f"{name} must be an integer from {low} to {high}{unit}, not {value!r}")
-
-
-class ScanSettings:
-    """The scan settings the system starts with: what the host-writable registers reset to
-    (the register map's defaults unless given).
-
-    Parameters
-    ----------
-    dwell : int
-        Frames each spiral point is held, 1 … 65535. At 2 Mbit/s a frame is 10 µs, so the
-        default 3 gives the paper's 30 µs between points.
-    amp_x, amp_y : int
-        Amplitude, unsigned Q1.15 (32768 = the table's full swing reaches the field edge).
-    center_x, center_y : int
-        Pattern centre in galvo units (32768 = field centre).
-    x_range, y_range : tuple of int
-        ``(first, last)`` ROM addresses walked by each axis, inclusive. The paper's
-        ``(0, 127)`` and ``(1, 126)`` make the ellipse precess.
-    run : bool
-        Start sweeping out of reset.
-    mode : str
-        Scan mode out of reset: ``"spiral"``, ``"raster"`` or ``"vector"``.
-    """
-
-    def __init__(self, *, dwell=3, amp_x=AMP_ONE, amp_y=AMP_ONE,
-                 center_x=FIELD_CENTRE, center_y=FIELD_CENTRE,
-                 x_range=(0, 127), y_range=(1, 126), run=True, mode="spiral"):
-        if mode not in MODES:
-            raise ValueError(f"mode must be one of {', '.join(MODES)}, not {mode!r}")
-        self.mode = mode
-        _check_int("dwell", dwell, 1, 0xFFFF, " frames")
-        for name, value in (("amp_x", amp_x), ("amp_y", amp_y)):
-            _check_int(name, value, 0, 0xFFFF, " (Q1.15, 32768 = 1.0)")
-        for name, value in (("center_x", center_x), ("center_y", center_y)):
-            _check_int(name, value, 0, 0xFFFF, " galvo units")
-        self.dwell = dwell
-        self.amp_x, self.amp_y = amp_x, amp_y
-        self.center_x, self.center_y = center_x, center_y
-        self.x_range = tuple(x_range)
-        self.y_range = tuple(y_range)
-        self.run = bool(run)
-
-    def register_resets(self):
-        """Reset values of the registers these settings set."""
-        return {
-            "mode": MODES[self.mode], "run": int(self.run), "dwell": self.dwell,
-            "amp_x": self.amp_x, "amp_y": self.amp_y,
-            "center_x": self.center_x, "center_y": self.center_y,
-            "x_first": self.x_range[0], "x_last": self.x_range[1],
-            "y_first": self.y_range[0], "y_last": self.y_range[1],
-        }
-
-    def check_ranges(self, points):
-        """Raise if the address ranges do not fit a table of ``points`` samples."""
-        for name, rng in (("x_range", self.x_range), ("y_range", self.y_range)):
-            if len(rng) != 2 or not all(isinstance(v, int) for v in rng) or \
-                    not 0 <= rng[0] <= rng[1] < points:
-                raise ValueError(f"{name} must be (first, last) with 0 <= first <= last < "
-                                 f"{points} (the table size), not {rng!r}")
 
 
 class GalvoScanTop(wiring.Component):
@@ -118,10 +52,14 @@ class GalvoScanTop(wiring.Component):
 
     ::
 
-                                                 ┌─▶ spiral sequencer (ROMs) ─┐
-        SPI ─┐                                   ├─▶ raster fill              ├─▶ scale ─▶ correction ─▶ XY2-100
-        UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  /offset   (n×n table)   PHY
-                                                  laser controller ◀── marking, pulse timing
+                                                 ┌─▶ spiral sequencer (ROMs) ─┐  source
+        SPI ─┐                                   ├─▶ raster fill              ├─▶ select ─▶ scale ─▶ correction ─▶ XY2-100
+        UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  (mode)     /offset   (n×n table)   PHY
+                           status block (flags, counters) ◀─┘  laser controller ◀── marking, pulse timing
+
+    Every register fact (which registers, their ranges and resets) comes from :attr:`regmap`,
+    the build's :func:`~.host.regmap.register_map`; the clock is checked once, by
+    :func:`~.clocking.check_clocks`.
 
     Parameters
     ----------
@@ -165,6 +103,13 @@ class GalvoScanTop(wiring.Component):
         DB25 pins 1-8, 9, 18, 19, 20 of a fiber laser (through 5 V TTL buffers).
     interlock_open : ``In(1, init=1)``
         1 = interlock open (give the pin a pull-up, so a broken loop reads open).
+
+    Attributes
+    ----------
+    regmap : :class:`~.host.regmap.RegisterMap`
+        This build's registers.
+    clocking : :class:`~.clocking.ClockPlan`
+        Clocks per XY2 bit and per UART bit.
     """
 
     xy2_clk: Out(1)
@@ -184,8 +129,8 @@ class GalvoScanTop(wiring.Component):
     laser_prr: Out(1)
     interlock_open: In(1, init=1)
 
-    def __init__(self, *, clk_freq, bit_rate=2_000_000, baud=115_200, table=None,
-                 settings=None, mo_lead=5e-3, modes=tuple(MODES), correction="identity",
+    def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=DEFAULT_BAUD, table=None,
+                 settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH):
         self.table = SpiralTable() if table is None else table
@@ -195,7 +140,7 @@ class GalvoScanTop(wiring.Component):
         if not isinstance(self.settings, ScanSettings):
             raise TypeError(f"settings must be ScanSettings, not {self.settings!r}")
         self.settings.check_ranges(self.table.points)
-        modes = tuple(modes)
+        modes = tuple(mode.label if isinstance(mode, Mode) else mode for mode in modes)
         if not modes or any(mode not in MODES for mode in modes) or len(set(modes)) != len(modes):
             raise ValueError(f"modes must be some of {', '.join(MODES)}, each once, not {modes!r}")
         if self.settings.mode not in modes:
@@ -203,7 +148,7 @@ class GalvoScanTop(wiring.Component):
                              f"{modes!r} leaves out")
         self.modes = modes
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
-        clocks_per_bit(clk_freq, bit_rate)
+        self.clocking = check_clocks(clk_freq, bit_rate, baud)
         if isinstance(correction, str) and correction == "identity":
             correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
         if correction is not None and not isinstance(correction, CorrectionTable):
@@ -225,13 +170,17 @@ class GalvoScanTop(wiring.Component):
         if not self.laser and "vector" in modes:
             raise ValueError("vector mode times its points by the laser's pulses: it needs the "
                              "laser controller")
-        self.uart_divisor = uart_divisor(clk_freq, baud)
         if not mo_lead > 0:
             raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
         self.mo_lead = mo_lead
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
+        #: This build's registers: what the register file holds and the host may write.
+        self.regmap = register_map(
+            table_points=self.table.points,
+            correction_nodes=None if correction is None else correction.n,
+            modes=modes, laser=self.laser, resets=self.settings.register_resets())
         super().__init__()
 
     def elaborate(self, platform):
@@ -239,17 +188,7 @@ class GalvoScanTop(wiring.Component):
 
         # --- host link ----------------------------------------------------------------------
         m.submodules.decoder = decoder = CommandDecoder()
-        last_address = self.table.points - 1
-        m.submodules.registers = regs = RegisterFile(
-            resets=self.settings.register_resets(),
-            highs={**{name: last_address for name in ("x_first", "x_last", "y_first", "y_last")},
-                   **({"cor_node": self.correction.n ** 2 - 1} if self.correction else {})},
-            choices={"mode": {MODES[mode] for mode in self.modes}},
-            leave_out=[name for mode, names in MODE_REGISTERS.items() if mode not in self.modes
-                       for name in names] +
-                      (list(CORRECTION_REGISTERS) if self.correction is None else []) +
-                      ([] if self.laser else list(LASER_REGISTERS)))
-
+        m.submodules.registers = regs = RegisterFile(self.regmap)
         # A link left out of the build: its pins are unused (the outputs idle) and the decoder
         # never hears from it.
         if "spi" in self.links:
@@ -265,7 +204,7 @@ class GalvoScanTop(wiring.Component):
         else:
             m.d.comb += decoder.spi_replies.ready.eq(1)
         if "uart" in self.links:
-            m.submodules.uart = uart = UARTCommandPort(divisor=self.uart_divisor,
+            m.submodules.uart = uart = UARTCommandPort(divisor=self.clocking.uart_divisor,
                                                        reply_depth=self.uart_reply_depth)
             m.d.comb += [uart.rx.eq(self.uart_rx), self.uart_tx.eq(uart.tx)]
             connect(m, uart.frames, decoder.uart_frames)
@@ -273,6 +212,21 @@ class GalvoScanTop(wiring.Component):
         else:
             m.d.comb += [decoder.uart_replies.ready.eq(1), self.uart_tx.eq(1)]
         connect(m, decoder.bus, regs.bus)
+
+        # Counters the host reads: those of the vector queue stop at their top, the laser's
+        # pulses wrap (the host counts by differences).
+        m.submodules.status = status = StatusBlock(
+            saturating=[name for name in ("vec_rejected", "vec_underruns", "vec_stalls")
+                        if name in self.regmap],
+            wrapping=["pulses"] if self.laser else [])
+        m.d.comb += [
+            status.status_read.eq(decoder.status_read),
+            status.flags.interlock_open.eq(self.interlock_open),
+            regs.status.eq(status.status),
+            regs.errors.eq(decoder.errors),
+        ]
+        for name in status.saturating + status.wrapping:
+            m.d.comb += getattr(regs, name).eq(status.counts[name])
 
         # --- scan ---------------------------------------------------------------------------
         # With a correction stage, it holds the point between frames, and the scale stage is
@@ -285,13 +239,12 @@ class GalvoScanTop(wiring.Component):
 
         sources = {}
         if "spiral" in self.modes:
-            m.submodules.spiral = spiral = SpiralSequencer(self.table)
+            m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(self.table)
             # Registers and ports of the same name.
             for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
                 m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
-            sources["spiral"] = spiral
         if "raster" in self.modes:
-            m.submodules.raster = raster = RasterSequencer()
+            m.submodules.raster = sources[Mode.RASTER] = raster = RasterSequencer()
             m.d.comb += [
                 raster.x.eq(regs.ras_x), raster.y.eq(regs.ras_y),
                 raster.width.eq(regs.ras_w), raster.height.eq(regs.ras_h),
@@ -299,32 +252,26 @@ class GalvoScanTop(wiring.Component):
                 raster.along_y.eq(regs.ras_flags[0]), raster.one_way.eq(regs.ras_flags[1]),
                 raster.turn_gate.eq(regs.ras_turn_gate),
             ]
-            sources["raster"] = raster
         if "vector" in self.modes:
-            m.submodules.vector = vector = VectorSequencer()
+            m.submodules.vector = sources[Mode.VECTOR] = vector = VectorSequencer()
             for name in ("pitch", "pulses_per_point", "jump_delay"):
                 m.d.comb += getattr(vector, name).eq(getattr(regs, name))
-            sources["vector"] = vector
+            self._elaborate_vector_queue(m, decoder, regs, vector, status)
 
-        # The selected source feeds the scale stage; the others are stopped.
-        running = Signal()
-        for name, source in sources.items():
-            selected = regs.mode == MODES[name]
+        m.submodules.select = select = SourceSelect(sources)
+        m.d.comb += [select.mode.eq(regs.mode), select.run.eq(regs.run)]
+        for index, source in enumerate(sources.values()):
+            connect(m, source.points, select.sources[index])
             m.d.comb += [
-                source.run.eq(regs.run & selected),
+                source.run.eq(select.source_run[index]),
                 source.frame_strobe.eq(phy.frame_strobe),
             ]
-            with m.If(selected):
-                m.d.comb += [
-                    scale.offsets.valid.eq(source.points.valid),
-                    scale.offsets.payload.eq(source.points.payload),
-                    source.points.ready.eq(scale.offsets.ready),
-                    running.eq(source.run),
-                ]
-        clipped = Signal()
+        connect(m, select.points, scale.offsets)
+        m.d.comb += status.flags.running.eq(select.running)
+
         if self.correction is None:
             connect(m, scale.positions, phy.position)
-            m.d.comb += clipped.eq(scale.clipped)
+            m.d.comb += status.flags.clipped.eq(scale.clipped)
         else:
             m.submodules.correction = correction = FieldCorrection(self.correction)
             connect(m, scale.positions, correction.positions_in)
@@ -336,96 +283,81 @@ class GalvoScanTop(wiring.Component):
                 correction.write_dy.eq(regs.cor_dy),
                 correction.write_en.eq(regs.cor_write),
                 regs.cor_nodes.eq(self.correction.n),
-                clipped.eq(scale.clipped | correction.clipped),
+                status.flags.clipped.eq(scale.clipped | correction.clipped),
             ]
 
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
 
-        # --- vector queue -------------------------------------------------------------------
-        if "vector" in self.modes:
-            # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when
-            # the queue is full, and the refusal is counted.
-            m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
-                                                          depth=VECTOR_QUEUE_DEPTH)
-            m.d.comb += [
-                queue.w_en.eq(regs.vec_op_push),
-                queue.w_data.eq(Cat(decoder.bus.write_data[0], regs.vec_x, regs.vec_y)),
-                regs.vec_op_ready.eq(queue.w_rdy),
-                vector.commands.valid.eq(queue.r_rdy),
-                vector.commands.payload.eq(queue.r_data),
-                queue.r_en.eq(vector.commands.ready),
-                regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
-                regs.status[STATUS_BITS["vector_busy"]].eq(vector.busy),
-            ]
-            counters = (("vec_rejected", decoder.write_refused &
-                         (decoder.bus.address == BY_NAME["vec_op"].address)),
-                        ("vec_underruns", vector.underrun), ("vec_stalls", vector.stall))
-            for name, event in counters:
-                count = Signal(16, name=name)
-                with m.If(event & (count != 0xFFFF)):
-                    m.d.sync += count.eq(count + 1)
-                m.d.comb += getattr(regs, name).eq(count)
-
         # --- laser --------------------------------------------------------------------------
         # A build without the laser controller (the smallest boards) leaves the laser pins
         # low: nothing can switch a laser on.
         if self.laser:
-            self._elaborate_laser(m, decoder, regs, phy, sources)
-
-        # --- status -------------------------------------------------------------------------
-        clipped_since_read = Signal()
-        with m.If(clipped):
-            m.d.sync += clipped_since_read.eq(1)
-        with m.Elif(decoder.status_read):
-            m.d.sync += clipped_since_read.eq(0)
-        m.d.comb += [
-            regs.status[STATUS_BITS["running"]].eq(running),
-            regs.status[STATUS_BITS["clipped"]].eq(clipped_since_read),
-            regs.status[STATUS_BITS["interlock_open"]].eq(self.interlock_open),
-            regs.errors.eq(decoder.errors),
-        ]
+            self._elaborate_laser(m, decoder, regs, phy, sources, select, status)
         return m
 
-    def _elaborate_laser(self, m, decoder, regs, phy, sources):
-        """The laser controller, its marking signal, pulse counter and status bits."""
+    def _elaborate_vector_queue(self, m, decoder, regs, vector, status):
+        """The queue between the ``vec_op`` register and the vector sequencer."""
+        # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
+        # queue is full, and the refusal is counted.
+        m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
+                                                      depth=VECTOR_QUEUE_DEPTH)
+        command = Signal(VectorCommand)
+        m.d.comb += [
+            command.op.eq(decoder.bus.write_data[0]),
+            command.x.eq(regs.vec_x),
+            command.y.eq(regs.vec_y),
+            queue.w_stream.payload.eq(command),
+            queue.w_stream.valid.eq(regs.vec_op_push),
+            regs.vec_op_ready.eq(queue.w_stream.ready),
+            regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
+            status.flags.vector_busy.eq(vector.busy),
+            status.events.vec_rejected.eq(
+                decoder.write_refused & (decoder.bus.address == self.regmap["vec_op"].address)),
+            status.events.vec_underruns.eq(vector.underrun),
+            status.events.vec_stalls.eq(vector.stall),
+        ]
+        connect(m, queue.r_stream, vector.commands)
+
+    def _elaborate_laser(self, m, decoder, regs, phy, sources, select, status):
+        """The laser controller, its marking signal, pulse counter and status flags."""
         # Pulse-synchronous sources count the PRR clock ahead by the two frames a point takes
         # to reach the head (into the scale stage's buffer, then onto the wires), plus the
         # clock modulation takes to follow `marking`.
-        frame_clocks = FRAME_BITS * clocks_per_bit(self.clk_freq, self.bit_rate)
-        lookahead = 2 * frame_clocks + 1 if "vector" in self.modes else 0
+        frame_clocks = FRAME_BITS * self.clocking.clocks_per_bit
+        lookahead = 2 * frame_clocks + 1 if Mode.VECTOR in sources else 0
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
                                                      mo_lead=self.mo_lead, lookahead=lookahead)
         # The watchdog hears of an accepted frame a clock later: that takes the decoder's
         # checks off the path into the laser's timers (the longest path otherwise).
         command_seen = Signal()
         m.d.sync += command_seen.eq(decoder.accepted)
+        selected = dict(zip(sources, select.selected))
         marking = Signal()
-        if "spiral" in self.modes:
+        if Mode.SPIRAL in sources:
             # Spiral: marking while it runs, from its first point on (not while parked).
             spiral_marking = Signal()
-            spiral = sources["spiral"]
+            spiral = sources[Mode.SPIRAL]
             with m.If(~spiral.run):
                 m.d.sync += spiral_marking.eq(0)
             with m.Elif(spiral.points.valid & spiral.points.ready):
                 m.d.sync += spiral_marking.eq(1)
-            with m.If(regs.mode == MODES["spiral"]):
+            with m.If(selected[Mode.SPIRAL]):
                 m.d.comb += marking.eq(spiral_marking)
-        if "vector" in self.modes:
-            m.d.comb += sources["vector"].pulse_ahead.eq(laser.pulse_ahead)
+        if Mode.VECTOR in sources:
+            m.d.comb += sources[Mode.VECTOR].pulse_ahead.eq(laser.pulse_ahead)
         # Raster and vector: each frame's laser decision, from the moment that frame has been
         # sent: two frame strobes after it was made.
-        framed = [sources[name] for name in ("raster", "vector") if name in sources]
+        framed = [mode for mode in (Mode.RASTER, Mode.VECTOR) if mode in sources]
         if framed:
             decided = Signal()
             frame_marking = Signal()
             with m.If(phy.frame_strobe):
                 m.d.sync += [
-                    decided.eq(Cat((regs.mode == MODES[name]) & sources[name].laser
-                                   for name in ("raster", "vector") if name in sources).any()),
+                    decided.eq(Cat(selected[mode] & sources[mode].laser for mode in framed).any()),
                     frame_marking.eq(decided),
                 ]
-            with m.If(regs.mode != MODES["spiral"]):
+            with m.If(select.mode != Mode.SPIRAL):
                 m.d.comb += marking.eq(frame_marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),
@@ -439,15 +371,11 @@ class GalvoScanTop(wiring.Component):
         ]
         for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr"):
             m.d.comb += getattr(self, name).eq(getattr(laser, name))
-        pulses = Signal(16)
-        with m.If(laser.pulse):
-            m.d.sync += pulses.eq(pulses + 1)
         m.d.comb += [
-            regs.pulses.eq(pulses),
-            regs.status[STATUS_BITS["armed"]].eq(regs.arm),
-            regs.status[STATUS_BITS["fault_interlock"]].eq(laser.faults[FAULT_BITS["interlock"]]),
-            regs.status[STATUS_BITS["fault_watchdog"]].eq(laser.faults[FAULT_BITS["watchdog"]]),
-            regs.status[STATUS_BITS["mo_on"]].eq(laser.laser_mo),
-            regs.status[STATUS_BITS["emitting"]].eq(laser.laser_am),
+            status.events.pulses.eq(laser.pulse),
+            status.flags.armed.eq(regs.arm),
+            status.flags.fault_interlock.eq(laser.faults.interlock),
+            status.flags.fault_watchdog.eq(laser.faults.watchdog),
+            status.flags.mo_on.eq(laser.laser_mo),
+            status.flags.emitting.eq(laser.laser_am),
         ]
-

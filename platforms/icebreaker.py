@@ -51,7 +51,7 @@ from amaranth.hdl import ClockDomain, Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
-from ..gateware.phy.xy2_100 import clocks_per_bit
+from ..gateware.clocking import check_clocks
 from ..gateware.top import GalvoScanTop
 from .pll import ICE40PLL, pll_settings
 
@@ -106,12 +106,13 @@ def icebreaker_platform():
 def system_clock(clock, bit_rate):
     """``(clk_freq, pll_settings or None)`` for a requested system clock (None: the crystal).
 
-    Raises ``ValueError`` if the PLL cannot make ``clock`` or the XY2 bit rate does not divide
-    it by an even integer; called before anything is built, so the error comes first.
+    Raises ``ValueError`` if the PLL cannot make ``clock`` or
+    :func:`~galvoscan.gateware.clocking.check_clocks` refuses it (the XY2 bit rate or the
+    UART baud rate); called before anything is built, so the error comes first.
     """
     pll = None if clock is None else pll_settings(CRYSTAL_HZ, clock)
     clk_freq = CRYSTAL_HZ if clock is None else clock
-    clocks_per_bit(clk_freq, bit_rate)
+    check_clocks(clk_freq, bit_rate)
     return clk_freq, pll
 
 

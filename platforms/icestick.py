@@ -29,7 +29,7 @@ from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icestick import ICEStickPlatform
 
-from ..gateware.phy.xy2_100 import clocks_per_bit
+from ..gateware.clocking import check_clocks
 from ..gateware.top import GalvoScanTop
 from .icebreaker import XY2_PMOD_PINS
 
@@ -62,7 +62,7 @@ def icestick_clock(clock, bit_rate):
     timing to spare for one and no use for one)."""
     if clock not in (None, ICESTICK_CRYSTAL_HZ):
         raise ValueError("the iCEstick build runs on its 12 MHz oscillator only")
-    clocks_per_bit(ICESTICK_CRYSTAL_HZ, bit_rate)
+    check_clocks(ICESTICK_CRYSTAL_HZ, bit_rate)
     return ICESTICK_CRYSTAL_HZ, None
 
 

@@ -230,3 +230,41 @@ def test_fuzzed_commands_never_emit_unsafely(steps):
         if am:
             assert mo and mo_on_for >= lead_clocks, "modulation before the MO lead"
         mo_on_for = mo_on_for + 1 if mo else 0
+
+
+def test_status_block_counts_and_latches():
+    """Saturating counters stop at 65535, wrapping ones go round, and a sticky flag stays set
+    until status is read."""
+    from amaranth.sim import Simulator
+    from galvoscan.gateware.host.status import StatusBlock
+
+    with pytest.raises(ValueError, match="distinct identifiers"):
+        StatusBlock(saturating=["a"], wrapping=["a"])
+    block = StatusBlock(saturating=["stops"], wrapping=["wraps"])
+
+    async def testbench(ctx):
+        ctx.set(block.counts.stops, 65534)      # not reachable from reset in a test's time
+        ctx.set(block.counts.wraps, 65535)
+        ctx.set(block.events.stops, 1)
+        ctx.set(block.events.wraps, 1)
+        await ctx.tick()
+        assert (ctx.get(block.counts.stops), ctx.get(block.counts.wraps)) == (65535, 0)
+        await ctx.tick()
+        assert (ctx.get(block.counts.stops), ctx.get(block.counts.wraps)) == (65535, 1)
+        ctx.set(block.events.stops, 0)
+        ctx.set(block.events.wraps, 0)
+        ctx.set(block.flags.clipped, 1)
+        ctx.set(block.flags.armed, 1)
+        assert ctx.get(block.status.armed) == 1           # a state: as it is now
+        await ctx.tick()
+        ctx.set(block.flags.clipped, 0)
+        await ctx.tick()
+        assert ctx.get(block.status.clipped) == 1         # an event: until status is read
+        ctx.set(block.status_read, 1)
+        await ctx.tick()
+        assert ctx.get(block.status.clipped) == 0
+
+    sim = Simulator(block)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()

@@ -134,3 +134,22 @@ def test_board_clock_ratio_gives_the_same_frames():
 def test_stopped_scanner_stays_parked():
     table, settings = SpiralTable(), ScanSettings(run=False)
     assert replay(table, settings, 20) == [PARK] * (PARK_FRAMES + 60)
+
+
+def test_top_with_a_512_point_table():
+    """A top built for a 512-point table takes the table's whole address range (the register
+    map's ranges come from the build) and its wires carry the model's spiral."""
+    table = SpiralTable(points=512)
+    settings = ScanSettings(dwell=1, x_range=(0, 511), y_range=(1, 510))
+    top = GalvoScanTop(clk_freq=4e6, table=table, settings=settings)
+    assert top.regmap["x_last"].high == 511 and top.regmap["y_last"].reset == 510
+    assert replay(table, settings, 40) == expected(table, settings, 40)
+
+
+def test_source_select_checks_its_modes():
+    from galvoscan.gateware.host.regmap import Mode
+    from galvoscan.gateware.sources.select import SourceSelect
+    assert len(SourceSelect([Mode.SPIRAL, Mode.VECTOR]).sources) == 2
+    for modes in ([], [Mode.SPIRAL, Mode.SPIRAL], ["spiral"]):
+        with pytest.raises(ValueError, match="modes must be distinct Mode members"):
+            SourceSelect(modes)

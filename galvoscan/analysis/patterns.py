@@ -14,16 +14,14 @@ import math
 
 import numpy as np
 
+from ..gateware.field.scale import AMP_ONE
+from ..gateware.host.regmap import BY_NAME
 from ..gateware.sources.spiral_table import SpiralTable
 from .galvo import FRAME_PERIOD, FULL_RANGE
 
 
 __all__ = ["ScanHead", "Frames", "spiral_frames", "spiral_amplitude", "spiral_dwell_for_speed",
            "raster_frames"]
-
-
-#: Q1.15 amplitude that makes the table's full swing reach the field edge.
-AMP_ONE = 32768
 
 
 class ScanHead:
@@ -86,11 +84,13 @@ class Frames:
 
 
 def _scaled(offsets, amp, centre):
-    # The gateware's scale stage: centre + floor(offset × amp / 32768), saturated to 16 bits.
+    # The gateware's scale stage: centre + floor(offset × amp / AMP_ONE), saturated to 16 bits.
     return np.clip(centre + (np.asarray(offsets, np.int64) * amp) // AMP_ONE, 0, FULL_RANGE - 1)
 
 
-def spiral_frames(table, *, dwell=3, amp=(AMP_ONE, AMP_ONE), centre=(32768, 32768),
+def spiral_frames(table, *, dwell=BY_NAME["dwell"].reset,
+                  amp=(BY_NAME["amp_x"].reset, BY_NAME["amp_y"].reset),
+                  centre=(BY_NAME["center_x"].reset, BY_NAME["center_y"].reset),
                   x_range=None, y_range=None, count=None):
     """The spiral sequencer's frames after the scale stage, from its first point.
 
@@ -114,8 +114,9 @@ def spiral_frames(table, *, dwell=3, amp=(AMP_ONE, AMP_ONE), centre=(32768, 3276
     for name, (first, last) in (("x_range", x_range), ("y_range", y_range)):
         if not 0 <= first <= last < n:
             raise ValueError(f"{name} must be (first, last) with 0 <= first <= last < {n}")
-    if not isinstance(dwell, int) or not 1 <= dwell <= 0xFFFF:
-        raise ValueError(f"dwell must be an integer from 1 to 65535 frames, not {dwell!r}")
+    low, high = BY_NAME["dwell"].low, BY_NAME["dwell"].high
+    if not isinstance(dwell, int) or not low <= dwell <= high:
+        raise ValueError(f"dwell must be an integer from {low} to {high} frames, not {dwell!r}")
     x_len = x_range[1] - x_range[0] + 1
     y_len = y_range[1] - y_range[0] + 1
     if count is None:
@@ -129,7 +130,7 @@ def spiral_frames(table, *, dwell=3, amp=(AMP_ONE, AMP_ONE), centre=(32768, 3276
 def spiral_amplitude(width_mm, head):
     """The Q1.15 amplitude whose pattern spans ``width_mm`` on ``head``'s field."""
     amp = round(head.units(width_mm) / 2 * AMP_ONE / 32767)
-    if not 0 <= amp <= 0xFFFF:
+    if not BY_NAME["amp_x"].low <= amp <= BY_NAME["amp_x"].high:
         raise ValueError(f"a {width_mm:g} mm wide pattern does not fit a {head.field_mm:g} mm "
                          f"field")
     return amp

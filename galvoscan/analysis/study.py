@@ -10,6 +10,7 @@ Every run uses the same rules, so numbers compare:
   100 kHz).
 """
 
+from ..gateware.points import FIELD_CENTRE
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser, Region
 from .galvo import FRAME_PERIOD, GalvoModel
@@ -72,7 +73,7 @@ class Setup:
         self.target_dose_j_cm2 = float(target_dose_j_cm2)
 
     def region(self, field_mm):
-        centre = float(self.head.mm(32768))
+        centre = float(self.head.mm(FIELD_CENTRE))
         return Region((centre, centre), field_mm)
 
 
@@ -108,7 +109,7 @@ def run_raster(setup, *, field_mm=DEFAULT_FIELD_MM, bidirectional=True, turn_gat
     _check_field(field_mm, setup.head)
     head = setup.head
     size = tuple(int(round(float(head.units(s)))) for s in field_mm)
-    corner = tuple(32768 - s // 2 for s in size)
+    corner = tuple(FIELD_CENTRE - s // 2 for s in size)
     step = max(1, int(round(float(head.units(setup.speed_m_s * FRAME_PERIOD * 1e3)))))
     spacing = max(1, int(round(float(head.units(setup.line_spacing_mm)))))
     frames = raster_frames(corner=corner, size=size, spacing=spacing, step=step,

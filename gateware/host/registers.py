@@ -4,7 +4,7 @@ from amaranth.hdl import Cat, Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from .regmap import BY_NAME, REGISTERS
+from .regmap import RegisterMap, register_map
 
 
 __all__ = ["RegisterBus", "RegisterFile"]
@@ -39,63 +39,43 @@ class RegisterBus(wiring.Signature):
 
 
 class RegisterFile(wiring.Component):
-    """Every register of :data:`~.regmap.REGISTERS`.
+    """Every register of one build's :class:`~.regmap.RegisterMap`.
 
     Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
     on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
     ``errors``) that the bus reads; a strobe register is an output that is high for one clock
-    after 1 is written to it (the clock after the write), and reads 0; a queue register is an output holding the last value
-    written, with ``<name>_push`` high for one clock per accepted write and ``<name>_ready``
-    (an input) refusing writes while low.
+    after 1 is written to it (the clock after the write), and reads 0; a queue register is an
+    output holding the last value written, with ``<name>_push`` high for one clock per accepted
+    write and ``<name>_ready`` (an input) refusing writes while low.
+
+    A write is taken only if its value lies in the register's range (and, for a register with
+    choices, such as ``mode``, is one of them); registers the map leaves out are unknown
+    addresses.
 
     Parameters
     ----------
-    resets : dict of str to int
-        Reset values that differ from the map's (the scan settings a build starts with).
-    choices : dict of str to set of int
-        Registers that take only some values of their range (the scan modes a build has).
-    leave_out : iterable of str
-        Registers this build does not have (those of scan modes left out): their addresses
-        are unknown, so frames for them are refused and counted.
-    highs : dict of str to int
-        Upper limits tighter than the map's (the table size bounds the address ranges).
+    regmap : :class:`~.regmap.RegisterMap`
+        The build's registers, ranges, resets and choices (default: :func:`~.regmap.register_map`
+        with its defaults).
     """
 
-    def __init__(self, *, resets=None, highs=None, choices=None, leave_out=()):
-        self.resets = {r.name: r.reset for r in REGISTERS}
-        self.highs = {r.name: r.high for r in REGISTERS}
-        for name, value in (resets or {}).items():
-            if name not in self.resets:
-                raise ValueError(f"no register named {name!r}")
-            reg = BY_NAME[name]
-            if reg.access != "rw" or not reg.low <= value <= reg.high:
-                raise ValueError(f"reset value {value!r} of {name} is outside {reg.low}…{reg.high}")
-            self.resets[name] = value
-        for name, value in (highs or {}).items():
-            if name not in self.highs:
-                raise ValueError(f"no register named {name!r}")
-            self.highs[name] = min(self.highs[name], value)
-        self.choices = {}
-        for name, values in (choices or {}).items():
-            if name not in self.highs:
-                raise ValueError(f"no register named {name!r}")
-            values = sorted(set(values))
-            if not values or not all(BY_NAME[name].low <= v <= self.highs[name] for v in values):
-                raise ValueError(f"choices for {name} must lie in its range, not {values!r}")
-            self.choices[name] = values
-        for name in leave_out:
-            if name not in BY_NAME:
-                raise ValueError(f"no register named {name!r}")
-        #: The registers this build has.
-        self.registers = [r for r in REGISTERS if r.name not in set(leave_out)]
+    def __init__(self, regmap=None):
+        regmap = register_map() if regmap is None else regmap
+        if not isinstance(regmap, RegisterMap):
+            raise TypeError(f"regmap must be a RegisterMap, not {regmap!r}")
+        for name in regmap.choices:
+            if name not in regmap:
+                raise ValueError(f"choices for {name!r}, which the map does not have")
+        #: The build's map.
+        self.regmap = regmap
         members = {"bus": In(RegisterBus())}
-        for reg in self.registers:
+        for reg in regmap:
             if reg.access == "rw":
-                members[reg.name] = Out(reg.width, init=self.resets[reg.name])
+                members[reg.name] = Out(reg.width, init=reg.reset)
             elif reg.access == "strobe":
                 members[reg.name] = Out(reg.width)
             elif reg.access == "queue":
-                members[reg.name] = Out(reg.width, init=self.resets[reg.name])
+                members[reg.name] = Out(reg.width, init=reg.reset)
                 members[f"{reg.name}_push"] = Out(1)
                 members[f"{reg.name}_ready"] = In(1)
             else:
@@ -105,11 +85,11 @@ class RegisterFile(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         bus = self.bus
-        for reg in self.registers:
+        for reg in self.regmap:
             if reg.access == "strobe":
                 m.d.sync += getattr(self, reg.name).eq(0)     # a pulse, unless written below
         with m.Switch(bus.address):
-            for reg in self.registers:
+            for reg in self.regmap:
                 with m.Case(reg.address):
                     value = getattr(self, reg.name)
                     m.d.comb += bus.read_ok.eq(1)
@@ -122,11 +102,10 @@ class RegisterFile(wiring.Component):
                     else:
                         m.d.comb += bus.read_data.eq(value)
                     if reg.access in ("rw", "queue"):
-                        in_range = (bus.write_data >= reg.low) & \
-                                   (bus.write_data <= self.highs[reg.name])
-                        if reg.name in self.choices:
+                        in_range = (bus.write_data >= reg.low) & (bus.write_data <= reg.high)
+                        if reg.name in self.regmap.choices:
                             in_range &= Cat(bus.write_data == v
-                                            for v in self.choices[reg.name]).any()
+                                            for v in self.regmap.choices[reg.name]).any()
                         if reg.access == "queue":
                             # A full queue refuses the write: nothing is lost silently.
                             in_range &= getattr(self, f"{reg.name}_ready")

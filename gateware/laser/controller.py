@@ -4,19 +4,20 @@
 import math
 
 from amaranth.hdl import Module, Signal
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 
-__all__ = ["LaserController", "PRR_UNIT_HZ", "PRR_RANGE", "FAULT_BITS", "clocks_at_least"]
+__all__ = ["LaserController", "PRR_UNIT_HZ", "Faults", "clocks_at_least"]
 
 
 #: The ``laser_prr`` register counts in steps of this many hertz.
 PRR_UNIT_HZ = 100
-#: Legal ``laser_prr`` values: 20 kHz … 200 kHz.
-PRR_RANGE = (200, 2000)
-#: Bits of :attr:`LaserController.faults`.
-FAULT_BITS = {"interlock": 0, "watchdog": 1}
+#: Latched fault causes (:attr:`LaserController.faults`), bit 0 first.
+Faults = data.StructLayout({
+    "interlock": 1,     # the interlock opened while armed
+    "watchdog": 1,      # no accepted command frame for the watchdog time while armed
+})
 
 # Phase accumulator width for the PRR clock.
 _PHASE_BITS = 28
@@ -80,8 +81,8 @@ class LaserController(wiring.Component):
         The interlock pin, asynchronous; 1 = open (unsafe).
     laser_power : ``Out(8)``, laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
         The DB25 signals (pins 1-8, 9, 18, 19, 20), for 5 V TTL buffers.
-    faults : ``Out(2)``
-        Latched fault causes (:data:`FAULT_BITS`).
+    faults : ``Out(Faults)``
+        Latched fault causes.
     mo_ready : ``Out(1)``
         MO has led long enough: modulation may follow ``marking``.
     pulse : ``Out(1)``
@@ -105,7 +106,7 @@ class LaserController(wiring.Component):
     laser_mo: Out(1)
     laser_am: Out(1)
     laser_prr: Out(1)
-    faults: Out(2)
+    faults: Out(Faults)
     mo_ready: Out(1)
     pulse: Out(1)
     pulse_ahead: Out(1)
@@ -145,23 +146,24 @@ class LaserController(wiring.Component):
         # --- faults -------------------------------------------------------------------------
         watchdog_fired = Signal()
         faults = self.faults
+        any_fault = faults.as_value().any()
         with m.If(self.fault_clear & ~interlock_open):
             m.d.sync += faults.eq(0)
         # Opening the interlock while disarmed (to load a part) is no fault: nothing can emit
         # then, and arming needs it closed.
         with m.If(interlock_open & self.arm):
-            m.d.sync += faults[FAULT_BITS["interlock"]].eq(1)
+            m.d.sync += faults.interlock.eq(1)
         with m.If(watchdog_fired):
-            m.d.sync += faults[FAULT_BITS["watchdog"]].eq(1)
+            m.d.sync += faults.watchdog.eq(1)
 
         # After a fault, arm must be seen low before the laser may start again.
         rearm_needed = Signal()
-        with m.If(faults.any() | interlock_open):
+        with m.If(any_fault | interlock_open):
             m.d.sync += rearm_needed.eq(1)
         with m.Elif(~self.arm):
             m.d.sync += rearm_needed.eq(0)
 
-        enabled = self.arm & ~faults.any() & ~interlock_open & ~rearm_needed
+        enabled = self.arm & ~any_fault & ~interlock_open & ~rearm_needed
 
         # --- watchdog -----------------------------------------------------------------------
         tick_ms = Signal(range(self.ms_clocks))
@@ -255,7 +257,7 @@ class LaserController(wiring.Component):
         # The interlock pin itself gates the outputs: off at once, whatever the registers say,
         # and kept off through the synchroniser until the latched fault takes over.
         safe = ~(self.interlock_open | interlock_meta | interlock_open |
-                 faults[FAULT_BITS["interlock"]])
+                 faults.interlock)
         m.d.comb += [
             self.laser_mo.eq(mo & safe),
             self.laser_am.eq(am & safe),

@@ -19,7 +19,14 @@ from statistics import NormalDist
 import math
 
 
-__all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE"]
+__all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE", "DEFAULT_POINTS",
+           "MIN_POINTS", "MAX_POINTS"]
+
+#: Samples per sine period: the paper's 128 by default; a multiple of 4 (the quarter-period
+#: symmetry) within these bounds (the ROM address registers are 12 bits at most).
+DEFAULT_POINTS = 128
+MIN_POINTS = 8
+MAX_POINTS = 4096
 
 
 #: Sampling kinds.
@@ -44,7 +51,8 @@ class SpiralTable:
     Parameters
     ----------
     points : int
-        Samples per sine period, a multiple of 4 from 8 to 4096. The paper uses 128.
+        Samples per sine period, a multiple of 4 from :data:`MIN_POINTS` to :data:`MAX_POINTS`.
+        The paper uses 128.
     sampling : str
         ``"gaussian"`` (the paper's choice) or ``"uniform"`` (equal phase steps).
     sigma : float
@@ -57,10 +65,11 @@ class SpiralTable:
         Signed 16-bit offsets from the field centre, ``±OFFSET_FULL_SCALE`` at the edges.
     """
 
-    def __init__(self, *, points=128, sampling="gaussian", sigma=DEFAULT_SIGMA):
+    def __init__(self, *, points=DEFAULT_POINTS, sampling="gaussian", sigma=DEFAULT_SIGMA):
         if not isinstance(points, int) or isinstance(points, bool) or \
-                points % 4 != 0 or not 8 <= points <= 4096:
-            raise ValueError(f"points must be a multiple of 4 from 8 to 4096, not {points!r}")
+                points % 4 != 0 or not MIN_POINTS <= points <= MAX_POINTS:
+            raise ValueError(f"points must be a multiple of 4 from {MIN_POINTS} to {MAX_POINTS}, "
+                             f"not {points!r}")
         if sampling not in SAMPLINGS:
             raise ValueError(f"sampling must be one of {', '.join(SAMPLINGS)}, not {sampling!r}")
         if not isinstance(sigma, (int, float)) or not math.isfinite(sigma) or \
