@@ -296,3 +296,34 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
     achieved = float(re.search(r"not met: ([\d.]+) MHz < 120 MHz", message).group(1))
     assert 5 < achieved < 120
     assert not list(tmp_path.glob("*.bin"))
+
+
+def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
+    """A 512-point table (the README's advice for coverage): its register ranges come from the
+    build's table, and the spiral from the simulated wires is the model's."""
+    code, out, _ = run(capsys, "regs", "--table-points", "512", "--json")
+    regs = {r["name"]: r for r in json.loads(out)}
+    assert code == 0
+    assert (regs["x_last"]["max"], regs["x_last"]["reset"]) == (511, 511)
+    assert (regs["y_first"]["reset"], regs["y_last"]["reset"]) == (1, 510)
+    assert regs["x_first"]["width"] == 9
+
+    csv_path = tmp_path / "spiral512.csv"
+    code, out, _ = run(capsys, "sim", "--points", "20", "--table-points", "512", "--json",
+                       "--csv", str(csv_path))
+    summary = json.loads(out)
+    assert code == 0 and summary["x_range"] == [0, 511] and summary["y_range"] == [1, 510]
+    rows = list(csv.DictReader(csv_path.read_text().splitlines()))
+    table = SpiralTable(points=512)
+    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"],
+                         x_range=(0, 511), y_range=(1, 510))
+    assert [(int(r["x"]), int(r["y"])) for r in rows] == want
+
+
+@pytest.mark.toolchain
+def test_build_with_a_512_point_table(tmp_path, capsys):
+    code, out, _ = run(capsys, "build", "--table-points", "512", "--build-dir", str(tmp_path),
+                       "--json")
+    report = json.loads(out)
+    assert code == 0 and report["meets_timing"]
+    assert Path(report["bitstream"]).stat().st_size > 100_000

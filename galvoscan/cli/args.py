@@ -124,16 +124,18 @@ def read_text(path, what="file"):
 # --- spiral tables -------------------------------------------------------------------------------
 
 def add_table_options(parser):
-    from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SAMPLINGS
+    from ..gateware.sources.spiral_table import (DEFAULT_POINTS, DEFAULT_SIGMA, MAX_POINTS,
+                                                 MIN_POINTS, SAMPLINGS)
     group = parser.add_argument_group("spiral tables")
     group.add_argument("--sampling", choices=SAMPLINGS, default="gaussian",
                        help="how one sine period is sampled (default: %(default)s)")
     group.add_argument("--sigma", type=sigma, default=DEFAULT_SIGMA,
                        help="width of the Gaussian sampling in half-swings "
                             "(default: %(default)s)")
-    group.add_argument("--table-points", type=int_in(8, 4096, "table points"), default=128,
-                       metavar="N", help="samples per sine period, a multiple of 4 "
-                                         "(default: %(default)s, as in the paper)")
+    group.add_argument("--table-points", type=int_in(MIN_POINTS, MAX_POINTS, "table points"),
+                       default=DEFAULT_POINTS, metavar="N",
+                       help=f"samples per sine period, a multiple of 4 from {MIN_POINTS} to "
+                            f"{MAX_POINTS} (default: %(default)s, as in the paper)")
 
 
 def table_from(args):
@@ -145,10 +147,14 @@ def table_from(args):
 
 
 def settings_from(args, table, **overrides):
-    """The scan settings a build or simulation starts with, for ``table``'s size: the paper's
-    ranges (X over the whole table, Y one short at each end) scaled to it."""
+    """The scan settings a build or simulation starts with, for ``table``'s size: the resets
+    its register map gives (the paper's ranges, X over the whole table, Y one short at each
+    end), the dwell if given."""
+    from ..gateware.host.regmap import register_map
     from ..gateware.top import ScanSettings
-    settings = dict(x_range=(0, table.points - 1), y_range=(1, table.points - 2))
+    regmap = register_map(table_points=table.points)
+    settings = dict(x_range=(regmap["x_first"].reset, regmap["x_last"].reset),
+                    y_range=(regmap["y_first"].reset, regmap["y_last"].reset))
     if getattr(args, "dwell", None) is not None:
         settings["dwell"] = args.dwell
     settings.update(overrides)

@@ -3,18 +3,19 @@ written and read over the serial port or SPI."""
 
 import json
 
-from .args import add_link_options, fail, open_link
+from .args import add_link_options, fail, int_in, open_link
 
 
 __all__ = ["add_parsers", "register_table"]
 
 
-def register_table():
-    """The register map as a Markdown table (``galvoscan regs``; the README carries it)."""
+def register_table(registers=None):
+    """The register map as a Markdown table (``galvoscan regs``; the README carries the host's
+    view, the default)."""
     from ..gateware.host.regmap import REGISTERS
     lines = ["| address | name | access | reset | range | unit | description |",
              "|---|---|---|---|---|---|---|"]
-    for r in REGISTERS:
+    for r in REGISTERS if registers is None else registers:
         span = f"{r.low}…{r.high}" if r.access in ("rw", "queue") else "—"
         lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {r.reset} | {span} | "
                      f"{r.unit} | {r.description} |")
@@ -22,11 +23,22 @@ def register_table():
 
 
 def _cmd_regs(args):
-    from ..gateware.host.regmap import REGISTERS
+    from ..gateware.host.regmap import REGISTERS, register_map
+    registers = REGISTERS
+    if args.table_points is not None or args.correction_nodes is not None:
+        # One build's map: its own ranges and resets (the board refuses anything else).
+        from ..gateware.host.regmap import DEFAULT_CORRECTION_NODES, DEFAULT_TABLE_POINTS
+        nodes = args.correction_nodes or DEFAULT_CORRECTION_NODES
+        try:
+            registers = list(register_map(
+                table_points=args.table_points or DEFAULT_TABLE_POINTS,
+                correction_nodes=None if nodes == "none" else int(nodes)))
+        except ValueError as error:
+            fail(error)
     if args.json:
-        print(json.dumps([r.as_dict() for r in REGISTERS], indent=2, ensure_ascii=False))
+        print(json.dumps([r.as_dict() for r in registers], indent=2, ensure_ascii=False))
     else:
-        print(register_table())
+        print(register_table(registers))
     return 0
 
 
@@ -96,11 +108,22 @@ def _cmd_read(args):
 
 
 def add_parsers(commands):
-    regs = commands.add_parser("regs", help="print the register map",
-                               description="The register map: addresses, access, reset "
-                                           "values, ranges and units.")
+    from ..gateware.field.correction_table import TABLE_SIZES
+    from ..gateware.sources.spiral_table import MAX_POINTS, MIN_POINTS
+    regs = commands.add_parser(
+        "regs", help="print the register map",
+        description="The register map: addresses, access, reset values, ranges and units. "
+                    "Without options, the host's view (ranges that depend on the build open to "
+                    "the largest build); with --table-points or --correction-nodes, the map of "
+                    "that build, as its board checks writes.")
     regs.add_argument("--json", action="store_true",
                       help="[{name, address, width, access, reset, min, max, unit, description}]")
+    regs.add_argument("--table-points", type=int_in(MIN_POINTS, MAX_POINTS, "table points"),
+                      default=None, metavar="N",
+                      help="the build's spiral table size (as `build --table-points`)")
+    regs.add_argument("--correction-nodes", choices=[*map(str, TABLE_SIZES), "none"],
+                      default=None, metavar="N",
+                      help="the build's correction table nodes per axis, or none (default 17)")
     regs.set_defaults(run=_cmd_regs)
 
     encode = commands.add_parser(

@@ -13,7 +13,7 @@ import contextlib
 from amaranth.sim import Simulator
 
 from ..client import encode_read, encode_write
-from ..gateware.host.regmap import BY_NAME, STATUS_BITS
+from ..gateware.host.regmap import BY_NAME, Status
 from ..gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
 from ..job import OPS
 from .link import Timed, spi_transfer
@@ -116,8 +116,7 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
                 await ctx.delay(mo_lead + 100e-6)
                 await write(ctx, "run", 1)
                 started = True
-        busy = 1 << STATUS_BITS["vector_busy"]
-        while await read(ctx, "status") & busy:
+        while Status.from_bits(await read(ctx, "status")).vector_busy:
             await ctx.delay(100e-6)
         await ctx.delay(50e-6)                   # the last frames reach the head
         rejected = await read(ctx, "vec_rejected")
