@@ -1,4 +1,5 @@
-"""The command path from the SPI pins to a register write, as properties (SPEC §1, §4)."""
+"""The command path from the SPI pins to a register write, as properties (Dai & Tang 2020's
+frame; galvoscan's bad-input rules, README "How it is checked")."""
 
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Signal

@@ -1,4 +1,5 @@
-"""Laser safety (SPEC §4), as properties of the DB25 pins."""
+"""Laser safety, as properties of the DB25 pins (galvoscan's safety rules, README "How it is
+checked")."""
 
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, ClockDomain, Cover, Elaboratable, Module, ResetSignal, Signal

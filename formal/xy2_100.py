@@ -1,8 +1,9 @@
-"""What an XY2-100 scan head needs from the transmitter, as properties (SPEC §2).
+"""What an XY2-100 scan head needs from the transmitter, as properties.
 
 The spec watches only what a scan head and a position source can see: the four wires and the
-position stream. Its monitor is written from the protocol description, not from the PHY, so a
-PHY that differs from the protocol anywhere fails the proof.
+position stream. Its monitor is written from the XY2-100 protocol (control bits, 001 by
+default; even parity; SYNC low on the parity bit), not from the PHY, so a PHY that differs
+from the protocol anywhere fails the proof.
 """
 
 from amaranth.asserts import AnySeq

@@ -1,6 +1,6 @@
 """galvoscan gateware: reusable Amaranth cores, independent of any board.
 
-Data flow (SPEC §3)::
+Data flow (README "What it does")::
 
     sources/ (spiral …) ──▶ field/ (scale, offset, saturation) ──▶ phy/ (XY2-100) ──▶ galvos
 

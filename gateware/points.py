@@ -5,7 +5,7 @@ Two coordinate systems flow through the design:
 * **Offsets** come out of the position sources: signed 16-bit, 0 is the field centre, ±32767
   is the full half-field. They are dimensionless until scaled.
 * **Field positions** go into the XY2-100 PHY: unsigned 16-bit galvo units, offset binary as
-  on the wire, 32768 is the field centre (SPEC §2). On a 110 mm field one unit is ≈ 1.68 µm.
+  on the wire, 32768 is the field centre. On a 110 mm field one unit is ≈ 1.68 µm.
 """
 
 from amaranth.hdl import signed, unsigned

@@ -1,4 +1,4 @@
-"""The galvoscan system, independent of any board (SPEC §3).
+"""The galvoscan system, independent of any board (README "What it does").
 
 Its ports are plain one-bit wires with fixed names, so the exported Verilog drops into other
 designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_clk``,

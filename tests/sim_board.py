@@ -1,7 +1,8 @@
 """The system top in the simulator, with a scan head on its XY2-100 wires and a host on its UART
-and SPI pins. The host side is bit-banged here from SPEC §1/§4 and standard 8N1 / SPI mode 0,
-independently of the gateware; the transports plug into the real :class:`HostClient`, so the
-bytes the client produces are the bytes on the simulated pins.
+and SPI pins. The host side is bit-banged here from the command frame (README "Controlling it
+from a host") and standard 8N1 / SPI mode 0, independently of the gateware; the transports
+plug into the real :class:`HostClient`, so the bytes the client produces are the bytes on the
+simulated pins.
 """
 
 from collections import deque

@@ -1,4 +1,5 @@
-"""A plain Python model of the spiral scanner, written from SPEC §1/§3 and not from the gateware.
+"""A plain Python model of the spiral scanner, written from Dai & Tang 2020 and README "What it
+does", not from the gateware.
 
 Given the two tables and the settings, it lists the positions a scan head receives, frame by
 frame from power-up.

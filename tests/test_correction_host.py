@@ -1,5 +1,5 @@
-"""Correction tables on the host: the 003 model, measured grids, lens files, the photo pipeline
-and ``galvoscan correct``."""
+"""Correction tables on the host: the f-theta model (Liao & Chen 2016), measured grids, lens
+files, the photo pipeline and ``galvoscan correct``."""
 
 import csv
 import json
@@ -22,7 +22,7 @@ from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.job import parse_job
 
 
-# --- 003: the f-theta model ----------------------------------------------------------------------
+# --- Liao & Chen 2016: the f-theta model ---------------------------------------------------------
 
 def test_table_1_exact_columns_match_the_paper():
     for row, paper in zip(ftheta.table_1_rows(), ftheta.TABLE_1):
@@ -66,9 +66,9 @@ def test_synthetic_head_has_004s_size_and_the_model_table_undoes_it():
     head = synthetic_head()
     before = residuals(head.land)
     assert before["before_max"] == pytest.approx(1400, abs=1)
-    assert 200 < before["before_mean"] < 300                  # 004: 259
+    assert 200 < before["before_mean"] < 300                  # Zhu & Zhang: 259
     # On the axes the f-theta lens is exact; at a corner X is pulled out (pincushion) and Y
-    # pulled in (barrel), as 003 and 004 describe.
+    # pulled in (barrel), as Liao & Chen and Zhu & Zhang describe.
     lx, ly = head.land(np.array([57768.0, 57768.0]), np.array([32768.0, 57768.0]))
     assert abs(lx[0] - 57768) < 1e-6 and abs(ly[0] - 32768) < 1e-6
     assert lx[1] - 57768 > 500 and ly[1] - 57768 < -1000
@@ -77,7 +77,8 @@ def test_synthetic_head_has_004s_size_and_the_model_table_undoes_it():
     finer = residuals(head.land, ftheta_table(65, field_mm=head.field_mm))
     assert finer["after_mean"] < exact["after_mean"]
     poly = residuals(head.land, ftheta_table(17, field_mm=head.field_mm, method="polynomial"))
-    # 003's polynomial is fitted to a 300 mm lens over ±150 mm: on this 302 mm field, close.
+    # Liao & Chen's polynomial is fitted to a 300 mm lens over ±150 mm: on this 302 mm field,
+    # close.
     assert poly["removed"] > 0.9
 
 
@@ -93,7 +94,7 @@ def test_model_table_rejects_bad_parameters(kwargs, message):
         ftheta_table(17, **kwargs)
 
 
-# --- 004: tables from measured points -------------------------------------------------------------
+# --- Zhu & Zhang: tables from measured points ----------------------------------------------------
 
 def test_affine_error_is_removed_exactly_by_a_3x3_bilinear_table():
     """A head that scales, shears and shifts: bilinear interpolation represents it exactly, so
@@ -121,7 +122,7 @@ def test_denser_grids_and_fits_help_on_the_synthetic_head():
             table = table_from_measurement(cx, cy, mx, my, method=method)
             means[grid, method] = residuals(head.land, table)["after_mean"]
     assert means[3, "bilinear"] > means[5, "bilinear"] > means[11, "bilinear"]
-    assert means[11, "bilinear"] < 36.5                     # 004's result after correction
+    assert means[11, "bilinear"] < 36.5                     # Zhu & Zhang's result after correction
     # On this smooth (f-theta) distortion a cubic fit beats piecewise-bilinear at every size.
     assert all(means[g, "polynomial"] < means[g, "bilinear"] for g in GRID_SIZES)
 

@@ -1,5 +1,5 @@
 """Random, truncated, corrupted and misaligned command streams (hypothesis) against a model of
-the command rules written here from SPEC §4: no register changes except by a valid frame, every
+the command rules written here: no register changes except by a valid frame, every
 rejected frame is counted, and the next valid frame after any garbage is accepted."""
 
 from hypothesis import HealthCheck, given, settings, strategies as st

@@ -106,7 +106,7 @@ def test_client_refuses_what_the_board_would_reject():
 
 
 def test_encoding_is_the_documented_frame():
-    # Address, data high, data low, 0x64: written out by hand from SPEC §1.
+    # Address, data high, data low, 0x64: written out by hand from Dai & Tang 2020's frame.
     assert encode_write("dwell", 0x1234) == bytes([BY_NAME["dwell"].address, 0x12, 0x34, 0x64])
     assert encode_read("errors") == bytes([0x80 | BY_NAME["errors"].address, 0, 0, 0x64])
 

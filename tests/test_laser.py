@@ -1,7 +1,7 @@
 # amaranth: UnusedElaboratable=no
 # (parameter checks build components without elaborating them)
-"""The laser controller on its pins: the 003 sequence, PRR accuracy, interlock, watchdog, and
-fuzzed command streams with the interlock toggling, checked on every clock."""
+"""The laser controller on its pins: Liao & Chen 2016's sequence, PRR accuracy, interlock,
+watchdog, and fuzzed command streams with the interlock toggling, checked on every clock."""
 
 import pytest
 from amaranth.sim import Simulator
@@ -134,7 +134,7 @@ def test_spiral_and_laser_from_host_commands():
     board.run_for(6e-3)
     assert status_bits(client, "mo_on", "emitting", "running") == \
         {"mo_on": True, "emitting": True, "running": True}
-    # The 003 sequence on the system's pins: power, latch pulse, MO, 5 ms, modulation.
+    # Liao & Chen's sequence on the system's pins: power, latch pulse, MO, 5 ms, modulation.
     run = board.laser_pins[start:]
     power_set = next(i for i, p in enumerate(run) if p[5] == 128)
     latch_up = next(i for i, p in enumerate(run) if p[4])

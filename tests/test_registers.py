@@ -1,8 +1,8 @@
 # amaranth: UnusedElaboratable=no
 # (parameter checks build register files without elaborating them)
 """The register file alone, driven through its register bus as the command decoder drives it,
-against a model written here from SPEC §4 (the access kinds) and a register table typed out
-here, not made from the map's code."""
+against a model of galvoscan's register rules written here (the access kinds) and a register
+table typed out here, not made from the map's code."""
 
 import pytest
 from amaranth.sim import Simulator
@@ -89,7 +89,7 @@ def table(*, without=(), changes=None):
 
 
 class RegisterModel:
-    """What SPEC §4 says a register file does with one access.
+    """What galvoscan's rules say a register file does with one access.
 
     A write is taken if the register exists, is not read-only, and the value is in range (and,
     for ``mode``, a mode built); a queue write also needs room. ``rw`` and ``queue`` registers

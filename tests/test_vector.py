@@ -2,7 +2,7 @@
 # (the parameter checks build tops that are never elaborated)
 
 """Vector mode (issue 6): the points decoded from the XY2-100 wires against plain Python models
-written from SPEC §1 (001's DDA) and §3, and the laser pulses on every point counted on the DB25
+written from Wan et al. 2018's DDA, and the laser pulses on every point counted on the DB25
 pins. (Raster mode: tests/test_raster.py.)"""
 
 import bisect
@@ -113,7 +113,8 @@ def test_each_point_gets_exactly_n_pulses_at_the_board_clock():
 
 @pytest.mark.parametrize("prr_100hz, speed", [(600, 6.0), (300, 3.0)])
 def test_line_speed_of_the_001_table(prr_100hz, speed):
-    """001: 0.1 mm pitch (60 units on a 110 mm field), N = 1: 6 m/s at 60 kHz, 3 m/s at 30."""
+    """Wan et al. 2018: 0.1 mm pitch (60 units on a 110 mm field), N = 1: 6 m/s at 60 kHz,
+    3 m/s at 30."""
     job = [("jump", 20000, 30000), ("mark", 26000, 30000)]     # 100 points, 10 mm
     board, client, expected = run_job(job, prr_100hz=prr_100hz)
     frames = board.xy2_frames()

@@ -51,8 +51,9 @@ def test_xy2_200_ratio():
 
 # --- the paper's figure 7 -------------------------------------------------------------------------
 
-# X = 136 = 0x0088 and Y = 264 = 0x0108, written out by hand from SPEC §2: control bits, 16 data
-# bits MSB first, then a parity bit that makes the count of ones even (three ones so far → 1).
+# X = 136 = 0x0088 and Y = 264 = 0x0108, written out by hand from the XY2-100 protocol: control
+# bits, 16 data bits MSB first, then a parity bit that makes the count of ones even (three ones
+# so far → 1).
 FIG7_X = "001" + "0000000010001000" + "1"
 FIG7_Y = "001" + "0000000100001000" + "1"
 # The paper's own control bits 000: two ones in the data → parity 0.

@@ -1,4 +1,4 @@
-"""A plain Python model of vector marking, written from SPEC §1 "Line marking (001)" and §3,
+"""A plain Python model of vector marking, written from Wan et al. 2018's line marking,
 with exact decimal arithmetic (not the gateware's fixed point)."""
 
 from decimal import Decimal, ROUND_FLOOR, localcontext
@@ -8,14 +8,14 @@ from decimal import Decimal, ROUND_FLOOR, localcontext
 PARK = (32768, 32768)
 
 
-# --- the model, from SPEC §1 "Line marking (001)" ----------------------------------------------
+# --- the model, from Wan et al. 2018 -----------------------------------------------------------
 
 def half_up(value):
     return int((value + Decimal("0.5")).to_integral_value(rounding=ROUND_FLOOR))
 
 
 def dda(start, end, pitch):
-    """001's DDA: step the major axis by p/√(1+m²), the minor by m times that, round each
+    """Wan et al.'s DDA: step the major axis by p/√(1+m²), the minor by m times that, round each
     coordinate; stop before the end and finish on it exactly. Nothing for zero length."""
     (x0, y0), (x1, y1) = start, end
     dx, dy = x1 - x0, y1 - y0

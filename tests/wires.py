@@ -1,4 +1,5 @@
-"""Test-side XY2-100 reader, written from SPEC §2 and independent of the gateware and the CLI.
+"""Test-side XY2-100 reader, written from the XY2-100 protocol as scan heads read it,
+independent of the gateware and the CLI.
 
 A simulation testbench records every system clock's wire levels (or just the falling-edge
 samples); the functions here turn those recordings into frames and check the protocol's timing.

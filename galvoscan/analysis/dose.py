@@ -57,12 +57,12 @@ class Laser:
     Parameters
     ----------
     power_w : float
-        Average power, W (000: 50 W).
+        Average power, W (Dai & Tang 2020: 50 W).
     prr_hz : float
-        Pulse repetition rate, Hz (000: 100 kHz).
+        Pulse repetition rate, Hz (Dai & Tang 2020: 100 kHz).
     spot_mm : float
         Spot 1/e² diameter on the work piece, mm. Default 0.05 mm: a 7 mm, M² 1.5 beam at
-        1064 nm through 000's f = 160 mm lens.
+        1064 nm through Dai & Tang's f = 160 mm lens.
     """
 
     def __init__(self, *, power_w=50.0, prr_hz=100e3, spot_mm=0.05):

@@ -1,4 +1,4 @@
-"""A model of a galvo mirror following XY2-100 frames (SPEC §1, 001's JD1403 galvo).
+"""A model of a galvo mirror following XY2-100 frames (the JD1403 galvo of Wan et al. 2018).
 
 A scan head's servo does not jump to each commanded position. Two things shape the path the spot
 really takes:
@@ -11,8 +11,8 @@ really takes:
 Here the commanded position first passes a rate limiter (at most ``v_max`` galvo units per second)
 and then the second-order filter with natural frequency ``omega_n``. Both numbers are set from two
 small-step response times, as galvo data sheets give them: a step of 1 % of the range settles in
-0.3 ms and a step of 10 % in 0.7 ms (001). "Settled" means within :data:`SETTLE_BAND` of the step
-size for good.
+0.3 ms and a step of 10 % in 0.7 ms (Wan et al. 2018). "Settled" means within
+:data:`SETTLE_BAND` of the step size for good.
 
 Positions are galvo units (65536 = full range, whatever the lens); time is seconds. The model is
 evaluated on a grid of ``substeps`` samples per 10 µs frame: the rate limiter exactly (it is a
@@ -28,7 +28,7 @@ import numpy as np
 __all__ = ["FRAME_PERIOD", "FULL_RANGE", "SETTLE_BAND", "GalvoModel", "MirrorPath"]
 
 
-#: One XY2-100 frame: 20 bits at 2 Mbit/s (SPEC §2).
+#: One XY2-100 frame: 20 bits at 2 Mbit/s.
 FRAME_PERIOD = 10e-6
 
 #: Galvo units across the full range.
@@ -103,7 +103,8 @@ class GalvoModel:
     def from_step_times(cls, *, small_step=0.01, small_time=0.3e-3, large_step=0.1,
                         large_time=0.7e-3):
         """The model whose ``small_step`` and ``large_step`` (shares of the full range) settle
-        in ``small_time`` and ``large_time`` seconds. Defaults: 001's JD1403 galvo."""
+        in ``small_time`` and ``large_time`` seconds. Defaults: the JD1403 galvo of Wan et al.
+        2018."""
         if not 0 < small_step < large_step <= 1:
             raise ValueError("need 0 < small_step < large_step <= 1 (shares of the range)")
         if not 0 < small_time < large_time:

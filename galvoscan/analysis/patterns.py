@@ -1,9 +1,9 @@
 """Commanded frame sequences of the scan patterns, in galvo units (one position per 10 µs frame).
 
 * :func:`spiral_frames` is the Python model of the gateware's spiral sequencer and scale stage
-  (SPEC §3). The full-pattern replay test (``tests/test_spiral.py``) checks it frame for frame
-  against the XY2-100 wires of the simulated system top, so the analysis speaks of what the
-  gateware emits.
+  (README "What it does"). The full-pattern replay test (``tests/test_spiral.py``) checks it
+  frame for frame against the XY2-100 wires of the simulated system top, so the analysis speaks
+  of what the gateware emits.
 * :func:`raster_frames` is the line-by-line fill the paper compares the spiral with: lines at a
   constant speed, one after the other, the turn-arounds left to the mirror.
 
@@ -30,8 +30,8 @@ class ScanHead:
     Parameters
     ----------
     field_mm : float
-        Field side, mm. Default 110 mm (001: 110 mm ↔ 65536 units, 1 unit ≈ 1.68 µm; a typical
-        f = 160 mm f-theta lens, as in 000).
+        Field side, mm. Default 110 mm (Wan et al. 2018: 110 mm ↔ 65536 units, 1 unit ≈ 1.68 µm;
+        a typical f = 160 mm f-theta lens, as in Dai & Tang 2020).
     """
 
     def __init__(self, field_mm=110.0):

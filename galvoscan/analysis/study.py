@@ -4,10 +4,10 @@ spiral against line-by-line on the paper's two fields.
 Every run uses the same rules, so numbers compare:
 
 * the pattern is centred on the field; the spiral's amplitudes span the field;
-* the spiral's dwell is the smallest that keeps each axis at or below ``speed_m_s`` (000: galvo
-  maximum 5 m/s), unless given; the raster runs its lines at that speed;
-* the mirror is the 001 galvo model (:class:`~.galvo.GalvoModel`), the laser 000's (50 W,
-  100 kHz).
+* the spiral's dwell is the smallest that keeps each axis at or below ``speed_m_s`` (Dai & Tang
+  2020: galvo maximum 5 m/s), unless given; the raster runs its lines at that speed;
+* the mirror is the galvo model of Wan et al. 2018 (:class:`~.galvo.GalvoModel`), the laser
+  Dai & Tang's (50 W, 100 kHz).
 """
 
 from ..gateware.points import FIELD_CENTRE

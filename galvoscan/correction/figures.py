@@ -50,8 +50,8 @@ def plot_study(study, out):
                 color=colour, label=f"{method}: mean")
         ax.plot([r["grid"] for r in rows], [r["after_max"] for r in rows], marker=marker,
                 color=colour, linestyle="--", label=f"{method}: max")
-    ax.axhline(36.5, color="grey", linestyle=":", label="004 mean after (36.5)")
-    ax.axhline(194, color="grey", linestyle="-.", label="004 max after (194)")
+    ax.axhline(36.5, color="grey", linestyle=":", label="Zhu & Zhang mean after (36.5)")
+    ax.axhline(194, color="grey", linestyle="-.", label="Zhu & Zhang max after (194)")
     ax.set_yscale("log")
     ax.set_xlabel("calibration grid (points per side)")
     ax.set_ylabel("landing error after correction (galvo units)")

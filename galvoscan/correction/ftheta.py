@@ -1,11 +1,11 @@
-"""The f-theta two-mirror distortion model of 003 (SPEC §1 "Marking controller (003)").
+"""The f-theta two-mirror distortion model of Liao & Chen 2016.
 
 Two galvo mirrors deflect the beam by twice their angles ``φx``, ``φy``; through an f-theta lens
 of focal length ``f`` the controller assumes the spot lands at ``x' = 2fφx``, ``y' = 2fφy``.
 It does not: the second mirror sees a beam already tilted by the first, so X bends into a
-pincushion and Y into a barrel. 003 gives where the spot really lands (:func:`landing`), the
-angle corrections that put it where it was asked (:func:`exact_compensation`) and a polynomial
-fitted to them (:func:`polynomial_compensation`), with eight points in its Table 1.
+pincushion and Y into a barrel. Liao & Chen give where the spot really lands (:func:`landing`),
+the angle corrections that put it where it was asked (:func:`exact_compensation`) and a
+polynomial fitted to them (:func:`polynomial_compensation`), with eight points in their Table 1.
 
 Two findings from reproducing Table 1 (README "Distortion correction"):
 
@@ -18,7 +18,7 @@ Two findings from reproducing Table 1 (README "Distortion correction"):
   fit of the same four terms over ±150 mm (:func:`fit_polynomial`) gives nearly the corrected
   values, so the printed exponents are taken to be typesetting slips.
 
-Lengths in mm, angles in radians (mechanical mirror angles, as 003).
+Lengths in mm, angles in radians (mechanical mirror angles, as Liao & Chen use).
 """
 
 import numpy as np
@@ -29,20 +29,20 @@ __all__ = ["PAPER_FOCAL_MM", "PRINTED_COEFFICIENTS", "PAPER_COEFFICIENTS", "TABL
            "fit_polynomial", "table_1_rows"]
 
 
-#: 003's f-theta lens.
+#: Liao & Chen's f-theta lens.
 PAPER_FOCAL_MM = 300.0
 
-#: (a, b, c, d) of Δφx = a·k·x·y² + b·k²·x, Δφy = c·k·x²·y + d·k²·y as 003 prints them.
+#: (a, b, c, d) of Δφx = a·k·x·y² + b·k²·x, Δφy = c·k·x²·y + d·k²·y as Liao & Chen print them.
 PRINTED_COEFFICIENTS = (-3.242e-8, -1.024e-7, 6.515e-8, -1.222e-5)
 
-#: The same with the exponents that reproduce 003's Table 1 (see the module docstring).
+#: The same with the exponents that reproduce Liao & Chen's Table 1 (see the module docstring).
 PAPER_COEFFICIENTS = (-3.242e-9, -1.024e-7, 6.515e-9, -1.222e-6)
 
-#: The trim factor's range in 003 (k = 1 for f = 300 mm).
+#: The trim factor's range in Liao & Chen (k = 1 for f = 300 mm).
 K_RANGE = (0.9706, 1.0306)
 
-#: 003 Table 1: X', Y' (mm); exact compensation Δφ'x, Δφ'y; residual after the polynomial
-#: Δφx, Δφy (rad).
+#: Liao & Chen's Table 1: X', Y' (mm); exact compensation Δφ'x, Δφ'y; residual after the
+#: polynomial Δφx, Δφy (rad).
 TABLE_1 = [
     (150, 150, -0.0114, 0.0218, -0.000404, -0.000043),
     (100, 100, -0.0032, 0.0063, 0.000044, -0.000089),
@@ -56,7 +56,8 @@ TABLE_1 = [
 
 
 def landing(phi_x, phi_y, focal_mm=PAPER_FOCAL_MM):
-    """Where the spot lands (mm) for mirror angles ``phi_x``, ``phi_y`` (rad): 003's formula."""
+    """Where the spot lands (mm) for mirror angles ``phi_x``, ``phi_y`` (rad): Liao & Chen's
+    formula."""
     phi_x = np.asarray(phi_x, dtype=float)
     phi_y = np.asarray(phi_y, dtype=float)
     cx, cy = np.cos(2 * phi_x), np.cos(2 * phi_y)
@@ -69,7 +70,7 @@ def landing(phi_x, phi_y, focal_mm=PAPER_FOCAL_MM):
 
 
 def exact_compensation(x, y, focal_mm=PAPER_FOCAL_MM):
-    """003's exact angle corrections (rad) for the spot to land at ``x``, ``y`` (mm)."""
+    """Liao & Chen's exact angle corrections (rad) for the spot to land at ``x``, ``y`` (mm)."""
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     r = np.hypot(x, y)
@@ -83,7 +84,7 @@ def exact_compensation(x, y, focal_mm=PAPER_FOCAL_MM):
 
 
 def polynomial_compensation(x, y, k=1.0, coefficients=PAPER_COEFFICIENTS):
-    """003's fitted corrections (rad) at ``x``, ``y`` (mm) with trim factor ``k``."""
+    """Liao & Chen's fitted corrections (rad) at ``x``, ``y`` (mm) with trim factor ``k``."""
     a, b, c, d = coefficients
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -91,7 +92,8 @@ def polynomial_compensation(x, y, k=1.0, coefficients=PAPER_COEFFICIENTS):
 
 
 def fit_polynomial(half_field_mm=150.0, focal_mm=PAPER_FOCAL_MM, samples=61):
-    """Least-squares (a, b, c, d) of 003's four-term polynomial against the exact formula."""
+    """Least-squares (a, b, c, d) of Liao & Chen's four-term polynomial against the exact
+    formula."""
     grid = np.linspace(-half_field_mm, half_field_mm, samples)
     x, y = (v.ravel() for v in np.meshgrid(grid, grid))
     ex, ey = exact_compensation(x, y, focal_mm)

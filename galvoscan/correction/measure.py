@@ -1,11 +1,12 @@
-"""Correction tables from measured points (SPEC §1 "Vision correction (004)").
+"""Correction tables from measured points (after Zhu & Zhang's vision-assisted correction).
 
 A calibration marks an ``n × n`` grid of points (n = 3 … 11) over the calibrated square, and
 their landed positions are measured (a camera, :mod:`.photo`, or by hand). The error at each
 grid point is ``measured − commanded``. Between grid points the error is estimated either by
-bilinear interpolation of the grid (004's better method), or by a least-squares polynomial (004's
-"curve fit"). The table's node offsets then solve ``q + d + E(q + d) = q`` for each node ``q``
-by fixed-point iteration: the spot is sent to where it must be aimed for it to land on ``q``.
+bilinear interpolation of the grid (Zhu & Zhang's better method), or by a least-squares
+polynomial (their "curve fit"). The table's node offsets then solve ``q + d + E(q + d) = q``
+for each node ``q`` by fixed-point iteration: the spot is sent to where it must be aimed for it
+to land on ``q``.
 
 Positions are galvo units throughout.
 """
@@ -25,10 +26,10 @@ __all__ = ["METHODS", "GRID_SIZES", "MeasurementError", "read_pairs", "calibrati
 #: How the error between grid points is estimated.
 METHODS = ("bilinear", "polynomial")
 
-#: Calibration grids 004 tried.
+#: Calibration grids Zhu & Zhang tried.
 GRID_SIZES = (3, 5, 7, 9, 11)
 
-#: 004's calibrated square, in galvo units.
+#: Zhu & Zhang's calibrated square, in galvo units.
 DEFAULT_SPAN = 50_000
 
 
@@ -52,9 +53,11 @@ def read_pairs(path):
                     if number == 1:
                         continue                     # a header line
                     raise MeasurementError(f"{path}, line {number}: not four numbers: {row!r}")
-                if len(values) != 4 or not np.all(np.isfinite(values)):
-                    raise MeasurementError(f"{path}, line {number}: a row is four finite "
-                                           f"numbers cmd_x, cmd_y, meas_x, meas_y, not {row!r}")
+                if len(values) != 4:
+                    raise MeasurementError(f"{path}, line {number}: {len(values)} values; a row "
+                                           f"is cmd_x, cmd_y, meas_x, meas_y")
+                if not np.all(np.isfinite(values)):
+                    raise MeasurementError(f"{path}, line {number}: not finite numbers: {row!r}")
                 rows.append(values)
     except UnicodeDecodeError:
         raise MeasurementError(f"{path}: not UTF-8 text") from None

@@ -1,8 +1,10 @@
-"""Correction tables from the 003 f-theta model, and a synthetic scan head to test them on.
+"""Correction tables from the f-theta model of Liao & Chen 2016, and a synthetic scan head to
+test them on.
 
 Galvo units map linearly to mirror angle: a lens field of ``field_mm`` spans 65536 units, so a
 unit ``u`` asks for the spot at ``x' = (u - 32768) × field_mm / 65536`` and the mirror at
-``φ = x' / 2f``. A node offset of ``2f·Δφ / mm_per_unit`` units adds 003's angle correction Δφ.
+``φ = x' / 2f``. A node offset of ``2f·Δφ / mm_per_unit`` units adds Liao & Chen's angle
+correction Δφ.
 """
 
 import numpy as np
@@ -25,7 +27,7 @@ def _check_positive(name, value, unit):
 
 
 def ftheta_table(nodes=17, *, field_mm, focal_mm=PAPER_FOCAL_MM, k=1.0, method="exact"):
-    """A correction table that undoes the f-theta distortion of 003.
+    """A correction table that undoes the f-theta distortion of Liao & Chen 2016.
 
     Parameters
     ----------
@@ -34,19 +36,20 @@ def ftheta_table(nodes=17, *, field_mm, focal_mm=PAPER_FOCAL_MM, k=1.0, method="
     field_mm : float
         Lens field: the width in mm that 65536 galvo units span.
     focal_mm : float
-        Focal length of the f-theta lens (003: 300 mm).
+        Focal length of the f-theta lens (Liao & Chen: 300 mm).
     k : float
-        003's trim factor for the polynomial (0.9706 … 1.0306; 1 for f = 300 mm). The exact
-        formula takes the lens's real focal length instead, so ``k`` must be 1 with it.
+        Liao & Chen's trim factor for the polynomial (0.9706 … 1.0306; 1 for f = 300 mm). The
+        exact formula takes the lens's real focal length instead, so ``k`` must be 1 with it.
     method : str
-        ``"exact"`` (003's closed-form compensation) or ``"polynomial"`` (its fitted one).
+        ``"exact"`` (Liao & Chen's closed-form compensation) or ``"polynomial"`` (its fitted one).
     """
     _check_positive("field_mm", field_mm, "mm")
     _check_positive("focal_mm", focal_mm, "mm")
     if method not in ("exact", "polynomial"):
         raise ValueError(f"method must be exact or polynomial, not {method!r}")
     if not isinstance(k, (int, float)) or not 0.5 <= k <= 2.0:
-        raise ValueError(f"k must be a number near 1 (003: 0.9706 … 1.0306), not {k!r}")
+        raise ValueError(f"k must be a number near 1 (Liao & Chen 2016: 0.9706 … 1.0306), "
+                         f"not {k!r}")
     if method == "exact" and k != 1.0:
         raise ValueError("k trims the polynomial; give the exact formula the real focal length")
     identity = CorrectionTable.identity(nodes)
@@ -67,7 +70,7 @@ def ftheta_table(nodes=17, *, field_mm, focal_mm=PAPER_FOCAL_MM, k=1.0, method="
 
 
 class ScanHeadModel:
-    """Where a scan head with 003's f-theta distortion puts the spot, in galvo units.
+    """Where a scan head with Liao & Chen's f-theta distortion puts the spot, in galvo units.
 
     Parameters
     ----------
@@ -100,7 +103,7 @@ class ScanHeadModel:
 
 def synthetic_head(max_error=1400.0, span=50_000, focal_mm=PAPER_FOCAL_MM):
     """A :class:`ScanHeadModel` whose distortion over a ``span``-unit square peaks at
-    ``max_error`` units (004's head: about 1400 over 50 000)."""
+    ``max_error`` units (Zhu & Zhang's head: about 1400 over 50 000)."""
     _check_positive("max_error", max_error, "units")
     low, high = 1.0, 20 * focal_mm              # the error grows with the field width
     for _ in range(80):

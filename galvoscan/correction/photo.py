@@ -1,4 +1,4 @@
-"""Calibration from a photo of a marked plate (004's pipeline, SPEC §1 "Vision correction").
+"""Calibration from a photo of a marked plate (Zhu & Zhang's vision-assisted pipeline).
 
 1. :func:`calibration_job` marks an ``n × n`` grid of spiral-filled circles (the spiral's pitch is
    the line width, so each circle is solid) as a vector job.
@@ -7,8 +7,8 @@
    photo to the plate.
 3. :func:`find_marks` thresholds the photo (Otsu), labels its blobs and takes each one's
    centroid as its centre and its equivalent-area radius as its size (on the synthetic photos
-   the centroid's worst error is a quarter of 004's minimum enclosing circle's, which rests on
-   a few rim pixels).
+   the centroid's worst error is a quarter of Zhu & Zhang's minimum enclosing circle's, which
+   rests on a few rim pixels).
 4. :func:`measure_photo` takes the four largest circles as the references, maps every circle
    centre through the homography they give into plate coordinates (galvo units of an ideal
    head), and pairs each with the grid point it was marked for.

@@ -1,10 +1,10 @@
-"""The correction study the README reports: 004's experiment on a synthetic scan head.
+"""The correction study the README reports: Zhu & Zhang's experiment on a synthetic scan head.
 
-A head with 003's f-theta distortion, scaled to 004's size (1400 units at worst over the
-50 000-unit calibrated square), is calibrated with 3 × 3 … 11 × 11 grids of measured points
-(with measurement noise), by bilinear tables and by polynomial fits, and through the photo
-pipeline; each table is then judged on a dense grid of targets through the gateware's own
-arithmetic. The 003 model table is judged the same way.
+A head with Liao & Chen's f-theta distortion, scaled to Zhu & Zhang's size (1400 units at
+worst over the 50 000-unit calibrated square), is calibrated with 3 × 3 … 11 × 11 grids of
+measured points (with measurement noise), by bilinear tables and by polynomial fits, and
+through the photo pipeline; each table is then judged on a dense grid of targets through the
+gateware's own arithmetic. The f-theta model table (Liao & Chen 2016) is judged the same way.
 """
 
 import numpy as np
@@ -17,7 +17,7 @@ from .photo import calibration_job, measure_photo, render_photo
 __all__ = ["PAPER_004", "STUDY_STEPS", "run_study", "markdown_table", "photo_sentence_values", "NOISE_UNITS"]
 
 
-#: 004's result: errors before and after its bilinear correction, galvo units.
+#: Zhu & Zhang's result: errors before and after their bilinear correction, galvo units.
 PAPER_004 = {"before_max": 1411, "before_mean": 259, "after_max": 194, "after_mean": 36.5}
 
 #: Standard deviation of the synthetic measurement noise per axis, galvo units (≈ 25 µm on a
@@ -33,7 +33,8 @@ def run_study(*, nodes=17, seed=1, photo_grid=9, progress=None):
     """Residuals per grid size and method, the model table's and the photo pipeline's.
 
     Returns a dict: ``head`` (its field and error), ``grids`` (rows of grid, method, residual
-    figures), ``model`` (the 003 exact table's residuals), ``photo`` (centre errors, residuals).
+    figures), ``model`` (the exact f-theta table's residuals), ``photo`` (centre errors,
+    residuals).
     """
     head = synthetic_head()
     rng = np.random.default_rng(seed)

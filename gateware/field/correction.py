@@ -1,4 +1,4 @@
-"""Field-distortion correction: bilinear offsets from an n × n table on every point (SPEC §3).
+"""Field-distortion correction: bilinear offsets from an n × n table on every point.
 
 The arithmetic is defined, and documented, in :mod:`.correction_table`; this module is its
 sequential implementation: one block RAM holding the table, one 16 × 16-bit multiplier with an

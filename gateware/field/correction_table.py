@@ -1,5 +1,5 @@
-"""The field-distortion correction table and its exact integer arithmetic (SPEC §1 "Vision
-correction (004)", §3 "Distortion correction").
+"""The field-distortion correction table and its exact integer arithmetic (Zhu & Zhang's
+bilinear grid; README "Distortion correction").
 
 The table is an ``n × n`` grid of nodes spread evenly over the whole 16-bit field, ``n = 2^k + 1``,
 so that node ``i`` sits at galvo position ``i × 2^(16-k)`` (the last node at 65536, just past the

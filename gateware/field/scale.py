@@ -1,4 +1,5 @@
-"""Scale and offset: source offsets to galvo positions, saturating (SPEC §3, §4)."""
+"""Scale and offset: source offsets to galvo positions, saturating: a point past the field
+edge is clamped and flagged, never wrapped."""
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import stream, wiring

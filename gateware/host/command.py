@@ -13,7 +13,7 @@ __all__ = ["CommandDecoder"]
 
 
 class CommandDecoder(wiring.Component):
-    """The paper's instruction decoder, for two transports (SPEC §1, §4).
+    """The instruction decoder of Dai & Tang 2020, for two transports.
 
     A frame is ``address[31:24] data[23:8] check[7:0]``. It is accepted only if it is complete
     (32 bits), its check byte is 0x64, and then

@@ -1,4 +1,4 @@
-"""The status word and event counters the host reads (SPEC §4)."""
+"""The status word and event counters the host reads."""
 
 from amaranth.hdl import Module
 from amaranth.lib import data, wiring

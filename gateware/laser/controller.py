@@ -1,5 +1,5 @@
 """Pulsed fiber laser over its DB25 port: power latch, MO, PRR and modulation, with interlocks
-(SPEC §1 "Marking controller (003)", §4)."""
+(Liao & Chen 2016's sequence; galvoscan's safety rules, README "How it is checked")."""
 
 import math
 
@@ -29,7 +29,7 @@ def clocks_at_least(seconds, clk_freq):
 
 
 class LaserController(wiring.Component):
-    """The 003 laser sequence, made safe.
+    """Liao & Chen's laser sequence, made safe.
 
     Emission needs, all at once: ``arm`` set, no latched fault, the interlock closed, and the
     master oscillator on for at least ``mo_lead`` seconds. Then modulation (the emission gate,

@@ -1,4 +1,4 @@
-"""XY2-100 transmitter: galvo positions onto the four-wire scan head bus (SPEC §2)."""
+"""XY2-100 transmitter: galvo positions onto the four-wire scan head bus."""
 
 from fractions import Fraction
 

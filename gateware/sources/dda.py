@@ -1,9 +1,9 @@
-"""Line interpolation at a fixed pitch (SPEC §1 "Line marking (001)", §3 vector mode).
+"""Line interpolation at a fixed pitch (Wan et al. 2018), for vector mode.
 
 From a start point to an end point, the points ``P_k = round(P_0 + k·p·D/|D|)`` for every
 ``k ≥ 1`` with ``k·p < |D|``, then the end point itself. Each step is one pitch ``p`` along the
-line: on the major axis ``p/√(1+m²)`` and on the minor one ``m`` times that (001's DDA, which
-swaps the roles of x and y for ``|m| > 1``); rounding is half up. The end point is always hit
+line: on the major axis ``p/√(1+m²)`` and on the minor one ``m`` times that (Wan et al.'s DDA,
+which swaps the roles of x and y for ``|m| > 1``); rounding is half up. The end point is always hit
 exactly and no point repeats: a segment of length ``L`` gives ``⌈L/p⌉`` points, one for a
 segment no longer than the pitch, none for a zero-length one.
 

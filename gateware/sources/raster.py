@@ -1,4 +1,4 @@
-"""Raster fill: line by line over a rectangle, the paper's baseline (SPEC §1, §3 raster mode).
+"""Raster fill: line by line over a rectangle, Dai & Tang 2020's baseline (raster mode).
 
 One point per 10 µs frame: along a line the position moves ``step`` galvo units a frame (the
 line speed) and ends exactly on the rectangle's edge; the next line starts ``spacing`` further

@@ -1,4 +1,4 @@
-"""Spiral sequencer: walks the two angle ROMs at different cycle lengths (SPEC §1, §3)."""
+"""Spiral sequencer: walks the two angle ROMs at different cycle lengths (Dai & Tang 2020)."""
 
 from amaranth.hdl import Module, Mux, Signal, signed
 from amaranth.lib import stream, wiring

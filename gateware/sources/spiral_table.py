@@ -1,4 +1,4 @@
-"""The spiral's two angle tables, computed at elaboration time (SPEC §1 "Spiral cleaning", §3).
+"""The spiral's two angle tables, computed at elaboration time (Dai & Tang 2020).
 
 One period of a sine is sampled at ``points`` steps, the same time apart. Sampled *uniformly in
 phase*, the mirror rushes through the centre and lingers at the edges: the mesh it draws is sparse
@@ -34,11 +34,12 @@ SAMPLINGS = ("gaussian", "uniform")
 
 #: Default σ of the Gaussian sampling, in half-swings, chosen by the scan analysis's σ sweep
 #: (``galvoscan analyze --sweep``, README "Results"): on the paper's 50 × 20 mm field with the
-#: 001 galvo model, the dose averaged over 1 mm blocks varies less and less as σ grows and levels
-#: off from σ ≈ 2 (CV 0.13, best 0.12 at σ = 5, against 0.34 at σ = 0.8 and 1.06 for uniform
-#: sampling), while the mirror's peak acceleration does not grow with σ. 2 is the smallest σ
-#: within 10 % of the best; it still puts more points near the centre, as the paper asks, and
-#: keeps the edges slightly below the centre (edge/centre dose 0.80), as the paper reports.
+#: galvo model of Wan et al. 2018, the dose averaged over 1 mm blocks varies less and less as σ
+#: grows and levels off from σ ≈ 2 (CV 0.13, best 0.12 at σ = 5, against 0.34 at σ = 0.8 and
+#: 1.06 for uniform sampling), while the mirror's peak acceleration does not grow with σ. 2 is
+#: the smallest σ within 10 % of the best; it still puts more points near the centre, as the
+#: paper asks, and keeps the edges slightly below the centre (edge/centre dose 0.80), as the
+#: paper reports.
 DEFAULT_SIGMA = 2.0
 
 #: Table value of a full half-swing; tables hold signed 16-bit offsets from the centre.

@@ -1,5 +1,5 @@
 """Vector marking: queued jump / mark segments, stepped at a pitch, each point held for a whole
-number of laser pulses (SPEC §1 "Line marking (001)", §3 vector mode).
+number of laser pulses (after Wan et al. 2018).
 
 Two halves:
 
@@ -9,13 +9,13 @@ Two halves:
   the next segment while the slot's point is being held.
 * the **pacer** hands points to the PHY at frame boundaries. A marked point is held until
   exactly ``pulses_per_point`` laser pulses have fallen on it, then the next one follows in
-  the pulse gap (001: t = N·T − 10 µs before the next pulse, the frame's transmission time;
-  here the pacer counts the laser's PRR clock ahead by the two frames a point takes to reach
-  the head, through ``pulse_ahead``). A jump's point is held ``jump_delay`` frames with the
-  laser off. The line speed is ``pitch × PRR / pulses_per_point``.
+  the pulse gap (Wan et al. 2018: t = N·T − 10 µs before the next pulse, the frame's
+  transmission time; here the pacer counts the laser's PRR clock ahead by the two frames a
+  point takes to reach the head, through ``pulse_ahead``). A jump's point is held
+  ``jump_delay`` frames with the laser off. The line speed is ``pitch × PRR / pulses_per_point``.
 
 This needs at most one pulse per frame: the PRR must not exceed the frame rate (100 kHz at
-XY2-100), as 001 says. Above it a point would get more pulses than asked.
+XY2-100), as Wan et al. say. Above it a point would get more pulses than asked.
 
 The pacer's decision for a frame, :attr:`laser`, applies from the moment that frame has been
 sent; the system top delays it by two frames to the laser's ``marking`` input.
