@@ -1,14 +1,18 @@
 """Vector job files: one segment a line, ``jump X Y`` or ``mark X Y`` in galvo units.
 
-Blank lines and everything after ``#`` are ignored. X and Y are integers 0 … 65535 (32768 is
-the field centre), decimal or with a ``0x`` prefix.
+Blank lines and everything after ``#`` are ignored. X and Y are integers in the range of the
+``vec_x`` / ``vec_y`` registers (0 … 65535, 32768 is the field centre), decimal or with a ``0x``
+prefix.
 """
+
+from .gateware.host.regmap import BY_NAME, VectorOp
+
 
 __all__ = ["JobError", "parse_job", "OPS"]
 
 
-#: The ``vec_op`` value of each command.
-OPS = {"jump": 0, "mark": 1}
+#: The ``vec_op`` value of each command word.
+OPS = {op.label: op for op in VectorOp}
 
 
 class JobError(ValueError):
@@ -34,8 +38,9 @@ def parse_job(text, *, name="job"):
                 value = int(word, 0)
             except ValueError:
                 raise JobError(f"{where}: {word!r} is not an integer") from None
-            if not 0 <= value <= 0xFFFF:
-                raise JobError(f"{where}: {value} is outside 0 … 65535 galvo units")
+            reg = BY_NAME["vec_x"]              # vec_y has the same range
+            if not reg.low <= value <= reg.high:
+                raise JobError(f"{where}: {value} is outside {reg.low} … {reg.high} galvo units")
             coordinates.append(value)
         segments.append((op, *coordinates))
     if not segments:

@@ -95,7 +95,9 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
         ctx.set(top.spi_cs_n, 1)
         for name, value in (("laser_prr", prr), ("pulses_per_point", pulses_per_point),
                             ("pitch", pitch), ("jump_delay", jump_delay),
-                            ("laser_power", 128), ("watchdog", 60000), ("arm", 1)):
+                            ("laser_power", 128),
+                            # The longest watchdog: the simulated host is slow, not silent.
+                            ("watchdog", BY_NAME["watchdog"].high), ("arm", 1)):
             await write(ctx, name, value)
         pending = list(job)
         free = VECTOR_QUEUE_DEPTH
@@ -109,7 +111,7 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
             op, x, y = pending.pop(0)
             await write(ctx, "vec_x", x)
             await write(ctx, "vec_y", y)
-            await write(ctx, "vec_op", OPS[op])
+            await write(ctx, "vec_op", OPS[op].value)
             free -= 1
             if not started and (free == 0 or not pending):
                 # The first batch is in; let the MO lead pass, then run.

@@ -35,7 +35,7 @@ from ..points import FIELD_CENTRE, FIELD_MAX
 from ..sources.spiral_table import DEFAULT_POINTS, MAX_POINTS
 
 
-__all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "Status", "STATUS_BITS", "Register", "RegisterMap",
+__all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "VectorOp", "Status", "STATUS_BITS", "Register", "RegisterMap",
            "register_map", "DEFAULT_TABLE_POINTS", "DEFAULT_CORRECTION_NODES", "MAX_TABLE_POINTS",
            "HOST_MAP",
            "REGISTERS", "BY_NAME", "BY_ADDRESS", "MODE_REGISTERS", "CORRECTION_REGISTERS",
@@ -74,6 +74,17 @@ class Mode(enum.Enum, shape=2):
     @property
     def label(self):
         """The name the host and the command line use."""
+        return self.name.lower()
+
+
+class VectorOp(enum.Enum, shape=1):
+    """Values of the ``vec_op`` register: what a queued segment does."""
+    JUMP = 0        #: move with the laser off, then wait ``jump_delay``
+    MARK = 1        #: step a line at ``pitch`` with the laser on
+
+    @property
+    def label(self):
+        """The word a job file uses."""
         return self.name.lower()
 
 

@@ -25,6 +25,7 @@ from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..host.regmap import VectorOp
 from ..points import FIELD_CENTRE, OffsetPoint
 from .dda import LineDDA
 
@@ -32,13 +33,11 @@ from .dda import LineDDA
 __all__ = ["VectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
 
 
-#: ``op`` of a jump: move with the laser off.
-OP_JUMP = 0
-#: ``op`` of a mark: step a line with the laser on.
-OP_MARK = 1
+#: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
+OP_JUMP, OP_MARK = VectorOp.JUMP, VectorOp.MARK
 
 #: One queued segment: where to go, and how.
-VectorCommand = data.StructLayout({"op": 1, "x": 16, "y": 16})
+VectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16})
 
 
 class VectorSequencer(wiring.Component):
