@@ -70,7 +70,7 @@ def icestick_check(*, modes=None, correction=None, clock=None, bit_rate=2_000_00
     """Raise ``ValueError`` for anything the iCEstick build cannot hold: checked before any
     build starts."""
     if modes is not None and tuple(modes) != ICESTICK_MODES:
-        raise ValueError(f"the iCEstick holds the spiral mode only, not {tuple(modes)!r}")
+        raise ValueError(f"the iCEstick holds the spiral mode only, not {', '.join(modes)}")
     if correction is not None and not (isinstance(correction, str) and
                                        correction == "identity"):
         raise ValueError("the iCEstick has no room for the correction stage: build without "

@@ -55,7 +55,7 @@ def test_missing_job_is_one_line(tmp_path, capsys):
 
 @pytest.mark.parametrize("option", ["--csv", "--png", "--vcd"])
 def test_output_folder_is_made_before_the_simulation(tmp_path, option, capsys):
-    target = tmp_path / "deep" / "er" / "out.file"
+    target = tmp_path / "deep" / "er" / ("out.png" if option == "--png" else "out.file")
     # A bad --points value stops the run at once, after the output option was parsed: the
     # folder already exists then, so it is made before any simulation could start.
     _one_line_error(capsys, ["sim", option, str(target), "--points", "0"])
@@ -125,3 +125,35 @@ def test_version(capsys):
         main(["--version"])
     assert exit.value.code == 0
     assert capsys.readouterr().out.startswith("galvoscan ")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["sim", "--points", "5", "--png", "{tmp}/x.bmp"], ".png is usual"),
+    (["correct", "synth-photo", "-o", "{tmp}/p.txt"], ".png is usual"),
+    (["sim", "--points", "5", "--csv", "/proc/galvoscan-nope.csv"], "cannot"),
+    (["export", "verilog", "-o", "{tmp}/" + "x" * 300 + ".v"], "cannot write"),
+    (["sim", "--points", "5", "--pitch", "7"], "--pitch is for --mode vector"),
+    (["sim", "--points", "5", "--points-csv", "{tmp}/p.csv"], "--points-csv is for --mode"),
+    (["regs", "--table-points", "10"], "multiple of 4"),
+    (["build", "--clock", "12e6"], "from 16e6 to 275e6"),
+])
+def test_wrong_arguments_are_one_line_before_any_work(tmp_path, capsys, argv, message):
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    line = _one_line_error(capsys, argv)
+    assert message in line
+    assert not list(tmp_path.iterdir())              # nothing written, nothing left behind
+
+
+def test_job_with_a_byte_order_mark_reads(tmp_path, capsys):
+    # Windows editors start UTF-8 files with a byte-order mark; that is still UTF-8.
+    from galvoscan.cli.args import read_text
+    job = tmp_path / "bom.job"
+    job.write_bytes("\ufeffjump 100 100\n".encode("utf-8"))
+    assert read_text(job).startswith("jump")
+
+
+def test_not_utf8_names_the_line(tmp_path, capsys):
+    job = tmp_path / "latin1.job"
+    job.write_bytes(b"jump 1 1\nmark 2 2\n# caf\xe9\n")
+    line = _one_line_error(capsys, ["sim", "--mode", "vector", "--job", str(job)])
+    assert "latin1.job, line 3" in line

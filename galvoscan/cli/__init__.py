@@ -53,3 +53,9 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("galvoscan: stopped (Ctrl-C)", file=sys.stderr)
         return 130
+    except OSError as error:
+        # A file that could not be written or read after all (a full disk, a lost device):
+        # one line, not a traceback. Paths are checked when parsed, so this is the exception.
+        where = f" {error.filename}" if error.filename else ""
+        print(f"galvoscan: error:{where} {error.strerror or error}", file=sys.stderr)
+        return 1

@@ -12,8 +12,8 @@ from pathlib import Path
 
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
-           "output_file", "output_dir", "read_text", "add_table_options", "table_from",
-           "settings_from", "add_link_options", "open_link"]
+           "table_points", "output_file", "image_file", "output_dir", "read_text",
+           "add_table_options", "table_from", "settings_from", "add_link_options", "open_link"]
 
 
 class CLIError(SystemExit):
@@ -42,6 +42,15 @@ def int_in(low, high, what):
     return parse
 
 
+def _number(value):
+    """A bound as a person writes it: 16e6 rather than 1.6e+07."""
+    if abs(value) >= 1e5 and value == int(value):
+        for exponent in (9, 6, 3):
+            if value % 10 ** exponent == 0:
+                return f"{value / 10 ** exponent:g}e{exponent}"
+    return f"{value:g}"
+
+
 def number_in(what, low, high):
     """A finite number from ``low`` to ``high`` (``1e6`` and the like accepted)."""
     def parse(text):
@@ -50,8 +59,8 @@ def number_in(what, low, high):
         except ValueError:
             raise argparse.ArgumentTypeError(f"{what} must be a number, not {text!r}")
         if not math.isfinite(value) or not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"{what} must be from {low:g} to {high:g}, "
-                                             f"not {text}")
+            raise argparse.ArgumentTypeError(f"{what} must be from {_number(low)} to "
+                                             f"{_number(high)}, not {text}")
         return value
     return parse
 
@@ -93,13 +102,45 @@ def _writable_folder(folder, what):
         raise argparse.ArgumentTypeError(f"cannot write into {str(folder)!r} (permission)")
 
 
+def table_points(text):
+    """Samples per period of the spiral table: a multiple of 4 in the table's bounds."""
+    from ..gateware.sources.spiral_table import MAX_POINTS, MIN_POINTS
+    value = int_in(MIN_POINTS, MAX_POINTS, "table points")(text)
+    if value % 4:
+        raise argparse.ArgumentTypeError(f"table points must be a multiple of 4, not {value}")
+    return value
+
+
 def output_file(text):
-    """A file to write: its folder is made now (or refused now), not after a long run."""
+    """A file to write: its folder is made and the file tried now (or refused now), not after
+    a long run."""
     path = Path(text)
-    if path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
-    _writable_folder(path.parent, text)
+    try:
+        if path.is_dir():
+            raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
+        _writable_folder(path.parent, text)
+        existed = path.exists()
+        with open(path, "a"):
+            pass
+    except OSError as error:                # a name too long, a folder that is not one, …
+        raise argparse.ArgumentTypeError(f"cannot write {text!r}: {error.strerror or error}")
+    if not existed:
+        path.unlink()                 # nothing is left behind if the run stops early
     return text
+
+
+def image_file(text):
+    """A picture to write, in a format the plots can be saved as (by its suffix)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    formats = Figure().canvas.get_supported_filetypes()
+    suffix = Path(text).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: a picture's name ends in one of .{', .'.join(sorted(formats))} "
+            f"(.png is usual)")
+    return output_file(text)
 
 
 def output_dir(text):
@@ -112,13 +153,17 @@ def output_dir(text):
 
 
 def read_text(path, what="file"):
-    """The UTF-8 text of ``path``, or a one-line error naming it."""
+    """The UTF-8 text of ``path`` (a byte-order mark, as Windows editors write, is dropped),
+    or a one-line error naming it."""
     try:
-        return Path(path).read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        fail(f"{path}: the {what} is not UTF-8 text (byte {error.start})")
+        data = Path(path).read_bytes()
     except OSError as error:
         fail(f"cannot read the {what} {path}: {error.strerror or error}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = data[:error.start].count(b"\n") + 1
+        fail(f"{path}, line {line}: the {what} is not UTF-8 text (save it as UTF-8)")
 
 
 # --- spiral tables -------------------------------------------------------------------------------
@@ -132,8 +177,7 @@ def add_table_options(parser):
     group.add_argument("--sigma", type=sigma, default=DEFAULT_SIGMA,
                        help="width of the Gaussian sampling in half-swings "
                             "(default: %(default)s)")
-    group.add_argument("--table-points", type=int_in(MIN_POINTS, MAX_POINTS, "table points"),
-                       default=DEFAULT_POINTS, metavar="N",
+    group.add_argument("--table-points", type=table_points, default=DEFAULT_POINTS, metavar="N",
                        help=f"samples per sine period, a multiple of 4 from {MIN_POINTS} to "
                             f"{MAX_POINTS} (default: %(default)s, as in the paper)")
 

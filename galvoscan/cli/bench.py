@@ -46,7 +46,7 @@ def _cmd_bench(args):
 def add_parsers(commands):
     bench = commands.add_parser(
         "bench", help="measure resources, Fmax, frame rate, link speed, simulator and proofs",
-        description="One run (under 10 minutes on 2 cores) that builds each board "
+        description="One run (10 to 20 minutes on 2 cores) that builds each board "
                     "configuration, runs every proof, and simulates the PHY, the host link and "
                     "the full spiral; prints a table (README 'Benchmarks').")
     bench.add_argument("--json", action="store_true",

@@ -6,7 +6,7 @@ from pathlib import Path
 import sys
 
 from .args import add_link_options, fail as _fail, int_in, number_in as positive, open_link, \
-    output_dir, output_file
+    image_file, output_dir, output_file
 
 
 __all__ = ["add_parsers"]
@@ -314,13 +314,15 @@ def add_parsers(commands):
                             "Zhang measured)")
     synth.add_argument("--seed", type=int_in(0, 2**32 - 1, "seed"), default=0,
                        help="noise seed (default: 0)")
-    output(synth, "the photo", metavar="PNG")
+    synth.add_argument("-o", "--output", type=image_file, required=True, metavar="PNG",
+                       help="the photo to write (.png; its folder is made if missing)")
     synth.set_defaults(run=_cmd_synth_photo)
 
     show = steps.add_parser("show", help="summarise (and plot) a table",
                             description="Print a table's size and offsets; plot them.")
     show.add_argument("table", metavar="FILE", help="the table (.json, .ctb, .cor)")
-    show.add_argument("--png", type=output_file, metavar="FILE", help="plot the offsets")
+    show.add_argument("--png", type=image_file, metavar="FILE",
+                      help="plot the offsets (.png, .svg, .pdf, …)")
     show.set_defaults(run=_cmd_show)
 
     study = steps.add_parser("study", help="the README's calibration study (synthetic head)",

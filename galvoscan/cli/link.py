@@ -3,7 +3,7 @@ written and read over the serial port or SPI."""
 
 import json
 
-from .args import add_link_options, fail, int_in, open_link
+from .args import add_link_options, fail, open_link, table_points
 
 
 __all__ = ["add_parsers", "register_table"]
@@ -109,7 +109,6 @@ def _cmd_read(args):
 
 def add_parsers(commands):
     from ..gateware.field.correction_table import TABLE_SIZES
-    from ..gateware.sources.spiral_table import MAX_POINTS, MIN_POINTS
     regs = commands.add_parser(
         "regs", help="print the register map",
         description="The register map: addresses, access, reset values, ranges and units. "
@@ -118,7 +117,7 @@ def add_parsers(commands):
                     "that build, as its board checks writes.")
     regs.add_argument("--json", action="store_true",
                       help="[{name, address, width, access, reset, min, max, unit, description}]")
-    regs.add_argument("--table-points", type=int_in(MIN_POINTS, MAX_POINTS, "table points"),
+    regs.add_argument("--table-points", type=table_points,
                       default=None, metavar="N",
                       help="the build's spiral table size (as `build --table-points`)")
     regs.add_argument("--correction-nodes", choices=[*map(str, TABLE_SIZES), "none"],

@@ -5,8 +5,8 @@ import json
 import sys
 import time
 
-from .args import (add_table_options, fail, int_in, number_in, output_file, read_text,
-                   register_int, settings_from, table_from)
+from .args import (add_table_options, fail, image_file, int_in, number_in, output_file,
+                   read_text, register_int, settings_from, table_from)
 
 
 __all__ = ["add_parsers"]
@@ -177,11 +177,23 @@ def _sim_spiral(args):
     return 0
 
 
+#: Vector-mode options given no value: the register's reset where there is one.
+VECTOR_DEFAULTS = {"prr": 60e3, "lens_field": 110.0}
+
+
 def _cmd_sim(args):
+    from ..gateware.host.regmap import BY_NAME
+    vector_only = ("prr", "pulses_per_point", "pitch", "jump_delay", "lens_field", "points_csv")
     if args.mode == "vector":
         if not args.job:
             fail("--mode vector needs --job FILE")
+        for name in vector_only:
+            if getattr(args, name) is None and name != "points_csv":
+                setattr(args, name, VECTOR_DEFAULTS.get(name) or BY_NAME[name].reset)
         return _sim_vector(args)
+    given = [name for name in vector_only if getattr(args, name) is not None]
+    if given:
+        fail(f"--{given[0].replace('_', '-')} is for --mode vector")
     return _sim_spiral(args)
 
 
@@ -218,26 +230,27 @@ def add_parsers(commands):
                      help="write a waveform (large for long runs)")
     sim.add_argument("--csv", type=output_file, metavar="FILE",
                      help="write one row per frame: frame,x,y (vector: and pulses)")
-    sim.add_argument("--png", type=output_file, metavar="FILE", help="plot the path")
+    sim.add_argument("--png", type=image_file, metavar="FILE",
+                     help="plot the path (.png, .svg, .pdf, …)")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     vector = sim.add_argument_group("vector mode")
     vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
     prr = BY_NAME["laser_prr"]       # in 100 Hz steps
     vector.add_argument("--prr", type=number_in("prr", prr.low * 100, prr.high * 100),
-                        default=60e3, metavar="HZ",
-                        help=f"laser pulse rate, {prr.low * 100:g} … {prr.high * 100:g} "
-                             f"(default: 60e3)")
-    vector.add_argument("--pulses-per-point", type=register_int("pulses_per_point"),
-                        default=BY_NAME["pulses_per_point"].reset, metavar="N",
-                        help="pulses on every marked point (default: %(default)s)")
-    vector.add_argument("--pitch", type=register_int("pitch"), default=BY_NAME["pitch"].reset,
-                        help="galvo units between marked points (default: %(default)s)")
-    vector.add_argument("--jump-delay", type=register_int("jump_delay", "jump delay"),
-                        default=BY_NAME["jump_delay"].reset, metavar="FRAMES",
-                        help="laser-off wait after a jump, 10 µs frames (default: %(default)s)")
-    vector.add_argument("--lens-field", type=number_in("lens field", 1, 2000), default=110.0,
-                        metavar="MM", help="field across 65536 units, for the speed in m/s "
-                                           "(default: 110)")
+                        metavar="HZ",
+                        help=f"laser pulse rate, {prr.low * 100:g} … {prr.high * 100:g} Hz "
+                             f"(default: {VECTOR_DEFAULTS['prr']:g}, the speeds of Wan et "
+                             f"al.'s table)")
+    for name, what in (("pulses_per_point", "pulses on every marked point"),
+                       ("pitch", "galvo units between marked points"),
+                       ("jump_delay", "laser-off wait after a jump, 10 µs frames")):
+        reg = BY_NAME[name]
+        vector.add_argument(f"--{name.replace('_', '-')}", type=register_int(name),
+                            metavar="N", help=f"{what}, {reg.low} … {reg.high} (default: the "
+                                              f"register's {reg.reset})")
+    vector.add_argument("--lens-field", type=number_in("lens field", 1, 2000), metavar="MM",
+                        help=f"field across 65536 units, for the speed in m/s (default: "
+                             f"{VECTOR_DEFAULTS['lens_field']:g})")
     vector.add_argument("--points-csv", type=output_file, metavar="FILE",
                         help="write one row per point: x,y,pulses,frames")
     add_table_options(sim)
