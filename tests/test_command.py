@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The command decoder alone (gateware/host/command.py), its register bus answered by a small
 register file modelled here, against the README's frame rules: a frame ``address, data[15:8],
 data[7:0], 0x64`` is accepted only if it is complete (32 bits), its check byte is 0x64, the

@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The SPI target alone (gateware/host/spi_target.py), driven by a mode-0 host written here:
 SCK idles low, the host sets COPI while SCK is low and both sides sample on the rising edge.
 Checked against a model of the README's SPI rules: a frame is exactly what is clocked in while

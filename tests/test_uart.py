@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The UART receiver and transmitter alone (gateware/host/uart.py), against a model of the 8N1
 line written here: idle high, a low start bit, eight data bits least significant first, a high
 stop bit, each one bit time (``divisor`` system clocks) long."""

