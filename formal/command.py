@@ -1,8 +1,9 @@
-"""The command path from the SPI pins to a register write, as properties (Dai & Tang 2020's
-frame; galvoscan's bad-input rules, README "How it is checked")."""
+"""The command path from both links to a register write, as properties (Dai & Tang 2020's
+frame; galvoscan's bad-input rules, README "Safety")."""
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Signal
+from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+                          ResetSignal, Signal)
 from amaranth.lib.wiring import connect
 
 from ..gateware.host.command import CommandDecoder
@@ -14,57 +15,93 @@ from ..gateware.host.spi_target import SPITarget
 
 __all__ = ["CommandPathSpec"]
 
+#: ``errors`` stops here.
+_ERRORS_TOP = 0xFFFF
+
 
 class CommandPathSpec(Elaboratable):
-    """No register write without a complete 32-bit frame with check byte 0x64.
+    """No register write without a complete 32-bit frame with check byte 0x64, from either link,
+    and every other frame counted; for every input and every reset.
 
-    The SPI pins are free on every clock (any SCK rate, glitches, ``cs_n`` released anywhere).
-    The spec reads the pins as the design must: through two flip-flops. For every clock it
-    proves that a register write happens only on the clock after ``cs_n`` rose at the end of a
-    frame of exactly 32 SCK rising edges whose last byte is 0x64 and whose address bit 7 is clear,
-    and that it writes that frame's address and data. A frame with more or fewer bits (``cs_n``
-    released mid-frame) therefore never writes.
+    The SPI pins are free on every clock (any SCK rate, glitches, ``cs_n`` released anywhere),
+    and so is the UART port's side of the decoder (any frame event, on any clock, with any
+    contents: a superset of what the UART port can hand on; the port's byte and idle rules are
+    simulated against a model in ``tests/test_uart_port.py``). The reset is free too, mid-frame
+    included. The spec reads the SPI pins as the design must: through two flip-flops. Proved:
+
+    * **writes**: a register is written only on the clock after ``cs_n`` rose at the end of a
+      frame of exactly 32 SCK rising edges (counted since ``cs_n`` fell after the last reset)
+      whose last byte is 0x64 and whose address bit 7 is clear, or on the clock a UART frame
+      event of 32 bits with those bytes is taken; and it writes that frame's address and data.
+      So a frame cut short, run over, or cut by a reset never writes;
+    * **one frame a clock**: a UART frame waits while an SPI frame is decoded;
+    * **counting**: ``errors`` goes up by one on the clock after a frame is taken and not
+      accepted (up to 65535), and changes at no other time; a frame is accepted only if it is
+      complete with check byte 0x64.
 
     A frame may last for ever, so k-induction alone cannot relate the spec's view of the frame
     to the SPI target's; helper invariants (also proved) say that the two agree.
+
+    The proof is made with everything live. Its covers come in two harnesses: this one shows
+    a UART write, a rejected frame counted and a read answered within a few clocks; an SPI
+    harness (``uart_live=False, reset_free=False``: a restriction of this one) shows an SPI
+    write, a frame cut short and a read answered over SPI, which need some 70 clocks, where
+    the free UART and reset would make every step of the search far slower.
 
     Parameters
     ----------
     make_spi, make_decoder : callables
         Build the SPI target and the decoder under proof (the tests pass broken ones).
+    helpers : bool
+        State the helper invariants. The broken designs' bounded checks leave them out, so
+        that the counterexample shows the bad write itself.
+    uart_live : bool
+        UART frame events free (else none come).
+    reset_free : bool
+        The reset free (else never asserted).
     """
 
-    def __init__(self, *, make_spi=SPITarget, make_decoder=CommandDecoder):
+    def __init__(self, *, make_spi=SPITarget, make_decoder=CommandDecoder, helpers=True,
+                 uart_live=True, reset_free=True):
         self.make_spi = make_spi
         self.make_decoder = make_decoder
+        self.helpers = helpers
+        self.uart_live = uart_live
+        self.reset_free = reset_free
 
     def elaborate(self, platform):
         m = Module()
-        m.domains.sync = ClockDomain(reset_less=True)
+        m.domains.sync = ClockDomain()
+        m.d.comb += ResetSignal("sync").eq(AnySeq(1) if self.reset_free else 0)
         m.submodules.spi = spi = self.make_spi()
         m.submodules.decoder = decoder = self.make_decoder()
         m.submodules.registers = registers = RegisterFile()
         connect(m, spi.frames, decoder.spi_frames)
         connect(m, decoder.spi_replies, spi.replies)
         connect(m, decoder.bus, registers.bus)
+        uart = decoder.uart_frames
         m.d.comb += [
-            decoder.uart_frames.valid.eq(0),
-            decoder.uart_replies.ready.eq(1),
+            uart.valid.eq(AnySeq(1) if self.uart_live else 0),
+            uart.payload.word.eq(AnySeq(len(uart.payload.word))),
+            uart.payload.bits.eq(AnySeq(len(uart.payload.bits))),
+            decoder.uart_replies.ready.eq(AnySeq(1)),
             spi.sck.eq(AnySeq(1)),
             spi.cs_n.eq(AnySeq(1)),
             spi.copi.eq(AnySeq(1)),
         ]
 
-        # The pins two clocks ago, as the design sees them after its synchronisers.
+        # The pins two clocks ago, as the design sees them after its synchronisers (which a
+        # reset does not touch).
         def delayed(pin, init):
-            stages = [Signal(init=init, name=f"{pin.name}_d{i}") for i in (1, 2)]
+            stages = [Signal(init=init, reset_less=True, name=f"{pin.name}_d{i}")
+                      for i in (1, 2)]
             m.d.sync += [stages[0].eq(pin), stages[1].eq(stages[0])]
             return stages[1]
         sck, cs_n, copi = delayed(spi.sck, 0), delayed(spi.cs_n, 1), delayed(spi.copi, 0)
         sck_q = Signal()
         m.d.sync += sck_q.eq(sck)
 
-        # The frame, from cs_n falling to cs_n rising.
+        # The SPI frame, from cs_n falling (or seen low after a reset) to cs_n rising.
         selected = Signal()
         bits = Signal(range(FRAME_BITS + 2))
         shift = Signal(FRAME_BITS)
@@ -77,7 +114,7 @@ class CommandPathSpec(Elaboratable):
         with m.Elif(cs_n & selected):
             m.d.sync += selected.eq(0)
 
-        # The frame that ended on the last clock.
+        # The SPI frame that ended on the last clock.
         ended = Signal()
         word = Signal(FRAME_BITS)
         word_bits = Signal.like(bits)
@@ -85,28 +122,63 @@ class CommandPathSpec(Elaboratable):
         with m.If(cs_n & selected):
             m.d.sync += [word.eq(shift), word_bits.eq(bits)]
 
+        def good_write(frame_bits, frame_word):
+            return ((frame_bits == FRAME_BITS) & (frame_word[0:8] == CHECK_BYTE) &
+                    ~frame_word[31] & (registers.bus.address == frame_word[24:31]) &
+                    (registers.bus.write_data == frame_word[8:24]))
+
+        def complete(frame_bits, frame_word):
+            return (frame_bits == FRAME_BITS) & (frame_word[0:8] == CHECK_BYTE)
+
+        uart_taken = uart.valid & ~ended
         write = registers.bus.write_en & registers.bus.write_ok
-        m.d.comb += Assert(~write | (ended & (word_bits == FRAME_BITS) &
-                                     (word[0:8] == CHECK_BYTE) & ~word[31] &
-                                     (registers.bus.address == word[24:31]) &
-                                     (registers.bus.write_data == word[8:24])),
-                           "a register is written only by a complete frame with check byte 0x64")
-
-        # Helper invariants: the SPI target's frame is the spec's frame.
         m.d.comb += [
-            Assert(spi._selected == selected, "helper: target selected"),
-            Assert(spi._bits == bits, "helper: target bit count"),
-            Assert(~selected | (spi._shift == shift), "helper: target bits"),
-            Assert(spi.frames.valid == ended, "helper: one frame event per frame"),
-            Assert(~ended | ((spi.frames.payload.word == word) &
-                             (spi.frames.payload.bits == word_bits)),
-                   "helper: frame event carries the frame"),
+            Assert(~write | (ended & good_write(word_bits, word)) |
+                   (uart_taken & good_write(uart.payload.bits, uart.payload.word)),
+                   "a register is written only by a complete frame with check byte 0x64"),
+            Assert(uart.ready == ~ended, "one frame a clock: a UART frame waits for SPI"),
         ]
 
-        m.d.comb += [
-            Cover(write, "a register is written"),
-            Cover(ended & (word_bits == FRAME_BITS - 1) & (word[0:8] == CHECK_BYTE),
-                  "a frame with a good check byte cut short by cs_n"),
-            Cover(decoder.spi_replies.valid, "a read is answered"),
-        ]
+        # --- every frame accepted or counted ------------------------------------------------
+        taken = ended | uart_taken
+        accepted = decoder.accepted
+        m.d.comb += Assert(
+            ~accepted | Mux(ended, complete(word_bits, word),
+                            uart_taken & complete(uart.payload.bits, uart.payload.word)),
+            "only a complete frame with check byte 0x64 is accepted")
+        m.d.comb += Assert(~write | accepted, "a write is an accepted frame")
+        errors_q = Signal.like(decoder.errors)
+        rejected_q = Signal()
+        m.d.sync += [errors_q.eq(decoder.errors), rejected_q.eq(taken & ~accepted)]
+        m.d.comb += Assert(
+            decoder.errors == Mux((errors_q == _ERRORS_TOP) | ~rejected_q, errors_q,
+                                  errors_q + 1),
+            "every rejected frame is counted, and nothing else")
+
+        if self.helpers:
+            # Helper invariants: the SPI target's frame is the spec's frame.
+            m.d.comb += [
+                Assert(spi._selected == selected, "helper: target selected"),
+                Assert(spi._bits == bits, "helper: target bit count"),
+                Assert(~selected | (spi._shift == shift), "helper: target bits"),
+                Assert(spi.frames.valid == ended, "helper: one frame event per frame"),
+                Assert(~ended | ((spi.frames.payload.word == word) &
+                                 (spi.frames.payload.bits == word_bits)),
+                       "helper: frame event carries the frame"),
+            ]
+
+        # --- covers -------------------------------------------------------------------------
+        if self.uart_live:
+            m.d.comb += [
+                Cover(write & uart_taken, "a register is written over the UART"),
+                Cover(rejected_q & (errors_q != 0), "a second rejected frame counted"),
+                Cover(decoder.uart_replies.valid, "a read is answered over the UART"),
+            ]
+        else:
+            m.d.comb += [
+                Cover(write & ended, "a register is written over SPI"),
+                Cover(ended & (word_bits == FRAME_BITS - 1) & (word[0:8] == CHECK_BYTE),
+                      "a frame with a good check byte cut short by cs_n"),
+                Cover(decoder.spi_replies.valid, "a read is answered over SPI"),
+            ]
         return m

@@ -1,8 +1,8 @@
-"""Laser safety, as properties of the DB25 pins (galvoscan's safety rules, README "How it is
-checked")."""
+"""Laser safety, as properties of the DB25 pins and the buffers' enable (galvoscan's safety
+rules, README "Safety")."""
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, ClockDomain, Cover, Elaboratable, Module, ResetSignal, Signal
+from amaranth.hdl import Assert, ClockDomain, Const, Cover, Elaboratable, Module, ResetSignal, Signal
 
 from ..gateware.laser.controller import Faults
 
@@ -14,42 +14,127 @@ class LaserSafetySpec(Elaboratable):
     """Safety of a laser controller, for every input sequence and every reset.
 
     All inputs (arm, power, PRR, watchdog time, accepted frames, fault clear, marking, the
-    interlock pin) and the reset are free on every clock. Proved:
+    interlock and alarm pins) and the reset are free on every clock. The spec reads the pins as
+    the design must: through two flip-flops ("seen" below). Proved:
 
-    * **interlock**: while the interlock pin is open, MO, modulation and the PRR clock are low;
-    * **lead**: modulation is on only while MO is on and has been on for at least the lead time;
-    * **reset**: after reset every laser output (power pins, latch, MO, modulation, PRR) stays
-      low until ``arm`` has been set;
+    * **enable**: ``laser_enable`` is high only while ``arm`` is set, no fault is latched, the
+      interlock is seen closed and no alarm is seen; while it is low, every laser output (power
+      pins, latch, MO, modulation, PRR) is low;
+    * **interlock, alarms**: while the interlock is seen open or an alarm is seen, every laser
+      output is low; and if armed, the fault is latched on the next clock (so whatever cut the
+      outputs also needs a clear and a re-arm);
+    * **watchdog**: armed with no accepted frame for the watchdog time (the value in force when
+      the last frame was accepted or arm was set) latches the watchdog fault at most that many
+      milliseconds and one clock after the last frame;
     * **faults**: a latched fault stays latched until ``fault_clear`` is pulsed while the
-      interlock is closed (as seen through two synchroniser clocks) or the system is reset;
-      and once a fault is latched, modulation is off from the next clock on.
+      interlock is seen closed and no alarm is seen (or the system is reset); from the clock a
+      fault is latched, every laser output is low, and stays low until the fault is cleared and
+      ``arm`` has been seen low;
+    * **lead**: modulation is on only while MO is on and has been on for at least the lead time;
+    * **reset**: after reset every laser output stays low until ``arm`` has been set.
 
     Parameters
     ----------
     controller : a :class:`~galvoscan.gateware.laser.controller.LaserController` (or a broken one)
     lead_clocks : int
         The lead the spec demands, in clocks.
+    ms_clocks : int
+        Clocks per millisecond of the watchdog.
+    alarms : int
+        Alarm inputs the controller has.
     """
 
-    def __init__(self, controller, *, lead_clocks):
+    def __init__(self, controller, *, lead_clocks, ms_clocks, alarms):
         self.controller = controller
         self.lead_clocks = lead_clocks
+        self.ms_clocks = ms_clocks
+        self.alarms = alarms
 
     def elaborate(self, platform):
         m = Module()
         m.domains.sync = ClockDomain()
         m.submodules.dut = dut = self.controller
         m.d.comb += ResetSignal("sync").eq(AnySeq(1))
-        for name in ("arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-                     "interlock_open"):
+        inputs = ["arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
+                  "interlock_open"] + (["alarm"] if self.alarms else [])
+        for name in inputs:
             port = getattr(dut, name)
             m.d.comb += port.eq(AnySeq(len(port)))
 
-        mo, am, prr = dut.laser_mo, dut.laser_am, dut.laser_prr
+        mo, am, prr, enable = dut.laser_mo, dut.laser_am, dut.laser_prr, dut.laser_enable
+        quiet = ~(mo | am | prr | dut.laser_latch) & (dut.laser_power == 0)
 
-        # --- interlock ----------------------------------------------------------------------
-        m.d.comb += Assert(~dut.interlock_open | ~(mo | am | prr),
-                           "interlock open: no MO, no modulation, no PRR")
+        # The pins as the design may see them: two clocks late (reset to "unsafe").
+        def seen(pin):
+            ones = 2 ** len(pin) - 1
+            first, second = Signal(len(pin), init=ones), Signal(len(pin), init=ones)
+            m.d.sync += [first.eq(pin), second.eq(first)]
+            return second.any()
+        interlock_seen = seen(dut.interlock_open)
+        alarm_seen = seen(dut.alarm) if self.alarms else Const(0, 1)
+
+        # --- enable -------------------------------------------------------------------------
+        m.d.comb += [
+            Assert(~enable | (dut.arm & ~dut.faults.as_value().any() & ~interlock_seen &
+                              ~alarm_seen),
+                   "laser_enable only while armed, no fault, interlock closed, no alarm"),
+            Assert(enable | quiet, "laser_enable low: every laser output low"),
+        ]
+
+        # --- interlock and alarms -----------------------------------------------------------
+        m.d.comb += Assert(~(interlock_seen | alarm_seen) | quiet,
+                           "interlock open or alarm: every laser output low")
+        interlock_due, alarm_due = Signal(), Signal()
+        m.d.sync += [interlock_due.eq(interlock_seen & dut.arm),
+                     alarm_due.eq(alarm_seen & dut.arm)]
+        m.d.comb += Assert(~interlock_due | dut.faults.interlock,
+                           "an interlock opening while armed latches a fault")
+        if self.alarms:
+            m.d.comb += Assert(~alarm_due | dut.faults.alarm,
+                               "an alarm while armed latches a fault")
+
+        # --- faults -------------------------------------------------------------------------
+        faults_q = Signal(Faults)
+        cleared_q = Signal()
+        m.d.sync += [faults_q.eq(dut.faults),
+                     cleared_q.eq(dut.fault_clear & ~interlock_seen & ~alarm_seen)]
+        for cause, _ in Faults:
+            m.d.comb += Assert(~faults_q[cause] | dut.faults[cause] | cleared_q,
+                               "a fault stays latched until cleared")
+        any_fault = dut.faults.as_value().any()
+        # From a fault on, off until cleared and arm seen low.
+        off_owed = Signal()
+        with m.If(any_fault):
+            m.d.sync += off_owed.eq(1)
+        with m.Elif(~dut.arm):
+            m.d.sync += off_owed.eq(0)
+        m.d.comb += Assert(
+            ~(any_fault | off_owed) | (quiet & ~enable),
+            "a latched fault keeps every laser output off until cleared and re-armed")
+
+        # --- watchdog -----------------------------------------------------------------------
+        # Clocks since the last accepted frame (or disarmed clock), and the watchdog time then.
+        limit = (2 ** len(dut.watchdog_ms) - 1) * self.ms_clocks + 1
+        silent = Signal(range(limit + 1))
+        silent_ms = Signal.like(dut.watchdog_ms)
+        with m.If(dut.alive | ~dut.arm):
+            m.d.sync += [silent.eq(0), silent_ms.eq(dut.watchdog_ms)]
+        with m.Elif(silent != limit):
+            m.d.sync += silent.eq(silent + 1)
+        timeout = silent_ms * self.ms_clocks
+        m.d.comb += Assert(~(silent > timeout) | dut.faults.watchdog | cleared_q,
+                           "silence for the watchdog time while armed latches a fault")
+        if hasattr(dut, "_ms_left"):
+            # Helper invariants (proved too): the watchdog's counters follow the silence.
+            with m.If(silent <= timeout):
+                m.d.comb += [
+                    Assert(dut._tick_ms == silent % self.ms_clocks, "helper: watchdog tick"),
+                    Assert(dut._ms_left == silent_ms - silent // self.ms_clocks,
+                           "helper: watchdog milliseconds left"),
+                ]
+            with m.Else():
+                m.d.comb += Assert(dut._ms_left == 0, "helper: watchdog expired")
+            m.d.comb += Assert(~off_owed | dut._rearm_needed, "helper: re-arm owed")
 
         # --- lead ---------------------------------------------------------------------------
         mo_on_for = Signal(range(self.lead_clocks + 1))    # clocks MO has been on, before now
@@ -65,20 +150,7 @@ class LaserSafetySpec(Elaboratable):
         armed_seen = Signal()
         with m.If(dut.arm):
             m.d.sync += armed_seen.eq(1)
-        quiet = ~(mo | am | prr | dut.laser_latch) & (dut.laser_power == 0)
         m.d.comb += Assert(armed_seen | quiet, "after reset all laser outputs low until armed")
-
-        # --- faults -------------------------------------------------------------------------
-        interlock_d1 = Signal(init=1)
-        interlock_d2 = Signal(init=1)
-        m.d.sync += [interlock_d1.eq(dut.interlock_open), interlock_d2.eq(interlock_d1)]
-        faults_q = Signal(Faults)
-        cleared_q = Signal()
-        m.d.sync += [faults_q.eq(dut.faults), cleared_q.eq(dut.fault_clear & ~interlock_d2)]
-        for cause, _ in Faults:
-            m.d.comb += Assert(~faults_q[cause] | dut.faults[cause] | cleared_q,
-                               "a fault stays latched until cleared")
-        m.d.comb += Assert(~faults_q.as_value().any() | ~am, "a latched fault stops modulation")
 
         # --- covers -------------------------------------------------------------------------
         emitted = Signal()
@@ -88,8 +160,13 @@ class LaserSafetySpec(Elaboratable):
             Cover(am & (dut.laser_power != 0), "modulation with power latched"),
             Cover(emitted & dut.faults.interlock & ~am,
                   "interlock opened after emission: fault latched, modulation off"),
+            Cover(emitted & dut.faults.watchdog & ~faults_q.watchdog,
+                  "the watchdog fires after emission"),
             Cover(emitted & faults_q.as_value().any() & ~dut.faults.as_value().any(),
                   "a fault cleared after emission"),
             Cover(dut.pulse, "a laser pulse"),
         ]
+        if self.alarms:
+            m.d.comb += Cover(emitted & dut.faults.alarm & ~faults_q.alarm,
+                              "an alarm after emission")
         return m

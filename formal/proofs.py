@@ -5,7 +5,7 @@ from typing import Callable
 
 from ..gateware.phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .command import CommandPathSpec
-from .correction import CorrectionSpec
+from .correction import CorrectionLinkSpec, CorrectionSpec
 from ..gateware.field.correction import FieldCorrection
 from ..gateware.field.correction_table import CorrectionTable
 from .laser import LaserSafetySpec
@@ -14,7 +14,7 @@ from .xy2_100 import XY2TransmitterSpec
 
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "command_path_proof", "laser_safety_proof",
-           "correction_proof", "LASER_PROOF_PARAMETERS"]
+           "correction_proof", "correction_link_proof", "LASER_PROOF_PARAMETERS"]
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,28 @@ class Proof:
     depth: int                      # k-induction depth (system clocks)
     cover_depth: int
     cover_skip: int = 0             # clocks before any cover can be reached
+    #: How deep the broken designs' bounded checks look (default: as deep as the covers).
+    bmc_depth: int = None
+    #: Builds the harness the covers are searched in, where that is a restriction of the
+    #: proof's (the reset tied off, say) that the solver searches far faster; None: the same.
+    cover_harness: Callable[[], object] = None
+
+    def __post_init__(self):
+        if self.bmc_depth is None:
+            object.__setattr__(self, "bmc_depth", self.cover_depth)
+
+    def run(self, workdir):
+        """Prove it and reach its covers: the prove and cover :class:`ProofResult`."""
+        from .runner import run_sby
+        if self.cover_harness is None:
+            return tuple(run_sby(self.harness(), self.name, workdir, depth=self.depth,
+                                 cover_depth=self.cover_depth, cover_skip=self.cover_skip))
+        prove, = run_sby(self.harness(), self.name, workdir, depth=self.depth,
+                         cover_depth=self.cover_depth, tasks=("prove",))
+        cover, = run_sby(self.cover_harness(), f"{self.name}_covers", workdir,
+                         depth=self.depth, cover_depth=self.cover_depth,
+                         cover_skip=self.cover_skip, tasks=("cover",))
+        return prove, cover
 
 
 def xy2_phy_proof(clocks_per_bit, *, make_phy=None, name=None):
@@ -34,81 +56,123 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, name=None):
     ``make_phy(clk_freq=…, bit_rate=…)`` builds the design under proof (the real transmitter
     by default; the tests pass deliberately broken ones).
 
-    The black-box spec remembers the last position taken for as long as no new one comes, so
-    k-induction has to see three whole frames before it can tie that memory to the PHY's own:
-    the depth is three frames and a few clocks. The cover needs two frames.
+    The black-box spec remembers the last position taken for as long as no new one comes; a
+    helper invariant ties that memory to the PHY's own, so k-induction needs to see one whole
+    frame (and a few clocks), resets included. The cover needs two frames.
     """
     make_phy = XY2Transmitter if make_phy is None else make_phy
     bit_rate = 2_000_000
     frame = FRAME_BITS * clocks_per_bit
 
-    def harness():
+    def harness(reset_free=True):
         phy = make_phy(clk_freq=clocks_per_bit * bit_rate, bit_rate=bit_rate)
-        return XY2TransmitterSpec(phy, clocks_per_bit=clocks_per_bit)
+        return XY2TransmitterSpec(phy, clocks_per_bit=clocks_per_bit, reset_free=reset_free)
 
     return Proof(
         name=name or f"xy2_100_{clocks_per_bit}x",
         description=f"XY2-100 PHY at {clocks_per_bit} system clocks per bit: clock, edges, "
-                    f"20-bit frames, SYNC, parity, control bits, latched data",
+                    f"20-bit frames, SYNC, parity, control bits, latched data; from power-up and "
+                    f"after any reset, mid-frame included",
         harness=harness,
-        depth=3 * frame + 5,
-        cover_depth=2 * frame + 10)
+        depth=frame + 5,
+        # Two frames with new data need no reset: searched with it tied off, they are found
+        # in seconds rather than minutes.
+        cover_depth=2 * frame + 10, cover_harness=lambda: harness(reset_free=False))
 
 
-def command_path_proof(*, make_spi=None, make_decoder=None, name="command_path"):
-    """SPI pins → decoder → register file: no write without a complete frame with 0x64.
+def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_live=True,
+                       reset_free=True, name="command_path"):
+    """Both links → decoder → register file, reset free: no write without a complete frame
+    with 0x64, every rejected frame counted.
 
-    Helper invariants make a short induction enough. A write needs a whole 32-bit frame through
-    the synchronisers, 67 clocks at the least, so covers are not searched before clock 66.
+    Helper invariants make a short induction enough. With the UART live, its covers are a few
+    clocks deep. A write over SPI needs a whole 32-bit frame through the synchronisers, 67
+    clocks at the least, so with the UART and reset tied off (the SPI covers' harness) covers
+    are not searched before clock 66: showing that none can be reached sooner is what takes a
+    solver long.
     """
-    kwargs = {}
+    kwargs = {"helpers": helpers, "uart_live": uart_live, "reset_free": reset_free}
     if make_spi is not None:
         kwargs["make_spi"] = make_spi
     if make_decoder is not None:
         kwargs["make_decoder"] = make_decoder
+    spi_only = not uart_live
     return Proof(
         name=name,
-        description="command path: a register is written only by a complete SPI frame with "
-                    "check byte 0x64; cs_n released mid-frame discards it",
+        description="command path, SPI pins and UART frames live, reset free: a register is "
+                    "written only by a complete frame with check byte 0x64 (cs_n released "
+                    "or a reset mid-frame discards it); every rejected frame is counted"
+                    if not spi_only else
+                    "command path over SPI alone: the same properties, and covers of an SPI "
+                    "write, a frame cut short and a read answered",
         harness=lambda: CommandPathSpec(**kwargs),
-        depth=8, cover_depth=74, cover_skip=66)
+        depth=8, cover_depth=74 if spi_only else 8, cover_skip=67 if spi_only else 0,
+        bmc_depth=74)
 
 
 #: The laser controller as proved: a 4 kHz clock makes 1 ms four clocks, so the 1.5 ms lead is 6
 #: clocks and the latch timings one clock each, and the cover of real emission is a few dozen
 #: clocks deep. The logic is the same at any size; the 5 ms lead at 12 MHz is simulated.
 LASER_PROOF_PARAMETERS = dict(clk_freq=4000, mo_lead=1.5e-3, latch_setup=0.25e-3,
-                              latch_pulse=0.25e-3)
+                              latch_pulse=0.25e-3, alarms=2)
 
 
 def laser_safety_proof(*, make_controller=None, lead_clocks=None, name="laser_safety"):
-    """Interlock, MO lead, reset and fault latching of the laser controller."""
+    """laser_enable, interlock, alarms, watchdog, MO lead, reset and faults of the controller.
+
+    The watchdog's counters are tied to the spec's count of silent clocks by helper
+    invariants, so a short induction covers any watchdog time (all 16 bits are free)."""
     make_controller = make_controller or (lambda: LaserController(**LASER_PROOF_PARAMETERS))
+    clk_freq = LASER_PROOF_PARAMETERS["clk_freq"]
     if lead_clocks is None:
-        lead_clocks = clocks_at_least(LASER_PROOF_PARAMETERS["mo_lead"],
-                                      LASER_PROOF_PARAMETERS["clk_freq"])
+        lead_clocks = clocks_at_least(LASER_PROOF_PARAMETERS["mo_lead"], clk_freq)
 
     return Proof(
         name=name,
-        description="laser: interlock open => no MO/modulation/PRR; modulation only after the "
-                    "MO lead; outputs low after reset until armed; faults latched until cleared",
-        harness=lambda: LaserSafetySpec(make_controller(), lead_clocks=lead_clocks),
+        description="laser: laser_enable only when armed, fault-free, interlock closed, no "
+                    "alarm, and every output low without it; interlock/alarm latch faults; "
+                    "watchdog fires in time; a fault keeps every output off until cleared and "
+                    "re-armed; MO lead; outputs low after reset until armed",
+        harness=lambda: LaserSafetySpec(make_controller(), lead_clocks=lead_clocks,
+                                        ms_clocks=round(clk_freq / 1000),
+                                        alarms=LASER_PROOF_PARAMETERS["alarms"]),
         depth=20, cover_depth=30)
 
 
-def correction_proof(*, make_stage=None, name="correction_writes"):
+def correction_proof(*, make_stage=None, helpers=True, name="correction_writes"):
     """The correction stage: no torn point, no lost write, the stream rules.
 
-    Proved on a 5 × 5 table (the RAM's size does not enter the properties). A point takes 15
-    clocks, so the induction looks 20 deep; the covers need a write and a point, about 20.
+    Proved on a 5 × 5 table (the RAM's size does not enter the properties). Helper invariants
+    tie a point's age to its step and a waiting write to the point it waits for, so a short
+    induction is enough (each step unrolls the multiplier once more); the covers need a write
+    and a point, about 20 clocks.
     """
     make_stage = make_stage or (lambda: FieldCorrection(CorrectionTable.identity(5)))
     return Proof(
         name=name,
         description="correction: no table write while a point is made; a requested write "
                     "is made within 15 clocks; a presented point holds until taken",
-        harness=lambda: CorrectionSpec(make_stage()),
-        depth=20, cover_depth=24)
+        harness=lambda: CorrectionSpec(make_stage(), helpers=helpers),
+        # A point's 15 clocks and a write waiting through one: each broken stage shows by 17.
+        depth=4, cover_depth=24, bmc_depth=17)
+
+
+def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting=True,
+                          name="correction_link"):
+    """Table writes from either link: the values at the frame are the values written.
+
+    The decoder, register file and correction stage (5 × 5) with frames free on both links.
+    Helper invariants tie a waiting write to its frame's registers and to the point it waits
+    for, so a short induction is enough.
+    """
+    return Proof(
+        name=name,
+        description="correction writes through both links: a table write stores what the "
+                    "registers held when its cor_write frame was accepted; one waits at a "
+                    "time, and is made within 16 clocks",
+        harness=lambda: CorrectionLinkSpec(make_stage=make_stage, helpers=helpers,
+                                           refuse_while_waiting=refuse_while_waiting),
+        depth=4, cover_depth=24, bmc_depth=12)
 
 
 PROOFS = [
@@ -117,10 +181,12 @@ PROOFS = [
     # The iCEBreaker's 12 MHz system clock.
     xy2_phy_proof(6),
     command_path_proof(),
+    command_path_proof(uart_live=False, reset_free=False, name="command_path_spi"),
     laser_safety_proof(),
     # As built with vector mode: the PRR clock runs free and leads pulse_ahead (MO gates it).
     laser_safety_proof(
         make_controller=lambda: LaserController(**LASER_PROOF_PARAMETERS, lookahead=3),
         name="laser_safety_free_prr"),
     correction_proof(),
+    correction_link_proof(),
 ]

@@ -19,6 +19,7 @@ _SBY_TEMPLATE = """\
 [tasks]
 prove
 cover
+bmc
 
 [options]
 prove: mode prove
@@ -26,6 +27,9 @@ prove: depth {depth}
 cover: mode cover
 cover: depth {cover_depth}
 cover: skip {cover_skip}
+bmc: mode bmc
+bmc: depth {cover_depth}
+bmc: skip {cover_skip}
 multiclock off
 
 [engines]
@@ -63,8 +67,12 @@ def run_sby(harness, name, workdir, *, depth, cover_depth, cover_skip=0,
     ``cover_skip`` clocks are not searched for covers: a cover that needs a whole command frame
     cannot be reached sooner, and proving that step by step is what takes a solver long.
 
+    ``tasks`` may also name ``"bmc"``: a bounded check to ``cover_depth`` (skipping
+    ``cover_skip`` clocks), which fails with a counterexample trace where an assertion can be
+    broken that soon; the broken designs' tests use it.
+
     Files go to ``workdir/name``; YoWASP tools cannot see absolute paths outside their working
-    folder, so they run with it as ``cwd`` and relative paths. Returns the prove and cover
+    folder, so they run with it as ``cwd`` and relative paths. Returns the
     :class:`ProofResult` of each of ``tasks``.
     """
     folder = Path(workdir) / name

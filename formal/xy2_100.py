@@ -7,7 +7,8 @@ from the protocol anywhere fails the proof.
 """
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux, Signal
+from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+                          ResetSignal, Signal)
 
 from ..gateware.phy.xy2_100 import FRAME_BITS
 from ..gateware.points import FIELD_CENTRE, FieldPoint
@@ -19,8 +20,10 @@ __all__ = ["XY2TransmitterSpec"]
 class XY2TransmitterSpec(Elaboratable):
     """Properties of an XY2 transmitter, for SymbiYosys.
 
-    Proved from power-up, for any sequence of offered positions (free ``valid`` and payload on
-    every clock):
+    Proved from power-up and after every reset (the reset is free on every clock, mid-frame
+    included: the monitor starts again with it, so after a reset the wires must once more give
+    whole, correct frames from the first clock on), for any sequence of offered positions
+    (free ``valid`` and payload on every clock):
 
     * **clock**: ``xy2_clk`` toggles every ``clocks_per_bit / 2`` system clocks, for ever;
     * **edges**: SYNC, X and Y change only together with a rising edge of ``xy2_clk``, so they
@@ -39,17 +42,22 @@ class XY2TransmitterSpec(Elaboratable):
         System clocks per XY2 bit of ``dut``.
     control_bits : int
         Control bits the frames must carry.
+    reset_free : bool
+        The reset free on every clock (else never asserted: power-up only).
     """
 
-    def __init__(self, dut, *, clocks_per_bit, control_bits=0b001):
+    def __init__(self, dut, *, clocks_per_bit, control_bits=0b001, reset_free=True):
+        self.reset_free = reset_free
         self.dut = dut
         self.clocks_per_bit = clocks_per_bit
         self.control_bits = control_bits
 
     def elaborate(self, platform):
         m = Module()
-        # Reset is the same as power-up for the PHY: both start from the initial state.
-        m.domains.sync = ClockDomain(reset_less=True)
+        # The reset is free; the monitor's own state resets with it, so every property below
+        # holds after a reset as it does after power-up.
+        m.domains.sync = ClockDomain()
+        m.d.comb += ResetSignal("sync").eq(AnySeq(1) if self.reset_free else 0)
         m.submodules.dut = dut = self.dut
 
         m.d.comb += [
@@ -60,7 +68,7 @@ class XY2TransmitterSpec(Elaboratable):
         half = self.clocks_per_bit // 2
         clk, sync, x, y = dut.xy2_clk, dut.xy2_sync, dut.xy2_x, dut.xy2_y
 
-        # The wires one clock ago; all low at power-up.
+        # The wires one clock ago; all low at power-up and after reset.
         clk_q, sync_q, x_q, y_q = (Signal(name=f"{s.name}_q") for s in (clk, sync, x, y))
         m.d.sync += [clk_q.eq(clk), sync_q.eq(sync), x_q.eq(x), y_q.eq(y)]
         rise = clk & ~clk_q
@@ -116,6 +124,19 @@ class XY2TransmitterSpec(Elaboratable):
         frame_position = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
         with m.If(sync_rise):
             m.d.sync += frame_position.eq(taken)
+        if hasattr(dut, "_latched"):
+            # Helper invariant (proved too): the spec's memory of the last position taken is
+            # the transmitter's. It spares the induction looking back over several frames.
+            # The bit counters agree (the spec's moves a clock after the PHY's, with the clock
+            # edge it counts) and stay in range.
+            bit_q = Signal.like(dut._bit)
+            m.d.sync += bit_q.eq(dut._bit)
+            m.d.comb += [
+                Assert(taken.as_value() == dut._latched.as_value(),
+                       "helper: the position taken is the one latched"),
+                Assert(dut._bit < FRAME_BITS, "helper: bit counter in range"),
+                Assert(~in_frame | (bit_no == bit_q), "helper: the bit counters agree"),
+            ]
 
         # --- content ----------------------------------------------------------------------------
         # Sample like a scan head: on the falling edge.

@@ -4,7 +4,8 @@ Its ports are plain one-bit wires with fixed names, so the exported Verilog drop
 designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_clk``,
 ``xy2_sync``, ``xy2_x``, ``xy2_y``, the host link ``spi_sck``, ``spi_cs_n``, ``spi_copi``,
 ``spi_cipo``, ``uart_rx``, ``uart_tx``, and the laser's DB25 signals ``laser_power[7:0]``,
-``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr`` with the ``interlock_open`` input.
+``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr``, the buffers' ``laser_enable``,
+and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``).
 """
 
 from amaranth.hdl import Cat, Module, Signal
@@ -22,7 +23,7 @@ from .host.regmap import DEFAULT_CORRECTION_NODES, Mode, register_map
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
-from .laser.controller import LaserController
+from .laser.controller import MAX_ALARMS, LaserController
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .settings import ScanSettings
 from .sources.raster import RasterSequencer
@@ -90,6 +91,8 @@ class GalvoScanTop(wiring.Component):
         unknown addresses, and vector mode (timed by the laser's pulses) cannot be built.
     uart_reply_depth : int
         Read answers the UART port queues (1 on the smallest boards).
+    laser_alarms : int
+        Laser alarm inputs, 0 … 4 (each latches an alarm fault while armed).
 
     Interface attributes
     --------------------
@@ -101,8 +104,15 @@ class GalvoScanTop(wiring.Component):
         Serial port, 8N1 at ``baud``.
     laser_power : ``Out(8)``; laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
         DB25 pins 1-8, 9, 18, 19, 20 of a fiber laser (through 5 V TTL buffers).
+    laser_enable : ``Out(1)``
+        High only while armed with no fault, the interlock closed and no alarm: the output
+        enable of those buffers (pulled down on the board: off before configuration). Every
+        laser output is low while it is low.
     interlock_open : ``In(1, init=1)``
         1 = interlock open (give the pin a pull-up, so a broken loop reads open).
+    laser_alarm : ``In(laser_alarms, init=all ones)``, when ``laser_alarms`` > 0
+        The laser's alarm outputs, 1 = alarm (give the pins pull-ups, so an unconnected one
+        reads as an alarm).
 
     Attributes
     ----------
@@ -112,27 +122,10 @@ class GalvoScanTop(wiring.Component):
         Clocks per XY2 bit and per UART bit.
     """
 
-    xy2_clk: Out(1)
-    xy2_sync: Out(1)
-    xy2_x: Out(1)
-    xy2_y: Out(1)
-    spi_sck: In(1)
-    spi_cs_n: In(1, init=1)
-    spi_copi: In(1)
-    spi_cipo: Out(1)
-    uart_rx: In(1, init=1)
-    uart_tx: Out(1, init=1)
-    laser_power: Out(8)
-    laser_latch: Out(1)
-    laser_mo: Out(1)
-    laser_am: Out(1)
-    laser_prr: Out(1)
-    interlock_open: In(1, init=1)
-
     def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=DEFAULT_BAUD, table=None,
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
-                 uart_reply_depth=REPLY_QUEUE_DEPTH):
+                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -173,6 +166,11 @@ class GalvoScanTop(wiring.Component):
         if not mo_lead > 0:
             raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
         self.mo_lead = mo_lead
+        if not isinstance(laser_alarms, int) or isinstance(laser_alarms, bool) or \
+                not 0 <= laser_alarms <= MAX_ALARMS:
+            raise ValueError(f"laser_alarms must be a whole number from 0 to {MAX_ALARMS}, "
+                             f"not {laser_alarms!r}")
+        self.laser_alarms = laser_alarms if self.laser else 0
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -181,7 +179,17 @@ class GalvoScanTop(wiring.Component):
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
             modes=modes, laser=self.laser, resets=self.settings.register_resets())
-        super().__init__()
+        members = {
+            "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
+            "spi_sck": In(1), "spi_cs_n": In(1, init=1), "spi_copi": In(1), "spi_cipo": Out(1),
+            "uart_rx": In(1, init=1), "uart_tx": Out(1, init=1),
+            "laser_power": Out(8), "laser_latch": Out(1), "laser_mo": Out(1),
+            "laser_am": Out(1), "laser_prr": Out(1), "laser_enable": Out(1),
+            "interlock_open": In(1, init=1),
+        }
+        if self.laser_alarms:
+            members["laser_alarm"] = In(self.laser_alarms, init=2 ** self.laser_alarms - 1)
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
@@ -282,6 +290,9 @@ class GalvoScanTop(wiring.Component):
                 correction.write_dx.eq(regs.cor_dx),
                 correction.write_dy.eq(regs.cor_dy),
                 correction.write_en.eq(regs.cor_write),
+                # A write asked for now, or one still waiting for a point: refuse the next
+                # (the stage keeps one write's values).
+                regs.cor_write_ready.eq(~regs.cor_write & ~correction.write_pending),
                 regs.cor_nodes.eq(self.correction.n),
                 status.flags.clipped.eq(scale.clipped | correction.clipped),
             ]
@@ -327,7 +338,8 @@ class GalvoScanTop(wiring.Component):
         frame_clocks = FRAME_BITS * self.clocking.clocks_per_bit
         lookahead = 2 * frame_clocks + 1 if Mode.VECTOR in sources else 0
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
-                                                     mo_lead=self.mo_lead, lookahead=lookahead)
+                                                     mo_lead=self.mo_lead, lookahead=lookahead,
+                                                     alarms=self.laser_alarms)
         # The watchdog hears of an accepted frame a clock later: that takes the decoder's
         # checks off the path into the laser's timers (the longest path otherwise).
         command_seen = Signal()
@@ -369,13 +381,19 @@ class GalvoScanTop(wiring.Component):
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),
         ]
-        for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr"):
+        if self.laser_alarms:
+            m.d.comb += [laser.alarm.eq(self.laser_alarm),
+                         status.flags.alarm.eq(self.laser_alarm.any())]
+        for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr",
+                     "laser_enable"):
             m.d.comb += getattr(self, name).eq(getattr(laser, name))
         m.d.comb += [
             status.events.pulses.eq(laser.pulse),
             status.flags.armed.eq(regs.arm),
             status.flags.fault_interlock.eq(laser.faults.interlock),
             status.flags.fault_watchdog.eq(laser.faults.watchdog),
+            status.flags.fault_alarm.eq(laser.faults.alarm),
+            status.flags.laser_enable.eq(laser.laser_enable),
             status.flags.mo_on.eq(laser.laser_mo),
             status.flags.emitting.eq(laser.laser_am),
         ]

@@ -39,11 +39,17 @@ PMOD1A 7       3         laser_latch        9
 PMOD1A 8       48        laser_mo           18
 PMOD1A 9       46        laser_am           19
 PMOD1A 10      44        laser_prr          20
+PMOD1B 8       36        laser_enable       (the buffers' output enable; pull it down)
 PMOD1B 7       42        interlock_open     (loop; pulled up: a broken loop reads open)
+PMOD1B 9, 10   32 28     laser_alarm[0:2]   (laser's alarm outputs, 1 = alarm; pulled up)
 =============  ========  =================  =========
 
-The red LED lights once frames are going out. The four bus lines leave through the I/O cells'
-output flip-flops, one system clock after the PHY's own registers.
+Before and while the FPGA configures, its pins float with weak pull-ups: the buffers must be
+off then (``laser_enable`` pulled down, so the buffers' outputs are disabled) and the laser
+lines held low by pull-downs behind them (README "Wiring").
+
+The red LED lights once frames are going out. The four bus lines and every laser line leave
+through the I/O cells' output flip-flops, one system clock after the core's own logic.
 """
 
 from amaranth.build import Attrs, Pins, Resource, Subsignal
@@ -60,7 +66,7 @@ from .pll import ICE40PLL, pll_settings
 CRYSTAL_HZ = 12_000_000
 
 __all__ = ["CRYSTAL_HZ", "ICEBreakerScanner", "system_clock", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
-           "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN"]
+           "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN", "ALARM_PMOD_PINS"]
 
 
 #: PMOD1A pin of each XY2-100 signal (the README's table is checked against these).
@@ -74,9 +80,12 @@ LASER_PMOD_PINS = {
     "mo": (0, "8", "18"),
     "am": (0, "9", "19"),
     "prr": (0, "10", "20"),
+    "enable": (1, "8", "-"),     # to the buffers' output enable, not to the DB25
 }
 #: The interlock loop input: (PMOD number, PMOD pin).
 INTERLOCK_PMOD_PIN = (1, "7")
+#: The laser alarm inputs: (PMOD number, PMOD pins); as many alarms as pins.
+ALARM_PMOD_PINS = (1, "9 10")
 
 
 def icebreaker_platform():
@@ -98,6 +107,10 @@ def icebreaker_platform():
                  Attrs(IO_STANDARD="SB_LVCMOS")),
         Resource("interlock", 0,
                  Pins(INTERLOCK_PMOD_PIN[1], dir="i", conn=("pmod", INTERLOCK_PMOD_PIN[0])),
+                 Attrs(IO_STANDARD="SB_LVCMOS", PULLUP=1)),
+        # Pulled up: an unconnected alarm input reads as an alarm, and the laser stays off.
+        Resource("laser_alarm", 0,
+                 Pins(ALARM_PMOD_PINS[1], dir="i", conn=("pmod", ALARM_PMOD_PINS[0])),
                  Attrs(IO_STANDARD="SB_LVCMOS", PULLUP=1)),
     ])
     return platform
@@ -147,7 +160,8 @@ class ICEBreakerScanner(Elaboratable):
             m.submodules.pll = ICE40PLL(crystal, self.pll, sync)
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, table=self.table,
-            settings=self.settings, correction=self.correction, **extra)
+            settings=self.settings, correction=self.correction,
+            laser_alarms=len(ALARM_PMOD_PINS[1].split()), **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.
@@ -169,15 +183,19 @@ class ICEBreakerScanner(Elaboratable):
             m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
             m.d.comb += pad.o.eq(getattr(scanner, name))
 
-        # Laser. Plain buffers, no I/O flip-flops: the interlock pin gates MO, modulation and
-        # PRR inside the core without a clock, and that must reach the pins as it is.
+        # Laser. Every line through the I/O cell's output flip-flop, like the bus: no logic
+        # glitch reaches the laser, and the lines (with laser_enable) change together. The
+        # flip-flops come out of configuration low. The core synchronises the inputs.
         laser = platform.request("laser", 0, dir="-")
         for name in LASER_PMOD_PINS:
-            m.submodules[f"laser_{name}_pad"] = pad = io.Buffer("o", getattr(laser, name))
+            m.submodules[f"laser_{name}_pad"] = pad = io.FFBuffer("o", getattr(laser, name))
             m.d.comb += pad.o.eq(getattr(scanner, f"laser_{name}"))
         m.submodules.interlock_pad = interlock = io.Buffer(
             "i", platform.request("interlock", 0, dir="-"))
         m.d.comb += scanner.interlock_open.eq(interlock.i)
+        m.submodules.alarm_pad = alarm = io.Buffer(
+            "i", platform.request("laser_alarm", 0, dir="-"))
+        m.d.comb += scanner.laser_alarm.eq(alarm.i)
 
         running = Signal()
         with m.If(scanner.xy2_sync):

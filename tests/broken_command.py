@@ -1,6 +1,6 @@
 """Deliberately broken command paths, to show that the command proof catches each fault."""
 
-from amaranth.hdl import Cat, Const, Module, Mux
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 
 from galvoscan.gateware.host.command import CommandDecoder
@@ -61,13 +61,91 @@ class TargetPassingShortFrames(wiring.Component):
         return m
 
 
-#: Each fault: the parts to swap in, and the property it must break.
+class TargetKeepingFramesThroughReset(SPITarget):
+    """The real SPI target, but its frame state survives a reset: the bits after a reset
+    mid-frame complete the bits before it."""
+
+    def __init__(self):
+        super().__init__()
+        self._selected = Signal(reset_less=True)
+        self._bits = Signal.like(self._bits, reset_less=True)
+        self._shift = Signal.like(self._shift, reset_less=True)
+
+
+class DecoderDroppingUARTErrors(wiring.Component):
+    """The real decoder, but a UART frame that is not 32 bits long is taken and dropped
+    without being counted."""
+
+    def __init__(self):
+        self.inner = CommandDecoder()
+        super().__init__(self.inner.signature)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.inner = inner = self.inner
+        wiring.connect(m, wiring.flipped(self.spi_frames), inner.spi_frames)
+        wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
+        wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
+        wiring.connect(m, inner.bus, wiring.flipped(self.bus))
+        whole = self.uart_frames.payload.bits == 32
+        m.d.comb += [
+            inner.uart_frames.valid.eq(self.uart_frames.valid & whole),
+            inner.uart_frames.payload.eq(self.uart_frames.payload),
+            self.uart_frames.ready.eq(inner.uart_frames.ready | ~whole),
+            self.errors.eq(inner.errors),
+            self.accepted.eq(inner.accepted),
+            self.status_read.eq(inner.status_read),
+            self.write_refused.eq(inner.write_refused),
+        ]
+        return m
+
+
+class DecoderAcceptingLongUARTFrames(wiring.Component):
+    """The real decoder, but a UART frame that ran over (33 bits) is decoded as complete."""
+
+    def __init__(self):
+        self.inner = CommandDecoder()
+        super().__init__(self.inner.signature)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.inner = inner = self.inner
+        wiring.connect(m, wiring.flipped(self.spi_frames), inner.spi_frames)
+        wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
+        wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
+        wiring.connect(m, inner.bus, wiring.flipped(self.bus))
+        bits = self.uart_frames.payload.bits
+        m.d.comb += [
+            inner.uart_frames.valid.eq(self.uart_frames.valid),
+            self.uart_frames.ready.eq(inner.uart_frames.ready),
+            inner.uart_frames.payload.word.eq(self.uart_frames.payload.word),
+            inner.uart_frames.payload.bits.eq(Mux(bits == 33, 32, bits)),
+            self.errors.eq(inner.errors),
+            self.accepted.eq(inner.accepted),
+            self.status_read.eq(inner.status_read),
+            self.write_refused.eq(inner.write_refused),
+        ]
+        return m
+
+
+#: Each fault: the parts to swap in (and which of the links and reset the check needs), and
+#: the property it must break. The broken designs are checked without the helper invariants
+#: (a bounded check, from clock 66 on), so that the counterexample is the bad write or the
+#: lost count itself.
 BROKEN_COMMAND_PATHS = {
     "decoder_ignores_check_byte": (
-        {"make_decoder": DecoderIgnoringCheckByte},
+        {"make_decoder": DecoderIgnoringCheckByte, "uart_live": False, "reset_free": False},
         "a register is written only by a complete frame with check byte 0x64"),
-    # The target misreports what was clocked in: the proof's statement of exactly that fails.
     "target_passes_short_frames": (
-        {"make_spi": TargetPassingShortFrames},
-        "helper: frame event carries the frame"),
+        {"make_spi": TargetPassingShortFrames, "uart_live": False, "reset_free": False},
+        "a register is written only by a complete frame with check byte 0x64"),
+    "target_keeps_frames_through_reset": (
+        {"make_spi": TargetKeepingFramesThroughReset, "uart_live": False},
+        "a register is written only by a complete frame with check byte 0x64"),
+    "decoder_drops_uart_errors": (
+        {"make_decoder": DecoderDroppingUARTErrors},
+        "every rejected frame is counted, and nothing else"),
+    "decoder_accepts_long_uart_frames": (
+        {"make_decoder": DecoderAcceptingLongUARTFrames},
+        "a register is written only by a complete frame with check byte 0x64"),
 }

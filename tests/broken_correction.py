@@ -13,6 +13,14 @@ class WritesMidPoint(FieldCorrection):
         return 1
 
 
+class WritesLateValues(FieldCorrection):
+    """A waiting write stores what the write port shows when it is made, not what it showed
+    when the write was asked for (a frame from the other link can change it meanwhile)."""
+
+    def _write_value(self, pending, held, asked_now):
+        return asked_now
+
+
 class OverwritesOutput(FieldCorrection):
     """Takes a new point while the last one still waits to be taken."""
 
@@ -27,6 +35,10 @@ class LosesWrites(wiring.Component):
         self.inner = FieldCorrection(table)
         self._busy = self.inner._busy
         self._ram_write = self.inner._ram_write
+        self._ram_addr = self.inner._ram_addr
+        self._ram_data = self.inner._ram_data
+        self._step = self.inner._step
+        self._held_node, self._held_data = self.inner._held_node, self.inner._held_data
         super().__init__(self.inner.signature)
 
     def elaborate(self, platform):
@@ -44,11 +56,12 @@ class LosesWrites(wiring.Component):
         return m
 
 
-#: Each fault and the property that catches it first. (A lost write shows first as a write
-#: owed that the stage no longer keeps pending: the helper that lets the induction bound the
-#: wait.)
+#: Each fault and the property its bounded check (without helper invariants) breaks.
 CORRECTION_FAULTS = {
     WritesMidPoint: "no table write while a point is made",
+    WritesLateValues: "a table write stores the node and offsets asked for",
     OverwritesOutput: "a point is taken only when the output is free",
-    LosesWrites: "helper: a write is owed while one is pending",
+    # The dropped write is never made; or a later one is, storing other values than it asked.
+    LosesWrites: ("a requested write is made within CLOCKS clocks",
+                  "a table write stores the node and offsets asked for"),
 }

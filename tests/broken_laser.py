@@ -7,9 +7,9 @@ from galvoscan.gateware.laser.controller import LaserController
 
 
 INPUTS = ("arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-          "interlock_open")
-OUTPUTS = ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "faults",
-           "mo_ready", "pulse")
+          "interlock_open", "alarm")
+OUTPUTS = ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "laser_enable",
+           "faults", "mo_ready", "pulse")
 
 
 class TamperedLaser(wiring.Component):
@@ -25,11 +25,28 @@ class TamperedLaser(wiring.Component):
         outputs = {name: getattr(inner, name) for name in OUTPUTS}
 
         if self.kind == "mo_ignores_interlock":
-            # MO straight from its register, not through the interlock gate.
+            # MO straight from its register, not through the enable gate.
             outputs["laser_mo"] = inner._mo
         elif self.kind == "power_before_arm":
             # The power register on the pins whether armed or not.
             outputs["laser_power"] = self.power
+        elif self.kind == "watchdog_never_fires":
+            # The watchdog is told of a frame on every clock.
+            inputs["alive"] = 1
+        elif self.kind == "mo_stays_on_after_watchdog":
+            # Modulation stops on a watchdog fault, but MO and the PRR clock that were on
+            # stay on until the fault is cleared.
+            mo_q, stuck_q = Signal(), Signal()
+            stuck = inner.faults.watchdog & (mo_q | stuck_q)
+            m.d.sync += [mo_q.eq(inner.laser_mo), stuck_q.eq(stuck)]
+            outputs["laser_mo"] = inner.laser_mo | stuck
+            outputs["laser_prr"] = inner.laser_prr | stuck
+        elif self.kind == "alarms_ignored":
+            # The alarm inputs are not wired to the controller.
+            inputs["alarm"] = 0
+        elif self.kind == "enable_ignores_faults":
+            # The buffers' enable follows arm alone.
+            outputs["laser_enable"] = self.arm
         elif self.kind == "fault_clears_itself":
             # Faults cleared as soon as the interlock closes again, without a clear command.
             closed = Signal()
@@ -45,10 +62,20 @@ class TamperedLaser(wiring.Component):
         return m
 
 
-#: Each fault: how to build it, and the property it must break.
+#: Each fault: how to build it, and the property it must break (or those it may break first:
+#: the solver reports the shortest counterexample, whichever property that breaks).
 LASER_FAULTS = {
-    "mo_ignores_interlock": "interlock open: no MO, no modulation, no PRR",
+    "mo_ignores_interlock": "laser_enable low: every laser output low",
     "power_before_arm": "after reset all laser outputs low until armed",
     "fault_clears_itself": "a fault stays latched until cleared",
     "short_lead": "modulation only after MO has led for the lead time",
+    "watchdog_never_fires": "silence for the watchdog time while armed latches a fault",
+    "mo_stays_on_after_watchdog":
+        "a latched fault keeps every laser output off until cleared and re-armed",
+    # Unwired alarms: no alarm fault latches, and a fault is cleared while an alarm is on.
+    "alarms_ignored": ("interlock open or alarm: every laser output low",
+                       "an alarm while armed latches a fault",
+                       "a fault stays latched until cleared"),
+    "enable_ignores_faults": "laser_enable only while armed, no fault, interlock closed, no "
+                             "alarm",
 }

@@ -4,7 +4,7 @@ Each is the real transmitter with one thing tampered with between it and the pin
 stream), so everything else about it stays correct and only the targeted property can fail.
 """
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import ClockDomain, ClockSignal, DomainRenamer, Module, Mux, Signal
 from amaranth.lib import wiring
 
 from galvoscan.gateware.phy.xy2_100 import XY2Transmitter
@@ -19,7 +19,15 @@ class TamperedPHY(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.inner = inner = self.inner
+        inner = self.inner
+        if self.kind == "ignores_reset":
+            # The transmitter on the same clock, in a domain without a reset: after a reset
+            # mid-frame it carries on with the frame it was sending.
+            m.domains.free_running = ClockDomain(reset_less=True)
+            m.d.comb += ClockSignal("free_running").eq(ClockSignal("sync"))
+            m.submodules.inner = DomainRenamer("free_running")(inner)
+        else:
+            m.submodules.inner = inner
         kind = self.kind
         half = inner.clocks_per_bit // 2
 
@@ -63,6 +71,8 @@ class TamperedPHY(wiring.Component):
         elif kind == "mid_frame_latch":
             # The stream is also ready in the middle of a frame.
             ready = ready | (started & (bit == 9) & rise)
+        elif kind == "ignores_reset":
+            pass
         elif kind == "idle_clock":
             # One clock pulse a frame is swallowed.
             clk = clk & ~(started & (bit == 10))
@@ -92,4 +102,9 @@ FAULTS = {
     "corrupt_data": "X data is the latched position",
     "mid_frame_latch": "a position is taken only on the clock before a frame starts",
     "idle_clock": "xy2_clk toggles every clocks_per_bit/2 system clocks",
+    # After a reset the monitor starts again and sees the old frame's remains first.
+    "ignores_reset": ("xy2_clk starts on the first clock after power-up",
+                      "the first frame starts with the first clock",
+                      "SYNC, X and Y change only with a rising xy2_clk",
+                      "xy2_clk toggles every clocks_per_bit/2 system clocks"),
 }

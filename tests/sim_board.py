@@ -15,8 +15,8 @@ from wires import frames_from_samples
 
 
 class SimBoard:
-    def __init__(self, *, clk_freq=4e6, baud=500_000, interlock_closed=True, record_laser=False,
-                 **top_kwargs):
+    def __init__(self, *, clk_freq=4e6, baud=500_000, interlock_closed=True, alarms_clear=True,
+                 record_laser=False, **top_kwargs):
         self.top = top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
         self.clk_freq = clk_freq
         self.bit_time = 1 / baud
@@ -36,9 +36,10 @@ class SimBoard:
         self.sim.add_testbench(self._uart_host_rx, background=True)
         self.sim.add_testbench(self._spi_host, background=True)
         self.interlock_closed = interlock_closed
+        self.alarms_clear = alarms_clear
         self.sim.add_testbench(self._interlock, background=True)
-        #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power) on every
-        #: clock, if recorded.
+        #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power,
+        #: laser_enable, laser_alarm) on every clock, if recorded.
         self.laser_pins = []
         #: xy2_sync on every clock, if the laser is recorded (frame k's position is in force
         #: from sync's (k+1)-th rising edge: the end of that frame).
@@ -65,14 +66,21 @@ class SimBoard:
         while True:
             self.laser_pins.append((ctx.get(top.laser_mo), ctx.get(top.laser_am),
                                     ctx.get(top.laser_prr), ctx.get(top.interlock_open),
-                                    ctx.get(top.laser_latch), ctx.get(top.laser_power)))
+                                    ctx.get(top.laser_latch), ctx.get(top.laser_power),
+                                    ctx.get(top.laser_enable),
+                                    ctx.get(top.laser_alarm) if hasattr(top, "laser_alarm")
+                                    else 0))
             self.sync_pins.append(ctx.get(top.xy2_sync))
             await ctx.tick()
 
     async def _interlock(self, ctx):
-        # The interlock loop; a test opens or closes it by setting `interlock_closed`.
+        # The interlock loop and the laser's alarm outputs; a test opens or closes the loop by
+        # setting `interlock_closed`, raises every alarm by clearing `alarms_clear`.
+        alarm = getattr(self.top, "laser_alarm", None)
         while True:
             ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
+            if alarm is not None:
+                ctx.set(alarm, 0 if self.alarms_clear else 2 ** len(alarm) - 1)
             await ctx.delay(1e-6)
 
     async def _uart_host_tx(self, ctx):

@@ -34,7 +34,7 @@ def run_controller(script, cycles):
     async def watch(ctx):
         for _ in range(cycles):
             pins.append({name: ctx.get(getattr(dut, f"laser_{name}"))
-                         for name in ("power", "latch", "mo", "am", "prr")})
+                         for name in ("power", "latch", "mo", "am", "prr", "enable")})
             await ctx.tick()
 
     async def drive(ctx):
@@ -68,8 +68,10 @@ def test_the_003_sequence_on_the_pins():
     dut, pins = run_controller(script, disarm_at + 200)
     us = CLK / 1e6                              # clocks per µs
 
-    # Nothing before arming.
-    assert all(p == {"power": 0, "latch": 0, "mo": 0, "am": 0, "prr": 0} for p in pins[:21])
+    off = {"power": 0, "latch": 0, "mo": 0, "am": 0, "prr": 0, "enable": 0}
+    # Nothing before arming; the buffers' enable rises with arm (and the interlock closed).
+    assert all(p == off for p in pins[:21])
+    assert pins[21]["enable"] == 1
     # Power first, then the latch pulse after ≥ 1 µs of set-up, ≥ 1 µs wide, ≥ 1 µs of hold.
     power_set = next(i for i, p in enumerate(pins) if p["power"] == 200)
     latch_up, = edges(pins, "latch", 1)
@@ -91,11 +93,12 @@ def test_the_003_sequence_on_the_pins():
     assert max(periods) - min(periods) <= 1                 # one clock of jitter at most
     high = sum(p["prr"] for p in window[rises[0]:rises[-1]])
     assert high / (rises[-1] - rises[0]) == pytest.approx(0.5, abs=0.01)
-    # Disarm: modulation drops first, MO a clock later, the power pins return to 0.
+    # Disarm: the enable, modulation, MO and the power pins drop on the same clock.
     am_down, = edges(pins, "am", 0)
     mo_down, = edges(pins, "mo", 0)
-    assert mo_down == am_down + 1
-    assert pins[-1] == {"power": 0, "latch": 0, "mo": 0, "am": 0, "prr": 0}
+    enable_down, = edges(pins, "enable", 0)
+    assert am_down == mo_down == enable_down
+    assert pins[enable_down] == off and pins[-1] == off
 
 
 def test_power_change_while_armed_is_latched_again():
@@ -163,12 +166,12 @@ def test_spiral_and_laser_from_host_commands():
     board.run_for(1e-4)
     assert status_bits(client, "emitting")["emitting"]
 
-    # The interlock opens: everything off on that very clock, and a fault latches.
+    # The interlock opens: everything off within the two synchroniser clocks, and a fault
+    # latches.
     mark = len(board.laser_pins)
     board.interlock_closed = False
     board.run_for(1e-4)
-    for mo, am, prr, open_, _, _ in board.laser_pins[mark:]:
-        assert not (open_ and (mo or am or prr))
+    assert_interlock_cuts_the_outputs(board.laser_pins[mark - 3:])
     assert status_bits(client, "fault_interlock", "mo_on", "interlock_open") == \
         {"fault_interlock": True, "mo_on": False, "interlock_open": True}
     # A clear while it is open does nothing; closed, it clears, but the laser waits for re-arm.
@@ -186,6 +189,97 @@ def test_spiral_and_laser_from_host_commands():
     assert status_bits(client, "mo_on", "emitting") == {"mo_on": True, "emitting": True}
 
 
+def assert_interlock_cuts_the_outputs(pins):
+    """Every laser output is low from the third clock the interlock pin is open on (it passes
+    two synchroniser flip-flops), and on every clock laser_enable is low."""
+    for clock in range(3, len(pins)):
+        mo, am, prr, _, latch, power, enable, _ = pins[clock]
+        if all(pins[clock - back][3] for back in range(3)):
+            assert not (mo or am or prr or latch or power or enable), \
+                f"laser on with the interlock open for 3 clocks (clock {clock})"
+        if not enable:
+            assert not (mo or am or prr or latch or power), "a laser output without enable"
+
+
+def test_alarm_latches_a_fault_and_an_unconnected_alarm_blocks_arming():
+    board = SimBoard(mo_lead=2e-4, record_laser=True, alarms_clear=False)
+    client = HostClient(SimUARTTransport(board))
+    client.write("laser_power", 50)
+    client.write("arm", 1)
+    board.run_for(1e-3)
+    # An alarm input pulled up (unconnected) reads as an alarm: nothing is enabled.
+    assert status_bits(client, "alarm", "fault_alarm", "laser_enable", "mo_on") == \
+        {"alarm": True, "fault_alarm": True, "laser_enable": False, "mo_on": False}
+    assert not any(pins[0] or pins[6] for pins in board.laser_pins)
+    # The laser's alarms clear: clear the fault, re-arm, and it emits.
+    board.alarms_clear = True
+    board.run_for(1e-5)
+    client.write("fault_clear", 1)
+    client.write("arm", 0)
+    client.write("arm", 1)
+    board.run_for(1e-3)
+    assert status_bits(client, "fault_alarm", "laser_enable", "emitting") == \
+        {"fault_alarm": False, "laser_enable": True, "emitting": True}
+    # An alarm while emitting: off within the synchroniser, latched, held after it clears.
+    mark = len(board.laser_pins)
+    board.alarms_clear = False
+    board.run_for(1e-5)
+    board.alarms_clear = True
+    board.run_for(1e-4)
+    pins = board.laser_pins[mark:]
+    first = next(i for i, p in enumerate(pins) if p[7])
+    assert all(not any(p[j] for j in (0, 1, 2, 4, 5, 6)) for p in pins[first + 2:])
+    assert status_bits(client, "fault_alarm", "alarm", "emitting") == \
+        {"fault_alarm": True, "alarm": False, "emitting": False}
+
+
+@pytest.mark.parametrize("spans_an_edge", [False, True])
+def test_interlock_glitch_reaches_the_outputs_only_with_a_fault(spans_an_edge):
+    """A glitch on the interlock pin that no clock edge samples changes nothing; one that is
+    sampled cuts the outputs and latches a fault (it cannot cut them and leave no fault)."""
+    period = 1 / CLK
+
+    async def script(ctx, dut):
+        ctx.set(dut.interlock_open, 0)
+        ctx.set(dut.alarm, 0)
+        ctx.set(dut.power, 100)
+        ctx.set(dut.prr, 500)
+        ctx.set(dut.watchdog_ms, 60000)
+        ctx.set(dut.marking, 1)
+        await ctx.tick().repeat(5)
+        ctx.set(dut.arm, 1)
+        await ctx.tick().repeat(400)
+        # A glitch a fifth of a clock long, between two edges or across one.
+        await ctx.delay(period * (0.9 if spans_an_edge else 0.3))
+        ctx.set(dut.interlock_open, 1)
+        await ctx.delay(period * 0.2)
+        ctx.set(dut.interlock_open, 0)
+
+    dut = LaserController(clk_freq=CLK, mo_lead=50e-6, alarms=1)
+    sim = Simulator(dut)
+    sim.add_clock(period)
+    pins, faults = [], []
+
+    async def watch(ctx):
+        for _ in range(600):
+            pins.append((ctx.get(dut.laser_am), ctx.get(dut.laser_mo), ctx.get(dut.laser_enable)))
+            faults.append(ctx.get(dut.faults.interlock))
+            await ctx.tick()
+
+    async def drive(ctx):
+        await script(ctx, dut)
+
+    sim.add_testbench(watch)
+    sim.add_testbench(drive, background=True)
+    sim.run()
+    assert pins[400] == (1, 1, 1)
+    cut = [i for i in range(400, 600) if pins[i] != (1, 1, 1)]
+    if spans_an_edge:
+        assert cut and faults[-1] == 1 and cut == list(range(cut[0], 600))
+    else:
+        assert not cut and faults[-1] == 0
+
+
 def test_watchdog_switches_the_laser_off():
     board = SimBoard(mo_lead=2e-4)
     client = HostClient(SimUARTTransport(board))
@@ -201,6 +295,7 @@ def test_watchdog_switches_the_laser_off():
 # --- fuzzed command streams with the interlock toggling --------------------------------------------
 
 laser_writes = st.sampled_from([encode_write("arm", 1), encode_write("arm", 0),
+                                encode_write("laser_power", 0),
                                 encode_write("fault_clear", 1), encode_write("run", 1),
                                 encode_write("run", 0), encode_write("laser_power", 77),
                                 encode_write("watchdog", 1)])
@@ -208,25 +303,29 @@ garbage = st.binary(min_size=1, max_size=6)
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.lists(st.tuples(st.one_of(laser_writes, garbage), st.booleans(),
+@given(st.lists(st.tuples(st.one_of(laser_writes, garbage), st.booleans(), st.booleans(),
                           st.integers(0, 400)), min_size=3, max_size=12))
 def test_fuzzed_commands_never_emit_unsafely(steps):
     lead = 100e-6
     board = SimBoard(mo_lead=lead, record_laser=True)
     link = SimUARTTransport(board)
     link.send_bytes(encode_write("arm", 1))     # start armed, so emission is within reach
-    for data, toggle_interlock, wait_us in steps:
+    for data, toggle_interlock, toggle_alarms, wait_us in steps:
         if toggle_interlock:
             board.interlock_closed = not board.interlock_closed
+        if toggle_alarms:
+            board.alarms_clear = not board.alarms_clear
         link.send_bytes(data)
         board.run_for(wait_us * 1e-6)
     board.run_for(2 * lead)
 
     lead_clocks = lead * CLK
     event("emitted" if any(pins[1] for pins in board.laser_pins) else "did not emit")
+    assert_interlock_cuts_the_outputs(board.laser_pins)
     mo_on_for = 0
-    for mo, am, prr, interlock_open, _, _ in board.laser_pins:
-        assert not (interlock_open and (mo or am or prr)), "laser on with the interlock open"
+    for clock, (mo, am, prr, _, _, _, enable, alarm) in enumerate(board.laser_pins):
+        if clock >= 3 and all(board.laser_pins[clock - back][7] for back in range(3)):
+            assert not (mo or am or prr or enable), "laser on with an alarm for 3 clocks"
         if am:
             assert mo and mo_on_for >= lead_clocks, "modulation before the MO lead"
         mo_on_for = mo_on_for + 1 if mo else 0

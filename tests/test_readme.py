@@ -7,8 +7,8 @@ import re
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
 from galvoscan.cli.link import register_table
-from galvoscan.platforms.icebreaker import (INTERLOCK_PMOD_PIN, LASER_PMOD_PINS, SPI_PMOD_PINS,
-                                           XY2_PMOD_PINS)
+from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
+                                           LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
 
 
 ROOT = Path(__file__).parent.parent
@@ -69,6 +69,7 @@ def test_laser_pin_table_matches_the_platform():
     for name, (number, pins, _) in LASER_PMOD_PINS.items():
         assert seen[f"laser_{name}"] == [(number, int(p)) for p in pins.split()]
     assert seen["interlock_open"] == [(INTERLOCK_PMOD_PIN[0], int(INTERLOCK_PMOD_PIN[1]))]
+    assert seen["laser_alarm"] == [(ALARM_PMOD_PINS[0], int(p)) for p in ALARM_PMOD_PINS[1].split()]
 
 
 def test_sampling_table_is_what_the_analysis_measures():

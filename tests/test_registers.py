@@ -16,7 +16,7 @@ from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, 
 #: The default build's registers (128-point spiral table, 17 × 17 correction nodes, all modes,
 #: the laser): name, address, access, reset, lowest and highest value written, bits held.
 DEFAULT_BUILD = [
-    ("status", 0x00, "ro", 0, 0, 0, 9),
+    ("status", 0x00, "ro", 0, 0, 0, 12),
     ("errors", 0x01, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
@@ -193,7 +193,8 @@ def test_status_layout_is_the_status_register():
     assert Status.size == BY_NAME["status"].width
     assert STATUS_BITS == {"running": 0, "clipped": 1, "armed": 2, "fault_interlock": 3,
                            "fault_watchdog": 4, "mo_on": 5, "emitting": 6,
-                           "interlock_open": 7, "vector_busy": 8}
+                           "interlock_open": 7, "vector_busy": 8, "fault_alarm": 9,
+                           "alarm": 10, "laser_enable": 11}
 
 
 def test_mode_register_holds_the_modes():

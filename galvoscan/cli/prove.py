@@ -11,7 +11,6 @@ __all__ = ["add_parsers"]
 
 def _cmd_prove(args):
     from ..formal.proofs import PROOFS
-    from ..formal.runner import run_sby
     from ..toolchain import ToolchainError
 
     unknown = set(args.only or ()) - {proof.name for proof in PROOFS}
@@ -23,8 +22,7 @@ def _cmd_prove(args):
     try:
         for proof in selected:
             print(f"proving {proof.name} (depth {proof.depth}) …", file=sys.stderr, flush=True)
-            for result in run_sby(proof.harness(), proof.name, args.workdir, depth=proof.depth,
-                                  cover_depth=proof.cover_depth, cover_skip=proof.cover_skip):
+            for result in proof.run(args.workdir):
                 rows.append(result)
                 print(f"  {result.task:5s} {result.status} in {result.seconds:.1f} s",
                       file=sys.stderr, flush=True)

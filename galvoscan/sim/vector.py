@@ -92,6 +92,8 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
 
     async def host(ctx):
         ctx.set(top.interlock_open, 0)
+        if hasattr(top, "laser_alarm"):
+            ctx.set(top.laser_alarm, 0)     # the laser reports no alarm
         ctx.set(top.spi_cs_n, 1)
         for name, value in (("laser_prr", prr), ("pulses_per_point", pulses_per_point),
                             ("pitch", pitch), ("jump_delay", jump_delay),

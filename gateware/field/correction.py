@@ -47,8 +47,10 @@ class FieldCorrection(wiring.Component):
     write_en : ``In(1)``
         A pulse asks for the write; it is made on that clock if no point is being made, else
         on the clock the point is done, within :attr:`CLOCKS` clocks. ``write_node``,
-        ``write_dx`` and ``write_dy`` must hold until then (the register file holds them until
-        the next command frame, hundreds of clocks).
+        ``write_dx`` and ``write_dy`` are taken on the clock of the pulse: the stage keeps its
+        own copy while the write waits, so a register changed meanwhile (by the other link)
+        does not reach the table. A pulse while a write waits is ignored: the register file
+        refuses such a request (see ``write_pending``).
     write_pending : ``Out(1)``
         A write was asked for while a point was being made, and waits for it.
     clipped : ``Out(1)``
@@ -67,6 +69,12 @@ class FieldCorrection(wiring.Component):
         # made; the table RAM is being written.
         self._busy = Signal()
         self._ram_write = Signal()
+        self._ram_addr = Signal(range(nodes))
+        self._ram_data = Signal(32)
+        # The point's step (0 … 13 while busy), and a waiting write's node and offsets.
+        self._step = Signal(range(16))
+        self._held_node = Signal(range(nodes))
+        self._held_data = Signal(32)
         super().__init__({
             "positions_in": In(stream.Signature(FieldPoint)),
             "positions_out": Out(stream.Signature(FieldPoint)),
@@ -90,6 +98,10 @@ class FieldCorrection(wiring.Component):
         """The table is written only between points."""
         return ~busy
 
+    def _write_value(self, pending, held, asked_now):
+        """A waiting write stores what was asked for, not what the port shows now."""
+        return Mux(pending, held, asked_now)
+
     def elaborate(self, platform):
         m = Module()
         n, s = self.table.n, self.table.shift
@@ -103,7 +115,7 @@ class FieldCorrection(wiring.Component):
         x = Signal(16)
         y = Signal(16)
         busy = self._busy
-        step = Signal(range(16))
+        step = self._step
         take = self.positions_in.valid & self.positions_in.ready
         out_free = ~self.positions_out.valid | self.positions_out.ready
         m.d.comb += self.positions_in.ready.eq(self._may_take(busy, out_free))
@@ -116,11 +128,19 @@ class FieldCorrection(wiring.Component):
         # taken on the clock of a write reads its corners afterwards: it sees the new node.)
         asked = self.write_pending | self.write_en
         m.d.sync += self.write_pending.eq(asked & busy)
+        # The node and offsets of a write that waits, as they were when it was asked for.
+        held_node, held_data = self._held_node, self._held_data
+        with m.If(self.write_en & ~self.write_pending):
+            m.d.sync += [held_node.eq(self.write_node),
+                         held_data.eq(Cat(self.write_dx, self.write_dy))]
         m.d.comb += [
-            write.addr.eq(self.write_node),
-            write.data.eq(Cat(self.write_dx, self.write_dy)),
+            write.addr.eq(self._write_value(self.write_pending, held_node, self.write_node)),
+            write.data.eq(self._write_value(self.write_pending, held_data,
+                                            Cat(self.write_dx, self.write_dy))),
             write.en.eq(asked & self._may_write(busy)),
             self._ram_write.eq(write.en),
+            self._ram_addr.eq(write.addr),
+            self._ram_data.eq(write.data),
         ]
 
         # --- addresses of the cell's corners --------------------------------------------------

@@ -44,7 +44,8 @@ class RegisterFile(wiring.Component):
     Writable registers are outputs named after them (``dwell``, ``amp_x``, …), set by writes
     on :attr:`bus` and reset to their reset values; read-only ones are inputs (``status``,
     ``errors``) that the bus reads; a strobe register is an output that is high for one clock
-    after 1 is written to it (the clock after the write), and reads 0; a queue register is an
+    after 1 is written to it (the clock after the write), and reads 0 (a ``refusable`` one has
+    an input ``<name>_ready`` too, and a write of 1 is refused while it is low); a queue register is an
     output holding the last value written, with ``<name>_push`` high for one clock per accepted
     write and ``<name>_ready`` (an input) refusing writes while low.
 
@@ -74,6 +75,8 @@ class RegisterFile(wiring.Component):
                 members[reg.name] = Out(reg.width, init=reg.reset)
             elif reg.access == "strobe":
                 members[reg.name] = Out(reg.width)
+                if reg.refusable:
+                    members[f"{reg.name}_ready"] = In(1)
             elif reg.access == "queue":
                 members[reg.name] = Out(reg.width, init=reg.reset)
                 members[f"{reg.name}_push"] = Out(1)
@@ -97,8 +100,11 @@ class RegisterFile(wiring.Component):
                         # Reads 0 (read_data's default); a write of 1 pulses the output on
                         # the next clock (from a flip-flop: the decoder's checks stay off the
                         # paths into whatever the strobe acts on).
-                        m.d.comb += bus.write_ok.eq(bus.write_data <= reg.high)
-                        m.d.sync += value.eq(bus.write_en & (bus.write_data == 1))
+                        ok = bus.write_data <= reg.high
+                        if reg.refusable:
+                            ok &= getattr(self, f"{reg.name}_ready") | (bus.write_data == 0)
+                        m.d.comb += bus.write_ok.eq(ok)
+                        m.d.sync += value.eq(bus.write_en & ok & (bus.write_data == 1))
                     else:
                         m.d.comb += bus.read_data.eq(value)
                     if reg.access in ("rw", "queue"):

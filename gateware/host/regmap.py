@@ -99,6 +99,9 @@ Status = data.StructLayout({
     "emitting": 1,          # modulation is on: the laser is firing
     "interlock_open": 1,    # the interlock is open now
     "vector_busy": 1,       # vector mode has segments queued or points still to mark
+    "fault_alarm": 1,       # latched: a laser alarm input was active while armed
+    "alarm": 1,             # a laser alarm input is active now
+    "laser_enable": 1,      # the laser buffers are enabled (armed, no fault, closed, no alarm)
 })
 
 #: Bit number of each :data:`Status` flag, for host code that tests bits of a value read.
@@ -116,6 +119,9 @@ class Register:
     unit: str
     description: str
     width: int = 16      # bits that hold state; the frame always carries 16
+    #: A strobe the block it acts on can refuse while busy: the register file then refuses
+    #: (and the decoder counts) a write of 1 (``<name>_ready`` low).
+    refusable: bool = False
 
     def as_dict(self):
         return {"name": self.name, "address": self.address, "width": self.width,
@@ -139,7 +145,9 @@ def _all_registers(table_points, correction_nodes):
                  "bit 0 running (the selected mode), bit 1 a point was clamped at the field edge (by the scale or "
                  "the correction stage) since the last read of status (cleared by reading), bit 2 armed, bit 3 interlock fault (latched), "
                  "bit 4 watchdog fault (latched), bit 5 MO on, bit 6 emitting, bit 7 interlock "
-                 "open now, bit 8 vector mode busy (segments queued or points still to mark)",
+                 "open now, bit 8 vector mode busy (segments queued or points still to mark), "
+                 "bit 9 alarm fault (latched), bit 10 a laser alarm input active now, bit 11 "
+                 "laser_enable (the laser's buffers enabled)",
                  width=Status.size),
         Register("errors", 0x01, "ro", 0, 0, 0, "frames",
                  "rejected command frames since reset (bad check byte, unknown address, write to "
@@ -234,14 +242,17 @@ def _all_registers(table_points, correction_nodes):
                  "Y offset for cor_write"),
         Register("cor_write", 0x44, "strobe", 0, 0, 1, "write 1",
                  "stores (cor_dx, cor_dy) at node cor_node, both at once and between two points, so "
-                 "no point is made from a half-written node", width=1),
+                 "no point is made from a half-written node; the values are those of the moment "
+                 "of the write. Refused (counted in errors) while the last write still waits for "
+                 "a point to finish (at most 15 clocks)", width=1, refusable=True),
         Register("cor_nodes", 0x45, "ro", 0, 0, 0, "nodes",
                  "correction table nodes per axis in this build (5, 9, 17, 33 or 65)",
                  width=_width(max(TABLE_SIZES))),
         # --- laser group ------------------------------------------------------------------------
         Register("arm", 0x10, "rw", 0, 0, 1, "bool",
-                 "1 = arm the laser: latch power, MO on, modulation after the MO lead (5 ms) "
-                 "while the spiral runs; 0 = modulation off, then MO off", width=1),
+                 "1 = arm the laser: laser_enable on, latch power, MO on, modulation after the "
+                 "MO lead (5 ms) while the spiral runs; 0 = laser_enable and every laser "
+                 "output off", width=1),
         Register("laser_power", 0x11, "rw", 0, 0, 255, "1/255 of full power",
                  "laser power on DB25 pins 1-8, latched by pin 9 on arming and on every change "
                  "while armed", width=8),
@@ -252,8 +263,8 @@ def _all_registers(table_points, correction_nodes):
                  "while armed, no accepted command frame for this long switches the laser off and "
                  "latches a watchdog fault"),
         Register("fault_clear", 0x14, "strobe", 0, 0, 1, "write 1",
-                 "clears latched faults if the interlock is closed; the laser then stays off until "
-                 "arm is written 0 and 1 again", width=1),
+                 "clears latched faults if the interlock is closed and no alarm is active; the "
+                 "laser then stays off until arm is written 0 and 1 again", width=1),
         Register("pulses", 0x15, "ro", 0, 0, 0, "pulses",
                  "laser pulses emitted (PRR rising edges while modulating) since reset, modulo "
                  "65536"),

@@ -3,12 +3,12 @@
 
 import math
 
-from amaranth.hdl import Module, Signal
+from amaranth.hdl import Const, Module, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 
-__all__ = ["LaserController", "PRR_UNIT_HZ", "Faults", "clocks_at_least"]
+__all__ = ["LaserController", "PRR_UNIT_HZ", "Faults", "MAX_ALARMS", "clocks_at_least"]
 
 
 #: The ``laser_prr`` register counts in steps of this many hertz.
@@ -17,7 +17,11 @@ PRR_UNIT_HZ = 100
 Faults = data.StructLayout({
     "interlock": 1,     # the interlock opened while armed
     "watchdog": 1,      # no accepted command frame for the watchdog time while armed
+    "alarm": 1,         # a laser alarm input was active while armed
 })
+
+#: Most laser alarm inputs a controller takes (IPG's type-D interface has four alarm pins).
+MAX_ALARMS = 4
 
 # Phase accumulator width for the PRR clock.
 _PHASE_BITS = 28
@@ -39,16 +43,26 @@ class LaserController(wiring.Component):
        ``latch_pulse`` long pulse on pin 9 takes it; ``latch_setup`` of hold follows;
     2. **MO** (pin 18) goes high; the **PRR** clock (pin 20, 50 % duty) starts;
     3. after ``mo_lead`` (5 ms, as the paper), **modulation** follows ``marking``;
-    4. **arm** falls: modulation drops, MO and PRR one clock later; the power pins return to 0.
+    4. **arm** falls: :attr:`laser_enable` falls and with it every laser output, on the same
+       clock (as the buffers it enables do); the power register returns to 0.
 
     A power change while armed goes out through a new latch pulse; the power pins never change
     without one following.
 
-    Safety: an open interlock switches MO, modulation and PRR off *at once* (the pin gates the
-    outputs without going through a flip-flop) and, if armed, latches a fault. No accepted command frame
-    for ``watchdog_ms`` while armed latches a fault too. A fault switches the laser off and stays
-    latched until ``fault_clear`` is pulsed with the interlock closed; even then the laser stays
-    off until ``arm`` has been seen low and set again. Reset switches everything off.
+    Safety: every laser output is gated by :attr:`laser_enable`, which is high only while
+    ``arm`` is set, no fault is latched, the interlock is closed and no alarm input is active
+    (the last two as seen through two synchroniser flip-flops), and after a fault only once
+    ``arm`` has been seen low again. So ``laser_enable`` low means every laser output low, and
+    whatever opens the gate also latches a fault if armed: an interlock opening or an alarm
+    that reaches the outputs at all has passed the synchroniser, and the synchroniser's output
+    is what latches the fault (a glitch too short to be sampled reaches nothing). The pins
+    react within three clocks of the interlock opening (two synchroniser stages and the I/O
+    flip-flop the board puts on every laser line: 250 ns at 12 MHz). No accepted command frame
+    for ``watchdog_ms`` while armed latches a fault too, at most ``watchdog_ms`` ms and one
+    clock after the last one. A fault drops ``laser_enable`` on the clock it is latched and
+    stays latched until ``fault_clear`` is pulsed with the interlock closed and no alarm
+    active; even then the laser stays off until ``arm`` has been seen low and set again. Reset
+    switches everything off.
 
     Parameters
     ----------
@@ -61,6 +75,8 @@ class LaserController(wiring.Component):
         latch pulse width. 1 µs each by default, well inside TTL lasers' needs (tens of ns).
     lookahead : int
         Clocks by which :attr:`pulse_ahead` leads the PRR clock's rising edges.
+    alarms : int
+        Laser alarm inputs, 0 … :data:`MAX_ALARMS`.
 
     Interface attributes
     --------------------
@@ -79,8 +95,15 @@ class LaserController(wiring.Component):
         The scan wants emission now (running and marking, not jumping or parked).
     interlock_open : ``In(1)``
         The interlock pin, asynchronous; 1 = open (unsafe).
+    alarm : ``In(alarms)``, when ``alarms`` > 0
+        The laser's alarm outputs, asynchronous; 1 = alarm. They reset to 1 (and the board
+        pulls them up), so an unconnected input reads as an alarm.
     laser_power : ``Out(8)``, laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
         The DB25 signals (pins 1-8, 9, 18, 19, 20), for 5 V TTL buffers.
+    laser_enable : ``Out(1)``
+        Armed, no fault, interlock closed, no alarm: drives the output enable of those buffers
+        (pulled down on the board, so the buffers are off before configuration). Every laser
+        output is low while it is low.
     faults : ``Out(Faults)``
         Latched fault causes.
     mo_ready : ``Out(1)``
@@ -93,32 +116,19 @@ class LaserController(wiring.Component):
         while ``prr`` is unchanged (the PRR clock is free-running and gated onto its pin).
     """
 
-    arm: In(1)
-    power: In(8)
-    prr: In(11)
-    watchdog_ms: In(16)
-    alive: In(1)
-    fault_clear: In(1)
-    marking: In(1)
-    interlock_open: In(1, init=1)
-    laser_power: Out(8)
-    laser_latch: Out(1)
-    laser_mo: Out(1)
-    laser_am: Out(1)
-    laser_prr: Out(1)
-    faults: Out(Faults)
-    mo_ready: Out(1)
-    pulse: Out(1)
-    pulse_ahead: Out(1)
-
     def __init__(self, *, clk_freq, mo_lead=5e-3, latch_setup=1e-6, latch_pulse=1e-6,
-                 lookahead=0):
+                 lookahead=0, alarms=0):
         for name, value in (("mo_lead", mo_lead), ("latch_setup", latch_setup),
                             ("latch_pulse", latch_pulse)):
             if not value > 0:
                 raise ValueError(f"{name} must be a positive time in seconds, not {value!r}")
         if not isinstance(lookahead, int) or lookahead < 0:
             raise ValueError(f"lookahead must be a whole number of clocks, not {lookahead!r}")
+        if not isinstance(alarms, int) or isinstance(alarms, bool) or \
+                not 0 <= alarms <= MAX_ALARMS:
+            raise ValueError(f"alarms must be a whole number from 0 to {MAX_ALARMS}, not "
+                             f"{alarms!r}")
+        self.alarms = alarms
         self.clk_freq = clk_freq
         self.lookahead = lookahead
         #: Clocks MO leads modulation (at least ``mo_lead``).
@@ -126,48 +136,89 @@ class LaserController(wiring.Component):
         self.setup_clocks = clocks_at_least(latch_setup, clk_freq)
         self.pulse_clocks = clocks_at_least(latch_pulse, clk_freq)
         self.ms_clocks = round(clk_freq / 1000)
-        super().__init__()
+        members = {
+            "arm": In(1),
+            "power": In(8),
+            "prr": In(11),
+            "watchdog_ms": In(16),
+            "alive": In(1),
+            "fault_clear": In(1),
+            "marking": In(1),
+            "interlock_open": In(1, init=1),
+        }
+        if alarms:
+            members["alarm"] = In(alarms, init=2 ** alarms - 1)
+        members.update({
+            "laser_power": Out(8),
+            "laser_latch": Out(1),
+            "laser_mo": Out(1),
+            "laser_am": Out(1),
+            "laser_prr": Out(1),
+            "laser_enable": Out(1),
+            "faults": Out(Faults),
+            "mo_ready": Out(1),
+            "pulse": Out(1),
+            "pulse_ahead": Out(1),
+        })
+        super().__init__(members)
         # State the proofs refer to in their helper invariants (made here, not in elaborate,
         # so the proof harness can name them).
-        self._mo = Signal()                 # MO, before the interlock gate
+        self._mo = Signal()                 # MO, before the enable gate
         # Clocks of MO still to go before modulation may start on the next clock.
         self._lead_left = Signal(range(self.lead_clocks), init=self.lead_clocks - 1)
+        # The watchdog: clocks into the current millisecond, milliseconds left.
+        self._tick_ms = Signal(range(self.ms_clocks))
+        self._ms_left = Signal(16)
+        # After a fault (or an opening) arm must be seen low before the laser may start.
+        self._rearm_needed = Signal()
 
     def elaborate(self, platform):
         m = Module()
 
-        # Two synchroniser stages, built here rather than with FFSynchronizer because the
-        # output gate below uses both: from the clock the pin opens until the fault is latched,
-        # the outputs stay off without a gap, even for a glitch on the pin.
+        # The interlock and alarm pins through two synchroniser stages (FFSynchronizer's
+        # structure, written out so that the proof can follow them). Only the second stage is
+        # used: whatever gates the outputs is what latches the fault, so an opening cannot cut
+        # the outputs without latching one (a glitch the first stage missed reaches nothing).
         interlock_meta = Signal(init=1)
         interlock_open = Signal(init=1)
         m.d.sync += [interlock_meta.eq(self.interlock_open), interlock_open.eq(interlock_meta)]
+        if self.alarms:
+            alarm_meta = Signal(self.alarms, init=2 ** self.alarms - 1)
+            alarm_now = Signal(self.alarms, init=2 ** self.alarms - 1)
+            m.d.sync += [alarm_meta.eq(self.alarm), alarm_now.eq(alarm_meta)]
+            alarm_active = alarm_now.any()
+        else:
+            alarm_active = Const(0, 1)
 
         # --- faults -------------------------------------------------------------------------
         watchdog_fired = Signal()
         faults = self.faults
         any_fault = faults.as_value().any()
-        with m.If(self.fault_clear & ~interlock_open):
+        with m.If(self.fault_clear & ~interlock_open & ~alarm_active):
             m.d.sync += faults.eq(0)
         # Opening the interlock while disarmed (to load a part) is no fault: nothing can emit
-        # then, and arming needs it closed.
+        # then, and arming needs it closed. Likewise an alarm while disarmed.
         with m.If(interlock_open & self.arm):
             m.d.sync += faults.interlock.eq(1)
         with m.If(watchdog_fired):
             m.d.sync += faults.watchdog.eq(1)
+        if self.alarms:
+            with m.If(alarm_active & self.arm):
+                m.d.sync += faults.alarm.eq(1)
 
         # After a fault, arm must be seen low before the laser may start again.
-        rearm_needed = Signal()
-        with m.If(any_fault | interlock_open):
+        rearm_needed = self._rearm_needed
+        with m.If(any_fault | interlock_open | alarm_active):
             m.d.sync += rearm_needed.eq(1)
         with m.Elif(~self.arm):
             m.d.sync += rearm_needed.eq(0)
 
-        enabled = self.arm & ~any_fault & ~interlock_open & ~rearm_needed
+        enabled = Signal()
+        m.d.comb += enabled.eq(self.arm & ~any_fault & ~interlock_open & ~alarm_active &
+                               ~rearm_needed)
 
         # --- watchdog -----------------------------------------------------------------------
-        tick_ms = Signal(range(self.ms_clocks))
-        ms_left = Signal(16)
+        tick_ms, ms_left = self._tick_ms, self._ms_left
         with m.If(self.alive | ~self.arm):
             m.d.sync += [tick_ms.eq(0), ms_left.eq(self.watchdog_ms)]
         with m.Elif(tick_ms == self.ms_clocks - 1):
@@ -181,16 +232,17 @@ class LaserController(wiring.Component):
         # --- power latch --------------------------------------------------------------------
         # The power on the pins, and the value the laser last latched.
         latched = Signal(8)
+        power = Signal(8)          # the power pins, before the enable gate
+        latch = Signal()           # the latch pin, likewise
         latch_timer = Signal(range(2 * self.setup_clocks + self.pulse_clocks + 1))
         latching = latch_timer != 0
         power_latched = Signal()    # the laser holds the current power
         with m.If(~enabled):
-            m.d.sync += [self.laser_power.eq(0), latch_timer.eq(0), power_latched.eq(0),
-                         self.laser_latch.eq(0)]
+            m.d.sync += [power.eq(0), latch_timer.eq(0), power_latched.eq(0), latch.eq(0)]
         with m.Elif(~latching & (~power_latched | (self.power != latched))):
             # New power: onto the pins now, latch pulse after the set-up time.
             m.d.sync += [
-                self.laser_power.eq(self.power),
+                power.eq(self.power),
                 latched.eq(self.power),
                 latch_timer.eq(2 * self.setup_clocks + self.pulse_clocks),
                 power_latched.eq(0),
@@ -200,16 +252,15 @@ class LaserController(wiring.Component):
             # Pulse high from set-up time on, for the pulse width; then the hold time.
             in_pulse = (latch_timer <= self.setup_clocks + self.pulse_clocks) & \
                        (latch_timer > self.setup_clocks)
-            m.d.sync += self.laser_latch.eq(in_pulse)
+            m.d.sync += latch.eq(in_pulse)
             with m.If(latch_timer == 1):
                 m.d.sync += power_latched.eq(1)
 
         # --- master oscillator and lead time ---------------------------------------------------
         mo, lead_left = self._mo, self._lead_left
-        am_on = Signal()    # modulation is on now (registered below)
         with m.If(~enabled):
-            # Modulation drops first; MO follows a clock later.
-            m.d.sync += [mo.eq(mo & am_on), lead_left.eq(self.lead_clocks - 1)]
+            # (The enable gate has already cut both on the pins.)
+            m.d.sync += [mo.eq(0), lead_left.eq(self.lead_clocks - 1)]
         with m.Elif(power_latched | mo):
             m.d.sync += mo.eq(1)
             with m.If(mo & (lead_left != 0)):
@@ -252,16 +303,17 @@ class LaserController(wiring.Component):
         m.d.sync += prr_q.eq(prr_clock)
 
         # --- outputs ------------------------------------------------------------------------
-        am = am_on
+        am = Signal()       # modulation, before the enable gate
         m.d.sync += am.eq(self.mo_ready & enabled & self.marking)
-        # The interlock pin itself gates the outputs: off at once, whatever the registers say,
-        # and kept off through the synchroniser until the latched fault takes over.
-        safe = ~(self.interlock_open | interlock_meta | interlock_open |
-                 faults.interlock)
+        # Every output through the enable gate: off on the clock enable falls, whatever the
+        # registers behind it still hold.
         m.d.comb += [
-            self.laser_mo.eq(mo & safe),
-            self.laser_am.eq(am & safe),
-            self.laser_prr.eq(prr_clock & mo & safe),
-            self.pulse.eq(am & safe & prr_clock & ~prr_q),
+            self.laser_enable.eq(enabled),
+            self.laser_power.eq(power & enabled.replicate(8)),
+            self.laser_latch.eq(latch & enabled),
+            self.laser_mo.eq(mo & enabled),
+            self.laser_am.eq(am & enabled),
+            self.laser_prr.eq(prr_clock & mo & enabled),
+            self.pulse.eq(am & enabled & prr_clock & ~prr_q),
         ]
         return m

@@ -97,6 +97,10 @@ class XY2Transmitter(wiring.Component):
         #: System clocks per frame.
         self.clocks_per_frame = FRAME_BITS * self.clocks_per_bit
         super().__init__()
+        # The position of the frame being sent (made here so that the proof's helper
+        # invariant can name it).
+        self._latched = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        self._bit = Signal(range(FRAME_BITS), init=FRAME_BITS - 1)    # bit number, 0 = C2
 
     @property
     def frame_rate(self):
@@ -109,7 +113,7 @@ class XY2Transmitter(wiring.Component):
         per_bit = self.clocks_per_bit
         # The counters start on the last clock of a frame, so the first frame begins at once.
         tick = Signal(range(per_bit), init=per_bit - 1)        # system clocks into the bit
-        bit = Signal(range(FRAME_BITS), init=FRAME_BITS - 1)    # bit number, 0 = C2
+        bit = self._bit
         bit_end = tick == per_bit - 1
         frame_end = bit_end & (bit == FRAME_BITS - 1)
 
@@ -124,7 +128,7 @@ class XY2Transmitter(wiring.Component):
             m.d.sync += self.xy2_clk.eq(0)
 
         # The position for the next frame: a new one if offered now, else the last one.
-        latched = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        latched = self._latched
         next_position = FieldPoint(Mux(self.position.valid, self.position.payload, latched))
         m.d.comb += [
             self.position.ready.eq(frame_end),
