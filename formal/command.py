@@ -59,10 +59,15 @@ class CommandPathSpec(Elaboratable):
         UART frame events free (else none come).
     reset_free : bool
         The reset free (else never asserted).
+    regmap : :class:`~galvoscan.gateware.host.regmap.RegisterMap`, optional
+        The register file's map (default: the default build's). The SPI covers' harness uses a
+        small one: the properties do not depend on which registers there are, and a smaller
+        register file makes each of the 70 steps of the search cheaper.
     """
 
     def __init__(self, *, make_spi=SPITarget, make_decoder=CommandDecoder, helpers=True,
-                 uart_live=True, reset_free=True):
+                 uart_live=True, reset_free=True, regmap=None):
+        self.regmap = regmap
         self.make_spi = make_spi
         self.make_decoder = make_decoder
         self.helpers = helpers
@@ -75,7 +80,7 @@ class CommandPathSpec(Elaboratable):
         m.d.comb += ResetSignal("sync").eq(AnySeq(1) if self.reset_free else 0)
         m.submodules.spi = spi = self.make_spi()
         m.submodules.decoder = decoder = self.make_decoder()
-        m.submodules.registers = registers = RegisterFile()
+        m.submodules.registers = registers = RegisterFile(self.regmap)
         connect(m, spi.frames, decoder.spi_frames)
         connect(m, decoder.spi_replies, spi.replies)
         connect(m, decoder.bus, registers.bus)

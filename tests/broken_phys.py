@@ -106,5 +106,6 @@ FAULTS = {
     "ignores_reset": ("xy2_clk starts on the first clock after power-up",
                       "the first frame starts with the first clock",
                       "SYNC, X and Y change only with a rising xy2_clk",
-                      "xy2_clk toggles every clocks_per_bit/2 system clocks"),
+                      "xy2_clk toggles every clocks_per_bit/2 system clocks",
+                      "a position is taken only on the clock before a frame starts"),
 }

@@ -61,6 +61,9 @@ DEFAULT_BUILD = [
     ("pulses", 0x15, "ro", 0, 0, 0, 16),
 ]
 
+#: Strobes a busy block refuses (the ready flag of the accesses below stands for its room).
+REFUSABLE = {"cor_write"}
+
 #: Registers of each part a build may leave out.
 SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last"}
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
@@ -92,9 +95,11 @@ class RegisterModel:
     """What galvoscan's rules say a register file does with one access.
 
     A write is taken if the register exists, is not read-only, and the value is in range (and,
-    for ``mode``, a mode built); a queue write also needs room. ``rw`` and ``queue`` registers
-    read back what was written; a strobe reads 0 and pulses for one clock after a write of 1;
-    read-only registers read their inputs. Unknown addresses are refused both ways.
+    for ``mode``, a mode built); a queue write also needs room, and so does a write of 1 to
+    ``cor_write`` (its stage must not hold a waiting write: README register table). ``rw`` and
+    ``queue`` registers read back what was written; a strobe reads 0 and pulses for one clock
+    after a write of 1; read-only registers read their inputs. Unknown addresses are refused
+    both ways.
     """
 
     def __init__(self, entries, *, modes=(0, 1, 2)):
@@ -108,6 +113,8 @@ class RegisterModel:
         if entry is None or entry.access == "ro":
             return False
         if entry.access == "strobe":
+            if entry.name in REFUSABLE and data == 1:
+                return queue_ready
             return data <= entry.high
         ok = entry.low <= data <= entry.high
         if entry.name == "mode":
@@ -154,7 +161,7 @@ def run(regfile, model, accesses, *, inputs=None):
         for address, data, write, queue_ready in accesses:
             ctx.set(bus.address, address)
             ctx.set(bus.write_data, data)
-            for name in queues:
+            for name in queues + [name for name in strobes if name in REFUSABLE]:
                 ctx.set(getattr(regfile, f"{name}_ready"), queue_ready)
             read_ok, read_data = model.read(address)
             assert ctx.get(bus.read_ok) == read_ok, (address, data)
@@ -216,6 +223,8 @@ def test_each_access_kind():
         # strobe: 1 pulses one clock, 0 does nothing, 2 is refused; reads 0
         (0x44, 1, True, True), (0x44, 0, False, True), (0x44, 0, True, True),
         (0x44, 2, True, True), (0x14, 1, True, True), (0x14, 1, True, True),
+        # cor_write refused while its stage holds a waiting write; a 0 still does nothing
+        (0x44, 1, True, False), (0x44, 0, True, False), (0x44, 1, True, True),
         # queue: pushed while there is room, refused when full; reads the last value taken
         (0x22, 1, True, True), (0x22, 0, True, False), (0x22, 0, False, True),
         (0x22, 2, True, True), (0x22, 0, True, True),
