@@ -48,6 +48,7 @@ class Proof:
         cover, = run_sby(self.cover_harness(), f"{self.name}_covers", workdir,
                          depth=self.depth, cover_depth=self.cover_depth,
                          cover_skip=self.cover_skip, tasks=("cover",))
+        cover.name = self.name          # reported as this proof's cover
         return prove, cover
 
 
