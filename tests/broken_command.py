@@ -8,8 +8,12 @@ from galvoscan.gateware.host.regmap import CHECK_BYTE
 from galvoscan.gateware.host.spi_target import SPITarget
 
 
-class DecoderIgnoringCheckByte(wiring.Component):
-    """The real decoder, fed SPI frames whose check byte has been replaced by 0x64."""
+class TamperedDecoder(wiring.Component):
+    """The real decoder with one link's frame stream tampered with (``_feed``); everything
+    else passes through unchanged."""
+
+    #: The stream ``_feed`` connects: ``"spi_frames"`` or ``"uart_frames"``.
+    tampered = None
 
     def __init__(self):
         self.inner = CommandDecoder()
@@ -18,21 +22,30 @@ class DecoderIgnoringCheckByte(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         m.submodules.inner = inner = self.inner
-        wiring.connect(m, wiring.flipped(self.uart_frames), inner.uart_frames)
+        for name in ("spi_frames", "uart_frames"):
+            if name != self.tampered:
+                wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(inner, name))
         wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
         wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
         wiring.connect(m, inner.bus, wiring.flipped(self.bus))
-        m.d.comb += [
-            inner.spi_frames.valid.eq(self.spi_frames.valid),
-            self.spi_frames.ready.eq(inner.spi_frames.ready),
-            inner.spi_frames.payload.bits.eq(self.spi_frames.payload.bits),
-            inner.spi_frames.payload.word.eq(
-                Cat(Const(CHECK_BYTE, 8), self.spi_frames.payload.word[8:])),
-            self.errors.eq(inner.errors),
-            self.accepted.eq(inner.accepted),
-            self.status_read.eq(inner.status_read),
-        ]
+        for name in ("errors", "accepted", "status_read", "write_refused"):
+            m.d.comb += getattr(self, name).eq(getattr(inner, name))
+        self._feed(m, getattr(self, self.tampered), getattr(inner, self.tampered))
         return m
+
+
+class DecoderIgnoringCheckByte(TamperedDecoder):
+    """The real decoder, fed SPI frames whose check byte has been replaced by 0x64."""
+
+    tampered = "spi_frames"
+
+    def _feed(self, m, outer, inner):
+        m.d.comb += [
+            inner.valid.eq(outer.valid),
+            outer.ready.eq(inner.ready),
+            inner.payload.bits.eq(outer.payload.bits),
+            inner.payload.word.eq(Cat(Const(CHECK_BYTE, 8), outer.payload.word[8:])),
+        ]
 
 
 class TargetPassingShortFrames(wiring.Component):
@@ -72,60 +85,34 @@ class TargetKeepingFramesThroughReset(SPITarget):
         self._shift = Signal.like(self._shift, reset_less=True)
 
 
-class DecoderDroppingUARTErrors(wiring.Component):
+class DecoderDroppingUARTErrors(TamperedDecoder):
     """The real decoder, but a UART frame that is not 32 bits long is taken and dropped
     without being counted."""
 
-    def __init__(self):
-        self.inner = CommandDecoder()
-        super().__init__(self.inner.signature)
+    tampered = "uart_frames"
 
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.inner = inner = self.inner
-        wiring.connect(m, wiring.flipped(self.spi_frames), inner.spi_frames)
-        wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
-        wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
-        wiring.connect(m, inner.bus, wiring.flipped(self.bus))
-        whole = self.uart_frames.payload.bits == 32
+    def _feed(self, m, outer, inner):
+        whole = outer.payload.bits == 32
         m.d.comb += [
-            inner.uart_frames.valid.eq(self.uart_frames.valid & whole),
-            inner.uart_frames.payload.eq(self.uart_frames.payload),
-            self.uart_frames.ready.eq(inner.uart_frames.ready | ~whole),
-            self.errors.eq(inner.errors),
-            self.accepted.eq(inner.accepted),
-            self.status_read.eq(inner.status_read),
-            self.write_refused.eq(inner.write_refused),
+            inner.valid.eq(outer.valid & whole),
+            inner.payload.eq(outer.payload),
+            outer.ready.eq(inner.ready | ~whole),
         ]
-        return m
 
 
-class DecoderAcceptingLongUARTFrames(wiring.Component):
+class DecoderAcceptingLongUARTFrames(TamperedDecoder):
     """The real decoder, but a UART frame that ran over (33 bits) is decoded as complete."""
 
-    def __init__(self):
-        self.inner = CommandDecoder()
-        super().__init__(self.inner.signature)
+    tampered = "uart_frames"
 
-    def elaborate(self, platform):
-        m = Module()
-        m.submodules.inner = inner = self.inner
-        wiring.connect(m, wiring.flipped(self.spi_frames), inner.spi_frames)
-        wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
-        wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
-        wiring.connect(m, inner.bus, wiring.flipped(self.bus))
-        bits = self.uart_frames.payload.bits
+    def _feed(self, m, outer, inner):
+        bits = outer.payload.bits
         m.d.comb += [
-            inner.uart_frames.valid.eq(self.uart_frames.valid),
-            self.uart_frames.ready.eq(inner.uart_frames.ready),
-            inner.uart_frames.payload.word.eq(self.uart_frames.payload.word),
-            inner.uart_frames.payload.bits.eq(Mux(bits == 33, 32, bits)),
-            self.errors.eq(inner.errors),
-            self.accepted.eq(inner.accepted),
-            self.status_read.eq(inner.status_read),
-            self.write_refused.eq(inner.write_refused),
+            inner.valid.eq(outer.valid),
+            outer.ready.eq(inner.ready),
+            inner.payload.word.eq(outer.payload.word),
+            inner.payload.bits.eq(Mux(bits == 33, 32, bits)),
         ]
-        return m
 
 
 #: Each fault: the parts to swap in (and which of the links and reset the check needs), and
