@@ -61,7 +61,7 @@ class LaserSafetySpec(Elaboratable):
         m.submodules.dut = dut = self.controller
         m.d.comb += ResetSignal("sync").eq(AnySeq(1))
         inputs = ["arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-                  "interlock_open"] + (["alarm"] if self.alarms else [])
+                  "interlock_open", "guide"] + (["alarm"] if self.alarms else [])
         for name in inputs:
             port = getattr(dut, name)
             m.d.comb += port.eq(AnySeq(len(port)))
@@ -84,6 +84,8 @@ class LaserSafetySpec(Elaboratable):
                               ~alarm_seen),
                    "laser_enable only while armed, no fault, interlock closed, no alarm"),
             Assert(enable | quiet, "laser_enable low: every laser output low"),
+            # The pointer frames jobs with the marking laser off, never while it may fire.
+            Assert(~dut.laser_guide | ~dut.arm, "guide laser off while armed"),
         ]
 
         # --- interlock and alarms -----------------------------------------------------------
@@ -178,6 +180,7 @@ class LaserSafetySpec(Elaboratable):
             Cover(emitted & faults_q.as_value().any() & ~dut.faults.as_value().any(),
                   "a fault cleared after emission"),
             Cover(dut.pulse, "a laser pulse"),
+            Cover(emitted & dut.laser_guide, "the guide laser on after emission"),
         ]
         if self.alarms:
             m.d.comb += Cover(emitted & dut.faults.alarm & ~faults_q.alarm,

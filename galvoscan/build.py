@@ -6,6 +6,7 @@ from pathlib import Path
 import subprocess
 import time
 
+from .gateware.clocking import DEFAULT_BAUD
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
@@ -50,6 +51,7 @@ class BuildReport:
     seconds: float          # wall time of synthesis, place and route and packing
     modes: tuple = ()       # scan modes built
     bit_rate_mhz: float = 2.0   # XY2 bit rate (2: XY2-100, 4: XY2-200)
+    baud: int = DEFAULT_BAUD    # host serial port rate
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
 
     @property
@@ -87,13 +89,14 @@ class TimingError(BuildError):
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
-                    seed=1, require_timing=True):
+                    baud=DEFAULT_BAUD, seed=1, require_timing=True):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
     :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
     RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
-    the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200).
+    the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200),
+    ``baud`` the host serial port's rate.
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -104,10 +107,11 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     make_platform, make_top, synth_opts = BOARDS[board]
     # What the board cannot run raises here, before anything is built.
     if board == "icestick":
-        icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate)
+        icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate,
+                       baud=baud)
         correction = None               # the build has no correction stage at all
     else:
-        system_clock(clock, bit_rate)
+        system_clock(clock, bit_rate, baud)
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
@@ -117,7 +121,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
 
     start = time.monotonic()
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
-                                  correction=correction, clock=clock, bit_rate=bit_rate), name=name,
+                                  correction=correction, clock=clock, bit_rate=bit_rate,
+                                  baud=baud), name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design
                           # gives its figures rather than a failed subprocess.
@@ -145,7 +150,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
                        modes=modes, correction_nodes=correction.n if correction else 0,
-                       bit_rate_mhz=bit_rate / 1e6)
+                       bit_rate_mhz=bit_rate / 1e6, baud=baud)
     if not result.meets_timing:
         # A bitstream that misses timing is never written where a user would flash it.
         bitstream.unlink(missing_ok=True)

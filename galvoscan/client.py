@@ -10,6 +10,7 @@ of the address byte for a read. A transport moves frames; the client knows the r
         print(board.read("status"))
 """
 
+from .gateware.clocking import DEFAULT_BAUD
 from .gateware.host.regmap import (BY_ADDRESS, BY_NAME, CHECK_BYTE, READ_FLAG, FrameError,
                                    decode_frame, encode_frame)
 
@@ -94,12 +95,12 @@ class SerialTransport:
     port : str
         Serial device, e.g. ``/dev/ttyUSB1`` or ``COM4``.
     baud : int
-        Must match the bitstream (115200 by default).
+        Must match the bitstream (1 Mbaud by default).
     timeout : float
         Seconds to wait for an answer.
     """
 
-    def __init__(self, port, *, baud=115_200, timeout=0.5):
+    def __init__(self, port, *, baud=DEFAULT_BAUD, timeout=0.5):
         import serial   # pyserial
         self._serial = serial.Serial(port, baudrate=baud, timeout=timeout)
 

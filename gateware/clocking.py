@@ -13,13 +13,31 @@ from .host.uart import uart_divisor
 from .phy.xy2_100 import clocks_per_bit
 
 
-__all__ = ["ClockPlan", "check_clocks", "XY2_100_BIT_RATE", "DEFAULT_BAUD"]
+__all__ = ["ClockPlan", "check_clocks", "XY2_100_BIT_RATE", "DEFAULT_BAUD", "FTDI_BAUDS",
+           "default_baud"]
 
 
 #: The XY2-100 bit rate: 2 Mbit/s, a 10 µs frame.
 XY2_100_BIT_RATE = 2_000_000
-#: The host serial port's default rate (8N1).
-DEFAULT_BAUD = 115_200
+#: The host serial port's default rate (8N1). 1 Mbaud carries 25 000 frames/s, 8 300 vector
+#: segments/s: enough to keep the queue fed with 1 mm segments at several m/s (115 200 baud
+#: carries 960). The boards' FT2232H makes it exactly (3 MHz / 3), and a 12 MHz clock divides
+#: it exactly (12 clocks a bit); 3 Mbaud needs a 24 MHz or faster clock (8 clocks a bit).
+DEFAULT_BAUD = 1_000_000
+#: Rates the FT2232H makes exactly, for the command line's choices.
+FTDI_BAUDS = (115_200, 1_000_000, 3_000_000)
+
+
+def default_baud(clk_freq):
+    """:data:`DEFAULT_BAUD`, or for a clock too slow to carry it (a simulation's few MHz) the
+    fastest of :data:`FTDI_BAUDS` below it that the clock does carry."""
+    for baud in sorted((b for b in FTDI_BAUDS if b <= DEFAULT_BAUD), reverse=True):
+        try:
+            uart_divisor(clk_freq, baud)
+        except ValueError:
+            continue
+        return baud
+    return DEFAULT_BAUD         # none: check_clocks says why
 
 
 class ClockPlan(NamedTuple):

@@ -5,6 +5,7 @@ designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_cl
 ``xy2_sync``, ``xy2_x``, ``xy2_y``, the host link ``spi_sck``, ``spi_cs_n``, ``spi_copi``,
 ``spi_cipo``, ``uart_rx``, ``uart_tx``, and the laser's DB25 signals ``laser_power[7:0]``,
 ``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr``, the buffers' ``laser_enable``,
+the guide laser's ``laser_guide``,
 and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``).
 """
 
@@ -13,7 +14,7 @@ from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
-from .clocking import DEFAULT_BAUD, XY2_100_BIT_RATE, check_clocks
+from .clocking import XY2_100_BIT_RATE, check_clocks, default_baud
 from .field.correction import FieldCorrection
 from .field.correction_table import CorrectionTable
 from .field.scale import ScaleOffset
@@ -68,8 +69,10 @@ class GalvoScanTop(wiring.Component):
         Frequency of ``clk`` in Hz.
     bit_rate : int or float
         XY2 bit rate in Hz (2 MHz: XY2-100). ``clk_freq / bit_rate`` must be an even integer.
-    baud : int
-        UART rate (8N1).
+    baud : int or None
+        UART rate (8N1). None: 1 Mbaud (the boards' default), or on a clock too slow for it
+        (a simulation's few MHz) the fastest standard rate it carries
+        (:func:`~.clocking.default_baud`).
     table : :class:`SpiralTable`
         Spiral angle tables (default: 128 Gaussian-sampled points).
     settings : :class:`ScanSettings`
@@ -108,6 +111,9 @@ class GalvoScanTop(wiring.Component):
         High only while armed with no fault, the interlock closed and no alarm: the output
         enable of those buffers (pulled down on the board: off before configuration). Every
         laser output is low while it is low.
+    laser_guide : ``Out(1)``
+        The guide (red pointer) laser, from the ``guide`` register; off while armed. Which
+        DB25 pin takes it differs between lasers.
     interlock_open : ``In(1, init=1)``
         1 = interlock open (give the pin a pull-up, so a broken loop reads open).
     laser_alarm : ``In(laser_alarms, init=all ones)``, when ``laser_alarms`` > 0
@@ -122,7 +128,7 @@ class GalvoScanTop(wiring.Component):
         Clocks per XY2 bit and per UART bit.
     """
 
-    def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=DEFAULT_BAUD, table=None,
+    def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=None, table=None,
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2):
@@ -141,6 +147,7 @@ class GalvoScanTop(wiring.Component):
                              f"{modes!r} leaves out")
         self.modes = modes
         # Checked here so that a bad clock shows at construction, not deep in elaboration.
+        baud = default_baud(clk_freq) if baud is None else baud
         self.clocking = check_clocks(clk_freq, bit_rate, baud)
         if isinstance(correction, str) and correction == "identity":
             correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
@@ -185,6 +192,7 @@ class GalvoScanTop(wiring.Component):
             "uart_rx": In(1, init=1), "uart_tx": Out(1, init=1),
             "laser_power": Out(8), "laser_latch": Out(1), "laser_mo": Out(1),
             "laser_am": Out(1), "laser_prr": Out(1), "laser_enable": Out(1),
+            "laser_guide": Out(1),
             "interlock_open": In(1, init=1),
         }
         if self.laser_alarms:
@@ -380,12 +388,13 @@ class GalvoScanTop(wiring.Component):
             laser.fault_clear.eq(regs.fault_clear),
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),
+            laser.guide.eq(regs.guide),
         ]
         if self.laser_alarms:
             m.d.comb += [laser.alarm.eq(self.laser_alarm),
                          status.flags.alarm.eq(self.laser_alarm.any())]
         for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr",
-                     "laser_enable"):
+                     "laser_enable", "laser_guide"):
             m.d.comb += getattr(self, name).eq(getattr(laser, name))
         m.d.comb += [
             status.events.pulses.eq(laser.pulse),
@@ -394,6 +403,7 @@ class GalvoScanTop(wiring.Component):
             status.flags.fault_watchdog.eq(laser.faults.watchdog),
             status.flags.fault_alarm.eq(laser.faults.alarm),
             status.flags.laser_enable.eq(laser.laser_enable),
+            status.flags.laser_ready.eq(laser.mo_ready & laser.laser_enable),
             status.flags.mo_on.eq(laser.laser_mo),
             status.flags.emitting.eq(laser.laser_am),
         ]

@@ -40,9 +40,14 @@ PMOD1A 8       48        laser_mo           18
 PMOD1A 9       46        laser_am           19
 PMOD1A 10      44        laser_prr          20
 PMOD1B 8       36        laser_enable       (the buffers' output enable; pull it down)
+PMOD1B 10      28        laser_guide        22 on IPG (differs between lasers; pull it down)
 PMOD1B 7       42        interlock_open     (loop; pulled up: a broken loop reads open)
-PMOD1B 9, 10   32 28     laser_alarm[0:2]   (laser's alarm outputs, 1 = alarm; pulled up)
+PMOD1B 9       32        laser_alarm[0]     (laser's alarm outputs, OR-ed: 1 = alarm; pulled up)
 =============  ========  =================  =========
+
+The gateware treats every alarm input alike (any one active is an alarm), so a laser's several
+alarm outputs share the one input through a wired OR (open-collector outputs in parallel, or
+a diode OR), and the last PMOD pin is left for the guide laser.
 
 Before and while the FPGA configures, its pins float with weak pull-ups: the buffers must be
 off then (``laser_enable`` pulled down, so the buffers' outputs are disabled) and the laser
@@ -57,7 +62,7 @@ from amaranth.hdl import ClockDomain, Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
-from ..gateware.clocking import check_clocks
+from ..gateware.clocking import DEFAULT_BAUD, check_clocks
 from ..gateware.top import GalvoScanTop
 from .pll import ICE40PLL, pll_settings
 
@@ -81,11 +86,14 @@ LASER_PMOD_PINS = {
     "am": (0, "9", "19"),
     "prr": (0, "10", "20"),
     "enable": (1, "8", "-"),     # to the buffers' output enable, not to the DB25
+    # The guide (red pointer) laser: on while disarmed when asked, so through a buffer of its
+    # own that laser_enable does not gate; the DB25 pin differs between lasers.
+    "guide": (1, "10", "22"),
 }
 #: The interlock loop input: (PMOD number, PMOD pin).
 INTERLOCK_PMOD_PIN = (1, "7")
 #: The laser alarm inputs: (PMOD number, PMOD pins); as many alarms as pins.
-ALARM_PMOD_PINS = (1, "9 10")
+ALARM_PMOD_PINS = (1, "9")
 
 
 def icebreaker_platform():
@@ -116,7 +124,7 @@ def icebreaker_platform():
     return platform
 
 
-def system_clock(clock, bit_rate):
+def system_clock(clock, bit_rate, baud=DEFAULT_BAUD):
     """``(clk_freq, pll_settings or None)`` for a requested system clock (None: the crystal).
 
     Raises ``ValueError`` if the PLL cannot make ``clock`` or
@@ -125,7 +133,7 @@ def system_clock(clock, bit_rate):
     """
     pll = None if clock is None else pll_settings(CRYSTAL_HZ, clock)
     clk_freq = CRYSTAL_HZ if clock is None else clock
-    check_clocks(clk_freq, bit_rate)
+    check_clocks(clk_freq, bit_rate, baud)
     return clk_freq, pll
 
 
@@ -134,7 +142,7 @@ class ICEBreakerScanner(Elaboratable):
 
     Parameters
     ----------
-    table, settings, modes, correction, bit_rate
+    table, settings, modes, correction, bit_rate, baud
         As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
         ``correction`` ``"identity"``: the default identity table).
     clock : float or None
@@ -143,13 +151,14 @@ class ICEBreakerScanner(Elaboratable):
     """
 
     def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
-                 bit_rate=2_000_000, clock=None):
+                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD):
         self.table = table
         self.settings = settings
         self.modes = modes
         self.correction = correction
         self.bit_rate = bit_rate
-        self.clk_freq, self.pll = system_clock(clock, bit_rate)
+        self.baud = baud
+        self.clk_freq, self.pll = system_clock(clock, bit_rate, baud)
 
     def elaborate(self, platform):
         m = Module()
@@ -159,7 +168,7 @@ class ICEBreakerScanner(Elaboratable):
             crystal = platform.request(platform.default_clk, dir="-")
             m.submodules.pll = ICE40PLL(crystal, self.pll, sync)
         m.submodules.scanner = scanner = GalvoScanTop(
-            clk_freq=self.clk_freq, bit_rate=self.bit_rate, table=self.table,
+            clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, correction=self.correction,
             laser_alarms=len(ALARM_PMOD_PINS[1].split()), **extra)
 

@@ -29,7 +29,7 @@ from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icestick import ICEStickPlatform
 
-from ..gateware.clocking import check_clocks
+from ..gateware.clocking import DEFAULT_BAUD, check_clocks
 from ..gateware.top import GalvoScanTop
 from .icebreaker import XY2_PMOD_PINS
 
@@ -57,16 +57,17 @@ def icestick_platform():
     return platform
 
 
-def icestick_clock(clock, bit_rate):
+def icestick_clock(clock, bit_rate, baud=DEFAULT_BAUD):
     """The iCEstick runs on its 12 MHz oscillator (no PLL option here: its HX1K build has no
     timing to spare for one and no use for one)."""
     if clock not in (None, ICESTICK_CRYSTAL_HZ):
         raise ValueError("the iCEstick build runs on its 12 MHz oscillator only")
-    check_clocks(ICESTICK_CRYSTAL_HZ, bit_rate)
+    check_clocks(ICESTICK_CRYSTAL_HZ, bit_rate, baud)
     return ICESTICK_CRYSTAL_HZ, None
 
 
-def icestick_check(*, modes=None, correction=None, clock=None, bit_rate=2_000_000):
+def icestick_check(*, modes=None, correction=None, clock=None, bit_rate=2_000_000,
+                   baud=DEFAULT_BAUD):
     """Raise ``ValueError`` for anything the iCEstick build cannot hold: checked before any
     build starts."""
     if modes is not None and tuple(modes) != ICESTICK_MODES:
@@ -75,7 +76,7 @@ def icestick_check(*, modes=None, correction=None, clock=None, bit_rate=2_000_00
                                        correction == "identity"):
         raise ValueError("the iCEstick has no room for the correction stage: build without "
                          "a correction table")
-    return icestick_clock(clock, bit_rate)
+    return icestick_clock(clock, bit_rate, baud)
 
 
 class ICEStickScanner(Elaboratable):
@@ -85,15 +86,18 @@ class ICEStickScanner(Elaboratable):
     ----------
     table, settings
         As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
+    baud : int
+        UART rate (default 1 Mbaud).
     modes, correction, clock, bit_rate
         Accepted for the same call as the iCEBreaker's; anything but spiral mode, no
         correction and the 12 MHz oscillator is refused.
     """
 
     def __init__(self, *, table=None, settings=None, modes=None, correction=None,
-                 bit_rate=2_000_000, clock=None):
+                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD):
         self.clk_freq, _ = icestick_check(modes=modes, correction=correction, clock=clock,
-                                          bit_rate=bit_rate)
+                                          bit_rate=bit_rate, baud=baud)
+        self.baud = baud
         self.table = table
         self.settings = settings
         self.bit_rate = bit_rate
@@ -101,7 +105,7 @@ class ICEStickScanner(Elaboratable):
     def elaborate(self, platform):
         m = Module()
         m.submodules.scanner = scanner = GalvoScanTop(
-            clk_freq=self.clk_freq, bit_rate=self.bit_rate, table=self.table,
+            clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, modes=ICESTICK_MODES, correction=None,
             multiplier="serial", links=("uart",), laser=False, uart_reply_depth=1)
 

@@ -7,9 +7,9 @@ from galvoscan.gateware.laser.controller import LaserController
 
 
 INPUTS = ("arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-          "interlock_open", "alarm")
+          "interlock_open", "alarm", "guide")
 OUTPUTS = ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "laser_enable",
-           "faults", "mo_ready", "pulse")
+           "faults", "mo_ready", "pulse", "laser_guide")
 
 
 class TamperedLaser(wiring.Component):
@@ -52,6 +52,9 @@ class TamperedLaser(wiring.Component):
             closed = Signal()
             m.d.sync += closed.eq(~self.interlock_open)
             inputs["fault_clear"] = self.fault_clear | closed
+        elif self.kind == "guide_while_armed":
+            # The guide laser follows its register, armed or not.
+            outputs["laser_guide"] = self.guide
         else:
             raise ValueError(f"unknown fault {self.kind!r}")
 
@@ -74,8 +77,10 @@ LASER_FAULTS = {
         "a latched fault keeps every laser output off until cleared and re-armed",
     # Unwired alarms: no alarm fault latches, and a fault is cleared while an alarm is on.
     "alarms_ignored": ("interlock open or alarm: every laser output low",
+                       "laser_enable only while armed, no fault, interlock closed, no alarm",
                        "an alarm while armed latches a fault",
                        "a fault stays latched until cleared"),
     "enable_ignores_faults": "laser_enable only while armed, no fault, interlock closed, no "
                              "alarm",
+    "guide_while_armed": "guide laser off while armed",
 }

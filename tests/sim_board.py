@@ -39,7 +39,7 @@ class SimBoard:
         self.alarms_clear = alarms_clear
         self.sim.add_testbench(self._interlock, background=True)
         #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power,
-        #: laser_enable, laser_alarm) on every clock, if recorded.
+        #: laser_enable, laser_alarm, laser_guide) on every clock, if recorded.
         self.laser_pins = []
         #: xy2_sync on every clock, if the laser is recorded (frame k's position is in force
         #: from sync's (k+1)-th rising edge: the end of that frame).
@@ -69,7 +69,7 @@ class SimBoard:
                                     ctx.get(top.laser_latch), ctx.get(top.laser_power),
                                     ctx.get(top.laser_enable),
                                     ctx.get(top.laser_alarm) if hasattr(top, "laser_alarm")
-                                    else 0))
+                                    else 0, ctx.get(top.laser_guide)))
             self.sync_pins.append(ctx.get(top.xy2_sync))
             await ctx.tick()
 
@@ -156,6 +156,13 @@ class SimBoard:
                 raise TimeoutError(f"simulated {timeout * 1e3:.1f} ms without an answer")
             self.run_for(step)
             waited += step
+
+    LASER_PIN_NAMES = ("laser_mo", "laser_am", "laser_prr", "interlock_open", "laser_latch",
+                       "laser_power", "laser_enable", "laser_alarm", "laser_guide")
+
+    def top_pin(self, name):
+        """A laser pin's value on the last clock recorded (``record_laser=True``)."""
+        return self.laser_pins[-1][self.LASER_PIN_NAMES.index(name)]
 
     def xy2_frames(self):
         """All XY2-100 frames so far, decoded by the tests' reader, with the time each ended."""

@@ -367,3 +367,27 @@ def test_status_block_counts_and_latches():
     sim.add_clock(1e-6)
     sim.add_testbench(testbench)
     sim.run()
+
+
+def test_guide_laser_only_while_disarmed_and_ready_after_the_lead():
+    """The guide laser follows its register while disarmed and goes off on arming; status
+    says `laser_ready` once MO has led for the MO lead, not before."""
+    board = SimBoard(mo_lead=1e-3, record_laser=True)
+    client = HostClient(SimUARTTransport(board))
+    client.write("guide", 1)
+    board.run_for(2e-6)
+    assert board.top_pin("laser_guide") == 1
+    client.write("arm", 1)
+    armed_at = len(board.laser_pins)
+    board.run_for(1e-4)
+    # Off within a clock of arming (the register write), and the laser not ready yet.
+    assert board.top_pin("laser_guide") == 0
+    assert status_bits(client, "laser_enable", "laser_ready") == \
+        {"laser_enable": True, "laser_ready": False}
+    board.run_for(1e-3)
+    assert status_bits(client, "laser_ready") == {"laser_ready": True}
+    client.write("arm", 0)
+    board.run_for(2e-6)
+    assert status_bits(client, "laser_ready") == {"laser_ready": False}
+    assert board.top_pin("laser_guide") == 1           # the register still asks for it
+    assert armed_at > 0

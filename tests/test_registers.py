@@ -16,7 +16,7 @@ from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, 
 #: The default build's registers (128-point spiral table, 17 × 17 correction nodes, all modes,
 #: the laser): name, address, access, reset, lowest and highest value written, bits held.
 DEFAULT_BUILD = [
-    ("status", 0x00, "ro", 0, 0, 0, 12),
+    ("status", 0x00, "ro", 0, 0, 0, 13),
     ("errors", 0x01, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
@@ -59,6 +59,7 @@ DEFAULT_BUILD = [
     ("watchdog", 0x13, "rw", 1000, 1, 60000, 16),
     ("fault_clear", 0x14, "strobe", 0, 0, 1, 1),
     ("pulses", 0x15, "ro", 0, 0, 0, 16),
+    ("guide", 0x16, "rw", 0, 0, 1, 1),
 ]
 
 #: Strobes a busy block refuses (the ready flag of the accesses below stands for its room).
@@ -69,7 +70,7 @@ SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last"}
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
 VECTOR_ONLY = {"vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"}
-LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses"}
+LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses", "guide"}
 CORRECTION_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("cor_")}
 
 
@@ -201,7 +202,7 @@ def test_status_layout_is_the_status_register():
     assert STATUS_BITS == {"running": 0, "clipped": 1, "armed": 2, "fault_interlock": 3,
                            "fault_watchdog": 4, "mo_on": 5, "emitting": 6,
                            "interlock_open": 7, "vector_busy": 8, "fault_alarm": 9,
-                           "alarm": 10, "laser_enable": 11}
+                           "alarm": 10, "laser_enable": 11, "laser_ready": 12}
 
 
 def test_mode_register_holds_the_modes():

@@ -13,7 +13,8 @@ from pathlib import Path
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
-           "add_table_options", "table_from", "settings_from", "add_link_options", "open_link"]
+           "add_table_options", "table_from", "settings_from", "baud", "add_baud_option",
+           "add_link_options", "open_link"]
 
 
 class CLIError(SystemExit):
@@ -210,13 +211,31 @@ def settings_from(args, table, **overrides):
 
 # --- host link -----------------------------------------------------------------------------------
 
+def baud(text):
+    """A UART rate in baud (``1e6``, ``3000000``)."""
+    value = number_in("baud", 300, 12e6)(text)
+    if value != int(value):
+        raise argparse.ArgumentTypeError(f"baud must be a whole number, not {text}")
+    return int(value)
+
+
+def add_baud_option(parser):
+    """``--baud`` of a build: the rate the bitstream's serial port runs at."""
+    from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
+    parser.add_argument("--baud", type=baud, default=DEFAULT_BAUD, metavar="BAUD",
+                        help=f"host serial port rate (default: {_number(DEFAULT_BAUD)}; the "
+                             f"FT2232H makes {', '.join(map(_number, FTDI_BAUDS))} exactly; "
+                             f"3e6 needs --clock 24e6 or more)")
+
+
 def add_link_options(parser):
+    from ..gateware.clocking import DEFAULT_BAUD
     link = parser.add_argument_group("link (one of)")
     where = link.add_mutually_exclusive_group(required=True)
     where.add_argument("--port", help="serial port of the board (e.g. /dev/ttyUSB1, COM4)")
     where.add_argument("--spi", metavar="URL", help="pyftdi URL of an FTDI SPI adapter "
                                                     "(e.g. ftdi://ftdi:2232h/1)")
-    link.add_argument("--baud", type=int_in(300, 12_000_000, "baud"), default=115_200,
+    link.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                       help="serial rate of the bitstream (default: %(default)s)")
     link.add_argument("--timeout", type=number_in("timeout", 0.01, 60), default=0.5,
                       metavar="S", help="seconds to wait for an answer (default: 0.5)")

