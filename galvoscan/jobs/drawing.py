@@ -1,0 +1,410 @@
+"""Drawings to mark: SVG (svgelements) and DXF (ezdxf) files as polylines in mm, Y up.
+
+Curves are flattened into chords within ``tolerance_mm`` of the true curve. Every problem with a
+file is a :class:`DrawingError`, one line that names the file; nothing else escapes
+:func:`load_drawing`. What the file holds but is not marked (text, images, hatches, dimensions,
+hidden layers …) is counted in :attr:`Drawing.skipped`, so the user hears of it.
+"""
+
+from collections import Counter
+from dataclasses import dataclass
+import io
+import logging
+from logging.handlers import BufferingHandler
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+
+__all__ = ["DrawingError", "Drawing", "load_drawing"]
+
+
+#: Refused beyond this extent: no lens field is 10 m wide, so it is a unit mistake.
+MAX_EXTENT_MM = 10_000.0
+#: Below this, two consecutive points are one (float noise of transforms and flattening).
+SAME_POINT_MM = 1e-9
+MM_PER_PX = 25.4 / 96                       # svgelements gives px at 96 ppi
+
+
+class DrawingError(ValueError):
+    """A drawing that cannot be marked; the message is one line naming the file."""
+
+
+@dataclass(frozen=True, eq=False)          # eq=False: arrays have no truth value to compare
+class Drawing:
+    """A drawing as polylines.
+
+    Attributes
+    ----------
+    name : str
+        The file name.
+    paths : tuple of numpy.ndarray
+        Read-only float arrays of shape (n, 2), n >= 2, in mm, Y up.
+    closed : tuple of bool
+        One per path: it ends where it starts (its last point equals its first).
+    skipped : tuple of str
+        What the file holds but is not marked, e.g. ``"3 text elements (convert text to
+        paths)"``.
+    notes : tuple of str
+        How the file was read, e.g. ``"DXF has no units ($INSUNITS 0): taken as mm"``.
+    """
+    name: str
+    paths: tuple
+    closed: tuple
+    skipped: tuple = ()
+    notes: tuple = ()
+
+    def bounds(self):
+        """``(xmin, ymin, xmax, ymax)`` in mm."""
+        points = np.concatenate(self.paths)
+        return (*points.min(axis=0).tolist(), *points.max(axis=0).tolist())
+
+
+def _one_line(error):
+    text = " ".join(str(error).split()) or type(error).__name__
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
+def _counted(counter, hints=None):
+    """``["3 text elements (convert text to paths)"]`` from counts of singular phrases."""
+    plural = lambda m: m[1] + ("ies" if m[2] else "s")          # noqa: E731
+    return [f"{n} {what if n == 1 else re.sub(r'(element|path|entit)(y?)', plural, what, 1)}"
+            f"{(hints or {}).get(what, '')}" for what, n in sorted(counter.items()) if n]
+
+
+def load_drawing(path, *, tolerance_mm=0.01):
+    """Read an SVG or DXF drawing.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.svg`` or ``.dxf`` (by suffix, any case).
+    tolerance_mm : float
+        The largest distance allowed between a chord and the curve it stands for.
+
+    Returns
+    -------
+    Drawing
+
+    Raises
+    ------
+    DrawingError
+        For anything that is not a readable drawing with something to mark.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".job":
+        raise DrawingError(f"{path}: a job file is in galvo units, not a drawing to place")
+    if suffix not in (".svg", ".dxf"):
+        raise DrawingError(f"{path}: not a drawing galvoscan reads (.svg, .dxf, .job)")
+    if not (tolerance_mm > 0 and math.isfinite(tolerance_mm)):
+        raise DrawingError(f"{path}: the flattening tolerance must be > 0 mm, not {tolerance_mm}")
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise DrawingError(f"{path}: a folder, not a drawing") from None
+    except FileNotFoundError:
+        raise DrawingError(f"{path}: no such file") from None
+    except OSError as error:
+        raise DrawingError(f"{path}: cannot read ({error.strerror or _one_line(error)})") from None
+    if not data.strip():
+        raise DrawingError(f"{path}: empty file")
+    try:
+        reader = _read_svg if suffix == ".svg" else _read_dxf
+        raw, closed, skipped, notes = reader(data, tolerance_mm)
+    except DrawingError as error:
+        raise DrawingError(f"{path}: {error}") from None
+    except Exception as error:              # the libraries raise many types on bad input
+        kind = suffix[1:].upper()
+        raise DrawingError(f"{path}: not a readable {kind} file ({_one_line(error)})") from None
+    return _finish(path, raw, closed, skipped, notes, tolerance_mm)
+
+
+def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm):
+    """Clean the polylines up and check them: one rule set for both formats."""
+    paths, closed, degenerate = [], [], 0
+    for points, is_closed in zip(raw, closed_flags):
+        points = np.array(points, dtype=float).reshape(-1, 2)
+        if not np.isfinite(points).all():
+            raise DrawingError(f"{path}: coordinates that are not finite numbers")
+        if len(points):
+            step = np.hypot(*np.diff(points, axis=0).T)
+            points = points[np.concatenate([[True], step > SAME_POINT_MM])]
+        # A path back at its start, within what flattening promises anyway, is closed.
+        if len(points) > 2 and np.hypot(*(points[-1] - points[0])) <= tolerance_mm:
+            points[-1], is_closed = points[0], True
+        elif is_closed and len(points) >= 2:
+            points = np.vstack([points, points[:1]])
+        if len(points) < 2:
+            degenerate += 1
+            continue
+        points.flags.writeable = False
+        paths.append(points)
+        closed.append(bool(is_closed and len(points) > 2))
+    skipped = list(skipped) + _counted({"zero-length path": degenerate})
+    if not paths:
+        raise DrawingError(f"{path}: no lines or curves to mark")
+    drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes))
+    xmin, ymin, xmax, ymax = drawing.bounds()
+    if max(xmax - xmin, ymax - ymin) > MAX_EXTENT_MM:
+        raise DrawingError(f"{path}: {xmax - xmin:.6g} × {ymax - ymin:.6g} mm, more than "
+                           f"{MAX_EXTENT_MM / 1000:g} m: check the drawing's units")
+    return drawing
+
+
+# --- SVG ------------------------------------------------------------------------------------
+
+def _arc_points(arc, tolerance_px):
+    """An elliptical arc from its conjugate semi-diameters ``u``, ``v`` (``prx``, ``pry``
+    minus the centre): any affine image of an ellipse is ``c + u cos t + v sin t``.
+
+    svgelements' own ``Arc.point`` takes ``u`` and ``v`` as perpendicular, which a skew or a
+    turned non-uniform scale breaks (0.75 mm off on a skewed 10 mm ellipse). ``n`` equal steps
+    in ``t`` leave chords within ``a (1 - cos(sweep / 2n))``, ``a`` the largest semi-axis.
+    """
+    c = np.array(arc.center, dtype=float)
+    uv = np.column_stack([np.array(arc.prx, float) - c, np.array(arc.pry, float) - c])
+    start, end = np.array(arc.start, dtype=float), np.array(arc.end, dtype=float)
+    if abs(np.linalg.det(uv)) < 1e-12 or arc.sweep == 0:
+        return [end]
+    t0 = math.atan2(*np.linalg.solve(uv, start - c)[::-1])
+    major = np.linalg.norm(uv, 2)
+
+    def at(t):
+        return c + (uv @ np.array([np.cos(t), np.sin(t)])).T
+
+    # svgelements keeps the sweep relative to (u, u turned +90°), flipping it under a mirror:
+    # relative to (u, v) it is that times the sign of u × v. Checked against the arc's end (a
+    # half turn lands there either way round).
+    sweep = arc.sweep * (1.0 if np.linalg.det(uv) > 0 else -1.0)
+    misses = [np.hypot(*(at(np.array([t0 + s]))[0] - end)) for s in (sweep, -sweep)]
+    sweep = -sweep if misses[0] > misses[1] + 1e-9 * major else sweep
+    step = 2 * math.acos(1 - tolerance_px / major) if tolerance_px < major else math.pi
+    n = max(1, math.ceil(abs(sweep) / step - 1e-9))
+    points = at(t0 + sweep * np.arange(1, n + 1) / n)
+    points[-1] = end
+    return list(points)
+
+
+def _bezier_points(segment, tolerance_px):
+    """A Bézier curve in ``n`` equal parameter steps: linear interpolation over a step ``h``
+    is within ``h² / 8 · max |B''|``, and ``|B''|`` is bounded by the control polygon."""
+    p = np.array([np.array(q, dtype=float) for q in segment])
+    degree = len(p) - 1
+    second = np.max(np.hypot(*(p[:-2] - 2 * p[1:-1] + p[2:]).T)) * degree * (degree - 1)
+    n = max(1, math.ceil(math.sqrt(second / (8 * tolerance_px))))
+    return list(np.asarray(segment.npoint(np.arange(1, n + 1) / n), dtype=float))
+
+
+def _svg_subpaths(path, tolerance_px):
+    """The flattened subpaths of one reified svgelements Path: ``(points_px, closed)``."""
+    from svgelements import Arc, Close, CubicBezier, Move, QuadraticBezier
+
+    subpaths, points, closed = [], [], False
+    for segment in path:
+        if isinstance(segment, Move) or segment.start is None or not points or closed:
+            # A new subpath: at a Move, or drawing on after a Close.
+            if points:
+                subpaths.append((np.array(points), closed))
+            first = segment.end if isinstance(segment, Move) else segment.start
+            points, closed = ([] if first is None else [np.array(first, dtype=float)]), False
+            if isinstance(segment, Move) or first is None:
+                continue
+        if isinstance(segment, Arc):
+            points += _arc_points(segment, tolerance_px)
+        elif isinstance(segment, (CubicBezier, QuadraticBezier)):
+            points += _bezier_points(segment, tolerance_px)
+        else:                               # Line, Close
+            points.append(np.array(segment.end, dtype=float))
+            closed = isinstance(segment, Close)
+    if points:
+        subpaths.append((np.array(points), closed))
+    return subpaths
+
+
+def _read_svg(data, tolerance_mm):
+    import svgelements as svg
+
+    document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
+    paths, closed, skipped = [], [], Counter()
+    for element in document.elements():
+        if not isinstance(element, (svg.Shape, svg.Text, svg.Image)):
+            continue                        # groups, the document, <use> (its copy follows)
+        if str(element.values.get("visibility", "")).lower() in ("hidden", "collapse"):
+            skipped["hidden element"] += 1
+        elif isinstance(element, svg.Text):
+            skipped["text element"] += 1
+        elif isinstance(element, svg.Image):
+            skipped["image element"] += 1
+        else:
+            # Path(shape) keeps the shape's own transform aside: abs() applies it.
+            for points_px, is_closed in _svg_subpaths(abs(svg.Path(element)),
+                                                      tolerance_mm / MM_PER_PX):
+                paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
+                closed.append(is_closed)
+    return paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}), []
+
+
+# --- DXF ------------------------------------------------------------------------------------
+
+_TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB", "ATTDEF"}
+#: mm per $INSUNITS unit where the definition is exact (ezdxf's table has 1 in = 25.4000000001).
+_EXACT_MM = {1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 8: 25.4e-6, 9: 0.0254, 10: 914.4,
+             13: 1e-3, 14: 100.0}
+
+
+def _xy(vertices):
+    return np.array([(v.x, v.y) for v in vertices], dtype=float).reshape(-1, 2)
+
+
+def _spline_points(spline, tolerance):
+    """A B-spline evaluated by ezdxf and flattened here.
+
+    ezdxf's ``BSpline.flattening`` (and ``path.make_path``) run from the first knot to the last,
+    right only for clamped knots: a closed (periodic) spline comes out with loops far outside
+    it. The curve lives between knots ``order - 1`` and ``count``. Each knot span starts as 8
+    chords; a chord is halved until the curve at 1/4, 1/2 and 3/4 of it is within tolerance.
+    """
+    knots = np.asarray(spline.knots(), dtype=float)
+    low, high = knots[spline.order - 1], knots[spline.count]
+    breaks = np.unique(np.concatenate([[low, high], knots[(knots > low) & (knots < high)]]))
+    ts = np.unique(np.concatenate([np.linspace(a, b, 9) for a, b in zip(breaks, breaks[1:])]))
+    points = _xy(spline.points(ts))
+    t0, t1, p0, p1 = ts[:-1], ts[1:], points[:-1], points[1:]
+    done_t, done_p = [ts[:1]], [points[:1]]
+    for depth in range(40):
+        chord, worst = p1 - p0, np.zeros(len(t0))
+        for share in (0.25, 0.5, 0.75):
+            curve = _xy(spline.points(t0 + share * (t1 - t0)))
+            along = np.clip(np.sum((curve - p0) * chord, axis=1) /
+                            np.maximum(np.sum(chord * chord, axis=1), 1e-300), 0, 1)
+            worst = np.maximum(worst, np.hypot(*(p0 + along[:, None] * chord - curve).T))
+        good = (worst <= tolerance) | (depth == 39)
+        done_t.append(t1[good]), done_p.append(p1[good])
+        if good.all():
+            break
+        bad = ~good
+        tm = (t0[bad] + t1[bad]) / 2
+        pm = _xy(spline.points(tm))
+        t0, t1 = np.concatenate([t0[bad], tm]), np.concatenate([tm, t1[bad]])
+        p0, p1 = np.concatenate([p0[bad], pm]), np.concatenate([pm, p1[bad]])
+    return np.concatenate(done_p)[np.argsort(np.concatenate(done_t), kind="stable")]
+
+
+def _polyline_points(entity, tolerance):
+    """A 2D/3D polyline's LINE and ARC pieces, joined from its first vertex. ARC entities
+    always run counter-clockwise, so each piece is turned to start where the last ended."""
+    first = next(iter(entity.vertices_in_wcs() if entity.dxftype() == "LWPOLYLINE"
+                      else entity.points_in_wcs()))
+    chained = [_xy([first])]
+    for piece in entity.virtual_entities():
+        points = (_xy([piece.dxf.start, piece.dxf.end]) if piece.dxftype() == "LINE"
+                  else _xy(piece.flattening(tolerance)))
+        end = chained[-1][-1]
+        chained.append(points[::-1] if np.hypot(*(points[-1] - end)) <
+                       np.hypot(*(points[0] - end)) else points)
+    return np.concatenate(chained)
+
+
+def _entity_points(entity, tolerance, skipped):
+    """``(points, closed)`` of one entity that is not a block reference, or None."""
+    kind = entity.dxftype()
+    if kind == "LINE":
+        return _xy([entity.dxf.start, entity.dxf.end]), False
+    if kind == "CIRCLE":
+        return _xy(entity.flattening(tolerance)), True
+    if kind == "ARC":
+        span = (entity.dxf.end_angle - entity.dxf.start_angle) % 360
+        return _xy(entity.flattening(tolerance)), span == 0
+    if kind == "ELLIPSE":
+        span = (entity.dxf.end_param - entity.dxf.start_param) % math.tau
+        return _xy(entity.flattening(tolerance)), min(span, math.tau - span) < 1e-9
+    if kind == "SPLINE":
+        return _spline_points(entity.construction_tool(), tolerance), bool(entity.closed)
+    if kind == "LWPOLYLINE" or (kind == "POLYLINE" and
+                                (entity.is_2d_polyline or entity.is_3d_polyline)):
+        return _polyline_points(entity, tolerance), bool(entity.is_closed)
+    skipped["text entity" if kind in _TEXT_TYPES else f"{kind} entity"] += 1
+    return None
+
+
+def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
+    """Append the polylines of one entity to ``out``, in the drawing's units.
+
+    Block references are not exploded by ezdxf (which makes a non-uniformly scaled polyline
+    loose lines and ellipses, no longer closed): the block's entities are flattened in its own
+    coordinates, finer by the reference's largest stretch, and their points mapped by the
+    reference's matrix (row vectors, as ezdxf's ``Matrix44``).
+    """
+    kind = entity.dxftype()
+    try:
+        if kind == "INSERT":
+            if depth > 50:
+                raise DrawingError("block references nested more than 50 deep")
+            skipped["text entity"] += len(entity.attribs)
+            block = entity.block()
+            if block is None:
+                skipped["reference to a missing block"] += 1
+                return
+            for insert in (entity.multi_insert() if entity.mcount > 1 else [entity]):
+                m = np.array([insert.matrix44().get_row(i) for i in range(4)])
+                m = m if matrix is None else m @ matrix
+                stretch = max(np.linalg.norm(m[:2, :2], 2), 1e-12)
+                for child in block:
+                    _dxf_entity(child, tolerance / stretch, out, skipped, m, depth + 1)
+            return
+        found = _entity_points(entity, tolerance, skipped)
+    except DrawingError:
+        raise
+    except Exception as error:              # one broken entity: skip it, say so
+        skipped[f"{kind} entity ezdxf cannot evaluate ({_one_line(error)})"] += 1
+        return
+    if found is not None:
+        points, closed = found
+        out.append((points if matrix is None else points @ matrix[:2, :2] + matrix[3, :2],
+                    closed))
+
+
+def _read_dxf(data, tolerance_mm):
+    from ezdxf import recover, units
+
+    # recover reads what readfile reads and more: damaged files, binary DXF, any encoding. What
+    # it logs about a damaged file becomes a note, rather than lines on the user's terminal.
+    logger, said = logging.getLogger("ezdxf"), BufferingHandler(1 << 30)
+    said.setLevel(logging.WARNING)
+    logger.addHandler(said)
+    propagate, logger.propagate = logger.propagate, False
+    try:
+        document, auditor = recover.read(io.BytesIO(data))
+    finally:
+        logger.removeHandler(said)
+        logger.propagate = propagate
+    if auditor.has_errors:
+        raise DrawingError(f"damaged DXF ({_one_line(auditor.errors[0].message)})")
+    notes = [f"ezdxf: {_one_line(record.getMessage())}" for record in said.buffer[:3]]
+    if auditor.has_fixes:
+        notes.append(f"ezdxf repaired {len(auditor.fixes)} problem(s) in the DXF")
+    code = document.units
+    if code == units.InsertUnits.Unitless:
+        notes.append("DXF has no units ($INSUNITS 0): taken as mm")
+        factor = 1.0
+    elif code in _EXACT_MM:
+        factor = _EXACT_MM[code]
+    else:
+        try:
+            factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
+        except (TypeError, ValueError):
+            raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm") from None
+    out, skipped = [], Counter()
+    hidden = {layer.dxf.name.lower() for layer in document.layers
+              if layer.is_off() or layer.is_frozen()}
+    for entity in document.modelspace():
+        # What CAD does not show is not marked (construction layers, switched-off details).
+        if str(entity.dxf.get("layer", "0")).lower() in hidden or entity.dxf.get("invisible", 0):
+            skipped["entity on a hidden layer"] += 1
+        else:                               # flattened in the drawing's own units
+            _dxf_entity(entity, tolerance_mm / factor, out, skipped)
+    skipped = _counted(skipped, {"text entity": " (explode text to lines)"})
+    return [p * factor for p, _ in out], [c for _, c in out], skipped, notes

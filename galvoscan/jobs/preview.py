@@ -1,0 +1,97 @@
+"""The preview of a marking job: marks, the jumps between them, the field and the drawing's box,
+in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display)."""
+
+import numpy as np
+
+
+__all__ = ["preview"]
+
+
+def _length_mm(paths):
+    return sum(float(np.sum(np.hypot(*np.diff(p, axis=0).T))) for p in paths)
+
+
+def _jump_lines(paths):
+    """The jumps: from the field centre to the first path, then from each path's end to the
+    next one's start."""
+    ends = [np.zeros(2)] + [p[-1] for p in paths[:-1]]
+    return [np.array([end, p[0]]) for end, p in zip(ends, paths)]
+
+
+def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
+    """Write the picture of a job.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file; its suffix picks the format (``.png``, ``.svg``, ``.pdf`` …).
+    paths_mm : sequence of array-like
+        The paths in marking order, ``(n, 2)`` in field mm ((0, 0) the field centre, Y up).
+    jumps : bool
+        Draw the jumps as thin dashed grey lines.
+    field_mm : float
+        The field's size (the lens's): its square is outlined.
+    title : str
+        Above the picture.
+
+    Returns
+    -------
+    mark_mm, jump_mm : float
+        The lengths the legend gives.
+
+    Raises
+    ------
+    ValueError
+        When matplotlib cannot write the file (an unknown suffix, a folder that does not exist).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    paths = [np.asarray(p, dtype=float).reshape(-1, 2) for p in paths_mm]
+    paths = [p for p in paths if len(p)]
+    figure = Figure(figsize=(7, 7.6), dpi=110, layout="constrained")
+    FigureCanvasAgg(figure)
+    ax = figure.add_subplot()
+    half = field_mm / 2
+    ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
+            color="tab:red", linewidth=0.8)
+    handles = [Line2D([], [], color="tab:red", linewidth=0.8, label=f"field {field_mm:g} mm")]
+    mark_mm = _length_mm(paths)
+    jump_lines = _jump_lines(paths) if paths else []
+    jump_mm = _length_mm(jump_lines)
+    if jumps and jump_lines:
+        # Under the marks: a jump is where the laser is off, the marks are what matters.
+        ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,
+                                         linestyles=(0, (4, 3)), zorder=1))
+        handles.append(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
+                              label=f"jumps {jump_mm:.1f} mm"))
+    if paths:
+        ax.add_collection(LineCollection(paths, colors="black", linewidths=0.7, zorder=2))
+        handles.append(Line2D([], [], color="black", linewidth=0.7,
+                              label=f"marks {mark_mm:.1f} mm ({len(paths)} paths)"))
+        points = np.concatenate(paths)
+        (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)
+        ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
+                linewidth=0.6, linestyle=":")
+        handles.append(Line2D([], [], color="tab:blue", linewidth=0.6, linestyle=":",
+                              label=f"drawing {x1 - x0:.2f} × {y1 - y0:.2f} mm"))
+        half = max(half, *np.abs(points).max(axis=0))      # show what is outside the field too
+    margin = 0.04 * half
+    ax.set_xlim(-half - margin, half + margin)
+    ax.set_ylim(-half - margin, half + margin)
+    ax.set_aspect("equal")
+    ax.set_xlabel("X (mm)")
+    ax.set_ylabel("Y (mm)")
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    if title:
+        ax.set_title(title)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2,
+              fontsize=8, frameon=False)
+    try:
+        figure.savefig(path)
+    except (ValueError, OSError) as error:
+        message = " ".join(str(error).split())
+        raise ValueError(f"{path}: cannot write the preview ({message})") from None
+    return mark_mm, jump_mm

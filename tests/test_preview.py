@@ -1,0 +1,64 @@
+"""The preview picture: written in the format of its suffix, with the lengths in its legend
+worked out here, and no pyplot state left behind."""
+
+import sys
+
+import matplotlib
+import numpy as np
+import pytest
+
+from galvoscan.jobs.preview import preview
+
+
+SQUARE = np.array([[10.0, 10], [20, 10], [20, 20], [10, 20], [10, 10]])
+LINE = np.array([[-30.0, 0], [-30, 40]])
+
+
+def test_png_is_written(tmp_path):
+    out = tmp_path / "job.png"
+    mark_mm, jump_mm = preview(out, [SQUARE, LINE], field_mm=110, title="job.svg")
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert mark_mm == pytest.approx(40 + 40)
+    # Centre → (10, 10), then (10, 10) → (−30, 0).
+    assert jump_mm == pytest.approx(np.hypot(10, 10) + np.hypot(40, 10))
+
+
+def test_svg_legend_says_the_lengths(tmp_path):
+    out = tmp_path / "job.svg"
+    with matplotlib.rc_context({"svg.fonttype": "none"}):      # text as text, to search it
+        preview(out, [SQUARE, LINE], field_mm=110, title="job.svg")
+    text = out.read_text()
+    assert "marks 80.0 mm (2 paths)" in text
+    assert f"jumps {np.hypot(10, 10) + np.hypot(40, 10):.1f} mm" in text
+    assert "field 110 mm" in text and "drawing 50.00 × 40.00 mm" in text
+
+
+def test_without_jumps_and_empty(tmp_path):
+    out = tmp_path / "nojumps.svg"
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        preview(out, [SQUARE], jumps=False, field_mm=70)
+        assert "jumps" not in out.read_text()
+        preview(out, [], field_mm=70)
+        assert "marks" not in out.read_text() and "field 70 mm" in out.read_text()
+
+
+def test_pdf_by_suffix(tmp_path):
+    out = tmp_path / "job.pdf"
+    preview(out, [SQUARE], field_mm=110)
+    assert out.read_bytes()[:5] == b"%PDF-"
+
+
+def test_unwritable(tmp_path):
+    with pytest.raises(ValueError, match="cannot write the preview"):
+        preview(tmp_path / "job.unknown", [SQUARE], field_mm=110)
+    with pytest.raises(ValueError, match="cannot write the preview"):
+        preview(tmp_path / "missing" / "job.png", [SQUARE], field_mm=110)
+
+
+def test_no_pyplot_figures_left(tmp_path):
+    before = sys.modules.get("matplotlib.pyplot")
+    open_before = before.get_fignums() if before else []
+    preview(tmp_path / "job.png", [SQUARE], field_mm=110)
+    after = sys.modules.get("matplotlib.pyplot")
+    if after is not None:
+        assert after.get_fignums() == open_before

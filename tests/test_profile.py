@@ -1,0 +1,622 @@
+"""The machine profile (``galvoscan/jobs/profile.py``): the template is the defaults, every key's
+range is enforced at its edges, typos are caught with a suggestion, and nothing a user can put
+in the file escapes as anything but a one-line ProfileError."""
+
+import json
+import math
+import os
+import re
+
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from galvoscan.correction.files import save_table
+from galvoscan.gateware.field.correction_table import CorrectionTable
+from galvoscan.jobs.profile import DEFAULT_PROFILE_NAME, MachineProfile, ProfileError, \
+    default_profile, load_profile, parse_profile, profile_text
+
+
+# What the profile must accept, written out here rather than imported, so that a change of a
+# range in the module is a test failure to look at. (section, key): (low, high, whole number).
+RANGES = {
+    ("field", "size_mm"): (1, 2000, False),
+    ("link", "baud"): (300, 12_000_000, True),
+    ("link", "timeout_s"): (0.01, 600, False),
+    ("laser", "max_power_w"): (0.1, 10_000, False),
+    ("laser", "spot_mm"): (0.001, 10, False),
+    ("galvo", "jump_delay_us"): (10, 655_350, False),       # jump_delay 1 … 65535 frames
+    ("galvo", "settle_us_per_mm"): (0, 10_000, False),
+    ("galvo", "max_speed_mm_s"): (1, 100_000, False),
+    ("defaults", "speed_mm_s"): (0.1, 100_000, False),
+    ("defaults", "power_percent"): (0, 100, False),
+    ("defaults", "prr_khz"): (20, 200, False),               # laser_prr 200 … 2000 × 100 Hz
+    ("defaults", "passes"): (1, 1000, True),
+}
+# Keys that are not numbers: (section, key): a valid value in TOML.
+OTHER_KEYS = {
+    ("field", "correction"): None,                            # tested with a real file below
+    ("link", "port"): '"/dev/ttyUSB1"',
+    ("link", "spi"): '"ftdi://ftdi:2232h/1"',
+    ("laser", "prr_khz"): "[20, 200]",
+    ("laser", "guide"): "false",
+}
+# Other keys a value at an edge needs, so that only the key under test can be refused.
+COMPANIONS = {
+    ("defaults", "speed_mm_s"): {("galvo", "max_speed_mm_s"): "100000"},
+    ("galvo", "max_speed_mm_s"): {("defaults", "speed_mm_s"): "0.5"},
+}
+DEFAULTS = {
+    "field": {"size_mm": 110.0, "correction": None},
+    "link": {"port": None, "baud": 1_000_000, "spi": None, "timeout_s": 0.5},
+    "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
+    "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0},
+    "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
+}
+
+
+def toml(entries):
+    """A profile's text from ``{(section, key): "TOML value"}``."""
+    sections = {}
+    for (section, key), value in entries.items():
+        sections.setdefault(section, []).append(f"{key} = {value}")
+    return "".join(f"[{section}]\n" + "".join(f"{line}\n" for line in lines)
+                   for section, lines in sections.items())
+
+
+def with_value(section, key, value):
+    entries = dict(COMPANIONS.get((section, key), {}))
+    entries[(section, key)] = value
+    return toml(entries)
+
+
+def refused(text, *pieces, path=DEFAULT_PROFILE_NAME):
+    with pytest.raises(ProfileError) as error:
+        parse_profile(text, path=path)
+    message = str(error.value)
+    assert len(message.splitlines()) == 1
+    assert message.startswith(str(path))
+    for piece in pieces:
+        assert piece in message, (piece, message)
+    return message
+
+
+# --- the template ----------------------------------------------------------------------------
+
+def test_template_is_the_defaults():
+    profile = parse_profile(profile_text())
+    assert profile == default_profile()
+    assert profile.correction_table() is None
+    resolved = {name: values for name, values in profile.as_dict().items()
+                if name in DEFAULTS}
+    for section in resolved.values():
+        section.pop("correction_nodes", None)
+    assert resolved == DEFAULTS
+
+
+def test_template_file_round_trips(tmp_path):
+    path = tmp_path / "galvoscan.toml"
+    path.write_text(profile_text(), encoding="utf-8")
+    profile = load_profile(path)
+    assert profile == default_profile()
+    assert profile.source == path
+
+
+def _comment_above(lines, index):
+    block = []
+    for line in reversed(lines[:index]):
+        if not line.startswith("#") or re.match(r"# \w+ = ", line):
+            break
+        block.append(line)
+    return " ".join(reversed(block))
+
+
+@pytest.mark.parametrize("section, key", [*RANGES, *OTHER_KEYS])
+def test_template_explains_every_key(section, key):
+    lines = profile_text().splitlines()
+    index = next(i for i, line in enumerate(lines) if re.match(rf"(# )?{key} = ", line) and
+                 lines[max(i for i in range(i + 1) if lines[i].startswith("["))] ==
+                 f"[{section}]")
+    comment = _comment_above(lines, index)
+    assert len(comment) > 40, (key, comment)
+    if (section, key) in RANGES:
+        low, high, _ = RANGES[section, key]
+        numbers = {float(n.replace("_", "")) for n in re.findall(r"[\d_.]+\d|\d", comment)}
+        if (section, key) != ("defaults", "prr_khz"):      # "within [laser] prr_khz"
+            assert {low, high} <= numbers, (key, comment)
+
+
+def test_template_guide_comment_points_to_the_wiring():
+    assert "README's wiring table" in profile_text()
+
+
+def test_every_key_is_known():
+    every = {(s, k) for s, keys in DEFAULTS.items() for k in keys}
+    assert every == set(RANGES) | set(OTHER_KEYS)
+
+
+def test_empty_file_is_the_defaults():
+    assert parse_profile("") == default_profile()
+    assert parse_profile("[field]\n[laser]\n") == default_profile()
+
+
+# --- ranges at their edges -------------------------------------------------------------------
+
+def _outside(value, direction, whole):
+    if whole:
+        return value + direction
+    return math.nextafter(float(value), direction * math.inf)
+
+
+@pytest.mark.parametrize("section, key", list(RANGES))
+def test_range_edges_accepted(section, key):
+    low, high, whole = RANGES[section, key]
+    for value in (low, high):
+        profile = parse_profile(with_value(section, key, repr(value)))
+        assert getattr(getattr(profile, section), key) == value
+        if not whole:                           # written as a float: the same
+            profile = parse_profile(with_value(section, key, repr(float(value))))
+            assert getattr(getattr(profile, section), key) == value
+
+
+@pytest.mark.parametrize("section, key", list(RANGES))
+def test_range_just_outside_refused(section, key):
+    low, high, whole = RANGES[section, key]
+    for value in (_outside(low, -1, whole), _outside(high, +1, whole)):
+        refused(with_value(section, key, repr(value)), f"[{section}] {key} must be",
+                f"from {low:g} to {high:g}" if not whole else f"from {low} to {high}")
+
+
+@pytest.mark.parametrize("section, key", list(RANGES))
+def test_non_finite_refused(section, key):
+    for value in ("nan", "inf", "-inf", "+nan"):
+        refused(with_value(section, key, value), f"[{section}] {key} must be")
+
+
+@pytest.mark.parametrize("section, key", list(RANGES))
+def test_wrong_type_refused(section, key):
+    for value in ('"fifty"', '"50"', "true", "false", "[50]", "{ a = 1 }", "1979-05-27",
+                  "07:32:00"):
+        message = refused(with_value(section, key, value), f"[{section}] {key} must be a ")
+        assert "number" in message
+
+
+def test_error_message_as_documented():
+    message = refused('[laser]\nmax_power_w = "fifty"\n')
+    assert message == ("galvoscan.toml: [laser] max_power_w must be a number from 0.1 to "
+                       "10000 (W), not 'fifty'")
+
+
+def test_whole_numbers():
+    assert parse_profile("[link]\nbaud = 1e6\n").link.baud == 1_000_000
+    assert isinstance(parse_profile("[link]\nbaud = 1e6\n").link.baud, int)
+    assert parse_profile("[defaults]\npasses = 3.0\n").defaults.passes == 3
+    refused("[defaults]\npasses = 1.5\n", "[defaults] passes must be a whole number")
+    refused("[link]\nbaud = 115200.5\n", "[link] baud must be a whole number")
+
+
+def test_huge_integer_refused_not_overflowing():
+    refused("[field]\nsize_mm = " + "9" * 400 + "\n", "[field] size_mm must be")
+    refused("[link]\nbaud = -" + "9" * 400 + "\n", "[link] baud must be")
+
+
+def test_laser_prr_accepted():
+    for value in ("[20, 200]", "[50, 50]", "[20.0, 199.9]", "[30, 100]"):
+        low, high = json.loads(value)
+        text = f"[laser]\nprr_khz = {value}\n[defaults]\nprr_khz = {low}\n"
+        assert parse_profile(text).laser.prr_khz == (low, high)
+
+
+LASER_PRR_REFUSED = [
+    ("[19.999, 200]", "each from 20 to 200 (kHz)"),
+    ("[20, 200.001]", "each from 20 to 200 (kHz)"),
+    ("[60, 50]", "lowest ≤ highest"),
+    ("[20]", "two numbers"),
+    ("[20, 100, 200]", "two numbers"),
+    ("50", "two numbers"),
+    ('["20", 200]', "two numbers"),
+    ("[true, 200]", "two numbers"),
+    ("[nan, 200]", "two numbers"),
+    ("[]", "two numbers"),
+]
+
+
+def test_laser_prr_refused():
+    for value, piece in LASER_PRR_REFUSED:
+        refused(f"[laser]\nprr_khz = {value}\n", "[laser] prr_khz must be", piece)
+
+
+def test_default_prr_within_the_lasers():
+    text = "[laser]\nprr_khz = [30, 100]\n[defaults]\nprr_khz = {}\n"
+    assert parse_profile(text.format(30)).defaults.prr_khz == 30
+    assert parse_profile(text.format(100)).defaults.prr_khz == 100
+    refused(text.format(29.9), "[defaults] prr_khz", "[laser] prr_khz")
+    refused(text.format(100.1), "[defaults] prr_khz", "[laser] prr_khz")
+    # The laser's narrower range with the default 50 kHz outside it:
+    refused("[laser]\nprr_khz = [60, 100]\n", "[defaults] prr_khz")
+
+
+def test_default_speed_at_most_the_galvos():
+    text = "[galvo]\nmax_speed_mm_s = 2000\n[defaults]\nspeed_mm_s = {}\n"
+    assert parse_profile(text.format(2000)).defaults.speed_mm_s == 2000
+    refused(text.format(2000.5), "[defaults] speed_mm_s", "max_speed_mm_s")
+
+
+OTHER_TYPES_REFUSED = [
+    ("laser", "guide", "1", "true or false"),
+    ("laser", "guide", '"yes"', "true or false"),
+    ("link", "port", "5", "text in quotes"),
+    ("link", "port", '""', "text in quotes"),
+    ("link", "port", "true", "text in quotes"),
+    ("link", "spi", "[1]", "text in quotes"),
+    ("field", "correction", "3", "file name in quotes"),
+    ("field", "correction", '"  "', "file name in quotes"),
+]
+
+
+def test_other_types_refused():
+    for section, key, value, piece in OTHER_TYPES_REFUSED:
+        refused(toml({(section, key): value}), f"[{section}] {key} must be", piece)
+
+
+def test_text_keys():
+    profile = parse_profile('[link]\nport = "COM4"\nbaud = 115200\ntimeout_s = 2\n')
+    assert (profile.link.port, profile.link.baud, profile.link.timeout_s) == ("COM4", 115200, 2)
+    assert parse_profile('[link]\nspi = "ftdi://ftdi:2232h/1"\n').link.spi == \
+        "ftdi://ftdi:2232h/1"
+    assert parse_profile("[laser]\nguide = false\n").laser.guide is False
+
+
+def test_port_and_spi_refused_together():
+    refused('[link]\nport = "/dev/ttyUSB1"\nspi = "ftdi://ftdi:2232h/1"\n', "port", "spi")
+
+
+# --- unknown names ---------------------------------------------------------------------------
+
+def test_unknown_key_suggests_the_near_one():
+    message = refused("[defaults]\nspeed_mms = 500\n", "speed_mms", "did you mean speed_mm_s?")
+    for known in ("speed_mm_s", "power_percent", "prr_khz", "passes"):
+        assert known in message
+
+
+def test_unknown_key_without_a_near_one_lists_the_known():
+    message = refused("[laser]\nwavelength_nm = 1064\n", "[laser] wavelength_nm")
+    assert "did you mean" not in message
+    assert "max_power_w, prr_khz, spot_mm, guide" in message
+
+
+def test_key_in_the_wrong_section():
+    refused("[laser]\njump_delay_us = 300\n", "[laser] jump_delay_us",
+            "did you mean [galvo] jump_delay_us?")
+
+
+def test_unknown_section_suggests_the_near_one():
+    refused("[lazer]\nmax_power_w = 20\n", "unknown section [lazer]", "did you mean [laser]?",
+            "[field], [link], [laser], [galvo], [defaults]")
+    refused("[machine]\n", "unknown section [machine]", "[field]")
+
+
+def test_key_outside_a_section():
+    refused("size_mm = 110\n", "size_mm", "[field]")
+    refused("prr_khz = 50\n", "prr_khz", "[laser] or [defaults]")
+    refused("sise_mm = 110\n", "sise_mm", "did you mean size_mm")
+
+
+def test_section_that_is_not_a_table():
+    refused("laser = 5\n", "[laser] must be a section")
+    refused("[[laser]]\nmax_power_w = 5\n", "[[laser]]")
+    refused("[laser.max_power_w]\n", "[laser] max_power_w must be a number")
+
+
+def test_odd_key_names_are_quoted():
+    message = refused('[laser]\n"max power" = 5\n')
+    assert "'max power'" in message
+
+
+# --- TOML and the file -----------------------------------------------------------------------
+
+def test_syntax_error_names_the_line():
+    refused("[field]\nsize_mm = 110\nbaud 5\n", "not valid TOML", "line 3")
+    refused("[field]\nsize_mm = 110\nsize_mm = 120\n", "not valid TOML")
+
+
+def test_deep_nesting_is_a_profile_error():
+    refused("a = " + "[" * 5000 + "]" * 5000 + "\n", "not valid TOML")
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ProfileError, match="no such file"):
+        load_profile(tmp_path / "nope.toml")
+
+
+def test_folder(tmp_path):
+    with pytest.raises(ProfileError, match="is a folder"):
+        load_profile(tmp_path)
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0,
+                    reason="needs file permissions that bind (not root)")
+def test_unreadable(tmp_path):
+    path = tmp_path / "galvoscan.toml"
+    path.write_text("")
+    path.chmod(0)
+    try:
+        with pytest.raises(ProfileError, match="cannot read"):
+            load_profile(path)
+    finally:
+        path.chmod(0o600)
+
+
+def test_not_utf8_names_the_line(tmp_path):
+    path = tmp_path / "galvoscan.toml"
+    path.write_bytes(b"[laser]\n# 20 W \xb5s\nmax_power_w = 20\n")
+    with pytest.raises(ProfileError, match=r"line 2: not UTF-8"):
+        load_profile(path)
+
+
+def test_byte_order_mark_accepted(tmp_path):
+    path = tmp_path / "galvoscan.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + profile_text().encode("utf-8"))
+    assert load_profile(path) == default_profile()
+
+
+def test_file_errors_name_the_file(tmp_path):
+    path = tmp_path / "m.toml"
+    path.write_text("[laser]\nspot_mm = 0\n")
+    with pytest.raises(ProfileError) as error:
+        load_profile(path)
+    assert str(error.value).startswith(f"{path}: [laser] spot_mm must be")
+
+
+# --- the correction table --------------------------------------------------------------------
+
+@pytest.fixture
+def lens_table(tmp_path):
+    folder = tmp_path / "machine" / "tables"
+    folder.mkdir(parents=True)
+    table = CorrectionTable.identity(5).with_node(2, 2, 7, -3)
+    save_table(folder / "lens.json", table, source="test")
+    return folder / "lens.json"
+
+
+def test_correction_relative_to_the_profile(tmp_path, monkeypatch, lens_table):
+    profile_path = tmp_path / "machine" / "galvoscan.toml"
+    profile_path.write_text('[field]\ncorrection = "tables/lens.json"\n')
+    monkeypatch.chdir(tmp_path)                      # not the profile's folder
+    profile = load_profile("machine/galvoscan.toml")
+    assert profile.field.correction == lens_table
+    assert profile.field.correction.is_absolute()
+    table = profile.correction_table()
+    assert table.n == 5 and table.dx[2, 2] == 7 and table.dy[2, 2] == -3
+    assert profile.as_dict()["field"]["correction_nodes"] == 5
+    assert profile != default_profile()
+
+
+def test_correction_absolute_path(tmp_path, lens_table):
+    path = tmp_path / "elsewhere.toml"
+    path.write_text(f"[field]\ncorrection = {json.dumps(str(lens_table))}\n")
+    assert load_profile(path).correction_table().n == 5
+
+
+def test_correction_missing(tmp_path):
+    path = tmp_path / "galvoscan.toml"
+    path.write_text('[field]\ncorrection = "lens.cor"\n')
+    with pytest.raises(ProfileError) as error:
+        load_profile(path)
+    message = str(error.value)
+    assert "[field] correction" in message and str(tmp_path / "lens.cor") in message
+    assert "\n" not in message
+
+
+@pytest.mark.parametrize("name, content", [
+    ("lens.json", b"{not json"),
+    ("lens.json", b'{"format": "something else"}'),
+    ("lens.ctb", b"\x00" * 10),
+    ("lens.cor", b"garbage"),
+    ("lens.txt", b"1 2 3"),
+])
+def test_correction_unreadable_table(tmp_path, name, content):
+    (tmp_path / name).write_bytes(content)
+    path = tmp_path / "galvoscan.toml"
+    path.write_text(f'[field]\ncorrection = "{name}"\n')
+    with pytest.raises(ProfileError) as error:
+        load_profile(path)
+    assert "[field] correction" in str(error.value) and "\n" not in str(error.value)
+
+
+def test_correction_folder(tmp_path):
+    (tmp_path / "tables").mkdir()
+    path = tmp_path / "galvoscan.toml"
+    path.write_text('[field]\ncorrection = "tables"\n')
+    with pytest.raises(ProfileError, match=r"\[field\] correction: .* is a folder"):
+        load_profile(path)
+
+
+# --- derived numbers -------------------------------------------------------------------------
+
+def test_register_conversions_by_hand():
+    profile = default_profile()
+    assert profile.prr_register(50) == 500
+    assert profile.prr_register(20) == 200
+    assert profile.prr_register(200) == 2000
+    assert profile.prr_register(33.3) == 333
+    assert profile.power_register(100) == 255
+    assert profile.power_register(0) == 0
+    assert profile.power_register(50) == 128                 # 127.5, half up
+    assert profile.power_register(10) == 26                  # 25.5
+    assert profile.power_w(100) == 20
+    assert profile.units_per_mm == 65536 / 110
+    assert parse_profile("[field]\nsize_mm = 65.536\n").units_per_mm == pytest.approx(1000)
+
+
+def test_prr_outside_refused():
+    for khz in (19.9, 200.1, math.nan, math.inf, "50", True, None):
+        with pytest.raises(ValueError) as error:
+            default_profile().prr_register(khz)
+        assert "\n" not in str(error.value) and "kHz" in str(error.value)
+
+
+def test_prr_outside_a_narrower_laser_refused():
+    profile = parse_profile("[laser]\nprr_khz = [30, 100]\n[defaults]\nprr_khz = 30\n")
+    assert profile.prr_register(30) == 300
+    assert profile.prr_register(100) == 1000
+    with pytest.raises(ValueError, match=r"30 … 100 kHz \(\[laser\] prr_khz"):
+        profile.prr_register(20)
+    # Rounding to 100 Hz steps stays inside a range that does not end on one.
+    odd = parse_profile("[laser]\nprr_khz = [30.04, 99.96]\n[defaults]\nprr_khz = 50\n")
+    assert odd.prr_register(30.04) == 301
+    assert odd.prr_register(99.96) == 999
+
+
+def test_power_outside_refused():
+    for percent in (-0.1, 100.1, math.nan, "10", False):
+        with pytest.raises(ValueError):
+            default_profile().power_register(percent)
+
+
+JUMP_FRAMES = [
+    ("", 0, 50),                                            # 500 µs
+    ("", 100, 50),
+    ("jump_delay_us = 505", 0, 51),                          # rounded up to a frame
+    ("jump_delay_us = 10", 0, 1),
+    ("jump_delay_us = 10\nsettle_us_per_mm = 0.5", 0.1, 2),   # 10.05 µs
+    ("settle_us_per_mm = 20", 10, 70),                       # 500 + 200 µs
+    ("settle_us_per_mm = 3", 1 / 3, 51),                     # 501 µs
+    ("jump_delay_us = 655350", 0, 65535),
+    ("jump_delay_us = 655350\nsettle_us_per_mm = 10000", 2000, 65535),   # clamped
+]
+
+
+def test_jump_delay_frames():
+    for galvo, jump_mm, frames in JUMP_FRAMES:
+        profile = parse_profile(f"[galvo]\n{galvo}\n")
+        assert profile.jump_delay_frames(jump_mm) == frames, (galvo, jump_mm)
+
+
+def test_jump_length_refused():
+    for jump_mm in (-1, math.nan, math.inf, "1"):
+        with pytest.raises(ValueError):
+            default_profile().jump_delay_frames(jump_mm)
+
+
+def test_as_dict_is_json():
+    data = json.loads(json.dumps(default_profile().as_dict()))
+    assert data["derived"]["jump_delay_frames_10mm"] == 50
+    assert data["derived"]["default_prr_register"] == 500
+    assert data["derived"]["default_power_register"] == 26
+    assert data["source"] is None
+
+
+def test_profile_is_frozen_and_hashable():
+    profile = default_profile()
+    with pytest.raises(AttributeError):
+        profile.field = None
+    assert hash(profile) == hash(parse_profile(profile_text()))
+    assert isinstance(profile, MachineProfile)
+
+
+# --- nothing else escapes --------------------------------------------------------------------
+
+_KNOWN = {s: list(keys) for s, keys in DEFAULTS.items()}
+_names = st.one_of(st.sampled_from(sorted({k for keys in _KNOWN.values() for k in keys})),
+                   st.text(min_size=1, max_size=12))
+_scalars = st.one_of(
+    st.integers(min_value=-10 ** 30, max_value=10 ** 30),
+    st.sampled_from([0, 1, 10, 20, 50, 100, 200, 300, 1000, 655350, 12_000_000]),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.booleans(),
+    st.text(max_size=20),
+)
+_values = st.recursive(_scalars, lambda inner: st.one_of(
+    st.lists(inner, max_size=3),
+    st.dictionaries(_names, inner, max_size=3)), max_leaves=8)
+
+
+def _toml_key(key):
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else json.dumps(key)
+
+
+def _toml_value(value):
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else "inf" if value == math.inf else \
+            "-inf" if value == -math.inf else repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(map(_toml_value, value)) + "]"
+    return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
+
+
+_documents = st.dictionaries(
+    st.one_of(st.sampled_from(sorted(_KNOWN)), st.text(min_size=1, max_size=10)),
+    st.one_of(st.dictionaries(_names, _values, max_size=5), _values),
+    max_size=5)
+
+
+def _document_text(document):
+    top = [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in document.items()
+           if not isinstance(v, dict)]
+    sections = [f"[{_toml_key(k)}]\n" + "".join(f"{_toml_key(key)} = {_toml_value(value)}\n"
+                                                for key, value in v.items())
+                for k, v in document.items() if isinstance(v, dict)]
+    return "".join(line + "\n" for line in top) + "".join(sections)
+
+
+def _loads_or_one_line_error(text, path=DEFAULT_PROFILE_NAME):
+    try:
+        return parse_profile(text, path=path)
+    except ProfileError as error:
+        assert len(str(error).splitlines()) == 1 and str(error).startswith(str(path))
+        return None
+
+
+@settings(max_examples=200, deadline=None)
+@given(_documents)
+def test_random_documents(document):
+    _loads_or_one_line_error(_document_text(document))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.dictionaries(st.tuples(st.sampled_from(sorted(_KNOWN)), st.sampled_from(
+    sorted({k for keys in _KNOWN.values() for k in keys}))), _scalars, max_size=8))
+def test_random_values_of_known_keys(entries):
+    _loads_or_one_line_error(toml({key: _toml_value(v) for key, v in entries.items()}))
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    return tmp_path_factory.mktemp("profiles")
+
+
+@settings(max_examples=200, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.one_of(st.binary(max_size=300),
+                      st.binary(max_size=60).map(lambda b: profile_text().encode() + b)))
+def test_random_bytes(folder, data):
+    path = folder / "galvoscan.toml"
+    path.write_bytes(data)
+    try:
+        load_profile(path)
+    except ProfileError as error:
+        assert len(str(error).splitlines()) == 1 and str(error).startswith(str(path))
+
+
+def test_every_truncation_of_the_template():
+    text = profile_text()
+    loaded = sum(_loads_or_one_line_error(text[:cut]) is not None for cut in range(len(text)))
+    assert loaded > len(text) // 4           # many cuts fall on whole lines or in comments
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.data())
+def test_template_with_random_edits(data):
+    text = profile_text()
+    start = data.draw(st.integers(0, len(text)))
+    end = data.draw(st.integers(start, min(len(text), start + 20)))
+    insert = data.draw(st.one_of(st.text(max_size=10),
+                                 st.sampled_from(["0", "-1", "1e9", "nan", '"x"', "[", "]",
+                                                  "=", "\n", "true", "#", "_", "."])))
+    _loads_or_one_line_error(text[:start] + insert + text[end:])
