@@ -103,6 +103,12 @@ class SerialTransport:
     def __init__(self, port, *, baud=DEFAULT_BAUD, timeout=0.5):
         import serial   # pyserial
         self._serial = serial.Serial(port, baudrate=baud, timeout=timeout)
+        try:
+            # An FTDI chip holds received bytes up to 16 ms before sending them on; in
+            # low-latency mode 1 ms. Every read of a register waits for that round trip.
+            self._serial.set_low_latency_mode(True)
+        except (AttributeError, NotImplementedError, ValueError, OSError):
+            pass            # not Linux, or not a device that has it (a pty)
 
     def write_frame(self, frame):
         self._serial.write(frame)

@@ -1,0 +1,106 @@
+"""What ``mark`` and ``clean`` share: job parameters in user units, the link to a board (a real
+one, or the simulated one with ``--sim``), and running a job safely to its end."""
+
+import argparse
+import contextlib
+import sys
+
+from .args import baud, fail, number_in
+
+
+__all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
+           "has_link", "pair_mm"]
+
+
+def pair_mm(what):
+    """``X,Y`` in mm."""
+    def parse(text):
+        parts = text.replace(" ", "").split(",")
+        try:
+            x, y = (float(p) for p in parts)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be X,Y in mm (e.g. 10,-5), not "
+                                             f"{text!r}")
+        if not all(abs(v) <= 1000 for v in (x, y)):
+            raise argparse.ArgumentTypeError(f"{what} must be within ±1000 mm, not {text}")
+        return x, y
+    return parse
+
+
+def add_job_options(parser):
+    """``--speed``, ``--power``, ``--prr``, ``--passes`` (defaults from the machine profile)."""
+    job = parser.add_argument_group("laser and speed (defaults: the machine profile's)")
+    job.add_argument("--speed", type=number_in("speed", 0.1, 100_000), metavar="MM_S",
+                     help="marking speed in mm/s")
+    job.add_argument("--power", type=number_in("power", 0, 100), metavar="PERCENT",
+                     help="laser power in %% of the laser's maximum")
+    job.add_argument("--prr", type=number_in("PRR", 1, 10_000), metavar="KHZ",
+                     help="pulse repetition rate in kHz (the laser's range, 20 … 200 at most)")
+    return job
+
+
+def job_settings_values(args, profile):
+    """``(speed_mm_s, power_percent, prr_khz)``: the command line's, else the profile's."""
+    defaults = profile.defaults
+    return (args.speed if args.speed is not None else defaults.speed_mm_s,
+            args.power if args.power is not None else defaults.power_percent,
+            args.prr if args.prr is not None else defaults.prr_khz)
+
+
+def add_job_link_options(parser):
+    link = parser.add_argument_group("board (one of; none: plan, preview and estimate only)")
+    where = link.add_mutually_exclusive_group()
+    where.add_argument("--port", help="serial port of the board (default: the profile's)")
+    where.add_argument("--spi", metavar="URL", help="pyftdi URL of an FTDI SPI adapter")
+    where.add_argument("--sim", action="store_true",
+                       help="run on the simulated board (about 1000x slower than a real one)")
+    link.add_argument("--baud", type=baud, default=None,
+                      help="serial rate of the bitstream (default: the profile's)")
+    link.add_argument("--timeout", type=number_in("timeout", 0.01, 600), default=None,
+                      metavar="S", help="seconds to wait for an answer (default: the "
+                                        "profile's; 60 with --sim)")
+
+
+def has_link(args, profile):
+    return bool(args.sim or args.port or args.spi or profile.link.port or profile.link.spi)
+
+
+@contextlib.contextmanager
+def board_link(args, profile):
+    """``(client, simulated_board or None)`` for the job's board, opened; closed after."""
+    from ..client import ClientError, FTDISPITransport, HostClient, SerialTransport
+    baud_rate = args.baud or profile.link.baud
+    if args.sim:
+        from ..sim.board import SIM_TIMEOUT_S, PTYServer, SimulatedBoard
+        board = SimulatedBoard(baud=baud_rate)
+        server = PTYServer(board).start()
+        try:
+            with SerialTransport(server.port, baud=baud_rate,
+                                 timeout=args.timeout or SIM_TIMEOUT_S) as transport:
+                yield HostClient(transport), board
+        finally:
+            server.stop()
+            if server.error is not None:
+                fail(f"the simulated board stopped: {server.error}")
+        return
+    port = args.port or (None if args.spi else profile.link.port)
+    spi = args.spi or (None if args.port else profile.link.spi)
+    timeout = args.timeout or profile.link.timeout_s
+    try:
+        if spi:
+            transport = FTDISPITransport(spi)
+        else:
+            transport = SerialTransport(port, baud=baud_rate, timeout=timeout)
+    except ClientError as error:
+        fail(error)
+    except Exception as error:      # serial.SerialException and the like
+        fail(f"cannot open {spi or port}: {error}")
+    with transport:
+        yield HostClient(transport), None
+
+
+def progress_bar(total, unit, *, disable=None):
+    """A tqdm bar on stderr (off when stderr is not a terminal, unless asked)."""
+    from tqdm import tqdm
+    return tqdm(total=total, unit=unit, file=sys.stderr, leave=False,
+                disable=(not sys.stderr.isatty()) if disable is None else disable)

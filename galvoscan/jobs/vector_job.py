@@ -1,0 +1,202 @@
+"""A drawing made into a vector job for one machine: placed in the field, hatched, ordered to
+cut jumps, turned into galvo units, checked against the field through the lens correction,
+and timed; every register value it needs worked out and checked before anything is sent.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..gateware.host.regmap import BY_NAME
+from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, hatch,
+                   jump_mark_lengths, order_paths, place, to_galvo)
+
+
+__all__ = ["JobSettings", "VectorJob", "plan_vector_job", "segments_from_paths",
+           "link_segments_per_s"]
+
+#: Frames a segment takes on the link (vec_x, vec_y, vec_op), bytes a frame, bits a byte (8N1).
+_FRAMES_PER_SEGMENT, _BYTES_PER_FRAME, _BITS_PER_BYTE = 3, 4, 10
+
+
+def link_segments_per_s(baud, *, batch=128):
+    """Segments a second the serial link carries at ``baud``, with the streamer's read of
+    ``fifo_free`` (a request and its answer) after every ``batch`` segments."""
+    frames = _FRAMES_PER_SEGMENT + 2 / batch
+    return baud / _BITS_PER_BYTE / _BYTES_PER_FRAME / frames
+
+
+@dataclass(frozen=True)
+class JobSettings:
+    """A job's parameters in user units (mm/s, %, kHz), as the command line gives them."""
+    speed_mm_s: float
+    power_percent: float
+    prr_khz: float
+    passes: int = 1
+    hatch_mm: float = None          # hatch line spacing, None: no hatch
+    hatch_deg: float = 0.0
+    outline: bool = True
+
+
+@dataclass
+class VectorJob:
+    """A planned job.
+
+    Attributes
+    ----------
+    segments : list of (str, int, int)
+        ``("jump" | "mark", x, y)`` in galvo units, every pass.
+    paths_mm : list of ndarray
+        The marked paths in field mm, in marking order (one pass).
+    jump_before_mm, jump_after_mm : float
+        Jump length of one pass in the drawing's order and in the order chosen.
+    pitch : :class:`~.plan.Pitch`
+    registers : dict
+        What the board is set to for the job.
+    estimate_s : float
+    mark_mm, jump_mm : float
+        Lengths marked and jumped, all passes.
+    bounds_mm : tuple
+        ``(xmin, ymin, xmax, ymax)`` of the marks in field mm.
+    """
+    segments: list
+    paths_mm: list
+    jump_before_mm: float
+    jump_after_mm: float
+    pitch: object
+    registers: dict
+    estimate_s: float
+    mark_mm: float
+    jump_mm: float
+    bounds_mm: tuple
+    notes: list = field(default_factory=list)
+
+
+def segments_from_paths(paths_units):
+    """Jump to each path's first point, mark along the rest."""
+    segments = []
+    for path in paths_units:
+        x0, y0 = (int(v) for v in path[0])
+        segments.append(("jump", x0, y0))
+        for x, y in path[1:]:
+            segments.append(("mark", int(x), int(y)))
+    return segments
+
+
+def _check_corrected(segments, table):
+    """Refuse a job that the correction table would push past the galvo range (the board
+    would clamp it, and mark it out of shape)."""
+    if table is None:
+        return
+    xy = np.array([(x, y) for _, x, y in segments], dtype=float)
+    cx, cy = table.apply(xy[:, 0], xy[:, 1])
+    low = min(np.min(cx), np.min(cy))
+    high = max(np.max(cx), np.max(cy))
+    if low < 0 or high > BY_NAME["vec_x"].high:
+        raise PlanError(f"through the lens correction the job reaches galvo position "
+                        f"{int(low) if low < 0 else int(high)}, outside 0 … 65535: move it "
+                        f"towards the field centre or make it smaller")
+
+
+def _machine_settings(settings, profile):
+    """``(prr_register, prr_hz, pitch)`` for the job's speed and PRR on this machine."""
+    prr_register = profile.prr_register(settings.prr_khz)     # refuses a PRR the laser lacks
+    prr_hz = prr_register * 100.0
+    if settings.speed_mm_s > profile.galvo.max_speed_mm_s:
+        raise PlanError(f"{settings.speed_mm_s:g} mm/s is faster than the machine's "
+                        f"{profile.galvo.max_speed_mm_s:g} mm/s ([galvo] max_speed_mm_s)")
+    # A pitch of at most half the spot keeps the marked points overlapping.
+    pitch = choose_pitch(settings.speed_mm_s, prr_hz, profile.units_per_mm,
+                         max_pitch_mm=profile.laser.spot_mm / 2)
+    return prr_register, prr_hz, pitch
+
+
+def _finish(segments, paths_mm, before, after, settings, profile, notes):
+    """Registers, timing and bounds of a job's segments."""
+    prr_register, prr_hz, pitch = _machine_settings(settings, profile)
+    units_per_mm = profile.units_per_mm
+    table = profile.correction_table()
+    _check_corrected(segments, table)
+    longest_jump_mm = 0.0
+    here = (32768, 32768)
+    for op, x, y in segments:
+        if op == "jump":
+            longest_jump_mm = max(longest_jump_mm,
+                                  math.hypot(x - here[0], y - here[1]) / units_per_mm)
+        here = (x, y)
+    # One jump delay for the whole job (the board has one register): the longest jump's.
+    jump_delay = profile.jump_delay_frames(longest_jump_mm)
+    registers = {
+        "pitch": pitch.pitch_units,
+        "pulses_per_point": pitch.pulses_per_point,
+        "jump_delay": jump_delay,
+        "laser_prr": prr_register,
+        "laser_power": profile.power_register(settings.power_percent),
+    }
+    if table is not None:
+        registers["cor_enable"] = 1
+    estimate = estimate_seconds(segments, pitch_units=pitch.pitch_units,
+                                pulses_per_point=pitch.pulses_per_point, prr_hz=prr_hz,
+                                jump_delay_frames=jump_delay)
+    mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm)
+    marks = np.concatenate(paths_mm)
+    bounds = (*marks.min(axis=0), *marks.max(axis=0))
+    return VectorJob(segments=segments, paths_mm=paths_mm, jump_before_mm=before,
+                     jump_after_mm=after, pitch=pitch, registers=registers,
+                     estimate_s=estimate, mark_mm=mark_mm, jump_mm=jump_mm,
+                     bounds_mm=tuple(float(v) for v in bounds), notes=list(notes))
+
+
+def plan_job_file(segments, settings, profile):
+    """A ``.job`` (galvo units, already placed and ordered) for this machine."""
+    from .plan import from_galvo
+    paths, current = [], None
+    here = (32768, 32768)
+    for op, x, y in segments:
+        if op == "mark":
+            if current is None:
+                current = [here]
+                paths.append(current)
+            current.append((x, y))
+        else:
+            current = None
+        here = (x, y)
+    paths_mm = [from_galvo(np.array(p, dtype=float), profile.field.size_mm) for p in paths]
+    if not paths_mm:
+        raise PlanError("the job has no mark segments")
+    return _finish(list(segments) * settings.passes, paths_mm, 0.0, 0.0, settings, profile,
+                   ["a .job is in galvo units: no placement, hatch or reordering"])
+
+
+def plan_vector_job(drawing, placement, settings, profile):
+    """Plan ``drawing`` for ``profile``'s machine; raises :class:`~.plan.PlanError` (one line)
+    for anything that cannot run, before any link is opened."""
+    field_mm = profile.field.size_mm
+    _machine_settings(settings, profile)        # the speed and PRR first: the cheap checks
+    placed = place(drawing, placement)
+    paths, closed = [], []
+    if settings.outline:
+        paths += [np.asarray(p) for p in placed.paths]
+        closed += list(placed.closed)
+    if settings.hatch_mm is not None:
+        lines = hatch(placed.paths, placed.closed, settings.hatch_mm, settings.hatch_deg)
+        paths += [np.asarray(line) for line in lines]
+        closed += [False] * len(lines)
+    if not paths:
+        raise PlanError(f"{drawing.name}: nothing to mark (no outline, and no closed shape "
+                        f"to hatch)")
+    field_check(paths, field_mm)
+    ordered, before, after = order_paths(paths, closed)
+    units = [to_galvo(path, field_mm) for path in ordered]
+    segments = segments_from_paths(units) * settings.passes
+    return _finish(segments, ordered, before, after, settings, profile,
+                   list(drawing.notes) + list(drawing.skipped))
+
+
+def frame_segments(bounds_mm, field_mm, times):
+    """The job's bounding box traced ``times`` times (for the guide laser), in galvo units."""
+    xmin, ymin, xmax, ymax = bounds_mm
+    box = np.array([(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax), (xmin, ymin)])
+    units = to_galvo(box, field_mm)
+    return segments_from_paths([units]) * times

@@ -1,0 +1,257 @@
+"""`galvoscan mark` end to end: drawings read, planned and streamed over the serial link into
+the simulated board (``--sim``: the system top served on a pseudo-terminal, the same link code
+a real board gets), and what the XY2-100 wires and the DB25 pins did checked against the
+drawing's own geometry, written out here independently of the planner."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from galvoscan.cli import main
+
+
+SPEED_MM_S = 2000.0
+PRR_KHZ = 50.0
+# A machine with a 0.1 mm spot and quick mirrors: fewer points and shorter waits to simulate.
+PROFILE = """
+[laser]
+spot_mm = 0.1
+[galvo]
+jump_delay_us = 100
+"""
+# Pitch the planner may choose at most (half the 0.1 mm spot), one galvo unit of rounding on a
+# 110 mm field, and the chord tolerance of curves.
+HALF_PITCH_MM = 0.025
+UNIT_MM = 110 / 65536
+CHORD_MM = 0.01
+
+# A 2 mm square with a 0.6 mm square hole (one path, even-odd) and a circle, SVG units = mm.
+SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="4mm" viewBox="0 0 4 4">
+  <path d="M 0.5 0.5 H 2.5 V 2.5 H 0.5 Z M 1.2 1.2 H 1.8 V 1.8 H 1.2 Z"
+        fill-rule="evenodd" fill="none" stroke="black"/>
+  <circle cx="3.2" cy="3.2" r="0.6" fill="none" stroke="black"/>
+</svg>
+"""
+HATCH_MM = 0.25
+# A port that cannot be opened: an error about the drawing or the profile, not about the port,
+# shows the job was refused before the link was touched.
+NOPORT = ["--port", "/nonexistent/ttyUSB9"]
+
+
+def run_json(args, capsys):
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def distance_to_segment(p, a, b):
+    p, a, b = (np.asarray(v, dtype=float) for v in (p, a, b))
+    ab = b - a
+    t = np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0, 1)
+    return float(np.hypot(*(p - (a + t * ab))))
+
+
+def distance_to_polygon(p, corners):
+    return min(distance_to_segment(p, corners[i], corners[(i + 1) % len(corners)])
+               for i in range(len(corners)))
+
+
+# The SVG's shapes with Y up (the drawing's mm as the JSON reports them: y = -y_svg).
+OUTER = [(0.5, -0.5), (2.5, -0.5), (2.5, -2.5), (0.5, -2.5)]
+HOLE = [(1.2, -1.2), (1.8, -1.2), (1.8, -1.8), (1.2, -1.8)]
+CIRCLE = ((3.2, -3.2), 0.6)
+
+
+def inside_region(p):
+    """Even-odd: in the outer square and not in the hole, or in the circle."""
+    x, y = p
+    in_outer = 0.5 <= x <= 2.5 and -2.5 <= y <= -0.5
+    in_hole = 1.2 < x < 1.8 and -1.8 < y < -1.2
+    (cx, cy), r = CIRCLE
+    return (in_outer and not in_hole) or math.hypot(x - cx, y - cy) <= r
+
+
+def outline_distance(p):
+    (cx, cy), r = CIRCLE
+    return min(distance_to_polygon(p, OUTER), distance_to_polygon(p, HOLE),
+               abs(math.hypot(p[0] - cx, p[1] - cy) - r))
+
+
+@pytest.fixture(scope="module")
+def svg_result(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("svg")
+    path = folder / "shape.svg"
+    path.write_text(SVG)
+    machine = folder / "machine.toml"
+    machine.write_text(PROFILE)
+    import contextlib
+    import io
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
+                     "--hatch", str(HATCH_MM), "--machine", str(machine), "--sim",
+                     "--json"]) == 0
+    return json.loads(out.getvalue().strip().splitlines()[-1])
+
+
+@pytest.mark.slow
+def test_svg_marks_lie_on_the_drawing(svg_result):
+    marks = svg_result["marks"]
+    assert len(marks) > 100
+    tolerance = HALF_PITCH_MM + CHORD_MM + UNIT_MM
+    hatch_ys = []
+    for p in marks:
+        if outline_distance(p) <= tolerance:
+            continue
+        # Not on an outline: a hatch point, inside the even-odd region, on a hatch line.
+        assert inside_region(p), p
+        hatch_ys.append(p[1])
+    # Hatch lines every HATCH_MM (one galvo unit of rounding).
+    levels = sorted({round(y / UNIT_MM) for y in hatch_ys})
+    lines = [levels[0]]
+    for level in levels[1:]:
+        if level - lines[-1] > 2:
+            lines.append(level)
+    gaps = np.diff(np.array(lines) * UNIT_MM) / HATCH_MM
+    assert len(lines) >= 6
+    # One grid of lines HATCH_MM apart: between the square and the circle some are empty.
+    assert np.all(np.abs(gaps - np.round(gaps)) <= 2 * UNIT_MM / HATCH_MM), gaps
+    assert np.sum(np.round(gaps) == 1) >= len(gaps) - 2
+
+
+@pytest.mark.slow
+def test_svg_corners_hit_speed_and_counters(svg_result):
+    marks = np.array(svg_result["marks"])
+    for corner in OUTER + HOLE:
+        assert np.min(np.hypot(*(marks - corner).T)) <= 1.5 * UNIT_MM, corner
+    # The circle is marked all round (every chord's end lies on it, within the tolerance).
+    (cx, cy), r = CIRCLE
+    on_circle = marks[np.abs(np.hypot(marks[:, 0] - cx, marks[:, 1] - cy) - r) <= 0.02]
+    angles = np.sort(np.arctan2(on_circle[:, 1] - cy, on_circle[:, 0] - cx))
+    assert np.max(np.diff(angles)) < 2 * HALF_PITCH_MM * 2 / r
+    assert abs(svg_result["speed_mm_s"] - SPEED_MM_S) / SPEED_MM_S <= 0.02
+    assert svg_result["underruns"] == svg_result["errors"] == svg_result["rejected"] == 0
+    assert svg_result["pulses_per_point"] == 1
+    # Along the whole path (the short last step of every segment included) a little slower.
+    assert 0.9 * SPEED_MM_S <= svg_result["path_speed_mm_s"] <= svg_result["speed_mm_s"]
+
+
+def dxf_drawing(path, zigzag_points):
+    import ezdxf
+    doc = ezdxf.new(units=4)            # mm
+    msp = doc.modelspace()
+    msp.add_line((0, 0), (4, 0))
+    msp.add_arc((2, 2), 1.5, 0, 180)
+    # A polyline with a bulge of 1: a half circle from (5, 0) to (7, 0), centre (6, 0).
+    msp.add_lwpolyline([(5, 0, 0, 0, 1), (7, 0)], format="xyseb")
+    # Many short segments: more than the board's queue holds.
+    msp.add_lwpolyline([(0.05 * i, -1 - 0.03 * (i % 2)) for i in range(zigzag_points)])
+    doc.saveas(path)
+
+
+@pytest.mark.slow
+def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
+    path = tmp_path / "parts.dxf"
+    zigzag = 540
+    dxf_drawing(path, zigzag)
+    machine = tmp_path / "machine.toml"
+    machine.write_text(PROFILE)
+    result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
+                       "--machine", str(machine), "--sim", "--json"], capsys)
+    assert result["segments"] > 512
+    assert result["underruns"] == result["errors"] == result["rejected"] == 0
+    assert abs(result["speed_mm_s"] - SPEED_MM_S) / SPEED_MM_S <= 0.02
+    tolerance = HALF_PITCH_MM + CHORD_MM + UNIT_MM
+    zig = [(0.05 * i, -1 - 0.03 * (i % 2)) for i in range(zigzag)]
+
+    def distance(p):
+        return min(distance_to_segment(p, (0, 0), (4, 0)),
+                   abs(math.hypot(p[0] - 2, p[1] - 2) - 1.5) if p[1] >= 2 - 1e-3 else 9,
+                   abs(math.hypot(p[0] - 6, p[1]) - 1) if p[1] <= 1e-3 else 9,
+                   min(distance_to_segment(p, zig[i], zig[i + 1]) for i in
+                       range(max(0, int(p[0] / 0.05) - 2), min(zigzag - 1,
+                                                                int(p[0] / 0.05) + 2))))
+
+    marks = np.array(result["marks"])
+    for p in marks[::7]:                        # every 7th point keeps the test quick
+        assert distance(p) <= tolerance, p
+    # Every end of every entity and every zigzag vertex is hit.
+    for end in [(0, 0), (4, 0), (3.5, 2), (0.5, 2), (5, 0), (7, 0), *zig]:
+        assert np.min(np.hypot(*(marks - end).T)) <= 1.5 * UNIT_MM, end
+
+
+def test_out_of_field_drawing_is_refused_before_anything(tmp_path, capsys):
+    path = tmp_path / "big.svg"
+    path.write_text(SVG.replace('width="6mm" height="6mm"', 'width="600mm" height="600mm"'))
+    with pytest.raises(SystemExit) as stop:
+        main(["mark", str(path), *NOPORT])
+    message = str(stop.value.code)
+    assert "the field is −55.0…55.0 mm" in message and "\n" not in message
+
+
+@pytest.mark.parametrize("content, expected", [
+    (b"", "empty"),
+    (b"<svg xmlns='http://www.w3.org/2000/svg'><path d='M 0 0 L", "svg"),
+    (b"\x89PNG\r\n\x1a\n", "svg"),
+])
+def test_unreadable_drawings_are_one_line(tmp_path, content, expected):
+    path = tmp_path / "bad.svg"
+    path.write_bytes(content)
+    with pytest.raises(SystemExit) as stop:
+        main(["mark", str(path), *NOPORT])
+    message = str(stop.value.code)
+    assert message.startswith("galvoscan: error:") and "\n" not in message
+    assert "bad.svg" in message
+
+
+def test_unknown_suffix_missing_file_and_bad_profile(tmp_path):
+    for args, words in ((["mark", str(tmp_path / "x.png"), *NOPORT], "not a drawing"),
+                        (["mark", str(tmp_path / "none.svg"), *NOPORT], "none.svg")):
+        (tmp_path / "x.png").write_bytes(b"\x89PNG")
+        with pytest.raises(SystemExit) as stop:
+            main(args)
+        assert words in str(stop.value.code) and "\n" not in str(stop.value.code)
+    drawing = tmp_path / "ok.svg"
+    drawing.write_text(SVG)
+    profile = tmp_path / "m.toml"
+    profile.write_text("[laser]\nmax_power_w = 'fifty'\n")
+    with pytest.raises(SystemExit) as stop:
+        main(["mark", str(drawing), *NOPORT, "--machine", str(profile)])
+    assert "max_power_w" in str(stop.value.code)
+
+
+def test_units_and_placement_in_the_plan(tmp_path, capsys):
+    """Without a board: the plan, in mm, for an inch DXF placed lower-left at an offset."""
+    import ezdxf
+    doc = ezdxf.new(units=1)            # inches
+    doc.modelspace().add_line((0, 0), (1, 0))
+    path = tmp_path / "inch.dxf"
+    doc.saveas(path)
+    assert main(["mark", str(path), "--origin", "lower-left", "--offset", "10,5",
+                 "--estimate"]) == 0
+    out = capsys.readouterr().out
+    assert "25.4 mm marked" in out
+    assert "X 10.00 … 35.40 mm, Y 5.00 … 5.00 mm" in out
+
+
+def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
+    """A real SIGINT to `galvoscan mark --sim` mid-job: exit 130, one line, no traceback."""
+    import signal
+    import time
+    path = tmp_path / "shape.svg"
+    path.write_text(SVG)
+    process = subprocess.Popen([sys.executable, "-m", "galvoscan.cli", "mark", str(path),
+                                "--sim", "--speed", "1000", "--prr", "50"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    time.sleep(8)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 130, (out, err)
+    assert "Traceback" not in err
+    assert err.strip().splitlines()[-1] == "galvoscan: stopped (Ctrl-C)"

@@ -1,0 +1,176 @@
+"""The job streamer (galvoscan/jobs/stream.py): against a fake board for its protocol, and
+against the simulated board over a pseudo-terminal for what the laser pins do when a job is
+stopped."""
+
+import _thread
+import threading
+import time
+
+import pytest
+
+from galvoscan.client import ClientError, HostClient, SerialTransport
+from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
+from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
+
+
+class FakeBoard:
+    """Registers in a dict, a queue that drains by ``drain`` segments per read of fifo_free,
+    and a script of status flags; every write is logged."""
+
+    def __init__(self, *, drain=64, flags=(), fail_after=None):
+        self.values = {r.name: r.reset for r in BY_NAME.values()}
+        self.values["fifo_free"] = QUEUE_DEPTH
+        self.queue = 0
+        self.drain = drain
+        self.flags = set(flags)
+        self.log = []
+        self.fail_after = fail_after
+
+    def _status(self):
+        if self.values["run"]:
+            self.queue = max(0, self.queue - self.drain)
+        bits = {"armed": self.values["arm"], "laser_ready": self.values["arm"],
+                "laser_enable": self.values["arm"], "vector_busy": self.queue > 0}
+        bits.update({name: 1 for name in self.flags})
+        return sum(1 << STATUS_BITS[name] for name, on in bits.items() if on)
+
+    def write(self, name, value):
+        if self.fail_after is not None and len(self.log) >= self.fail_after:
+            raise ClientError("no answer from the board")
+        self.log.append((name, value))
+        if name == "vec_op":
+            assert self.queue < QUEUE_DEPTH, "written into a full queue"
+            self.queue += 1
+        else:
+            self.values[name] = value
+
+    def read(self, name):
+        if name == "status":
+            return self._status()
+        if name == "fifo_free":
+            if self.values["run"]:
+                self.queue = max(0, self.queue - self.drain)
+            return QUEUE_DEPTH - self.queue
+        if name == "mode":
+            return self.values["mode"]
+        return self.values.get(name, 0)
+
+
+def job(n):
+    return [("jump" if i % 10 == 0 else "mark", 1000 + i, 2000 + i) for i in range(n)]
+
+
+def test_every_segment_goes_in_order_and_the_queue_never_overflows():
+    board = FakeBoard(drain=50)
+    report = JobStreamer(board, batch=100, poll_s=0).run_vector(job(2000), {"pitch": 60},
+                                                                    timeout_s=5)
+    ops = [(board.log[i][1], board.log[i + 1][1], board.log[i + 2][1])
+           for i, (name, _) in enumerate(board.log) if name == "vec_x"]
+    expected = [(x, y) for _, x, y in job(2000)]
+    assert [(x, y) for x, y, _ in ops][:2000] == expected
+    # A job that ends on a mark gets a jump to where it ended.
+    assert ops[-1] == (expected[-1][0], expected[-1][1], 0)
+    assert report.segments == 2001
+    names = [name for name, _ in board.log]
+    # Parameters before the first segment, armed before run, disarmed at the end.
+    assert names.index("pitch") < names.index("vec_x")
+    assert names.index("arm") < names.index("run", names.index("arm"))
+    assert board.log[-3:] == [("arm", 0), ("run", 0), ("guide", 0)]
+
+
+def test_a_fault_mid_job_disarms_first():
+    board = FakeBoard(drain=1)
+    streamer = JobStreamer(board, batch=64, poll_s=0)
+    original = board.read
+
+    def read(name):
+        if name == "fifo_free" and len(board.log) > 3 * 600:
+            board.flags.add("fault_interlock")
+        return original(name)
+    board.read = read
+    with pytest.raises(JobAborted, match="interlock"):
+        streamer.run_vector(job(2000), {})
+    assert board.log[-3:] == [("arm", 0), ("run", 0), ("guide", 0)]
+
+
+def test_a_lost_link_still_tries_to_disarm():
+    board = FakeBoard(fail_after=200)
+    with pytest.raises(ClientError):
+        JobStreamer(board, poll_s=0).run_vector(job(1000), {})
+
+
+@pytest.mark.parametrize("flags, words", [(("armed",), "armed already"),
+                                          (("fault_alarm",), "alarm"),
+                                          (("interlock_open",), "interlock")])
+def test_a_board_not_ready_is_refused_before_anything_is_written(flags, words):
+    board = FakeBoard(flags=flags)
+    with pytest.raises(JobAborted, match=words):
+        JobStreamer(board, poll_s=0).run_vector(job(10), {"pitch": 60})
+    assert board.log == []
+
+
+def test_a_board_without_the_mode_is_refused():
+    board = FakeBoard()
+    board.read = lambda name, read=board.read: 0 if name == "mode" else read(name)
+    with pytest.raises(JobAborted, match="no vector mode"):
+        JobStreamer(board, poll_s=0).run_vector(job(10), {})
+    assert ("arm", 1) not in board.log
+
+
+@pytest.mark.slow
+def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
+    """A real KeyboardInterrupt while the laser emits: the streamer's first frame after it is
+    arm = 0, and from the end of that frame every laser output is low within one XY2-100
+    frame (10 µs)."""
+    from galvoscan.sim.board import LASER_PINS, PTYServer, SimulatedBoard
+    board = SimulatedBoard()
+    server = PTYServer(board).start()
+    emitting = threading.Event()
+
+    def watch():
+        am = LASER_PINS.index("laser_am")
+        while not emitting.is_set():
+            if any(pins[am] for _, pins in board.laser_changes[-5:]):
+                emitting.set()
+                _thread.interrupt_main()            # what Ctrl-C does
+            time.sleep(0.05)
+    watcher = threading.Thread(target=watch, daemon=True)
+    try:
+        with SerialTransport(server.port, timeout=60) as link:
+            client = HostClient(link)
+            streamer = JobStreamer(client, poll_s=0.01)
+            segments = [("jump", 30000, 30000)] + \
+                [("mark", 30000 + 600 * (i % 2), 30000 + 40 * i) for i in range(1, 40)]
+            watcher.start()
+            with pytest.raises(KeyboardInterrupt):
+                streamer.run_vector(segments, {"pitch": 12, "pulses_per_point": 1,
+                                               "laser_prr": 500, "laser_power": 40},
+                                    ready_timeout_s=600, timeout_s=600)
+            interrupted_at = len(board.bytes_in)
+        # Let the board take what the host sent after the interrupt, and run on a while.
+        arm_off = bytes([BY_NAME["arm"].address, 0, 0, 0x64])
+        deadline = time.monotonic() + 120
+        while arm_off not in bytes(b for _, b in board.bytes_in[max(0, interrupted_at - 64):]):
+            assert time.monotonic() < deadline, "the disarm frame never reached the board"
+            time.sleep(0.1)
+        until = board.now + 200e-6
+        while board.now < until:
+            time.sleep(0.1)
+    finally:
+        server.stop()
+    assert emitting.is_set()
+    received = bytes(byte for _, byte in board.bytes_in)
+    end = received.index(arm_off, max(0, interrupted_at - 64)) + 4
+    frame_done = board.bytes_in[end - 1][0]
+    clocks_per_frame = board.clk_freq * 10e-6
+    changes_after = [(cycle, pins) for cycle, pins in board.laser_changes
+                     if cycle >= frame_done]
+    last_on = [cycle for cycle, pins in changes_after
+               if any(pins[LASER_PINS.index(name)] for name in
+                      ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch"))]
+    off_by = max(last_on, default=frame_done)
+    # The pins' state from the last change on: all low, within a frame of the arm = 0 frame.
+    final = [pins for cycle, pins in board.laser_changes][-1]
+    assert not any(final[LASER_PINS.index(name)] for name in
+                   ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch"))
+    assert off_by - frame_done <= clocks_per_frame
