@@ -22,4 +22,10 @@ def test_bench_quick(capsys):
     # then the frame itself).
     for name in ("spi", "uart"):
         assert 10 < link[f"{name}_latency_us"] <= link[f"{name}_latency_max_us"] < 40
+    # Vector segments streamed over the UART at the default 1 Mbaud: three 4-byte frames a
+    # segment, 10 bits a byte, and a read of fifo_free (a request and its answer) per batch:
+    # under 8 333 a second, and at least 5 000 (what 1 mm segments at 5 m/s need).
+    stream = link["stream"]
+    assert stream["baud"] == 1_000_000 and stream["errors"] == 0
+    assert 5000 <= 0.97 * 1_000_000 / 10 / 12 <= stream["segments_per_s"] < 1_000_000 / 10 / 12
     assert "boards" in result and result["boards"] == {}

@@ -174,3 +174,29 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
     assert not any(final[LASER_PINS.index(name)] for name in
                    ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch"))
     assert off_by - frame_done <= clocks_per_frame
+
+
+@pytest.mark.slow
+def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
+    """`--frame`: the job's bounding box walked with the guide laser on, never armed."""
+    from galvoscan.jobs.vector_job import frame_segments
+    from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
+    board = SimulatedBoard()
+    client = HostClient(SimTransport(board))
+    box = (-1.0, -0.5, 1.0, 0.5)                      # mm
+    segments = frame_segments(box, 110, 2)
+    JobStreamer(client, poll_s=0).run_vector(
+        segments, {"pitch": 100, "pulses_per_point": 1, "laser_prr": 500, "jump_delay": 1,
+                   "laser_power": 0, "guide": 1}, armed=False, timeout_s=1e9)
+    guide = LASER_PINS.index("laser_guide")
+    emission = [LASER_PINS.index(name) for name in ("laser_enable", "laser_mo", "laser_am",
+                                                    "laser_latch")]
+    assert any(pins[guide] for _, pins in board.laser_changes)
+    assert not any(pins[i] for _, pins in board.laser_changes for i in emission)
+    assert board.laser_changes[-1][1][guide] == 0          # off again at the end
+    units = 65536 / 110
+    corners = {(32768 + round(x * units), 32768 + round(y * units))
+               for x in (box[0], box[2]) for y in (box[1], box[3])}
+    visited = {(x, y) for _, x, y in board.frames}
+    assert corners <= visited
+    assert not board.pulses

@@ -24,7 +24,7 @@ from .link import Timed
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["SimulatedBoard", "PTYServer", "SIM_TIMEOUT_S"]
+__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SIM_TIMEOUT_S"]
 
 
 #: Answer timeout a host should give the simulated board, in seconds of the host's clock.
@@ -255,3 +255,35 @@ class PTYServer:
 
     def __exit__(self, *exc):
         self.stop()
+
+
+class SimTransport:
+    """Frames straight into a :class:`SimulatedBoard`'s UART, in the board's own time (no
+    pseudo-terminal, no host clock): what a host at the link's full speed, with no latency of
+    its own, would get. For measuring the link (``galvoscan bench``)."""
+
+    def __init__(self, board, *, timeout=0.05):
+        self.board = board
+        self.timeout = timeout          # board seconds
+
+    def write_frame(self, frame):
+        board = self.board
+        board.to_board.extend(frame)
+        # Until the last byte has started: the next frame's follow it back to back.
+        while board.to_board:
+            board.run_for(len(board.to_board) * 10 * board.bit_time)
+
+    def query(self, frame):
+        from ..client import ClientError
+        board = self.board
+        board.from_board.clear()
+        self.write_frame(frame)
+        waited = 0.0
+        while len(board.from_board) < 4:
+            if waited > self.timeout:
+                raise ClientError(f"no answer from the simulated board in {self.timeout} s")
+            board.run_for(10 * board.bit_time)
+            waited += 10 * board.bit_time
+        answer = bytes(list(board.from_board)[:4])
+        board.from_board.clear()
+        return answer
