@@ -80,3 +80,25 @@ def test_wheel_regs_export_and_sim(installed):
     assert summary["points"] == 12
     rows = (where / "sim" / "spiral.csv").read_text().splitlines()
     assert len(rows) == summary["frames"] + 1
+
+
+def test_wheel_plans_a_drawing(installed):
+    """The job path's libraries (svgelements, ezdxf, shapely, the TOML reader) come with it."""
+    script, where = installed
+    result = _run(script, "machine", "init", "wheel.toml", cwd=where)
+    assert result.returncode == 0, result.stderr
+    (where / "box.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="4mm" viewBox="0 0 4 4">'
+        '<rect x="1" y="1" width="2" height="2"/></svg>')
+    result = _run(script, "mark", "box.svg", "--machine", "wheel.toml", "--hatch", "0.5",
+                  "--estimate", cwd=where)
+    assert result.returncode == 0, result.stderr
+    assert "mm marked" in result.stdout and "estimated time" in result.stdout
+    import ezdxf
+    doc = ezdxf.new(units=4)
+    doc.modelspace().add_circle((0, 0), 2)
+    doc.saveas(where / "ring.dxf")
+    result = _run(script, "mark", "ring.dxf", "--machine", "wheel.toml", "--estimate",
+                  "--preview", "ring.png", cwd=where)
+    assert result.returncode == 0, result.stderr
+    assert (where / "ring.png").stat().st_size > 0
