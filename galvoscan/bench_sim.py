@@ -1,0 +1,176 @@
+"""What ``galvoscan bench`` measures in simulation: the XY2-100 PHY's frame rate, the host
+link's command rate and latency, vector segments streamed end to end, and the full spiral
+replay (see :mod:`galvoscan.bench`)."""
+
+import time
+
+from amaranth.sim import Simulator
+
+from .sim import Timed, spi_transfer
+
+
+__all__ = ["phy_rate", "link_figures", "stream_figures", "replay_figures"]
+
+
+# --- XY2-100 -------------------------------------------------------------------------------------
+
+def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
+    """Frames per second and idle clocks between frames of the PHY, read off its wires.
+
+    A source offers a new position on every frame; the receiver decodes each one (checking
+    SYNC, control bits and parity) and the positions must be the ones offered.
+    """
+    from .gateware.phy.xy2_100 import XY2Transmitter, clocks_per_bit
+    from .sim import XY2Receiver
+    phy = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate)
+    counted = Timed(phy)
+    sim = Simulator(counted)
+    sim.add_clock(1 / clk_freq)
+    sent, received, starts = [], [], []
+
+    async def source(ctx):
+        for k in range(frames + 2):
+            position = (1000 * k + 17, 65535 - 900 * k)
+            ctx.set(phy.position.payload.x, position[0])
+            ctx.set(phy.position.payload.y, position[1])
+            ctx.set(phy.position.valid, 1)
+            await ctx.tick().until(phy.position.ready)
+            sent.append(position)
+
+    async def head(ctx):
+        receiver = XY2Receiver()
+        async for _, sync, x, y in ctx.negedge(phy.xy2_clk).sample(phy.xy2_sync, phy.xy2_x,
+                                                                   phy.xy2_y):
+            frame = receiver.sample(sync, x, y)
+            if frame is not None:
+                received.append((frame.x, frame.y))
+
+    async def sync_rises(ctx):
+        async for _, cycles in ctx.posedge(phy.xy2_sync).sample(counted.cycles):
+            starts.append(cycles)
+
+    sim.add_testbench(source)
+    sim.add_testbench(head, background=True)
+    sim.add_testbench(sync_rises, background=True)
+    sim.run()
+    # The PHY takes a position at each frame start: the frames are the positions offered.
+    if received != sent[:len(received)]:
+        raise RuntimeError("the PHY's frames are not the positions offered")
+    periods = {b - a for a, b in zip(starts, starts[1:])}
+    bit_clocks = clocks_per_bit(clk_freq, bit_rate) * 20
+    period = max(periods)
+    return {"frames_per_s": clk_freq / period, "idle_clocks": period - bit_clocks,
+            "frame_clocks": period, "period_jitter_clocks": max(periods) - min(periods)}
+
+
+# --- host link -----------------------------------------------------------------------------------
+
+def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
+    """Command throughput over SPI and UART, and command → XY2 latency for a vector jump."""
+    from .client import encode_read, encode_write
+    from .gateware.top import GalvoScanTop, ScanSettings
+    from .sim import XY2Receiver
+    top = GalvoScanTop(clk_freq=clk_freq, baud=baud,
+                       settings=ScanSettings(mode="vector", run=True))
+    counted = Timed(top)
+    sim = Simulator(counted)
+    sim.add_clock(1 / clk_freq)
+    bit_time = 1 / baud
+    results = {}
+    frame_ends = []                                  # (cycle, x, y) of each XY2 frame
+
+    async def spi_frame(ctx, frame):
+        return await spi_transfer(ctx, top, frame, clk_freq)
+
+    async def uart_frame(ctx, frame):
+        for byte in frame:
+            for level in [0, *((byte >> i) & 1 for i in range(8)), 1]:
+                ctx.set(top.uart_rx, level)
+                await ctx.delay(bit_time)
+
+    async def jump_latency(ctx, send, x, y):
+        """Queue a jump to (x, y); clocks from the end of the last frame to the XY2 frame."""
+        await send(ctx, encode_write("vec_x", x))
+        await send(ctx, encode_write("vec_y", y))
+        await send(ctx, encode_write("vec_op", 0))
+        sent_at = ctx.get(counted.cycles)
+        while not any(c > sent_at and (fx, fy) == (x, y) for c, fx, fy in frame_ends):
+            await ctx.delay(10e-6)
+        arrived = min(c for c, fx, fy in frame_ends if c > sent_at and (fx, fy) == (x, y))
+        return (arrived - sent_at) / clk_freq
+
+    async def host(ctx):
+        ctx.set(top.spi_cs_n, 1)
+        ctx.set(top.uart_rx, 1)
+        ctx.set(top.interlock_open, 0)
+        if hasattr(top, "laser_alarm"):
+            ctx.set(top.laser_alarm, 0)     # the laser reports no alarm
+        await ctx.delay(20e-6)
+        # Jumps held one frame, so that each jump's latency is its own.
+        await spi_frame(ctx, encode_write("jump_delay", 1))
+        for name, send in (("spi", spi_frame), ("uart", uart_frame)):
+            start = ctx.get(counted.cycles)
+            for k in range(frames):
+                await send(ctx, encode_write("pitch", 60 + k))
+            seconds = (ctx.get(counted.cycles) - start) / clk_freq
+            results[f"{name}_frames_per_s"] = frames / seconds
+            latencies = [await jump_latency(ctx, send, 20000 + 5000 * k, 40000 - 3000 * k)
+                         for k in range(3)]
+            results[f"{name}_latency_us"] = 1e6 * sum(latencies) / len(latencies)
+            results[f"{name}_latency_max_us"] = 1e6 * max(latencies)
+        await spi_frame(ctx, encode_read("errors"))
+        results["errors"] = (await spi_frame(ctx, encode_read("errors")) >> 8) & 0xFFFF
+
+    async def head(ctx):
+        receiver = XY2Receiver()
+        async for _, sync, x, y, cycles in ctx.negedge(top.xy2_clk).sample(
+                top.xy2_sync, top.xy2_x, top.xy2_y, counted.cycles):
+            frame = receiver.sample(sync, x, y)
+            if frame is not None:
+                frame_ends.append((cycles, frame.x, frame.y))
+
+    sim.add_testbench(host)
+    sim.add_testbench(head, background=True)
+    sim.run()
+    if results.pop("errors"):
+        raise RuntimeError("the simulated board refused some of the bench's command frames")
+    return results
+
+
+# --- simulator -----------------------------------------------------------------------------------
+
+def stream_figures(*, segments=600, baud=None):
+    """Vector segments a second streamed end to end: ``JobStreamer`` (batches, reads of
+    ``fifo_free``) through the UART pins of the simulated board at the default baud, one-point
+    marks that the board takes faster than the link brings them (so each one finds the queue
+    empty: ``underruns`` counts them all, by design); in the board's own time."""
+    from .client import HostClient
+    from .gateware.clocking import DEFAULT_BAUD
+    from .jobs.stream import JobStreamer
+    from .sim.board import SimTransport, SimulatedBoard
+    board = SimulatedBoard(baud=baud or DEFAULT_BAUD)
+    client = HostClient(SimTransport(board))
+    streamer = JobStreamer(client, poll_s=0)
+    streamer.setup({"run": 1, "mode": 2, "pitch": 1000, "pulses_per_point": 1,
+                    "laser_prr": 1000, "jump_delay": 1})
+    job = [("mark", 30000 + 100 * (k % 2), 30000) for k in range(segments)]
+    start = board.now
+    streamer.stream(job, start=lambda: None, timeout_s=1e9)
+    seconds = board.now - start
+    return {"segments_per_s": segments / seconds, "baud": board.baud,
+            "underruns": client.read("vec_underruns"), "errors": client.read("errors")}
+
+
+def replay_figures(points=8064):
+    """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``)."""
+    from .gateware.sources.spiral import PARK_FRAMES
+    from .sim import SIM_CLOCKS_PER_BIT, replay_spiral
+    frames = PARK_FRAMES + 3 * points
+    start = time.monotonic()
+    replay_spiral(frames=frames)
+    seconds = time.monotonic() - start
+    cycles = frames * 20 * SIM_CLOCKS_PER_BIT
+    return {"replay_points": points, "replay_s": seconds, "sim_cycles_per_s": cycles / seconds}
+
+
+# --- builds and proofs (in worker processes) ------------------------------------------------------
