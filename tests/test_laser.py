@@ -193,7 +193,7 @@ def assert_interlock_cuts_the_outputs(pins):
     """Every laser output is low from the third clock the interlock pin is open on (it passes
     two synchroniser flip-flops), and on every clock laser_enable is low."""
     for clock in range(3, len(pins)):
-        mo, am, prr, _, latch, power, enable, _ = pins[clock]
+        mo, am, prr, _, latch, power, enable, *_ = pins[clock]
         if all(pins[clock - back][3] for back in range(3)):
             assert not (mo or am or prr or latch or power or enable), \
                 f"laser on with the interlock open for 3 clocks (clock {clock})"
@@ -323,7 +323,9 @@ def test_fuzzed_commands_never_emit_unsafely(steps):
     event("emitted" if any(pins[1] for pins in board.laser_pins) else "did not emit")
     assert_interlock_cuts_the_outputs(board.laser_pins)
     mo_on_for = 0
-    for clock, (mo, am, prr, _, _, _, enable, alarm) in enumerate(board.laser_pins):
+    for clock, (mo, am, prr, _, _, _, enable, alarm, guide) in enumerate(board.laser_pins):
+        # The buffers are enabled only while armed, and the guide laser is off while armed.
+        assert not (enable and guide), "guide laser on with the laser enabled"
         if clock >= 3 and all(board.laser_pins[clock - back][7] for back in range(3)):
             assert not (mo or am or prr or enable), "laser on with an alarm for 3 clocks"
         if am:

@@ -187,7 +187,9 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
 
 def test_out_of_field_drawing_is_refused_before_anything(tmp_path, capsys):
     path = tmp_path / "big.svg"
-    path.write_text(SVG.replace('width="6mm" height="6mm"', 'width="600mm" height="600mm"'))
+    big = SVG.replace('width="4mm" height="4mm"', 'width="400mm" height="400mm"')
+    assert big != SVG
+    path.write_text(big)
     with pytest.raises(SystemExit) as stop:
         main(["mark", str(path), *NOPORT])
     message = str(stop.value.code)

@@ -42,7 +42,7 @@ def test_top_ports_have_the_fixed_names():
         "xy2_clk", "xy2_sync", "xy2_x", "xy2_y",
         "spi_sck", "spi_cs_n", "spi_copi", "spi_cipo", "uart_rx", "uart_tx",
         "laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "laser_enable",
-        "interlock_open", "laser_alarm"]
+        "laser_guide", "interlock_open", "laser_alarm"]
 
 
 @pytest.mark.parametrize("kwargs, message", [

@@ -242,7 +242,8 @@ def add_parsers(commands):
     place.add_argument("--offset", type=pair_mm("--offset"), default=(0.0, 0.0),
                        metavar="X,Y", help="where in the field, mm from its centre "
                                            "(default: 0,0)")
-    place.add_argument("--scale", type=number_in("scale", 1e-3, 1e3), default=1.0)
+    place.add_argument("--scale", type=number_in("scale", 1e-3, 1e3), default=1.0, metavar="K",
+                       help="size factor, about the drawing's centre (default: 1)")
     place.add_argument("--rotate", type=number_in("rotate", -360, 360), default=0.0,
                        metavar="DEG", help="counter-clockwise, degrees")
     out = mark.add_argument_group("output")

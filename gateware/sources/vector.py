@@ -112,7 +112,11 @@ class VectorSequencer(wiring.Component):
         with m.If(dda.segment.ready):
             m.d.sync += segment_valid.eq(0)
 
-        slot_free = ~slot_valid | taken
+        # A slot the pacer takes is free from the next clock, not this one: the pacer's
+        # once-a-frame decision then ends at the slot's flip-flop instead of running on into
+        # the DDA's handshake and the queue's read enable (the design's longest path). The
+        # pacer takes at most one point a frame, so the clock this costs is never seen.
+        slot_free = ~slot_valid
         command = self.commands.payload
         fetching = Signal()
         with m.FSM():
