@@ -51,44 +51,65 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
 
     paths = [np.asarray(p, dtype=float).reshape(-1, 2) for p in paths_mm]
     paths = [p for p in paths if len(p)]
-    figure = Figure(figsize=(7, 7.6), dpi=110, layout="constrained")
-    FigureCanvasAgg(figure)
-    ax = figure.add_subplot()
-    half = field_mm / 2
-    ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
-            color="tab:red", linewidth=0.8)
-    handles = [Line2D([], [], color="tab:red", linewidth=0.8, label=f"field {field_mm:g} mm")]
     mark_mm = _length_mm(paths)
     jump_lines = _jump_lines(paths) if paths else []
     jump_mm = _length_mm(jump_lines)
-    if jumps and jump_lines:
-        # Under the marks: a jump is where the laser is off, the marks are what matters.
-        ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,
-                                         linestyles=(0, (4, 3)), zorder=1))
-        handles.append(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
-                              label=f"jumps {jump_mm:.1f} mm"))
+    half = field_mm / 2
+    bounds = None
     if paths:
-        ax.add_collection(LineCollection(paths, colors="black", linewidths=0.7, zorder=2))
-        handles.append(Line2D([], [], color="black", linewidth=0.7,
-                              label=f"marks {mark_mm:.1f} mm ({len(paths)} paths)"))
         points = np.concatenate(paths)
-        (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)
-        ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
-                linewidth=0.6, linestyle=":")
-        handles.append(Line2D([], [], color="tab:blue", linewidth=0.6, linestyle=":",
-                              label=f"drawing {x1 - x0:.2f} × {y1 - y0:.2f} mm"))
-        half = max(half, *np.abs(points).max(axis=0))      # show what is outside the field too
-    margin = 0.04 * half
-    ax.set_xlim(-half - margin, half + margin)
-    ax.set_ylim(-half - margin, half + margin)
-    ax.set_aspect("equal")
-    ax.set_xlabel("X (mm)")
-    ax.set_ylabel("Y (mm)")
-    ax.grid(True, linewidth=0.3, alpha=0.5)
+        bounds = (*points.min(axis=0), *points.max(axis=0))
+    # A drawing much smaller than the field gets a second panel, zoomed in on it.
+    zoom = bounds is not None and max(bounds[2] - bounds[0], bounds[3] - bounds[1]) < field_mm / 4
+    figure = Figure(figsize=(12.5, 7.4) if zoom else (7, 7.6), dpi=110, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(1, 2) if zoom else [figure.add_subplot()]
+    handles = []
+    for index, ax in enumerate(axes):
+        first = index == 0
+
+        def keep(handle):
+            if first:
+                handles.append(handle)
+        ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
+                color="tab:red", linewidth=0.8)
+        keep(Line2D([], [], color="tab:red", linewidth=0.8, label=f"field {field_mm:g} mm"))
+        if jumps and jump_lines:
+            # Under the marks: a jump is where the laser is off, the marks are what matters.
+            ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,
+                                             linestyles=(0, (4, 3)), zorder=1))
+            keep(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
+                        label=f"jumps {jump_mm:.1f} mm"))
+        if paths:
+            ax.add_collection(LineCollection(paths, colors="black", linewidths=0.7, zorder=2))
+            keep(Line2D([], [], color="black", linewidth=0.7,
+                        label=f"marks {mark_mm:.1f} mm ({len(paths)} paths)"))
+            x0, y0, x1, y1 = bounds
+            ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
+                    linewidth=0.6, linestyle=":")
+            keep(Line2D([], [], color="tab:blue", linewidth=0.6, linestyle=":",
+                        label=f"drawing {x1 - x0:.2f} × {y1 - y0:.2f} mm"))
+        if first:
+            # The whole field, and whatever of the drawing lies outside it.
+            reach = max(half, *np.abs(points).max(axis=0)) if paths else half
+            margin = 0.04 * reach
+            ax.set_xlim(-reach - margin, reach + margin)
+            ax.set_ylim(-reach - margin, reach + margin)
+        else:
+            x0, y0, x1, y1 = bounds
+            side = max(x1 - x0, y1 - y0, 1e-3) * 1.15
+            cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+            ax.set_xlim(cx - side / 2, cx + side / 2)
+            ax.set_ylim(cy - side / 2, cy + side / 2)
+            ax.set_title("the drawing, zoomed in", fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlabel("X (mm)")
+        ax.set_ylabel("Y (mm)")
+        ax.grid(True, linewidth=0.3, alpha=0.5)
     if title:
-        ax.set_title(title)
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2,
-              fontsize=8, frameon=False)
+        figure.suptitle(title)
+    axes[0].legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2,
+                   fontsize=8, frameon=False)
     try:
         figure.savefig(path)
     except (ValueError, OSError) as error:

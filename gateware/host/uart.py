@@ -17,12 +17,13 @@ def uart_divisor(clk_freq, baud):
         raise ValueError(f"baud rate must be positive, not {baud!r}")
     divisor = round(clk_freq / baud)
     if divisor < 8:
-        raise ValueError(f"{baud:g} baud needs at least 8 system clocks per bit; "
-                         f"{clk_freq:g} Hz gives {clk_freq / baud:.2f}")
+        raise ValueError(f"{baud:,.0f} baud needs at least 8 system clocks per bit; "
+                         f"{clk_freq / 1e6:g} MHz gives {clk_freq / baud:.2f} (a clock of "
+                         f"{8 * baud / 1e6:g} MHz or more, or a lower baud rate)")
     error = abs(clk_freq / divisor - baud) / baud
     if error > 0.02:
-        raise ValueError(f"{baud:g} baud from {clk_freq:g} Hz is {error:.1%} off (divisor "
-                         f"{divisor}); at most 2 % is allowed")
+        raise ValueError(f"{baud:,.0f} baud from {clk_freq / 1e6:g} MHz is {error:.1%} off "
+                         f"(divisor {divisor}); at most 2 % is allowed")
     return divisor
 
 
