@@ -257,3 +257,19 @@ def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
     assert process.returncode == 130, (out, err)
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "galvoscan: stopped (Ctrl-C)"
+
+
+def test_unknown_units_are_refused_before_anything(tmp_path):
+    import ezdxf
+    svg = tmp_path / "furlongs.svg"
+    svg.write_text(SVG.replace('width="4mm"', 'width="4furlong"'))
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 99
+    doc.modelspace().add_line((0, 0), (1, 0))
+    dxf = tmp_path / "odd.dxf"
+    doc.saveas(dxf)
+    for path, words in ((svg, "unit galvoscan does not know"), (dxf, "cannot be converted")):
+        with pytest.raises(SystemExit) as stop:
+            main(["mark", str(path), *NOPORT])
+        message = str(stop.value.code)
+        assert words in message and "\n" not in message and "cannot open" not in message

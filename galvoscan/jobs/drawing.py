@@ -224,10 +224,21 @@ def _svg_subpaths(path, tolerance_px):
     return subpaths
 
 
+#: Units of an SVG size that svgelements converts (``None``/``""``: user units, px).
+_SVG_UNITS = {None, "", "px", "mm", "cm", "in", "pt", "pc", "%", "em", "ex"}
+
+
 def _read_svg(data, tolerance_mm):
     import svgelements as svg
 
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
+    # svgelements reads a size in a unit it does not know as plain px: the drawing would come
+    # out at a scale nobody asked for. Refuse it instead.
+    for name in ("width", "height"):
+        text = document.values.get(name)
+        if text is not None and svg.Length(text).units not in _SVG_UNITS:
+            raise DrawingError(f"the SVG's {name} {str(text)[:30]!r} is in a unit galvoscan "
+                               f"does not know (mm, cm, in, pt, pc, px or none)")
     paths, closed, skipped = [], [], Counter()
     for element in document.elements():
         if not isinstance(element, (svg.Shape, svg.Text, svg.Image)):
