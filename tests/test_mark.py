@@ -273,3 +273,34 @@ def test_unknown_units_are_refused_before_anything(tmp_path):
             main(["mark", str(path), *NOPORT])
         message = str(stop.value.code)
         assert words in message and "\n" not in message and "cannot open" not in message
+
+
+def test_the_profiles_lens_table_is_loaded_at_the_boards_size(tmp_path):
+    """A profile's correction table goes into the board before the job, resampled to the
+    board's node count, node by node (cor_node, cor_dx, cor_dy, cor_write)."""
+    from galvoscan.cli.jobargs import load_lens_table
+    from galvoscan.correction.files import save_table
+    from galvoscan.gateware.field.correction_table import CorrectionTable
+    from galvoscan.jobs.profile import load_profile
+    table = CorrectionTable.identity(5).with_node(2, 2, 40, -7)
+    save_table(tmp_path / "lens.json", table)
+    (tmp_path / "m.toml").write_text('[field]\ncorrection = "lens.json"\n')
+    profile = load_profile(tmp_path / "m.toml")
+
+    class Board:
+        writes = []
+
+        def read(self, name):
+            assert name == "cor_nodes"
+            return 9
+
+        def write(self, name, value):
+            self.writes.append((name, value))
+    board = Board()
+    said = []
+    load_lens_table(board, profile, said.append)
+    assert len(board.writes) == 4 * 81 and "9 x 9" in said[0]
+    # Node (4, 4) of 9 sits where node (2, 2) of 5 does: the centre, with its offsets.
+    centre = board.writes.index(("cor_node", 4 * 9 + 4))
+    assert board.writes[centre + 1:centre + 4] == [("cor_dx", 40), ("cor_dy", 0xFFFF - 6),
+                                                   ("cor_write", 1)]

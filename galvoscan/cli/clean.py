@@ -7,7 +7,7 @@ import sys
 
 from .args import fail, field_mm, int_in, number_in
 from .jobargs import (add_job_link_options, add_job_options, board_link, has_link,
-                      job_settings_values, pair_mm, progress_bar)
+                      job_settings_values, load_lens_table, pair_mm, progress_bar)
 from .machine import add_machine_option, profile_from
 
 
@@ -47,11 +47,14 @@ def _cmd_clean(args):
         if not args.estimate:
             say("no board given (--port, --spi or --sim): nothing sent")
         return 0
-    registers = job.registers
+    registers = dict(job.registers)
+    if profile.correction_table() is not None:
+        registers["cor_enable"] = 1
     pulses = max(1, math.ceil(job.seconds * registers["laser_prr"] * 100))
     with board_link(args, profile) as (client, board):
         streamer = JobStreamer(client)
         try:
+            load_lens_table(client, profile, say)
             if args.frame:
                 if not profile.laser.guide:
                     fail("the machine profile says there is no guide laser ([laser] guide)")

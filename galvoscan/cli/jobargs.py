@@ -99,6 +99,20 @@ def board_link(args, profile):
         yield HostClient(transport), None
 
 
+def load_lens_table(client, profile, say):
+    """Write the profile's correction table into the board (at the board's node count), so
+    that the job is corrected with the table it was checked against. Nothing without one."""
+    from ..correction.upload import upload_table
+    table = profile.correction_table()
+    if table is None:
+        return
+    nodes = client.read("cor_nodes")
+    if nodes != table.n:
+        table = table.resampled(nodes)
+    say(f"loading the lens correction table ({nodes} x {nodes} nodes) into the board")
+    upload_table(client, table)
+
+
 def progress_bar(total, unit, *, disable=None):
     """A tqdm bar on stderr (off when stderr is not a terminal, unless asked)."""
     from tqdm import tqdm

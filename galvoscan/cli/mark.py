@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .args import fail, image_file, int_in, number_in
 from .jobargs import (add_job_link_options, add_job_options, board_link, has_link,
-                      job_settings_values, pair_mm, progress_bar)
+                      job_settings_values, load_lens_table, pair_mm, progress_bar)
 from .machine import add_machine_option, profile_from
 
 
@@ -180,6 +180,7 @@ def _cmd_mark(args):
         bar = progress_bar(len(job.segments), "seg")
         streamer = JobStreamer(client, progress=bar.update)
         try:
+            load_lens_table(client, profile, say)
             if args.frame:
                 if not profile.laser.guide:
                     fail("the machine profile says there is no guide laser ([laser] guide)")
