@@ -4,13 +4,16 @@ Curves are flattened into chords within ``tolerance_mm`` of the true curve. Ever
 file is a :class:`DrawingError`, one line that names the file; nothing else escapes
 :func:`load_drawing`. What the file holds but is not marked (text, images, hatches, dimensions,
 hidden layers …) is counted in :attr:`Drawing.skipped`, so the user hears of it.
+
+This module holds the common part (:class:`Drawing`, :class:`DrawingError`,
+:func:`load_drawing` and the clean-up and checks both formats share) and the SVG reader. The DXF
+reader is :mod:`.dxf`; it imports :class:`DrawingError` and the helpers from here, so
+``load_drawing`` imports it only when it reads a DXF file (no import cycle).
 """
 
 from collections import Counter
 from dataclasses import dataclass
 import io
-import logging
-from logging.handlers import BufferingHandler
 import math
 import re
 from pathlib import Path
@@ -112,7 +115,11 @@ def load_drawing(path, *, tolerance_mm=0.01):
     if not data.strip():
         raise DrawingError(f"{path}: empty file")
     try:
-        reader = _read_svg if suffix == ".svg" else _read_dxf
+        if suffix == ".svg":
+            reader = _read_svg
+        else:
+            from .dxf import _read_dxf      # here: .dxf imports this module
+            reader = _read_dxf
         raw, closed, skipped, notes = reader(data, tolerance_mm)
     except DrawingError as error:
         raise DrawingError(f"{path}: {error}") from None
@@ -256,166 +263,3 @@ def _read_svg(data, tolerance_mm):
                 paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
                 closed.append(is_closed)
     return paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}), []
-
-
-# --- DXF ------------------------------------------------------------------------------------
-
-_TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB", "ATTDEF"}
-#: mm per $INSUNITS unit where the definition is exact (ezdxf's table has 1 in = 25.4000000001).
-_EXACT_MM = {1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 8: 25.4e-6, 9: 0.0254, 10: 914.4,
-             13: 1e-3, 14: 100.0}
-
-
-def _xy(vertices):
-    return np.array([(v.x, v.y) for v in vertices], dtype=float).reshape(-1, 2)
-
-
-def _spline_points(spline, tolerance):
-    """A B-spline evaluated by ezdxf and flattened here.
-
-    ezdxf's ``BSpline.flattening`` (and ``path.make_path``) run from the first knot to the last,
-    right only for clamped knots: a closed (periodic) spline comes out with loops far outside
-    it. The curve lives between knots ``order - 1`` and ``count``. Each knot span starts as 8
-    chords; a chord is halved until the curve at 1/4, 1/2 and 3/4 of it is within tolerance.
-    """
-    knots = np.asarray(spline.knots(), dtype=float)
-    low, high = knots[spline.order - 1], knots[spline.count]
-    breaks = np.unique(np.concatenate([[low, high], knots[(knots > low) & (knots < high)]]))
-    ts = np.unique(np.concatenate([np.linspace(a, b, 9) for a, b in zip(breaks, breaks[1:])]))
-    points = _xy(spline.points(ts))
-    t0, t1, p0, p1 = ts[:-1], ts[1:], points[:-1], points[1:]
-    done_t, done_p = [ts[:1]], [points[:1]]
-    for depth in range(40):
-        chord, worst = p1 - p0, np.zeros(len(t0))
-        for share in (0.25, 0.5, 0.75):
-            curve = _xy(spline.points(t0 + share * (t1 - t0)))
-            along = np.clip(np.sum((curve - p0) * chord, axis=1) /
-                            np.maximum(np.sum(chord * chord, axis=1), 1e-300), 0, 1)
-            worst = np.maximum(worst, np.hypot(*(p0 + along[:, None] * chord - curve).T))
-        good = (worst <= tolerance) | (depth == 39)
-        done_t.append(t1[good]), done_p.append(p1[good])
-        if good.all():
-            break
-        bad = ~good
-        tm = (t0[bad] + t1[bad]) / 2
-        pm = _xy(spline.points(tm))
-        t0, t1 = np.concatenate([t0[bad], tm]), np.concatenate([tm, t1[bad]])
-        p0, p1 = np.concatenate([p0[bad], pm]), np.concatenate([pm, p1[bad]])
-    return np.concatenate(done_p)[np.argsort(np.concatenate(done_t), kind="stable")]
-
-
-def _polyline_points(entity, tolerance):
-    """A 2D/3D polyline's LINE and ARC pieces, joined from its first vertex. ARC entities
-    always run counter-clockwise, so each piece is turned to start where the last ended."""
-    first = next(iter(entity.vertices_in_wcs() if entity.dxftype() == "LWPOLYLINE"
-                      else entity.points_in_wcs()))
-    chained = [_xy([first])]
-    for piece in entity.virtual_entities():
-        points = (_xy([piece.dxf.start, piece.dxf.end]) if piece.dxftype() == "LINE"
-                  else _xy(piece.flattening(tolerance)))
-        end = chained[-1][-1]
-        chained.append(points[::-1] if np.hypot(*(points[-1] - end)) <
-                       np.hypot(*(points[0] - end)) else points)
-    return np.concatenate(chained)
-
-
-def _entity_points(entity, tolerance, skipped):
-    """``(points, closed)`` of one entity that is not a block reference, or None."""
-    kind = entity.dxftype()
-    if kind == "LINE":
-        return _xy([entity.dxf.start, entity.dxf.end]), False
-    if kind == "CIRCLE":
-        return _xy(entity.flattening(tolerance)), True
-    if kind == "ARC":
-        span = (entity.dxf.end_angle - entity.dxf.start_angle) % 360
-        return _xy(entity.flattening(tolerance)), span == 0
-    if kind == "ELLIPSE":
-        span = (entity.dxf.end_param - entity.dxf.start_param) % math.tau
-        return _xy(entity.flattening(tolerance)), min(span, math.tau - span) < 1e-9
-    if kind == "SPLINE":
-        return _spline_points(entity.construction_tool(), tolerance), bool(entity.closed)
-    if kind == "LWPOLYLINE" or (kind == "POLYLINE" and
-                                (entity.is_2d_polyline or entity.is_3d_polyline)):
-        return _polyline_points(entity, tolerance), bool(entity.is_closed)
-    skipped["text entity" if kind in _TEXT_TYPES else f"{kind} entity"] += 1
-    return None
-
-
-def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
-    """Append the polylines of one entity to ``out``, in the drawing's units.
-
-    Block references are not exploded by ezdxf (which makes a non-uniformly scaled polyline
-    loose lines and ellipses, no longer closed): the block's entities are flattened in its own
-    coordinates, finer by the reference's largest stretch, and their points mapped by the
-    reference's matrix (row vectors, as ezdxf's ``Matrix44``).
-    """
-    kind = entity.dxftype()
-    try:
-        if kind == "INSERT":
-            if depth > 50:
-                raise DrawingError("block references nested more than 50 deep")
-            skipped["text entity"] += len(entity.attribs)
-            block = entity.block()
-            if block is None:
-                skipped["reference to a missing block"] += 1
-                return
-            for insert in (entity.multi_insert() if entity.mcount > 1 else [entity]):
-                m = np.array([insert.matrix44().get_row(i) for i in range(4)])
-                m = m if matrix is None else m @ matrix
-                stretch = max(np.linalg.norm(m[:2, :2], 2), 1e-12)
-                for child in block:
-                    _dxf_entity(child, tolerance / stretch, out, skipped, m, depth + 1)
-            return
-        found = _entity_points(entity, tolerance, skipped)
-    except DrawingError:
-        raise
-    except Exception as error:              # one broken entity: skip it, say so
-        skipped[f"{kind} entity ezdxf cannot evaluate ({_one_line(error)})"] += 1
-        return
-    if found is not None:
-        points, closed = found
-        out.append((points if matrix is None else points @ matrix[:2, :2] + matrix[3, :2],
-                    closed))
-
-
-def _read_dxf(data, tolerance_mm):
-    from ezdxf import recover, units
-
-    # recover reads what readfile reads and more: damaged files, binary DXF, any encoding. What
-    # it logs about a damaged file becomes a note, rather than lines on the user's terminal.
-    logger, said = logging.getLogger("ezdxf"), BufferingHandler(1 << 30)
-    said.setLevel(logging.WARNING)
-    logger.addHandler(said)
-    propagate, logger.propagate = logger.propagate, False
-    try:
-        document, auditor = recover.read(io.BytesIO(data))
-    finally:
-        logger.removeHandler(said)
-        logger.propagate = propagate
-    if auditor.has_errors:
-        raise DrawingError(f"damaged DXF ({_one_line(auditor.errors[0].message)})")
-    notes = [f"ezdxf: {_one_line(record.getMessage())}" for record in said.buffer[:3]]
-    if auditor.has_fixes:
-        notes.append(f"ezdxf repaired {len(auditor.fixes)} problem(s) in the DXF")
-    code = document.units
-    if code == units.InsertUnits.Unitless:
-        notes.append("DXF has no units ($INSUNITS 0): taken as mm")
-        factor = 1.0
-    elif code in _EXACT_MM:
-        factor = _EXACT_MM[code]
-    else:
-        try:
-            factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
-        except (TypeError, ValueError):
-            raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm") from None
-    out, skipped = [], Counter()
-    hidden = {layer.dxf.name.lower() for layer in document.layers
-              if layer.is_off() or layer.is_frozen()}
-    for entity in document.modelspace():
-        # What CAD does not show is not marked (construction layers, switched-off details).
-        if str(entity.dxf.get("layer", "0")).lower() in hidden or entity.dxf.get("invisible", 0):
-            skipped["entity on a hidden layer"] += 1
-        else:                               # flattened in the drawing's own units
-            _dxf_entity(entity, tolerance_mm / factor, out, skipped)
-    skipped = _counted(skipped, {"text entity": " (explode text to lines)"})
-    return [p * factor for p, _ in out], [c for _, c in out], skipped, notes

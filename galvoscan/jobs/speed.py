@@ -1,0 +1,117 @@
+"""Speed and time of a marking job: the pitch and pulses per point for a speed
+(:func:`choose_pitch`), the time the board takes (:func:`estimate_seconds`) and the lengths
+marked and jumped (:func:`jump_mark_lengths`), for segments in galvo units.
+
+:mod:`.plan` re-exports all of these, so ``from .plan import choose_pitch`` keeps working. That
+is why this module takes :class:`.plan.PlanError` and ``CENTRE`` from :mod:`.plan` inside the
+functions that need them, not at import time: no import cycle.
+"""
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+
+__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths"]
+
+
+@dataclass(frozen=True)
+class Pitch:
+    """A marking speed as the board makes it: ``pitch_units`` galvo units between points, each
+    point held for ``pulses_per_point`` laser pulses.
+
+    Attributes
+    ----------
+    pitch_units, pulses_per_point : int
+    speed_mm_s : float
+        The speed this gives, ``pitch_mm * prr_hz / pulses_per_point``.
+    pitch_mm : float
+    error : float
+        ``(speed_mm_s - asked) / asked``.
+    """
+    pitch_units: int
+    pulses_per_point: int
+    speed_mm_s: float
+    pitch_mm: float
+    error: float
+
+
+def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
+                 max_prr_per_point_hz=100e3):
+    """The pitch and pulses per point closest to a marking speed.
+
+    ``v = pitch_units / units_per_mm * prr_hz / N`` mm/s, with N (pulses per point) in
+    1 … 255, at least ``prr_hz / max_prr_per_point_hz`` (the most points a second the galvo
+    link takes: one per 10 µs frame), and the pitch 1 … 65535 units, at most ``max_pitch_mm``.
+    The closest speed wins; of equal ones, the smallest N (the finest pitch).
+
+    Raises
+    ------
+    PlanError
+        When nothing comes within 2 % of the speed; the message gives the reachable range.
+    """
+    from .plan import PlanError             # here: .plan imports this module
+
+    values = (speed_mm_s, prr_hz, units_per_mm, max_pitch_mm, max_prr_per_point_hz)
+    if not all(v > 0 and math.isfinite(v) for v in values):
+        raise PlanError(f"speed {speed_mm_s} mm/s, PRR {prr_hz} Hz, {units_per_mm} units/mm, "
+                        f"pitch ≤ {max_pitch_mm} mm: all must be > 0")
+    top = min(65535, math.floor(max_pitch_mm * units_per_mm + 1e-9))
+    low_n = max(1, math.ceil(prr_hz / max_prr_per_point_hz - 1e-9))
+    if top < 1 or low_n > 255:
+        raise PlanError(f"no pitch fits: {max_pitch_mm} mm is under one galvo unit, or "
+                        f"{prr_hz:g} Hz needs more than 255 pulses per point")
+    n = np.arange(low_n, 256)
+    ideal = speed_mm_s * n * units_per_mm / prr_hz
+    candidates = np.clip(np.stack([np.floor(ideal), np.ceil(ideal)]), 1, top)
+    speeds = candidates / units_per_mm * prr_hz / n
+    errors = np.abs(speeds - speed_mm_s) / speed_mm_s
+    least = errors.min()
+    row, column = np.nonzero(errors <= least * (1 + 1e-9) + 1e-15)
+    best = np.lexsort((candidates[row, column], column))[0]       # smallest N, then pitch
+    pitch, pulses = int(candidates[row[best], column[best]]), int(n[column[best]])
+    speed = pitch / units_per_mm * prr_hz / pulses
+    if abs(speed - speed_mm_s) / speed_mm_s > 0.02:
+        slowest, fastest = prr_hz / units_per_mm / 255, top / units_per_mm * prr_hz / low_n
+        raise PlanError(f"{speed_mm_s:g} mm/s is out of reach at {prr_hz / 1e3:g} kHz: "
+                        f"{slowest:.3g} … {fastest:.4g} mm/s (pitch ≤ {max_pitch_mm:g} mm, "
+                        f"{low_n} … 255 pulses per point)")
+    return Pitch(pitch, pulses, speed, pitch / units_per_mm, (speed - speed_mm_s) / speed_mm_s)
+
+
+def _walk(segments):
+    """Lengths (galvo units) and ops of the segments, from the field centre."""
+    from .plan import CENTRE                # here: .plan imports this module
+
+    here, out = (CENTRE, CENTRE), []
+    for op, x, y in segments:
+        out.append((op, math.hypot(x - here[0], y - here[1])))
+        here = (x, y)
+    return out
+
+
+def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_delay_frames,
+                     frame_s=10e-6):
+    """An estimate of the time the board takes for the segments.
+
+    ``segments`` are ``(op, x, y)`` in galvo units, op ``"jump"`` or ``"mark"``, from the field
+    centre. A mark of ``L`` units is ``ceil(L / pitch_units)`` points, each held
+    ``pulses_per_point / prr_hz`` s; a jump is ``1 + jump_delay_frames`` frames. Laser on/off
+    delays, the host link and anything the board adds are not counted.
+    """
+    dwell_s = pulses_per_point / prr_hz
+    total = 0.0
+    for op, length in _walk(segments):
+        if op == "mark":
+            total += math.ceil(length / pitch_units - 1e-12) * dwell_s
+        else:
+            total += (1 + jump_delay_frames) * frame_s
+    return total
+
+
+def jump_mark_lengths(segments, units_per_mm):
+    """``(mark_mm, jump_mm)``: the lengths marked and jumped, from the field centre."""
+    mark = sum(length for op, length in _walk(segments) if op == "mark")
+    jump = sum(length for op, length in _walk(segments) if op != "mark")
+    return mark / units_per_mm, jump / units_per_mm
