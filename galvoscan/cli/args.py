@@ -14,7 +14,7 @@ from pathlib import Path
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "baud", "add_baud_option",
-           "add_link_options", "open_link"]
+           "add_link_options", "open_transport", "open_link"]
 
 
 class CLIError(SystemExit):
@@ -244,14 +244,21 @@ def add_link_options(parser):
                                          "(default: 1e6)")
 
 
-def open_link(args):
-    """The transport the link options name, opened; one line if it cannot be."""
+def open_transport(*, port=None, spi=None, baud=None, timeout=0.5, sck=1e6):
+    """A serial (``port``) or FTDI SPI (``spi``) transport, opened; one line if it cannot be."""
     from ..client import ClientError, FTDISPITransport, SerialTransport
+    from ..gateware.clocking import DEFAULT_BAUD
     try:
-        if args.spi:
-            return FTDISPITransport(args.spi, frequency=args.sck)
-        return SerialTransport(args.port, baud=args.baud, timeout=args.timeout)
+        if spi:
+            return FTDISPITransport(spi, frequency=sck)
+        return SerialTransport(port, baud=baud or DEFAULT_BAUD, timeout=timeout)
     except ClientError as error:
         fail(error)
     except Exception as error:   # serial.SerialException and the like: say what failed
-        fail(f"cannot open {args.spi or args.port}: {error}")
+        fail(f"cannot open {spi or port}: {error}")
+
+
+def open_link(args):
+    """The transport the link options name, opened; one line if it cannot be."""
+    return open_transport(port=args.port, spi=args.spi, baud=args.baud, timeout=args.timeout,
+                          sck=args.sck)

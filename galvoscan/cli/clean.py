@@ -6,27 +6,26 @@ import math
 import sys
 
 from .args import fail, field_mm, int_in, number_in
-from .jobargs import (add_job_link_options, add_job_options, board_link, has_link,
-                      job_settings_values, load_lens_table, pair_mm, progress_bar)
+from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
+                      job_settings_values, load_lens_table, pair_mm, progress_bar,
+                      stopped_in_one_line)
 from .machine import add_machine_option, profile_from
 
 
 __all__ = ["add_parsers"]
 
 
-def _frame_registers(job, profile, prr_register):
-    """Vector-mode settings to trace the area's outline with the guide laser."""
+def _frame_registers(profile, prr_register):
+    """Vector-mode settings to walk the area's outline at (with the guide laser)."""
     pitch = max(1, round(profile.laser.spot_mm / 2 * profile.units_per_mm))
     return {"pitch": pitch, "pulses_per_point": 1, "laser_prr": prr_register,
-            "jump_delay": profile.jump_delay_frames(), "laser_power": 0, "guide": 1}
+            "jump_delay": profile.jump_delay_frames()}
 
 
 def _cmd_clean(args):
-    from ..client import ClientError
     from ..jobs.area import plan_area_job
     from ..jobs.plan import PlanError
-    from ..jobs.stream import JobAborted, JobStreamer
-    from ..jobs.vector_job import frame_segments
+    from ..jobs.stream import JobStreamer
     profile = profile_from(args)
     speed, power, prr = job_settings_values(args, profile)
     how = {"passes": args.passes, "duration_s": args.duration, "dose_j_cm2": args.dose}
@@ -53,17 +52,12 @@ def _cmd_clean(args):
     pulses = max(1, math.ceil(job.seconds * registers["laser_prr"] * 100))
     with board_link(args, profile) as (client, board):
         streamer = JobStreamer(client)
-        try:
+        with stopped_in_one_line():
             load_lens_table(client, profile, say)
             if args.frame:
-                if not profile.laser.guide:
-                    fail("the machine profile says there is no guide laser ([laser] guide)")
-                segments = frame_segments(job.bounds_mm, profile.field.size_mm, args.frame)
-                streamer.run_vector(segments, _frame_registers(job, profile,
-                                                               registers["laser_prr"]),
-                                    armed=False, timeout_s=1e4 if args.sim else 60)
-                say(f"framed the area {args.frame} time(s) with the guide laser; the laser "
-                    f"stayed off")
+                frame_job(streamer, profile, job.bounds_mm, args.frame,
+                          _frame_registers(profile, registers["laser_prr"]),
+                          timeout_s=1e4 if args.sim else 60, say=say, what="area")
                 return 0
             bar = progress_bar(pulses, "pulse")
             streamer.progress = lambda done: bar.update(done - bar.n)
@@ -73,10 +67,6 @@ def _cmd_clean(args):
                                            ready_timeout_s=1e4 if args.sim else 5)
             finally:
                 bar.close()
-        except JobAborted as error:
-            fail(f"job stopped, laser disarmed: {error}")
-        except (ClientError, OSError) as error:
-            fail(f"job stopped, laser disarm sent: the link failed: {error}")
     delivered = report.pulses / (registers["laser_prr"] * 100)
     say(f"done: {report.pulses} pulses ({delivered:.3f} s of emission, mean dose "
         f"{job.power_w * delivered / (args.area[0] * args.area[1] / 100):.3g} J/cm²); errors "

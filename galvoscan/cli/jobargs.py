@@ -5,11 +5,12 @@ import argparse
 import contextlib
 import sys
 
-from .args import baud, fail, number_in
+from .args import baud, fail, number_in, open_transport
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
-           "has_link", "pair_mm"]
+           "has_link", "pair_mm", "load_lens_table", "stopped_in_one_line", "frame_job",
+           "progress_bar"]
 
 
 def pair_mm(what):
@@ -68,7 +69,7 @@ def has_link(args, profile):
 @contextlib.contextmanager
 def board_link(args, profile):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after."""
-    from ..client import ClientError, FTDISPITransport, HostClient, SerialTransport
+    from ..client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
         from ..sim.board import SIM_TIMEOUT_S, PTYServer, SimulatedBoard
@@ -83,18 +84,9 @@ def board_link(args, profile):
             if server.error is not None:
                 fail(f"the simulated board stopped: {server.error}")
         return
-    port = args.port or (None if args.spi else profile.link.port)
-    spi = args.spi or (None if args.port else profile.link.spi)
-    timeout = args.timeout or profile.link.timeout_s
-    try:
-        if spi:
-            transport = FTDISPITransport(spi)
-        else:
-            transport = SerialTransport(port, baud=baud_rate, timeout=timeout)
-    except ClientError as error:
-        fail(error)
-    except Exception as error:      # serial.SerialException and the like
-        fail(f"cannot open {spi or port}: {error}")
+    transport = open_transport(port=args.port or (None if args.spi else profile.link.port),
+                               spi=args.spi or (None if args.port else profile.link.spi),
+                               baud=baud_rate, timeout=args.timeout or profile.link.timeout_s)
     with transport:
         yield HostClient(transport), None
 
@@ -111,6 +103,32 @@ def load_lens_table(client, profile, say):
         table = table.resampled(nodes)
     say(f"loading the lens correction table ({nodes} x {nodes} nodes) into the board")
     upload_table(client, table)
+
+
+@contextlib.contextmanager
+def stopped_in_one_line():
+    """A job the board stopped, or a link that failed, as one line and a non-zero exit (the
+    streamer has already sent arm = 0)."""
+    from ..client import ClientError
+    from ..jobs.stream import JobAborted
+    try:
+        yield
+    except JobAborted as error:
+        fail(f"job stopped, laser disarmed: {error}")
+    except (ClientError, OSError) as error:
+        fail(f"job stopped, laser disarm sent: the link failed: {error}")
+
+
+def frame_job(streamer, profile, bounds_mm, times, registers, *, timeout_s, say, what):
+    """Trace ``bounds_mm`` ``times`` times in vector mode with the guide laser on and the
+    laser never armed (``registers``: the vector settings to walk it with)."""
+    from ..jobs.vector_job import frame_segments
+    if not profile.laser.guide:
+        fail("the machine profile says there is no guide laser ([laser] guide)")
+    segments = frame_segments(bounds_mm, profile.field.size_mm, times)
+    streamer.run_vector(segments, dict(registers, guide=1, laser_power=0), armed=False,
+                        timeout_s=timeout_s)
+    say(f"framed the {what} {times} time(s) with the guide laser; the laser stayed off")
 
 
 def progress_bar(total, unit, *, disable=None):

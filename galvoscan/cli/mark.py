@@ -6,14 +6,16 @@ opened. ``--sim`` runs the job on the simulated board through the same link code
 ``--json`` reports what the scan head and the laser did.
 """
 
+import argparse
 import json
 import math
 import sys
 from pathlib import Path
 
 from .args import fail, image_file, int_in, number_in
-from .jobargs import (add_job_link_options, add_job_options, board_link, has_link,
-                      job_settings_values, load_lens_table, pair_mm, progress_bar)
+from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
+                      job_settings_values, load_lens_table, pair_mm, progress_bar,
+                      stopped_in_one_line)
 from .machine import add_machine_option, profile_from
 
 
@@ -27,16 +29,12 @@ def _hatch(text):
         spacing = float(parts[0])
         angle = float(parts[1]) if len(parts) == 2 else 0.0
     except (ValueError, IndexError):
-        raise argparse_error(f"--hatch must be SPACING[,ANGLE] (mm, degrees), not {text!r}")
+        raise argparse.ArgumentTypeError(f"--hatch must be SPACING[,ANGLE] (mm, degrees), not "
+                                         f"{text!r}")
     if len(parts) > 2 or not (0.001 <= spacing <= 100) or not math.isfinite(angle):
-        raise argparse_error(f"--hatch spacing must be from 0.001 to 100 mm, and the angle "
-                             f"a number of degrees, not {text!r}")
+        raise argparse.ArgumentTypeError(f"--hatch spacing must be from 0.001 to 100 mm, and "
+                                         f"the angle a number of degrees, not {text!r}")
     return spacing, angle
-
-
-def argparse_error(message):
-    import argparse
-    return argparse.ArgumentTypeError(message)
 
 
 def _plan(args, profile):
@@ -151,9 +149,7 @@ def _sim_report(board, job, placement, drawing, profile, report):
 
 
 def _cmd_mark(args):
-    from ..client import ClientError
-    from ..jobs.stream import JobAborted, JobStreamer
-    from ..jobs.vector_job import frame_segments
+    from ..jobs.stream import JobStreamer
     profile = profile_from(args)
     job, placement, drawing = _plan(args, profile)
     speed, power, prr = job_settings_values(args, profile)
@@ -177,27 +173,17 @@ def _cmd_mark(args):
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     with board_link(args, profile) as (client, board):
-        bar = progress_bar(len(job.segments), "seg")
+        bar = progress_bar(None if args.frame else len(job.segments), "seg")
         streamer = JobStreamer(client, progress=bar.update)
         try:
-            load_lens_table(client, profile, say)
-            if args.frame:
-                if not profile.laser.guide:
-                    fail("the machine profile says there is no guide laser ([laser] guide)")
-                segments = frame_segments(job.bounds_mm, profile.field.size_mm, args.frame)
-                bar.reset(total=len(segments))
-                registers = dict(job.registers, guide=1, laser_power=0)
-                report = streamer.run_vector(segments, registers, armed=False,
-                                             timeout_s=timeout)
-                say(f"framed the job {args.frame} time(s) with the guide laser; the laser "
-                    f"stayed off")
-                return 0
-            report = streamer.run_vector(job.segments, job.registers, timeout_s=timeout,
-                                         ready_timeout_s=timeout)
-        except JobAborted as error:
-            fail(f"job stopped, laser disarmed: {error}")
-        except (ClientError, OSError) as error:
-            fail(f"job stopped, laser disarm sent: the link failed: {error}")
+            with stopped_in_one_line():
+                load_lens_table(client, profile, say)
+                if args.frame:
+                    frame_job(streamer, profile, job.bounds_mm, args.frame, job.registers,
+                              timeout_s=timeout, say=say, what="job")
+                    return 0
+                report = streamer.run_vector(job.segments, job.registers, timeout_s=timeout,
+                                             ready_timeout_s=timeout)
         finally:
             bar.close()
         counters = report.counters

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from ..analysis.galvo import FRAME_PERIOD
 from ..analysis.patterns import ScanHead, spiral_amplitude, spiral_dwell_for_speed, spiral_frames
 from ..gateware.host.regmap import BY_NAME, Mode
+from ..gateware.points import FIELD_CENTRE
 from ..gateware.sources.spiral_table import SpiralTable
 from .plan import PlanError
 
@@ -23,7 +24,6 @@ __all__ = ["AreaJob", "plan_area_job", "PATTERNS"]
 
 
 PATTERNS = ("spiral", "raster")
-_CENTRE = 32768
 
 
 @dataclass
@@ -91,13 +91,13 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
         if dwell > BY_NAME["dwell"].high:
             raise PlanError(f"{speed_mm_s:g} mm/s is too slow for the spiral on this area")
         frames = spiral_frames(table, dwell=dwell, amp=amp,
-                               centre=(_CENTRE + _units(head, cx), _CENTRE + _units(head, cy)))
+                               centre=(FIELD_CENTRE + _units(head, cx), FIELD_CENTRE + _units(head, cy)))
         steps = [max(abs(b - a) for a, b in zip(axis, axis[1:])) for axis in (frames.x, frames.y)]
         # Each point is held ``dwell`` frames: the axis speed is a step over that time.
         built_speed = float(head.mm(max(steps))) / (dwell * FRAME_PERIOD)
         registers.update(mode=Mode.SPIRAL.value, dwell=dwell, amp_x=amp[0], amp_y=amp[1],
-                         center_x=_CENTRE + _units(head, cx),
-                         center_y=_CENTRE + _units(head, cy))
+                         center_x=FIELD_CENTRE + _units(head, cx),
+                         center_y=FIELD_CENTRE + _units(head, cy))
         pass_frames = len(frames.x)
     else:
         step = _units(head, speed_mm_s * FRAME_PERIOD)
@@ -105,7 +105,7 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
         if not 1 <= step <= BY_NAME["ras_step"].high:
             raise PlanError(f"{speed_mm_s:g} mm/s is under one galvo unit a frame: too slow "
                             f"for the raster")
-        corner = (_CENTRE + _units(head, bounds[0]), _CENTRE + _units(head, bounds[1]))
+        corner = (FIELD_CENTRE + _units(head, bounds[0]), FIELD_CENTRE + _units(head, bounds[1]))
         size = (_units(head, width), _units(head, height))
         # Lines one spacing apart, each ``ceil(width / step)`` frames and its end point.
         pass_frames = (size[1] // spacing + 1) * (math.ceil(size[0] / step) + 1)

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from ..gateware.points import FIELD_CENTRE, FIELD_MAX
 from .speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
 
 
@@ -21,8 +22,8 @@ __all__ = ["PlanError", "Placement", "place", "hatch", "order_paths", "Pitch", "
            "estimate_seconds", "jump_mark_lengths", "to_galvo", "from_galvo", "field_check"]
 
 
-CENTRE = 32768
-UNITS = 65536
+CENTRE = FIELD_CENTRE
+UNITS = FIELD_MAX + 1
 
 
 class PlanError(ValueError):

@@ -16,15 +16,17 @@ caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected`
 import time
 from dataclasses import dataclass, field
 
-from ..client import ClientError
 from ..gateware.host.regmap import BY_NAME, Mode, Status, VectorOp
 
 
-__all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS"]
+__all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
+           "DEFAULT_BATCH"]
 
 
 #: Segments the board's vector queue holds.
 QUEUE_DEPTH = 512
+#: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
+DEFAULT_BATCH = 128
 #: The board's counters a job reports, read before and after.
 COUNTERS = ("vec_underruns", "vec_stalls", "vec_rejected", "errors")
 _COUNTER_TOP = 0xFFFF
@@ -91,7 +93,7 @@ class JobStreamer:
         Called with the number of segments taken, as they are.
     """
 
-    def __init__(self, board, *, batch=128, poll_s=0.02, progress=None):
+    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None):
         if not 1 <= batch <= QUEUE_DEPTH:
             raise ValueError(f"batch must be from 1 to {QUEUE_DEPTH}, not {batch!r}")
         self.board = board
@@ -219,33 +221,23 @@ class JobStreamer:
             start()
         return sent
 
-    def run_vector(self, segments, registers, *, ready_timeout_s=5.0, timeout_s=60.0,
-                   armed=True):
-        """A whole vector job: checks, parameters, arm, stream, wait, disarm, report.
+    def _start(self, *, armed, ready_timeout_s):
+        """Arm (unless ``armed`` is false), wait out the MO lead, run."""
+        if armed:
+            self.board.write("arm", 1)
+            self.wait_ready(ready_timeout_s)
+        self.board.write("run", 1)
 
-        ``registers`` are written after ``mode = vector`` and ``run = 0`` (pitch, pulses per
-        point, jump delay, power, PRR …). With ``armed`` false the job runs with the laser
-        off (framing with the guide laser)."""
+    def _job(self, body):
+        """What every job does around its ``body()`` (which returns the segments it sent):
+        refuse a board not ready, count, disarm however it ends, report the counters' rise."""
         started = time.monotonic()
-        segments = list(segments)
-        if segments and segments[-1][0] == "mark":
-            # End on a jump (to where the last mark ends: no move): the board counts a mark
-            # that finds the queue empty as an underrun, and a job's end is none.
-            segments.append(("jump", *segments[-1][1:]))
         self.check_ready()
         before = self.counters()
         self._count_pulses()
+        first = self.pulses
         try:
-            self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
-
-            def start():
-                if armed:
-                    self.board.write("arm", 1)
-                    self.wait_ready(ready_timeout_s)
-                self.board.write("run", 1)
-
-            sent = self.stream(segments, start=start, timeout_s=timeout_s)
-            self.wait_idle(timeout_s)
+            sent = body()
         except BaseException:
             self.disarm()
             raise
@@ -253,23 +245,37 @@ class JobStreamer:
         after = self.counters()
         self._count_pulses()
         return StreamReport(
-            segments=sent, pulses=self.pulses, seconds=time.monotonic() - started,
+            segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
 
+    def run_vector(self, segments, registers, *, ready_timeout_s=5.0, timeout_s=60.0,
+                   armed=True):
+        """A whole vector job: checks, parameters, arm, stream, wait, disarm, report.
+
+        ``registers`` are written after ``mode = vector`` and ``run = 0`` (pitch, pulses per
+        point, jump delay, power, PRR …). With ``armed`` false the job runs with the laser
+        off (framing with the guide laser)."""
+        segments = list(segments)
+        if segments and segments[-1][0] == "mark":
+            # End on a jump (to where the last mark ends: no move): the board counts a mark
+            # that finds the queue empty as an underrun, and a job's end is none.
+            segments.append(("jump", *segments[-1][1:]))
+
+        def body():
+            self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
+            sent = self.stream(segments, timeout_s=timeout_s, start=lambda: self._start(
+                armed=armed, ready_timeout_s=ready_timeout_s))
+            self.wait_idle(timeout_s)
+            return sent
+        return self._job(body)
 
     def run_area(self, registers, *, pulses, timeout_s, ready_timeout_s=5.0):
         """A spiral or raster job: set up, arm, run until the laser has fired ``pulses``
         pulses (the board's own clock: this works on a simulated board too), disarm."""
-        started = time.monotonic()
-        self.check_ready()
-        before = self.counters()
-        self._count_pulses()
-        first = self.pulses
-        try:
+        def body():
+            first = self.pulses
             self.setup(registers)
-            self.board.write("arm", 1)
-            self.wait_ready(ready_timeout_s)
-            self.board.write("run", 1)
+            self._start(armed=True, ready_timeout_s=ready_timeout_s)
             deadline = time.monotonic() + timeout_s
             while self.pulses - first < pulses:
                 self.status()
@@ -279,17 +285,5 @@ class JobStreamer:
                     raise JobAborted(f"the laser fired {self.pulses - first} of {pulses} "
                                      f"pulses in {timeout_s:g} s")
                 time.sleep(self.poll_s)
-        except BaseException:
-            self.disarm()
-            raise
-        self.disarm()
-        after = self.counters()
-        self._count_pulses()
-        return StreamReport(
-            segments=0, pulses=self.pulses - first, seconds=time.monotonic() - started,
-            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
-
-
-def client_errors():
-    """The exceptions a lost or confused link raises (for callers to catch in one place)."""
-    return (ClientError, OSError)
+            return 0
+        return self._job(body)

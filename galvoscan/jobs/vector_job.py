@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..gateware.host.regmap import BY_NAME
+from ..gateware.points import FIELD_CENTRE
 from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, hatch,
                    jump_mark_lengths, order_paths, place, to_galvo)
 
@@ -24,9 +25,12 @@ _STALL_FREE_POINTS_HZ = 12e6 / 140
 _FRAMES_PER_SEGMENT, _BYTES_PER_FRAME, _BITS_PER_BYTE = 3, 4, 10
 
 
-def link_segments_per_s(baud, *, batch=128):
+def link_segments_per_s(baud, *, batch=None):
     """Segments a second the serial link carries at ``baud``, with the streamer's read of
-    ``fifo_free`` (a request and its answer) after every ``batch`` segments."""
+    ``fifo_free`` (a request and its answer) after every ``batch`` segments (default: the
+    streamer's)."""
+    from .stream import DEFAULT_BATCH
+    batch = batch or DEFAULT_BATCH
     frames = _FRAMES_PER_SEGMENT + 2 / batch
     return baud / _BITS_PER_BYTE / _BYTES_PER_FRAME / frames
 
@@ -123,7 +127,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
     table = profile.correction_table()
     _check_corrected(segments, table)
     longest_jump_mm = 0.0
-    here = (32768, 32768)
+    here = (FIELD_CENTRE, FIELD_CENTRE)
     for op, x, y in segments:
         if op == "jump":
             longest_jump_mm = max(longest_jump_mm,
@@ -163,7 +167,7 @@ def plan_job_file(segments, settings, profile):
     """A ``.job`` (galvo units, already placed and ordered) for this machine."""
     from .plan import from_galvo
     paths, current = [], None
-    here = (32768, 32768)
+    here = (FIELD_CENTRE, FIELD_CENTRE)
     for op, x, y in segments:
         if op == "mark":
             if current is None:

@@ -10,7 +10,6 @@ anything timed in seconds on the host (a cleaning run's duration) is counted in 
 own time (its laser pulses) rather than by the host's clock.
 """
 
-import bisect
 import os
 import select
 import threading
@@ -21,7 +20,7 @@ from amaranth.sim import Simulator
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
 from .link import Timed
-from .xy2_receiver import XY2Receiver
+from .xy2_receiver import XY2Receiver, frame_of_each_pulse
 
 
 __all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SIM_TIMEOUT_S"]
@@ -168,18 +167,13 @@ class SimulatedBoard:
     def points(self):
         """``(x, y, pulses, frames, cycle, first_pulse)`` per run of frames at one position,
         from power-up: ``cycle`` is the clock on which the run's first frame was complete,
-        ``first_pulse`` that of its first laser pulse (None without one).
-
-        Frame k is in force from the SYNC rise that starts frame k + 1 (the PHY takes the next
-        point as it starts a frame); a pulse on that very clock still falls on frame k - 1."""
+        ``first_pulse`` that of its first laser pulse (None without one)."""
         counts = [0] * len(self.frames)
         first = [None] * len(self.frames)
-        for cycle in self.pulses:
-            k = bisect.bisect_left(self.sync_rises, cycle) - 2
-            if 0 <= k < len(counts):
-                counts[k] += 1
-                if first[k] is None:
-                    first[k] = cycle
+        for k, cycle in frame_of_each_pulse(self.sync_rises, self.pulses, len(self.frames)):
+            counts[k] += 1
+            if first[k] is None:
+                first[k] = cycle
         points = []
         for (cycle, x, y), n, pulse in zip(self.frames, counts, first):
             if points and points[-1][:2] == [x, y]:

@@ -7,7 +7,6 @@ the point the head holds when they fire. Simulated at the board's 12 MHz (6 cloc
 bit), so the timing is the board's.
 """
 
-import bisect
 import contextlib
 
 from amaranth.sim import Simulator
@@ -17,7 +16,7 @@ from ..gateware.host.regmap import BY_NAME, Status
 from ..gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
 from ..job import OPS
 from .link import Timed, spi_transfer
-from .xy2_receiver import XY2Receiver
+from .xy2_receiver import XY2Receiver, frame_of_each_pulse
 
 
 __all__ = ["JobResult", "replay_job"]
@@ -155,11 +154,7 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
     with sim.write_vcd(vcd) if vcd else contextlib.nullcontext():
         sim.run()
 
-    # Frame k is in force from the SYNC rise that starts frame k + 1; a pulse on that very
-    # clock still falls on frame k - 1's position.
     counts = [0] * len(frame_ends)
-    for cycle in pulses:
-        k = bisect.bisect_left(sync_rises, cycle) - 2
-        if 0 <= k < len(counts):
-            counts[k] += 1
+    for k, _ in frame_of_each_pulse(sync_rises, pulses, len(frame_ends)):
+        counts[k] += 1
     return JobResult([(x, y, n) for (_, x, y), n in zip(frame_ends, counts)], clk_freq)

@@ -4,10 +4,11 @@ Used by ``galvoscan sim`` to turn the simulated wires into positions, exactly as
 would read them, with every frame's parity and control bits checked.
 """
 
+import bisect
 from dataclasses import dataclass
 
 
-__all__ = ["XY2Frame", "XY2Receiver", "XY2ProtocolError"]
+__all__ = ["XY2Frame", "XY2Receiver", "XY2ProtocolError", "frame_of_each_pulse"]
 
 
 class XY2ProtocolError(ValueError):
@@ -73,3 +74,18 @@ class XY2Receiver:
                 f"{axis} frame {word:05x} has control bits {word >> 17:03b}, "
                 f"not {self.control_bits:03b}")
         return (word >> 1) & 0xFFFF
+
+
+def frame_of_each_pulse(sync_rises, pulses, frames):
+    """``[(frame, clock)]``: the frame whose position each laser pulse fell on, of ``frames``
+    complete frames, from the clocks of the SYNC rises and of the pulses.
+
+    Frame k is in force from the SYNC rise that starts frame k + 1 (the PHY takes the next
+    point as it starts a frame); a pulse on that very clock still falls on frame k - 1.
+    Pulses before the first frame or after the last complete one are left out."""
+    placed = []
+    for cycle in pulses:
+        k = bisect.bisect_left(sync_rises, cycle) - 2
+        if 0 <= k < frames:
+            placed.append((k, cycle))
+    return placed
