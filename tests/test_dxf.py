@@ -1,0 +1,194 @@
+"""The DXF reader (galvoscan/jobs/dxf.py): entities with known geometry, checked against their
+equations and the curves written out in tests/drawings.py, not against ezdxf's own evaluation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from drawings import bezier, chord_midpoints, distance_to_curve, load_dxf, new_dxf
+
+
+def test_dxf_line_circle_arc(tmp_path):
+    tol = 0.01
+    doc, msp = new_dxf()
+    msp.add_line((1, 2), (11, 2))
+    msp.add_circle((1, 2), 5)
+    msp.add_arc((0, 0), 10, 0, 90)
+    line, circle, arc = load_dxf(tmp_path, doc, tolerance_mm=tol).paths
+    np.testing.assert_allclose(line, [[1, 2], [11, 2]])
+    r = np.hypot(circle[:, 0] - 1, circle[:, 1] - 2)
+    np.testing.assert_allclose(r, 5, rtol=1e-12)
+    assert np.all(np.hypot(*(chord_midpoints(circle) - (1, 2)).T) >= 5 - tol)
+    assert len(circle) - 1 <= 2 * math.pi / math.acos(1 - tol / 5) + 8
+    np.testing.assert_allclose(np.hypot(*arc.T), 10, rtol=1e-12)
+    np.testing.assert_allclose(arc[[0, -1]], [[10, 0], [0, 10]], atol=1e-9)
+    assert np.all(arc >= -1e-9)             # the first quadrant only
+    assert np.all(np.hypot(*chord_midpoints(arc).T) >= 10 - tol)
+
+
+def test_dxf_closed_flags(tmp_path):
+    doc, msp = new_dxf()
+    msp.add_line((0, 0), (1, 0))
+    msp.add_circle((0, 0), 1)
+    msp.add_lwpolyline([(0, 0), (1, 0), (1, 1)], close=True)
+    msp.add_lwpolyline([(0, 0), (1, 0), (1, 1)])
+    msp.add_ellipse((0, 0), major_axis=(2, 0), ratio=0.5)
+    msp.add_ellipse((0, 0), major_axis=(2, 0), ratio=0.5, start_param=0, end_param=1)
+    msp.add_spline().set_closed([(0, 0, 0), (4, 0, 0), (4, 4, 0), (0, 4, 0)])
+    d = load_dxf(tmp_path, doc)
+    assert d.closed == (False, True, True, False, True, False, True)
+    for path, closed in zip(d.paths, d.closed):
+        assert np.array_equal(path[0], path[-1]) == closed
+
+
+def test_dxf_ellipse_on_the_ellipse(tmp_path):
+    tol = 0.01
+    doc, msp = new_dxf()
+    msp.add_ellipse((3, 4), major_axis=(6, 8), ratio=0.5)    # a = 10, b = 5, turned atan2(8, 6)
+    (p,) = load_dxf(tmp_path, doc, tolerance_mm=tol).paths
+    turn = math.atan2(8, 6)
+    t = np.linspace(0, 2 * np.pi, 40001)
+    curve = np.column_stack([3 + 10 * np.cos(t) * math.cos(turn) - 5 * np.sin(t) * math.sin(turn),
+                             4 + 10 * np.cos(t) * math.sin(turn) + 5 * np.sin(t) * math.cos(turn)])
+    assert distance_to_curve(p, curve).max() < 1e-6
+    assert distance_to_curve(chord_midpoints(p), curve).max() <= tol + 1e-6
+
+
+def test_dxf_closed_spline_is_the_periodic_b_spline(tmp_path):
+    """ezdxf's own flattening of a closed (periodic) spline loops far outside it; a uniform
+    cubic B-spline passes through (P[i] + 4 P[i+1] + P[i+2]) / 6 and stays in the hull."""
+    tol = 0.01
+    controls = np.array([(0, 0), (4, 0), (4, 4), (0, 4)], dtype=float)
+    doc, msp = new_dxf()
+    msp.add_spline().set_closed([(x, y, 0) for x, y in controls])
+    d = load_dxf(tmp_path, doc, tolerance_mm=tol)
+    (p,) = d.paths
+    assert d.closed == (True,)
+    assert p.min() >= -1e-9 and p.max() <= 4 + 1e-9
+    for i in range(4):
+        knot_point = (controls[i] + 4 * controls[(i + 1) % 4] + controls[(i + 2) % 4]) / 6
+        assert distance_to_curve([knot_point], p)[0] <= tol
+
+
+def test_dxf_bulge_polyline(tmp_path):
+    """(0,0) → (10,0) bulge +1 (a counter-clockwise half circle, below the chord), → (10,10),
+    → (0,10) bulge −1 (clockwise, also below its chord: into the square), closed."""
+    tol = 0.01
+    doc, msp = new_dxf()
+    msp.add_lwpolyline([(0, 0, 1), (10, 0, 0), (10, 10, -1), (0, 10, 0)], format="xyb",
+                       close=True)
+    (p,) = load_dxf(tmp_path, doc, tolerance_mm=tol).paths
+    on_bottom = np.isclose(np.hypot(p[:, 0] - 5, p[:, 1]), 5) & (p[:, 1] <= 1e-9)
+    on_top = np.isclose(np.hypot(p[:, 0] - 5, p[:, 1] - 10), 5) & (p[:, 1] <= 10 + 1e-9)
+    on_sides = np.isclose(p[:, 0], 0) | np.isclose(p[:, 0], 10)
+    assert np.all(on_bottom | on_top | on_sides)
+    # In order and without doubling back: the length is two half circles and two sides.
+    length = np.sum(np.hypot(*np.diff(p, axis=0).T))
+    assert 20 + 10 * math.pi - 0.1 <= length <= 20 + 10 * math.pi
+    for corner in [(0, 0), (10, 0), (10, 10), (0, 10)]:
+        assert np.min(np.hypot(*(p - corner).T)) < 1e-9
+
+
+def test_dxf_spline_on_its_bezier_and_through_fit_points(tmp_path):
+    tol = 0.01
+    controls = [(0, 0), (0, 40), (60, 40), (60, 0)]
+    fit = [(0, 0), (10, 5), (20, -3), (30, 8), (40, 0)]
+    doc, msp = new_dxf()
+    msp.add_open_spline(controls, degree=3)     # clamped, one span: the cubic Bézier
+    msp.add_spline(fit)
+    cubic, through = load_dxf(tmp_path, doc, tolerance_mm=tol).paths
+    curve = bezier(controls, np.linspace(0, 1, 20001))
+    assert distance_to_curve(cubic, curve).max() < 1e-4
+    assert distance_to_curve(chord_midpoints(cubic), curve).max() <= tol + 1e-4
+    dense = np.concatenate([np.linspace(a, b, 200) for a, b in zip(through[:-1], through[1:])])
+    assert distance_to_curve(np.array(fit, float), dense).max() <= tol
+
+
+def test_dxf_insert_scaled_rotated_and_nested(tmp_path):
+    doc, msp = new_dxf()
+    square = doc.blocks.new("SQUARE")
+    square.add_lwpolyline([(0, 0), (10, 0), (10, 10), (0, 10)], close=True)
+    square.add_line((0, 0), (5, 0))
+    outer = doc.blocks.new("OUTER")
+    outer.add_blockref("SQUARE", (20, 0))
+    msp.add_blockref("SQUARE", (100, 50), dxfattribs={"xscale": 2, "yscale": 2, "rotation": 90})
+    msp.add_blockref("OUTER", (0, 0), dxfattribs={"xscale": 3, "yscale": 3})
+    d = load_dxf(tmp_path, doc)
+    assert d.closed == (True, False, True, False)
+    turned, line, nested, nested_line = d.paths
+    # (x, y) → 2·(−y, x) + (100, 50)
+    assert {tuple(np.round(q, 9)) for q in turned} == {(100, 50), (100, 70), (80, 70), (80, 50)}
+    np.testing.assert_allclose(line, [[100, 50], [100, 60]], atol=1e-9)
+    assert {tuple(np.round(q, 9)) for q in nested} == {(60, 0), (90, 0), (90, 30), (60, 30)}
+    np.testing.assert_allclose(nested_line, [[60, 0], [75, 0]], atol=1e-9)
+
+
+def test_dxf_insert_non_uniform_scale_keeps_shapes_closed(tmp_path):
+    """A circle in a block stretched 2 × 1 and turned 30° is an ellipse, still closed; a
+    closed bulge polyline stays one closed path. The block's base point is honoured."""
+    tol = 0.01
+    doc, msp = new_dxf()
+    block = doc.blocks.new("B", base_point=(1, 1))
+    block.add_circle((1, 1), 3)
+    block.add_lwpolyline([(1, 1, 1), (11, 1, 0), (11, 11, 0)], format="xyb", close=True)
+    msp.add_blockref("B", (50, 50), dxfattribs={"xscale": 2, "yscale": 1, "rotation": 30})
+    d = load_dxf(tmp_path, doc, tolerance_mm=tol)
+    assert d.closed == (True, True)
+    ellipse, polyline = d.paths
+    turn = math.radians(30)
+    # Back into block coordinates (relative to the base point), then the circle's equation.
+    back = (ellipse - 50) @ np.array([[math.cos(turn), -math.sin(turn)],
+                                      [math.sin(turn), math.cos(turn)]])
+    np.testing.assert_allclose(np.hypot(back[:, 0] / 2, back[:, 1]), 3, rtol=1e-9)
+    mid = (chord_midpoints(ellipse) - 50) @ np.array([[math.cos(turn), -math.sin(turn)],
+                                                       [math.sin(turn), math.cos(turn)]])
+    t = np.linspace(0, 2 * np.pi, 40001)
+    curve = np.column_stack([6 * np.cos(t), 3 * np.sin(t)])
+    assert distance_to_curve(mid, curve).max() <= tol
+    assert np.min(np.hypot(*(polyline - (50, 50)).T)) < 1e-9      # the base point's corner
+
+
+def test_dxf_minsert_grid(tmp_path):
+    doc, msp = new_dxf()
+    doc.blocks.new("DOT").add_line((0, 0), (1, 0))
+    msp.add_blockref("DOT", (0, 0)).grid(size=(2, 3), spacing=(10, 20))
+    starts = {tuple(np.round(p[0], 9)) for p in load_dxf(tmp_path, doc).paths}
+    assert starts == {(x, y) for x in (0, 20, 40) for y in (0, 10)}
+
+
+@pytest.mark.parametrize("insunits, mm", [(1, 25.4), (2, 304.8), (4, 1.0), (5, 10.0),
+                                          (6, 1000.0)])
+def test_dxf_units(tmp_path, insunits, mm):
+    doc, msp = new_dxf(units=insunits)
+    msp.add_line((0, 0), (1, 2))
+    (p,) = load_dxf(tmp_path, doc).paths
+    np.testing.assert_allclose(p, [[0, 0], [mm, 2 * mm]], rtol=1e-15)
+
+
+def test_dxf_unitless_is_mm_with_a_note(tmp_path):
+    doc, msp = new_dxf(units=0)
+    msp.add_line((0, 0), (7, 0))
+    d = load_dxf(tmp_path, doc)
+    np.testing.assert_allclose(d.paths[0], [[0, 0], [7, 0]])
+    assert d.notes == ("DXF has no units ($INSUNITS 0): taken as mm",)
+
+
+def test_dxf_skipped_entities_and_hidden_layers(tmp_path):
+    doc, msp = new_dxf()
+    msp.add_line((0, 0), (10, 0))
+    msp.add_text("A")
+    msp.add_text("B")
+    msp.add_mtext("C")
+    hatch = msp.add_hatch()
+    hatch.paths.add_polyline_path([(0, 0), (1, 0), (1, 1)])
+    msp.add_point((3, 3))
+    doc.layers.add("OFF").off()
+    doc.layers.add("FROZEN").freeze()
+    msp.add_line((0, 0), (0, 10), dxfattribs={"layer": "OFF"})
+    msp.add_circle((0, 0), 3, dxfattribs={"layer": "FROZEN"})
+    d = load_dxf(tmp_path, doc)
+    assert len(d.paths) == 1
+    assert set(d.skipped) == {"3 text entities (explode text to lines)", "1 HATCH entity",
+                              "1 POINT entity", "2 entities on a hidden layer"}
+
