@@ -21,7 +21,7 @@ STATUS = 0x00           # README register table: reading status clears its stick
 class RegisterStub:
     """A few registers of each kind: (access, low, high, value). Answers the bus the way the
     RegisterBus docstring says: ``read_ok`` for a register, ``write_ok`` for a writable one with
-    the value in range, ``read_data`` its value (garbage for no register)."""
+    the value in range, ``read_data`` its value on the next clock (garbage for no register)."""
 
     def __init__(self):
         self.regs = {
@@ -92,6 +92,7 @@ def run_decoder(offers, *, ready=lambda clock: (1, 1)):
 
     async def bench(ctx):
         clock = 0
+        last_read = [0xBEEF]
 
         async def step(offered):
             nonlocal clock
@@ -102,7 +103,9 @@ def run_decoder(offers, *, ready=lambda clock: (1, 1)):
                                                        ctx.get(dut.bus.write_data))
             ctx.set(dut.bus.write_ok, write_ok)
             ctx.set(dut.bus.read_ok, read_ok)
-            ctx.set(dut.bus.read_data, read_data)
+            # The value read answers the address of the clock before (RegisterBus).
+            ctx.set(dut.bus.read_data, last_read[0])
+            last_read[0] = read_data
             # What crosses the edge.
             for link, (_, replies) in streams.items():
                 if ctx.get(replies.valid) and ctx.get(replies.ready):
@@ -135,6 +138,8 @@ def run_decoder(offers, *, ready=lambda clock: (1, 1)):
                     seen["taken"].append(link)
                     ctx.set(streams[link][0].valid, 0)
                     del waiting[link]
+            # A link's frames come at least 32 bits apart: never on the next clock.
+            await step([])
         for _ in range(4):
             await step([])
         seen["errors"] = ctx.get(dut.errors)

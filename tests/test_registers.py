@@ -166,8 +166,6 @@ def run(regfile, model, accesses, *, inputs=None):
                 ctx.set(getattr(regfile, f"{name}_ready"), queue_ready)
             read_ok, read_data = model.read(address)
             assert ctx.get(bus.read_ok) == read_ok, (address, data)
-            if read_ok:
-                assert ctx.get(bus.read_data) == read_data, (address, data)
             write_ok = model.write_ok(address, data, queue_ready)
             assert ctx.get(bus.write_ok) == write_ok, (address, data)
             # As the command decoder does: a write is offered only once it is known good.
@@ -180,6 +178,10 @@ def run(regfile, model, accesses, *, inputs=None):
                 assert ctx.get(getattr(regfile, f"{name}_push")) == pushed
             await ctx.tick()
             ctx.set(bus.write_en, 0)
+            # The value read comes on the clock after the address: what the register held
+            # before this clock's write.
+            if read_ok:
+                assert ctx.get(bus.read_data) == read_data, (address, data)
             for name in strobes:
                 assert ctx.get(getattr(regfile, name)) == (name in pulsed), name
             for name, value in model.held.items():

@@ -1,6 +1,6 @@
 """Command decoder: checks each frame and turns it into a register write or a read reply."""
 
-from amaranth.hdl import Cat, Const, Module, Mux
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -21,7 +21,8 @@ class CommandDecoder(wiring.Component):
     * for a write (address bit 7 clear): the register exists, is writable and the value is in
       its range; the register is written;
     * for a read (address bit 7 set): the register exists and the data field is zero; the
-      answer ``address, value, 0x64`` is sent back on the transport the request came from.
+      answer ``address, value, 0x64`` is sent back on the transport the request came from
+      (two clocks after the frame: the register file answers a clock after the address).
 
     Anything else changes nothing and adds one to :attr:`errors`, as does a read whose answer
     cannot be queued. One frame is decoded per clock; SPI goes first when both arrive together.
@@ -77,8 +78,15 @@ class CommandDecoder(wiring.Component):
         for reply in replies:
             with m.If(reply.ready):
                 m.d.sync += reply.valid.eq(0)
-        reply_free = Mux(from_spi, ~self.spi_replies.valid | self.spi_replies.ready,
-                         ~self.uart_replies.valid | self.uart_replies.ready)
+        # A read's answer comes off the register bus a clock after its address: the read is
+        # fetching (`fetch`) on that clock, and its link's reply is not free until it is sent.
+        fetch = Signal()
+        fetch_spi = Signal()
+        fetch_address = Signal(7)
+        reply_free = Mux(from_spi,
+                         (~self.spi_replies.valid | self.spi_replies.ready) & ~(fetch & fetch_spi),
+                         (~self.uart_replies.valid | self.uart_replies.ready) &
+                         ~(fetch & ~fetch_spi))
 
         write_ok = complete & ~is_read & self.bus.write_ok
         read_ok = complete & is_read & self.bus.read_ok & (data == 0) & reply_free
@@ -90,10 +98,15 @@ class CommandDecoder(wiring.Component):
                                 (address[0:7] == BY_NAME["status"].address)),
         ]
 
-        with m.If(valid & read_ok):
-            answer = Cat(Const(CHECK_BYTE, 8), self.bus.read_data, address[0:7], Const(0, 1))
+        m.d.sync += [
+            fetch.eq(valid & read_ok),
+            fetch_spi.eq(from_spi),
+            fetch_address.eq(address[0:7]),
+        ]
+        with m.If(fetch):
+            answer = Cat(Const(CHECK_BYTE, 8), self.bus.read_data, fetch_address, Const(0, 1))
             for index, reply in enumerate(replies):
-                with m.If(from_spi if index == 0 else ~from_spi):
+                with m.If(fetch_spi if index == 0 else ~fetch_spi):
                     m.d.sync += [reply.payload.eq(answer), reply.valid.eq(1)]
 
         with m.If(valid & ~(write_ok | read_ok) & (self.errors != 0xFFFF)):

@@ -1,7 +1,8 @@
 """The register file: state the host writes and reads, built from the register map."""
 
-from amaranth.hdl import Cat, Module
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .regmap import RegisterMap, register_map
@@ -22,7 +23,8 @@ class RegisterBus(wiring.Signature):
     write_ok : ``In(1)``
         ``address`` is a writable register and ``write_data`` is in its range.
     read_data : ``In(16)``
-        The register at ``address``, now.
+        The register at ``address``: what it held on the clock ``address`` was given, on the
+        clock after (read through a block RAM).
     read_ok : ``In(1)``
         ``address`` is a register.
     """
@@ -51,7 +53,9 @@ class RegisterFile(wiring.Component):
 
     A write is taken only if its value lies in the register's range (and, for a register with
     choices, such as ``mode``, is one of them); registers the map leaves out are unknown
-    addresses.
+    addresses. A read answers on the clock after the address: the registers that hold a value
+    are read back from a copy in block RAM (two RAMs, whatever the map), the read-only ones
+    from their inputs.
 
     Parameters
     ----------
@@ -88,6 +92,11 @@ class RegisterFile(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         bus = self.bus
+        held = [reg for reg in self.regmap if reg.access in ("rw", "queue")]
+
+        # --- writes -------------------------------------------------------------------------
+        # Written since the last reset, one bit per register that reads back what it holds.
+        written = Signal(len(held))
         for reg in self.regmap:
             if reg.access == "strobe":
                 m.d.sync += getattr(self, reg.name).eq(0)     # a pulse, unless written below
@@ -97,16 +106,14 @@ class RegisterFile(wiring.Component):
                     value = getattr(self, reg.name)
                     m.d.comb += bus.read_ok.eq(1)
                     if reg.access == "strobe":
-                        # Reads 0 (read_data's default); a write of 1 pulses the output on
-                        # the next clock (from a flip-flop: the decoder's checks stay off the
-                        # paths into whatever the strobe acts on).
+                        # A write of 1 pulses the output on the next clock (from a flip-flop:
+                        # the decoder's checks stay off the paths into whatever the strobe
+                        # acts on).
                         ok = bus.write_data <= reg.high
                         if reg.refusable:
                             ok &= getattr(self, f"{reg.name}_ready") | (bus.write_data == 0)
                         m.d.comb += bus.write_ok.eq(ok)
                         m.d.sync += value.eq(bus.write_en & ok & (bus.write_data == 1))
-                    else:
-                        m.d.comb += bus.read_data.eq(value)
                     if reg.access in ("rw", "queue"):
                         in_range = (bus.write_data >= reg.low) & (bus.write_data <= reg.high)
                         if reg.name in self.regmap.choices:
@@ -119,5 +126,45 @@ class RegisterFile(wiring.Component):
                                 bus.write_en & in_range)
                         m.d.comb += bus.write_ok.eq(in_range)
                         with m.If(bus.write_en & in_range):
-                            m.d.sync += value.eq(bus.write_data)
+                            m.d.sync += [value.eq(bus.write_data),
+                                         written[held.index(reg)].eq(1)]
+
+        # --- reads --------------------------------------------------------------------------
+        # What a register holds is read back from a copy in block RAM, written with it: a
+        # multiplexer over every register would take some 450 logic cells. Until a register is
+        # written after a reset (which the RAM does not see) its reset value is read, from a
+        # second block RAM.
+        depth = 2 ** len(bus.address)
+        m.submodules.copy = copy = Memory(shape=16, depth=depth, init=[0] * depth)
+        resets = [0] * depth
+        for reg in held:
+            resets[reg.address] = reg.reset
+        m.submodules.resets = reset_values = Memory(shape=16, depth=depth, init=resets)
+        copy_write = copy.write_port()
+        copy_read = copy.read_port()
+        reset_read = reset_values.read_port()
+        m.d.comb += [
+            copy_write.addr.eq(bus.address),
+            copy_write.data.eq(bus.write_data),
+            copy_read.addr.eq(bus.address),
+            reset_read.addr.eq(bus.address),
+        ]
+        # The read's source, chosen on the clock of the address: the RAMs (the copy once the
+        # register has been written), or a read-only register's input (a strobe or an unknown
+        # address reads 0).
+        from_ram = Signal()
+        from_copy = Signal()
+        direct = Signal(16)
+        m.d.sync += [from_ram.eq(0), direct.eq(0)]
+        with m.Switch(bus.address):
+            for reg in self.regmap:
+                with m.Case(reg.address):
+                    if reg.access in ("rw", "queue"):
+                        m.d.comb += copy_write.en.eq(bus.write_en & bus.write_ok)
+                        m.d.sync += [from_ram.eq(1),
+                                     from_copy.eq(written[held.index(reg)])]
+                    elif reg.access == "ro":
+                        m.d.sync += direct.eq(getattr(self, reg.name))
+        m.d.comb += bus.read_data.eq(
+            Mux(from_ram, Mux(from_copy, copy_read.data, reset_read.data), direct))
         return m
