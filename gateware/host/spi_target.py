@@ -36,7 +36,8 @@ class SPITarget(wiring.Component):
     cipo : ``Out(1)``
         Data to the host; driven all the time (a point-to-point link).
     frames : ``Out(stream.Signature(CommandFrame))``
-        One event per ``cs_n`` low period.
+        One event per ``cs_n`` low period, to be taken on the clock it is offered (the
+        command decoder always takes SPI frames at once).
     replies : ``In(stream.Signature(32))``
         Words for the host's next frame. Always ready: a newer reply replaces an older one
         that has not gone out yet.
@@ -71,6 +72,10 @@ class SPITarget(wiring.Component):
         sck_fall = ~sck & sck_q
 
         selected, bits, shift = self._selected, self._bits, self._shift
+        # The frame handed on is the assembly registers themselves (no copy: 38 logic cells).
+        # A next frame clears them a clock after this one is offered at the soonest, and the
+        # decoder takes an SPI frame on the clock it is offered.
+        m.d.comb += [self.frames.payload.word.eq(shift), self.frames.payload.bits.eq(bits)]
 
         pending = Signal(32)
         pending_valid = Signal()
@@ -100,8 +105,6 @@ class SPITarget(wiring.Component):
             # Frame end: hand it on, whatever its length.
             m.d.sync += [
                 selected.eq(0),
-                self.frames.payload.word.eq(shift),
-                self.frames.payload.bits.eq(bits),
                 self.frames.valid.eq(1),
                 self.cipo.eq(0),
             ]

@@ -44,7 +44,7 @@ class UARTCommandPort(wiring.Component):
     rx : ``In(1, init=1)``, tx : ``Out(1, init=1)``
         The serial lines, idle high.
     frames : ``Out(stream.Signature(CommandFrame))``
-        One event per frame or cut-short frame.
+        One event per frame or cut-short frame, to be taken within a character time.
     replies : ``In(stream.Signature(32))``
         Words to send, most significant byte first.
     """
@@ -84,9 +84,13 @@ class UARTCommandPort(wiring.Component):
         with m.If(self.frames.ready):
             m.d.sync += self.frames.valid.eq(0)
 
-        def hand_on(word, bits):
+        # The frame handed on is the gathering register itself (no copy: 32 logic cells):
+        # it holds until the next byte, a character time later, and the decoder takes a UART
+        # frame within two clocks.
+        m.d.comb += self.frames.payload.word.eq(word)
+
+        def hand_on(bits):
             m.d.sync += [
-                self.frames.payload.word.eq(word),
                 self.frames.payload.bits.eq(bits),
                 self.frames.valid.eq(1),
                 count.eq(0),
@@ -96,7 +100,7 @@ class UARTCommandPort(wiring.Component):
         with m.If(receiver.bytes.valid):
             m.d.sync += [word.eq(Cat(receiver.bytes.payload, word)), quiet.eq(0)]
             with m.If(count == 3):
-                hand_on(Cat(receiver.bytes.payload, word), Mux(broken, BROKEN, FRAME_BITS))
+                hand_on(Mux(broken, BROKEN, FRAME_BITS))
             with m.Else():
                 m.d.sync += count.eq(count + 1)
         with m.Elif(receiver.framing_error):
@@ -104,7 +108,7 @@ class UARTCommandPort(wiring.Component):
         with m.Elif(quiet != gap):
             m.d.sync += quiet.eq(quiet + 1)
         with m.Elif((count != 0) | broken):
-            hand_on(word, Mux(broken, BROKEN, count * 8))
+            hand_on(Mux(broken, BROKEN, count * 8))
 
         # --- replies → bytes ----------------------------------------------------------------
         m.submodules.queue = queue = SyncFIFOBuffered(width=32, depth=self.reply_depth)

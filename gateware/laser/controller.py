@@ -289,14 +289,15 @@ class LaserController(wiring.Component):
         if self.lookahead:
             m.d.sync += phase.eq(phase + increment)
             # The same phase `lookahead` clocks on: its rising edges lead the PRR clock's.
-            # lookahead × increment, as shifted copies of the increment (a constant multiplier
-            # in adders, leaving the DSPs to the scan path).
+            # (lookahead + 1) × increment, as shifted copies of the increment (a constant
+            # multiplier in adders, leaving the DSPs to the scan path): one increment more
+            # because `ahead` is a register, a clock behind the phase it is made from.
             ahead_offset = Signal(_PHASE_BITS)
-            terms = [increment << bit for bit in range(self.lookahead.bit_length())
-                     if self.lookahead >> bit & 1]
+            factor = self.lookahead + 1
+            terms = [increment << bit for bit in range(factor.bit_length()) if factor >> bit & 1]
             m.d.sync += ahead_offset.eq(sum(terms[1:], terms[0]))
             ahead = Signal(_PHASE_BITS)
-            m.d.sync += ahead.eq(phase + increment + ahead_offset)     # = phase, next clock
+            m.d.sync += ahead.eq(phase + ahead_offset)     # = phase, lookahead clocks on
             ahead_q = Signal()
             m.d.sync += ahead_q.eq(ahead[-1])
             m.d.comb += self.pulse_ahead.eq(ahead[-1] & ~ahead_q)

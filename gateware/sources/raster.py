@@ -86,15 +86,18 @@ class RasterSequencer(wiring.Component):
             m.d.sync += self.points.valid.eq(0)
 
         def clamp(value):
-            return Mux(value > FIELD_MAX, FIELD_MAX, value)[:16]
+            # A 17-bit sum: past the field's edge exactly when its top bit is set.
+            return Mux(value[16], FIELD_MAX, value[:16])
 
         with m.If(~self.run):
             m.d.sync += [started.eq(0), along.eq(0), across.eq(0), backwards.eq(0),
                          line_frames.eq(0), first_line.eq(1), self.laser.eq(0)]
         with m.Elif(self.frame_strobe):
-            position_along = Mux(backwards, along_length - along, along)
-            pos_x = clamp(self.x + Mux(self.along_y, across, position_along))
-            pos_y = clamp(self.y + Mux(self.along_y, position_along, across))
+            # `along` never passes the line's length, nor `across` the rectangle's other side
+            # (both are brought back below), so both fit 16 bits, and so do their differences.
+            position_along = Mux(backwards, along_length - along[:16], along[:16])[:16]
+            pos_x = clamp(self.x + Mux(self.along_y, across[:16], position_along))
+            pos_y = clamp(self.y + Mux(self.along_y, position_along, across[:16]))
             gated = ~first_line & (line_frames < self.turn_gate)
             m.d.sync += [
                 self.points.valid.eq(1),

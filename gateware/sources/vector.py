@@ -108,7 +108,9 @@ class VectorSequencer(wiring.Component):
             m.d.sync += slot_valid.eq(0)
 
         segment_valid = Signal()
-        m.d.comb += dda.segment.valid.eq(segment_valid)
+        # A segment ends where the sequencer stands once it has been queued (no copy).
+        m.d.comb += [dda.segment.valid.eq(segment_valid),
+                     dda.segment.payload.x1.eq(cur_x), dda.segment.payload.y1.eq(cur_y)]
         with m.If(dda.segment.ready):
             m.d.sync += segment_valid.eq(0)
 
@@ -136,8 +138,6 @@ class VectorSequencer(wiring.Component):
                         # was off.
                         m.d.sync += [
                             dda.segment.payload.x0.eq(cur_x), dda.segment.payload.y0.eq(cur_y),
-                            dda.segment.payload.x1.eq(command.x),
-                            dda.segment.payload.y1.eq(command.y),
                             segment_valid.eq(1),
                             cur_x.eq(command.x), cur_y.eq(command.y),
                             pen_down.eq(1),
