@@ -12,7 +12,8 @@
   default baud, into the simulated board (:mod:`.bench_sim`).
 * **Simulator**: system clocks simulated per second, and the full 8064-point spiral replay.
 * **Blocks**: the default build's LUTs and flip-flops block by block (:mod:`.utilisation`).
-* **Proofs**: the time of each proof and its cover.
+* **Proofs**: the time of each proof and its cover, and of all of them.
+* **Test suite** (``--suite CHECKOUT``): the README's test command's wall time and counts.
 
 Builds and proofs run two at a time beside the simulations (the machine's cores are shared,
 so the times are those of a busy machine, as in CI).
@@ -40,8 +41,9 @@ README_END = "<!-- end of galvoscan bench -->"
 #: Board configurations the bench builds: label → (board, build_bitstream keyword arguments).
 BUILDS = {
     "icebreaker": ("icebreaker", {}),
-    "icebreaker_all_modes": ("icebreaker", {"modes": ("spiral", "raster", "vector"),
-                                            "correction": None}),
+    # The same build placed from two other seeds: nextpnr's Fmax varies from seed to seed.
+    "icebreaker_seed2": ("icebreaker", {"seed": 2}),
+    "icebreaker_seed3": ("icebreaker", {"seed": 3}),
     "icebreaker_xy2_200": ("icebreaker", {"modes": ("spiral",), "clock": 24e6,
                                           "bit_rate": 4e6}),
     "icestick": ("icestick", {}),
@@ -93,8 +95,31 @@ def _versions():
     return found
 
 
-def run_bench(*, builds=True, proofs=True, replay=True, progress=None):
-    """Every figure, as a dict (see the module)."""
+#: The README's test command, as ``bench --suite`` runs it in a checkout.
+SUITE_COMMAND = ["-m", "pytest", "-W", "error", "-n", "auto", "--dist", "worksteal", "-q",
+                 "-p", "no:cacheprovider"]
+
+
+def suite_figures(checkout):
+    """Run the test suite of the galvoscan checkout at ``checkout`` with this interpreter, as
+    the README's test command does (without the install): wall seconds and the counts pytest
+    gives (``passed``, ``failed``, ``skipped``, …)."""
+    import re
+    import subprocess
+    import sys
+    started = time.monotonic()
+    proc = subprocess.run([sys.executable, *SUITE_COMMAND], cwd=checkout,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    seconds = time.monotonic() - started
+    last = (proc.stdout.strip().splitlines() or [""])[-1]
+    counts = {word: int(number) for number, word in re.findall(r"(\d+) (\w+)", last)
+              if word in ("passed", "failed", "skipped", "errors", "error", "xfailed")}
+    return {"seconds": round(seconds, 1), "exit": proc.returncode, **counts}
+
+
+def run_bench(*, builds=True, proofs=True, replay=True, suite=None, progress=None):
+    """Every figure, as a dict (see the module); ``suite``: a checkout whose test suite is
+    run and timed too, after everything else (it needs the machine to itself)."""
     from .formal.proofs import PROOFS
 
     def step(text):
@@ -134,6 +159,13 @@ def run_bench(*, builds=True, proofs=True, replay=True, progress=None):
                 result[kind][name] = figures
     # The default build's cells by block: {"top.vector.dda": {"luts": …, "ffs": …}, …}.
     result["blocks"] = result.pop("utilisation", {}).get("blocks", {})
+    if result.get("proofs"):
+        # What `galvoscan prove` costs in all: every proof's and cover's time, one after another.
+        result["proofs_s"] = round(sum(task["seconds"] for tasks in result["proofs"].values()
+                                       for task in tasks.values()), 1)
+    if suite is not None:
+        step("test suite")
+        result["suite"] = suite_figures(suite)
     result["bench_s"] = time.monotonic() - started
     return result
 
@@ -175,9 +207,22 @@ def table(result):
         rows.append(("default build by block (Yosys, hierarchy kept: LUT4s / flip-flops)",
                      ", ".join(f"{name.removeprefix('top.') or 'top'} {c['luts']} / {c['ffs']}"
                                for name, c in largest)))
+    seeds = [board["fmax_mhz"] for label, board in result.get("boards", {}).items()
+             if label == "icebreaker" or label.startswith("icebreaker_seed")]
+    if len(seeds) > 1:
+        rows.append((f"default build, lowest Fmax of {len(seeds)} placer seeds",
+                     f"{min(seeds):.1f} MHz"))
     for name, tasks in result.get("proofs", {}).items():
         rows.append((f"proof {name}", ", ".join(f"{task} {v['status']} {v['seconds']:.0f} s"
                                                 for task, v in tasks.items())))
+    if "proofs_s" in result:
+        rows.append(("every proof and cover, one after another", f"{result['proofs_s']:.0f} s"))
+    if "suite" in result:
+        suite = result["suite"]
+        counts = ", ".join(f"{suite[k]} {k}" for k in ("passed", "failed", "skipped", "errors")
+                           if suite.get(k))
+        rows.append(("test suite (the README's test command, on every core)",
+                     f"{suite['seconds'] / 60:.1f} min, {counts}"))
     rows.append(("whole bench", f"{result['bench_s'] / 60:.1f} min"))
     lines = ["| what | figure |", "|---|---|"]
     lines += [f"| {what} | {figure} |" for what, figure in rows]

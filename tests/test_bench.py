@@ -29,3 +29,41 @@ def test_bench_quick(capsys):
     assert stream["baud"] == 1_000_000 and stream["errors"] == 0
     assert 5000 <= 0.97 * 1_000_000 / 10 / 12 <= stream["segments_per_s"] < 1_000_000 / 10 / 12
     assert "boards" in result and result["boards"] == {}
+
+
+def test_suite_needs_a_checkout(tmp_path, capsys):
+    """``--suite`` names a checkout with tests: anything else is one line, before the run."""
+    import pytest
+    with pytest.raises(SystemExit) as stop:
+        main(["bench", "--quick", "--suite", str(tmp_path)])
+    message = str(stop.value.code)
+    assert "not a galvoscan checkout" in message and "\n" not in message
+
+
+def test_table_shows_seeds_proofs_and_suite():
+    """The README table's rows for the three placer seeds, all proofs and the suite, from
+    figures typed here."""
+    from galvoscan.bench import table
+    board = {"modes": ["spiral"], "correction_nodes": 17, "clock_mhz": 12, "bit_rate_mhz": 2,
+             "luts": 4900, "luts_available": 5280, "brams": 15, "dsps": 5, "meets_timing": True,
+             "build_s": 200}
+    result = {
+        "xy2_100": {"frames_per_s": 100000, "idle_clocks": 0},
+        "xy2_200": {"frames_per_s": 200000, "idle_clocks": 0},
+        "link": {f"{n}_{k}": 1.0 for n in ("spi", "uart")
+                 for k in ("frames_per_s", "latency_us", "latency_max_us")},
+        "boards": {"icebreaker": {**board, "fmax_mhz": 25.0},
+                   "icebreaker_seed2": {**board, "fmax_mhz": 24.2},
+                   "icebreaker_seed3": {**board, "fmax_mhz": 26.0}},
+        "proofs": {"a": {"prove": {"status": "PASS", "seconds": 10.0}},
+                   "b": {"prove": {"status": "PASS", "seconds": 5.0},
+                         "cover": {"status": "PASS", "seconds": 20.0}}},
+        "proofs_s": 35.0,
+        "suite": {"seconds": 600.0, "passed": 800, "skipped": 2},
+        "bench_s": 60,
+    }
+    text = table(result)
+    assert "| default build, lowest Fmax of 3 placer seeds | 24.2 MHz |" in text
+    assert "| every proof and cover, one after another | 35 s |" in text
+    assert "| test suite (the README's test command, on every core) | 10.0 min, 800 passed, " \
+           "2 skipped |" in text

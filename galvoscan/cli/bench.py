@@ -25,7 +25,10 @@ def _cmd_bench(args):
         if README_START not in text or README_END not in text:
             fail(f"{args.readme} has no benchmark section to rewrite (the lines "
                  f"{README_START!r} … {README_END!r})")
-    result = run_bench(builds=full, proofs=full, replay=full, progress=progress)
+    if args.suite is not None and not (Path(args.suite) / "tests").is_dir():
+        fail(f"--suite {args.suite}: not a galvoscan checkout (it has no tests folder)")
+    result = run_bench(builds=full, proofs=full, replay=full, suite=args.suite,
+                       progress=progress)
     if args.record:
         Path(args.record).write_text(json.dumps(result, indent=2) + "\n")
     if args.readme:
@@ -57,6 +60,9 @@ def add_parsers(commands):
     bench.add_argument("--record", type=output_file, metavar="FILE",
                        help="also write the figures as JSON to FILE (the README's are in "
                             "docs/bench.json)")
+    bench.add_argument("--suite", metavar="CHECKOUT",
+                       help="also run and time the test suite of this galvoscan checkout (the "
+                            "README's test command, after everything else)")
     bench.add_argument("--readme", metavar="FILE",
                        help="rewrite the benchmark section of this README with the figures")
     bench.set_defaults(run=_cmd_bench)
