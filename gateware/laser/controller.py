@@ -289,13 +289,15 @@ class LaserController(wiring.Component):
         if self.lookahead:
             m.d.sync += phase.eq(phase + increment)
             # The same phase `lookahead` clocks on: its rising edges lead the PRR clock's.
-            # (lookahead + 1) × increment, as shifted copies of the increment (a constant
-            # multiplier in adders, leaving the DSPs to the scan path): one increment more
-            # because `ahead` is a register, a clock behind the phase it is made from.
+            # (lookahead + 1) × increment (one increment more because `ahead` is a register,
+            # a clock behind the phase it is made from), as prr × a constant: on the UP5K two
+            # DSP blocks rather than a hundred logic cells of shifted adds.
+            # (From prr a clock late, so that it follows a new prr on the clock the increment
+            # does.)
+            prr_q = Signal.like(self.prr)
             ahead_offset = Signal(_PHASE_BITS)
-            factor = self.lookahead + 1
-            terms = [increment << bit for bit in range(factor.bit_length()) if factor >> bit & 1]
-            m.d.sync += ahead_offset.eq(sum(terms[1:], terms[0]))
+            m.d.sync += [prr_q.eq(self.prr),
+                         ahead_offset.eq(prr_q * (step * (self.lookahead + 1)))]
             ahead = Signal(_PHASE_BITS)
             m.d.sync += ahead.eq(phase + ahead_offset)     # = phase, lookahead clocks on
             ahead_q = Signal()
