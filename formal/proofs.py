@@ -32,6 +32,11 @@ class Proof:
     #: Builds the harness the covers are searched in, where that is a restriction of the
     #: proof's (the reset tied off, say) that the solver searches far faster; None: the same.
     cover_harness: Callable[[], object] = None
+    #: Clocks the bounded check does not look at (no counterexample can be that short).
+    bmc_skip: int = 0
+    #: Builds the harness the bounded check searches, where that is a restriction of the
+    #: proof's: a counterexample found in it is one in the proof's harness too. None: the same.
+    bmc_harness: Callable[[], object] = None
 
     def __post_init__(self):
         if self.bmc_depth is None:
@@ -50,6 +55,15 @@ class Proof:
                          cover_skip=self.cover_skip, tasks=("cover",))
         cover.name = self.name          # reported as this proof's cover
         return prove, cover
+
+    def check(self, workdir):
+        """A bounded check to ``bmc_depth`` (the broken designs' test): its
+        :class:`ProofResult`, FAIL with a counterexample where an assertion can be broken."""
+        from .runner import run_sby
+        harness = self.bmc_harness or self.harness
+        bmc, = run_sby(harness(), self.name, workdir, depth=self.depth,
+                       cover_depth=self.bmc_depth, cover_skip=self.bmc_skip, tasks=("bmc",))
+        return bmc
 
 
 def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
@@ -88,10 +102,16 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
     with 0x64, every rejected frame counted.
 
     Helper invariants make a short induction enough. With the UART live, its covers are a few
-    clocks deep. A write over SPI needs a whole 32-bit frame through the synchronisers, 67
-    clocks at the least, so with the UART and reset tied off (the SPI covers' harness) covers
-    are not searched before clock 66: showing that none can be reached sooner is what takes a
-    solver long.
+    clocks deep, and so are the counterexamples of faults on the UART's path (a frame comes on
+    any clock).
+
+    Over SPI alone (``uart_live=False``) the covers and the bounded check search one frame
+    from a paced host (:class:`CommandPathSpec`'s ``one_frame``, a restriction of the proof's
+    free pins: what is reached or broken there is reached or broken with free pins). Its
+    fastest frame ends 31 bits in at clock 65 and 32 bits in at clock 67, and no SPI cover and
+    no fault that needs such a frame shows sooner, so clocks 0-63 are not searched; a reset
+    that cuts the frame shows as soon, since the target must still count 32 bits. Searching to
+    clock 80 leaves room for a read reply a few clocks later than now.
     """
     kwargs = {"helpers": helpers, "uart_live": uart_live, "reset_free": reset_free}
     if not uart_live:
@@ -102,6 +122,8 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
     if make_decoder is not None:
         kwargs["make_decoder"] = make_decoder
     spi_only = not uart_live
+    harness = lambda: CommandPathSpec(**kwargs)
+    one_frame = lambda: CommandPathSpec(**kwargs, one_frame=True)
     return Proof(
         name=name,
         description="command path, SPI pins and UART frames live, reset free: a register is "
@@ -110,9 +132,12 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
                     if not spi_only else
                     "command path over SPI alone: the same properties, and covers of an SPI "
                     "write, a frame cut short and a read answered",
-        harness=lambda: CommandPathSpec(**kwargs),
-        depth=8, cover_depth=74 if spi_only else 8, cover_skip=67 if spi_only else 0,
-        bmc_depth=74)
+        harness=harness,
+        depth=8,
+        cover_depth=80 if spi_only else 8, cover_skip=64 if spi_only else 0,
+        cover_harness=one_frame if spi_only else None,
+        bmc_depth=80 if spi_only else 8, bmc_skip=64 if spi_only else 0,
+        bmc_harness=one_frame if spi_only else None)
 
 
 #: The laser controller as proved: a 4 kHz clock makes 1 ms four clocks, so the 1.5 ms lead is 6
