@@ -182,6 +182,11 @@ def correction_proof(*, make_stage=None, helpers=True, name="correction_writes")
     tie a point's age to its step and a waiting write to the point it waits for, so a short
     induction is enough (each step unrolls the multiplier once more); the covers need a write
     and a point, about 20 clocks.
+
+    The broken stages' bounded checks offer every point at (0, 0) (``points_at_origin``, a
+    restriction of the free inputs, so their counterexamples hold with free points). A write
+    lost or made late shows when the point it waited for is done, 15 clocks in at the
+    earliest; 20 leaves room.
     """
     make_stage = make_stage or (lambda: FieldCorrection(CorrectionTable.identity(5)))
     return Proof(
@@ -189,8 +194,9 @@ def correction_proof(*, make_stage=None, helpers=True, name="correction_writes")
         description="correction: no table write while a point is made; a requested write "
                     "is made within 15 clocks; a presented point holds until taken",
         harness=lambda: CorrectionSpec(make_stage(), helpers=helpers),
-        # Two points' 15 clocks: each broken stage shows within 20.
-        depth=4, cover_depth=24, bmc_depth=20)
+        depth=4, cover_depth=24, bmc_depth=20,
+        bmc_harness=lambda: CorrectionSpec(make_stage(), helpers=helpers,
+                                           points_at_origin=True))
 
 
 def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting=True,
@@ -199,16 +205,22 @@ def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting
 
     The decoder, register file and correction stage (5 × 5) with frames free on both links.
     Helper invariants tie a waiting write to its frame's registers and to the point it waits
-    for, so a short induction is enough.
+    for, so a short induction is enough. The broken designs' bounded checks offer every point
+    at (0, 0), as :func:`correction_proof`'s do.
     """
+    def harness(points_at_origin=False):
+        return CorrectionLinkSpec(make_stage=make_stage, helpers=helpers,
+                                  refuse_while_waiting=refuse_while_waiting,
+                                  points_at_origin=points_at_origin)
+
     return Proof(
         name=name,
         description="correction writes through both links: a table write stores what the "
                     "registers held when its cor_write frame was accepted; one waits at a "
                     "time, and is made within 16 clocks",
-        harness=lambda: CorrectionLinkSpec(make_stage=make_stage, helpers=helpers,
-                                           refuse_while_waiting=refuse_while_waiting),
-        depth=4, cover_depth=24, bmc_depth=20)
+        harness=harness,
+        depth=4, cover_depth=24, bmc_depth=20,
+        bmc_harness=lambda: harness(points_at_origin=True))
 
 
 PROOFS = [

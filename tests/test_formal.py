@@ -89,8 +89,7 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
     else:
         make = partial(TamperedLaser, fault, **LASER_PROOF_PARAMETERS)
     proof = laser_safety_proof(make_controller=make, helpers=False, name=f"broken_{fault}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(LASER_FAULTS[fault]) & failed_properties(bmc), \
         (fault, bmc.failed)
@@ -101,8 +100,7 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
 def test_broken_correction_stage_fails_the_proof(fault, tmp_path):
     proof = correction_proof(make_stage=lambda: fault(CorrectionTable.identity(5)),
                              helpers=False, name=f"broken_{fault.__name__}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(CORRECTION_FAULTS[fault]) & failed_properties(bmc), \
         (fault, bmc.failed)
@@ -124,7 +122,6 @@ def test_broken_correction_link_fails_the_proof(fault, property, tmp_path):
     else:
         proof = correction_link_proof(refuse_while_waiting=False, helpers=False,
                                       name=f"broken_{fault}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
