@@ -42,19 +42,31 @@ class Proof:
         if self.bmc_depth is None:
             object.__setattr__(self, "bmc_depth", self.cover_depth)
 
+    #: What :meth:`run_task` runs, in the order reported.
+    TASKS = ("prove", "cover")
+
+    def run_task(self, task, workdir):
+        """Run one of :attr:`TASKS` ("prove" or "cover"): its :class:`ProofResult`.
+
+        Each task has its own folder (``workdir/name`` and ``workdir/name_covers``), so the
+        two may run at the same time."""
+        from .runner import run_sby
+        if task == "prove":
+            result, = run_sby(self.harness(), self.name, workdir, depth=self.depth,
+                              cover_depth=self.cover_depth, tasks=("prove",))
+        elif task == "cover":
+            harness = self.cover_harness or self.harness
+            result, = run_sby(harness(), f"{self.name}_covers", workdir, depth=self.depth,
+                              cover_depth=self.cover_depth, cover_skip=self.cover_skip,
+                              tasks=("cover",))
+            result.name = self.name         # reported as this proof's cover
+        else:
+            raise ValueError(f"unknown task {task!r}; known: {', '.join(self.TASKS)}")
+        return result
+
     def run(self, workdir):
         """Prove it and reach its covers: the prove and cover :class:`ProofResult`."""
-        from .runner import run_sby
-        if self.cover_harness is None:
-            return tuple(run_sby(self.harness(), self.name, workdir, depth=self.depth,
-                                 cover_depth=self.cover_depth, cover_skip=self.cover_skip))
-        prove, = run_sby(self.harness(), self.name, workdir, depth=self.depth,
-                         cover_depth=self.cover_depth, tasks=("prove",))
-        cover, = run_sby(self.cover_harness(), f"{self.name}_covers", workdir,
-                         depth=self.depth, cover_depth=self.cover_depth,
-                         cover_skip=self.cover_skip, tasks=("cover",))
-        cover.name = self.name          # reported as this proof's cover
-        return prove, cover
+        return tuple(self.run_task(task, workdir) for task in self.TASKS)
 
     def check(self, workdir):
         """A bounded check to ``bmc_depth`` (the broken designs' test): its
