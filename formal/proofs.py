@@ -187,7 +187,7 @@ def laser_safety_proof(*, make_controller=None, lead_clocks=None, helpers=True,
         depth=10, cover_depth=30)
 
 
-def correction_proof(*, make_stage=None, helpers=True, name="correction_writes"):
+def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correction_writes"):
     """The correction stage: no torn point, no lost write, the stream rules.
 
     Proved on a 5 × 5 table (the RAM's size does not enter the properties). Helper invariants
@@ -198,7 +198,8 @@ def correction_proof(*, make_stage=None, helpers=True, name="correction_writes")
     The broken stages' bounded checks offer every point at (0, 0) (``points_at_origin``, a
     restriction of the free inputs, so their counterexamples hold with free points). A write
     lost or made late shows when the point it waited for is done, 15 clocks in at the
-    earliest; 20 leaves room.
+    earliest; 20 leaves room, and such faults' checks may skip (``bmc_skip``) the clocks
+    before it.
     """
     make_stage = make_stage or (lambda: FieldCorrection(CorrectionTable.identity(5)))
     return Proof(
@@ -206,7 +207,7 @@ def correction_proof(*, make_stage=None, helpers=True, name="correction_writes")
         description="correction: no table write while a point is made; a requested write "
                     "is made within 15 clocks; a presented point holds until taken",
         harness=lambda: CorrectionSpec(make_stage(), helpers=helpers),
-        depth=4, cover_depth=24, bmc_depth=20,
+        depth=4, cover_depth=24, bmc_depth=20, bmc_skip=bmc_skip,
         bmc_harness=lambda: CorrectionSpec(make_stage(), helpers=helpers,
                                            points_at_origin=True))
 
