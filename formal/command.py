@@ -1,7 +1,7 @@
 """The command path from both links to a register write, as properties (Dai & Tang 2020's
 frame; galvoscan's bad-input rules, README "Safety")."""
 
-from amaranth.asserts import AnySeq
+from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
                           ResetSignal, Signal)
 from amaranth.lib.wiring import connect
@@ -44,9 +44,10 @@ class CommandPathSpec(Elaboratable):
 
     The proof is made with everything live. Its covers come in two harnesses: this one shows
     a UART write, a rejected frame counted and a read answered within a few clocks; an SPI
-    harness (``uart_live=False, reset_free=False``: a restriction of this one) shows an SPI
-    write, a frame cut short and a read answered over SPI, which need some 70 clocks, where
-    the free UART and reset would make every step of the search far slower.
+    harness (``uart_live=False, reset_free=False, one_frame=True``: a restriction of this
+    one) shows an SPI write, a frame cut short and a read answered over SPI, which need some
+    70 clocks, where the free UART, reset and SCK would make every step of the search far
+    slower.
 
     Parameters
     ----------
@@ -63,11 +64,23 @@ class CommandPathSpec(Elaboratable):
         The register file's map (default: the default build's). The SPI covers' harness uses a
         small one: the properties do not depend on which registers there are, and a smaller
         register file makes each of the 70 steps of the search cheaper.
+    one_frame : bool
+        One SPI frame from a paced host instead of free pins: for covers and the broken
+        designs' bounded checks only, never for the proof. SCK toggles on every clock from
+        power-up; ``cs_n`` is low from the first clock to a last one the solver chooses (any
+        constant), then high; COPI is free; with ``reset_free`` the reset is free on every
+        clock while ``cs_n`` is low, except its last (a reset that cuts the frame). Each such
+        run is one of the free harness's runs, so a cover reached or a counterexample found
+        here is one there too. The SCK and frame timing being fixed spares the solver ruling
+        out every other SCK pattern step by step, which took minutes; a rising edge every
+        other clock is the fastest SCK the synchronisers pass, so a frame ends here as soon as
+        it can with free pins: 31 bits are seen at clock 65 at the earliest, 32 at clock 67.
     """
 
     def __init__(self, *, make_spi=SPITarget, make_decoder=CommandDecoder, helpers=True,
-                 uart_live=True, reset_free=True, regmap=None):
+                 uart_live=True, reset_free=True, regmap=None, one_frame=False):
         self.regmap = regmap
+        self.one_frame = one_frame
         self.make_spi = make_spi
         self.make_decoder = make_decoder
         self.helpers = helpers
@@ -77,7 +90,10 @@ class CommandPathSpec(Elaboratable):
     def elaborate(self, platform):
         m = Module()
         m.domains.sync = ClockDomain()
-        m.d.comb += ResetSignal("sync").eq(AnySeq(1) if self.reset_free else 0)
+        reset = Signal()
+        m.d.comb += ResetSignal("sync").eq(reset)
+        if self.reset_free and not self.one_frame:
+            m.d.comb += reset.eq(AnySeq(1))
         m.submodules.spi = spi = self.make_spi()
         m.submodules.decoder = decoder = self.make_decoder()
         m.submodules.registers = registers = RegisterFile(self.regmap)
@@ -90,10 +106,21 @@ class CommandPathSpec(Elaboratable):
             uart.payload.word.eq(AnySeq(len(uart.payload.word))),
             uart.payload.bits.eq(AnySeq(len(uart.payload.bits))),
             decoder.uart_replies.ready.eq(AnySeq(1)),
-            spi.sck.eq(AnySeq(1)),
-            spi.cs_n.eq(AnySeq(1)),
             spi.copi.eq(AnySeq(1)),
         ]
+        if self.one_frame:
+            # The host's own count of clocks (a reset of the design does not touch the host).
+            clock = Signal(8, reset_less=True)
+            with m.If(clock != 255):
+                m.d.sync += clock.eq(clock + 1)
+            last = AnyConst(8)                  # cs_n's last low clock
+            sck_pin = Signal(reset_less=True)
+            m.d.sync += sck_pin.eq(~sck_pin)
+            m.d.comb += [spi.sck.eq(sck_pin), spi.cs_n.eq(clock > last)]
+            if self.reset_free:
+                m.d.comb += reset.eq(AnySeq(1) & (clock < last))
+        else:
+            m.d.comb += [spi.sck.eq(AnySeq(1)), spi.cs_n.eq(AnySeq(1))]
 
         # The pins two clocks ago, as the design sees them after its synchronisers (which a
         # reset does not touch).

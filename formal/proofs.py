@@ -32,24 +32,50 @@ class Proof:
     #: Builds the harness the covers are searched in, where that is a restriction of the
     #: proof's (the reset tied off, say) that the solver searches far faster; None: the same.
     cover_harness: Callable[[], object] = None
+    #: Clocks the bounded check does not look at (no counterexample can be that short).
+    bmc_skip: int = 0
+    #: Builds the harness the bounded check searches, where that is a restriction of the
+    #: proof's: a counterexample found in it is one in the proof's harness too. None: the same.
+    bmc_harness: Callable[[], object] = None
 
     def __post_init__(self):
         if self.bmc_depth is None:
             object.__setattr__(self, "bmc_depth", self.cover_depth)
 
+    #: What :meth:`run_task` runs, in the order reported.
+    TASKS = ("prove", "cover")
+
+    def run_task(self, task, workdir):
+        """Run one of :attr:`TASKS` ("prove" or "cover"): its :class:`ProofResult`.
+
+        Each task has its own folder (``workdir/name`` and ``workdir/name_covers``), so the
+        two may run at the same time."""
+        from .runner import run_sby
+        if task == "prove":
+            result, = run_sby(self.harness(), self.name, workdir, depth=self.depth,
+                              cover_depth=self.cover_depth, tasks=("prove",))
+        elif task == "cover":
+            harness = self.cover_harness or self.harness
+            result, = run_sby(harness(), f"{self.name}_covers", workdir, depth=self.depth,
+                              cover_depth=self.cover_depth, cover_skip=self.cover_skip,
+                              tasks=("cover",))
+            result.name = self.name         # reported as this proof's cover
+        else:
+            raise ValueError(f"unknown task {task!r}; known: {', '.join(self.TASKS)}")
+        return result
+
     def run(self, workdir):
         """Prove it and reach its covers: the prove and cover :class:`ProofResult`."""
+        return tuple(self.run_task(task, workdir) for task in self.TASKS)
+
+    def check(self, workdir):
+        """A bounded check to ``bmc_depth`` (the broken designs' test): its
+        :class:`ProofResult`, FAIL with a counterexample where an assertion can be broken."""
         from .runner import run_sby
-        if self.cover_harness is None:
-            return tuple(run_sby(self.harness(), self.name, workdir, depth=self.depth,
-                                 cover_depth=self.cover_depth, cover_skip=self.cover_skip))
-        prove, = run_sby(self.harness(), self.name, workdir, depth=self.depth,
-                         cover_depth=self.cover_depth, tasks=("prove",))
-        cover, = run_sby(self.cover_harness(), f"{self.name}_covers", workdir,
-                         depth=self.depth, cover_depth=self.cover_depth,
-                         cover_skip=self.cover_skip, tasks=("cover",))
-        cover.name = self.name          # reported as this proof's cover
-        return prove, cover
+        harness = self.bmc_harness or self.harness
+        bmc, = run_sby(harness(), self.name, workdir, depth=self.depth,
+                       cover_depth=self.bmc_depth, cover_skip=self.bmc_skip, tasks=("bmc",))
+        return bmc
 
 
 def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
@@ -58,9 +84,11 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
     ``make_phy(clk_freq=…, bit_rate=…)`` builds the design under proof (the real transmitter
     by default; the tests pass deliberately broken ones).
 
-    The black-box spec remembers the last position taken for as long as no new one comes; a
-    helper invariant ties that memory to the PHY's own, so k-induction needs to see one whole
-    frame (and a few clocks), resets included. The cover needs two frames.
+    The black-box spec remembers the last position taken for as long as no new one comes, and
+    the bits of the frame it has sampled so far; helper invariants tie each bit of its state
+    to the PHY's (the position latched, the shift registers, the counters), so k-induction
+    needs only a few clocks at any divider, resets included (without them it had to see a
+    whole frame: 125 clocks at 6 clocks a bit). The cover needs two frames.
     """
     make_phy = XY2Transmitter if make_phy is None else make_phy
     bit_rate = 2_000_000
@@ -76,7 +104,8 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
                     f"20-bit frames, SYNC, parity, control bits, latched data; from power-up"
                     + (" and after any reset, mid-frame included" if reset_free else ""),
         harness=harness,
-        depth=frame + 5,
+        # The helpers are inductive on their own (depth 1 passes); 3 leaves a little room.
+        depth=3,
         # Two frames with new data need no reset: searched with it tied off, they are found
         # in seconds rather than minutes.
         cover_depth=2 * frame + 10, cover_harness=lambda: harness(reset_free=False))
@@ -88,10 +117,16 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
     with 0x64, every rejected frame counted.
 
     Helper invariants make a short induction enough. With the UART live, its covers are a few
-    clocks deep. A write over SPI needs a whole 32-bit frame through the synchronisers, 67
-    clocks at the least, so with the UART and reset tied off (the SPI covers' harness) covers
-    are not searched before clock 66: showing that none can be reached sooner is what takes a
-    solver long.
+    clocks deep, and so are the counterexamples of faults on the UART's path (a frame comes on
+    any clock).
+
+    Over SPI alone (``uart_live=False``) the covers and the bounded check search one frame
+    from a paced host (:class:`CommandPathSpec`'s ``one_frame``, a restriction of the proof's
+    free pins: what is reached or broken there is reached or broken with free pins). Its
+    fastest frame ends 31 bits in at clock 65 and 32 bits in at clock 67, and no SPI cover and
+    no fault that needs such a frame shows sooner, so clocks 0-63 are not searched; a reset
+    that cuts the frame shows as soon, since the target must still count 32 bits. Searching to
+    clock 80 leaves room for a read reply a few clocks later than now.
     """
     kwargs = {"helpers": helpers, "uart_live": uart_live, "reset_free": reset_free}
     if not uart_live:
@@ -102,6 +137,8 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
     if make_decoder is not None:
         kwargs["make_decoder"] = make_decoder
     spi_only = not uart_live
+    harness = lambda: CommandPathSpec(**kwargs)
+    one_frame = lambda: CommandPathSpec(**kwargs, one_frame=True)
     return Proof(
         name=name,
         description="command path, SPI pins and UART frames live, reset free: a register is "
@@ -110,9 +147,12 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
                     if not spi_only else
                     "command path over SPI alone: the same properties, and covers of an SPI "
                     "write, a frame cut short and a read answered",
-        harness=lambda: CommandPathSpec(**kwargs),
-        depth=8, cover_depth=74 if spi_only else 8, cover_skip=67 if spi_only else 0,
-        bmc_depth=74)
+        harness=harness,
+        depth=8,
+        cover_depth=80 if spi_only else 8, cover_skip=64 if spi_only else 0,
+        cover_harness=one_frame if spi_only else None,
+        bmc_depth=80 if spi_only else 8, bmc_skip=64 if spi_only else 0,
+        bmc_harness=one_frame if spi_only else None)
 
 
 #: The laser controller as proved: a 4 kHz clock makes 1 ms four clocks, so the 1.5 ms lead is 6
@@ -147,13 +187,19 @@ def laser_safety_proof(*, make_controller=None, lead_clocks=None, helpers=True,
         depth=10, cover_depth=30)
 
 
-def correction_proof(*, make_stage=None, helpers=True, name="correction_writes"):
+def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correction_writes"):
     """The correction stage: no torn point, no lost write, the stream rules.
 
     Proved on a 5 × 5 table (the RAM's size does not enter the properties). Helper invariants
     tie a point's age to its step and a waiting write to the point it waits for, so a short
     induction is enough (each step unrolls the multiplier once more); the covers need a write
     and a point, about 20 clocks.
+
+    The broken stages' bounded checks offer every point at (0, 0) (``points_at_origin``, a
+    restriction of the free inputs, so their counterexamples hold with free points). A write
+    lost or made late shows when the point it waited for is done, 15 clocks in at the
+    earliest; 20 leaves room, and such faults' checks may skip (``bmc_skip``) the clocks
+    before it.
     """
     make_stage = make_stage or (lambda: FieldCorrection(CorrectionTable.identity(5)))
     return Proof(
@@ -161,8 +207,9 @@ def correction_proof(*, make_stage=None, helpers=True, name="correction_writes")
         description="correction: no table write while a point is made; a requested write "
                     "is made within 15 clocks; a presented point holds until taken",
         harness=lambda: CorrectionSpec(make_stage(), helpers=helpers),
-        # Two points' 15 clocks: each broken stage shows within 20.
-        depth=4, cover_depth=24, bmc_depth=20)
+        depth=4, cover_depth=24, bmc_depth=20, bmc_skip=bmc_skip,
+        bmc_harness=lambda: CorrectionSpec(make_stage(), helpers=helpers,
+                                           points_at_origin=True))
 
 
 def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting=True,
@@ -171,25 +218,30 @@ def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting
 
     The decoder, register file and correction stage (5 × 5) with frames free on both links.
     Helper invariants tie a waiting write to its frame's registers and to the point it waits
-    for, so a short induction is enough.
+    for, so a short induction is enough. The broken designs' bounded checks offer every point
+    at (0, 0), as :func:`correction_proof`'s do.
     """
+    def harness(points_at_origin=False):
+        return CorrectionLinkSpec(make_stage=make_stage, helpers=helpers,
+                                  refuse_while_waiting=refuse_while_waiting,
+                                  points_at_origin=points_at_origin)
+
     return Proof(
         name=name,
         description="correction writes through both links: a table write stores what the "
                     "registers held when its cor_write frame was accepted; one waits at a "
                     "time, and is made within 16 clocks",
-        harness=lambda: CorrectionLinkSpec(make_stage=make_stage, helpers=helpers,
-                                           refuse_while_waiting=refuse_while_waiting),
-        depth=4, cover_depth=24, bmc_depth=20)
+        harness=harness,
+        depth=4, cover_depth=24, bmc_depth=20,
+        bmc_harness=lambda: harness(points_at_origin=True))
 
 
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
-    # The iCEBreaker's 12 MHz system clock, from power-up. (The reset is the same logic at
-    # every divider, and proved above; free at 6 clocks a bit it makes every step of the
-    # 125-clock search several times slower.)
-    xy2_phy_proof(6, reset_free=False),
+    # The iCEBreaker's 12 MHz system clock, from power-up and after any reset (with the helper
+    # invariants the induction is a few clocks deep, so the free reset costs nothing).
+    xy2_phy_proof(6),
     command_path_proof(),
     command_path_proof(uart_live=False, reset_free=False, name="command_path_spi"),
     laser_safety_proof(),

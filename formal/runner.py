@@ -33,7 +33,9 @@ bmc: skip {cover_skip}
 multiclock off
 
 [engines]
-smtbmc z3
+prove: smtbmc z3
+cover: smtbmc --nopresat z3
+bmc: smtbmc --nopresat z3
 
 [script]
 read_rtlil {name}.il
@@ -70,6 +72,11 @@ def run_sby(harness, name, workdir, *, depth, cover_depth, cover_skip=0,
     ``tasks`` may also name ``"bmc"``: a bounded check to ``cover_depth`` (skipping
     ``cover_skip`` clocks), which fails with a counterexample trace where an assertion can be
     broken that soon; the broken designs' tests use it.
+
+    The covers and bounded checks run without smtbmc's ``--presat``: it checks on every step
+    that the assumptions can hold, and the harnesses assume nothing (all their inputs are
+    free or fixed), so it only doubled the solver calls, each as dear as a cover or assertion
+    query.
 
     Files go to ``workdir/name``; YoWASP tools cannot see absolute paths outside their working
     folder, so they run with it as ``cwd`` and relative paths. Returns the

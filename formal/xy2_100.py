@@ -7,10 +7,10 @@ from the protocol anywhere fails the proof.
 """
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Fragment, Module, Mux,
                           ResetSignal, Signal)
 
-from ..gateware.phy.xy2_100 import FRAME_BITS
+from ..gateware.phy.xy2_100 import FRAME_BITS, frame_word
 from ..gateware.points import FIELD_CENTRE, FieldPoint
 
 
@@ -58,7 +58,16 @@ class XY2TransmitterSpec(Elaboratable):
         # holds after a reset as it does after power-up.
         m.domains.sync = ClockDomain()
         m.d.comb += ResetSignal("sync").eq(AnySeq(1) if self.reset_free else 0)
-        m.submodules.dut = dut = self.dut
+        dut = self.dut
+        if hasattr(dut, "_latched"):
+            # The real transmitter: elaborated here, so that the helper invariants below can
+            # name its clock-into-the-bit counter and shift registers.
+            body = Fragment.get(dut, platform)
+            internals = {signal.name: signal for statement in body.statements.get("sync", ())
+                         for signal in statement._lhs_signals()}
+            m.submodules.dut = body
+        else:
+            m.submodules.dut = dut
 
         m.d.comb += [
             dut.position.valid.eq(AnySeq(1)),
@@ -156,6 +165,60 @@ class XY2TransmitterSpec(Elaboratable):
                 Assert(word_x[1:17] == frame_position.x, "X data is the latched position"),
                 Assert(word_y[1:17] == frame_position.y, "Y data is the latched position"),
             ]
+
+        if hasattr(dut, "_latched"):
+            # Helper invariants (proved too) that tie every bit of the spec's state to the
+            # transmitter's, so that k-induction needs no more than a couple of clocks, whatever
+            # the divider: without them it must look back over a whole frame (125 clocks at 6
+            # clocks a bit) before the shift registers' contents are pinned down.
+            per_bit = self.clocks_per_bit
+            tick, bit = internals["tick"], dut._bit
+            latched = dut._latched
+            started = clk_started
+            # Before the first rising edge is seen: power-up (or reset), or the clock after.
+            m.d.comb += [
+                Assert(in_frame == started, "helper: frames start with the clock"),
+                Assert(started | ((tick == per_bit - 1) & (bit == FRAME_BITS - 1) & ~clk_q &
+                                  (since_toggle == 0)) |
+                       ((tick == 0) & (bit == 0) & ~clk_q & (since_toggle == 1)),
+                       "helper: the first two clocks"),
+            ]
+            # The clock: high for the first half of each bit.
+            m.d.comb += [
+                Assert(tick < per_bit, "helper: tick in range"),
+                Assert(clk == (tick < half), "helper: xy2_clk follows tick"),
+                Assert(~started | (clk_q == Mux(tick == 0, 0, Mux(tick == half, 1, clk))),
+                       "helper: xy2_clk one clock ago"),
+                Assert(~started | (since_toggle == (tick + half - 1) % half),
+                       "helper: clocks since xy2_clk toggled"),
+                Assert(bit_q == Mux(tick == 0, Mux(bit == 0, FRAME_BITS - 1, bit - 1), bit),
+                       "helper: bit one clock ago"),
+                Assert(ready_q == ((tick == 0) & (bit == 0)), "helper: taken one clock ago"),
+            ]
+            # SYNC and the data: the frame of the position latched, bit by bit.
+            m.d.comb += [
+                Assert(sync == (bit != FRAME_BITS - 1), "helper: SYNC follows the bit"),
+                Assert(sync_q == Mux(tick == 0, bit != 0, sync), "helper: SYNC one clock ago"),
+                Assert(sync_rise | (frame_position.as_value() == latched.as_value()),
+                       "helper: the frame's position is the one latched"),
+            ]
+            # Bits of the frame the spec has sampled: one a bit, on its falling edge.
+            sampled = bit + (tick > half)
+            for axis, wire, wire_q, shift, rx in (("x", x, x_q, internals["shift_x"], rx_x),
+                                                  ("y", y, y_q, internals["shift_y"], rx_y)):
+                word = frame_word(self.control_bits, getattr(latched, axis))
+                m.d.comb += [
+                    Assert(~(started | (tick == 0)) |
+                           (shift == (word << bit)[:FRAME_BITS]),
+                           f"helper: {axis} shift register holds the rest of the frame"),
+                    Assert(~(started | (tick == 0)) | (wire == shift[-1]),
+                           f"helper: {axis} wire is the shift register's first bit"),
+                    Assert((tick == 0) | (wire_q == wire), f"helper: {axis} one clock ago"),
+                ]
+                for count in range(1, FRAME_BITS):
+                    with m.If(started & (sampled == count)):
+                        m.d.comb += Assert(rx[:count] == word[FRAME_BITS - count:],
+                                           f"helper: {axis} bits sampled so far")
 
         # --- covers -----------------------------------------------------------------------------
         # Two whole frames with different data on both axes, so the proof is not vacuous.

@@ -117,8 +117,8 @@ class DecoderAcceptingLongUARTFrames(TamperedDecoder):
 
 #: Each fault: the parts to swap in (and which of the links and reset the check needs), and
 #: the property it must break. The broken designs are checked without the helper invariants
-#: (a bounded check, from clock 66 on), so that the counterexample is the bad write or the
-#: lost count itself.
+#: (a bounded check; over SPI one paced frame, from clock 64 on), so that the counterexample
+#: is the bad write or the lost count itself.
 BROKEN_COMMAND_PATHS = {
     "decoder_ignores_check_byte": (
         {"make_decoder": DecoderIgnoringCheckByte, "uart_live": False, "reset_free": False},

@@ -15,7 +15,7 @@ from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
 from broken_command import BROKEN_COMMAND_PATHS
-from broken_correction import CORRECTION_FAULTS, WritesLateValues
+from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_phys import FAULTS, TamperedPHY
 
@@ -71,13 +71,10 @@ def test_broken_command_path_fails_the_proof(fault, tmp_path):
     parts, properties = BROKEN_COMMAND_PATHS[fault]
     proof = command_path_proof(**parts, helpers=False, name=f"broken_{fault}")
     # A fault that needs a whole frame lies deeper than the induction looks (depth 8): a
-    # bounded check as deep as the covers finds a reachable counterexample.
-    # A UART frame comes on any clock, so a fault in its path shows within a few clocks; one in
-    # the SPI path needs a whole frame, so the check starts at clock 66.
-    spi_fault = parts.get("uart_live") is False
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth if spi_fault else 8,
-                   cover_skip=66 if spi_fault else 0, tasks=("bmc",))
+    # bounded check as deep as the covers finds a reachable counterexample. A UART frame comes
+    # on any clock, so a fault in its path shows within a few clocks; one in the SPI path
+    # needs a whole frame, searched from one paced host (see command_path_proof).
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(properties) & failed_properties(bmc), (fault, bmc.failed)
 
@@ -92,8 +89,7 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
     else:
         make = partial(TamperedLaser, fault, **LASER_PROOF_PARAMETERS)
     proof = laser_safety_proof(make_controller=make, helpers=False, name=f"broken_{fault}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(LASER_FAULTS[fault]) & failed_properties(bmc), \
         (fault, bmc.failed)
@@ -103,9 +99,9 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
                          ids=lambda f: f.__name__)
 def test_broken_correction_stage_fails_the_proof(fault, tmp_path):
     proof = correction_proof(make_stage=lambda: fault(CorrectionTable.identity(5)),
-                             helpers=False, name=f"broken_{fault.__name__}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+                             helpers=False, bmc_skip=13 if fault in WAITING_FAULTS else 0,
+                             name=f"broken_{fault.__name__}")
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(CORRECTION_FAULTS[fault]) & failed_properties(bmc), \
         (fault, bmc.failed)
@@ -127,7 +123,6 @@ def test_broken_correction_link_fails_the_proof(fault, property, tmp_path):
     else:
         proof = correction_link_proof(refuse_while_waiting=False, helpers=False,
                                       name=f"broken_{fault}")
-    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
-                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
