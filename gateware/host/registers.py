@@ -62,10 +62,16 @@ class RegisterFile(wiring.Component):
     regmap : :class:`~.regmap.RegisterMap`
         The build's registers, ranges, resets and choices (default: :func:`~.regmap.register_map`
         with its defaults).
+    read_back : bool
+        Build the read path (default). Without it ``bus.read_data`` is left for the caller to
+        drive: the command proofs drive it with any value at all, since none of their
+        properties depends on a value read, and the read path's two memories would make every
+        step of their search far slower (the read path is simulated against a model instead).
     """
 
-    def __init__(self, regmap=None):
+    def __init__(self, regmap=None, *, read_back=True):
         regmap = register_map() if regmap is None else regmap
+        self.read_back = bool(read_back)
         if not isinstance(regmap, RegisterMap):
             raise TypeError(f"regmap must be a RegisterMap, not {regmap!r}")
         for name in regmap.choices:
@@ -128,6 +134,9 @@ class RegisterFile(wiring.Component):
                         with m.If(bus.write_en & in_range):
                             m.d.sync += [value.eq(bus.write_data),
                                          written[held.index(reg)].eq(1)]
+
+        if not self.read_back:
+            return m
 
         # --- reads --------------------------------------------------------------------------
         # What a register holds is read back from a copy in block RAM, written with it: a

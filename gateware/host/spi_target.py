@@ -39,8 +39,8 @@ class SPITarget(wiring.Component):
         One event per ``cs_n`` low period, to be taken on the clock it is offered (the
         command decoder always takes SPI frames at once).
     replies : ``In(stream.Signature(32))``
-        Words for the host's next frame. Always ready: a newer reply replaces an older one
-        that has not gone out yet.
+        Words for the host's next frame: taken as a frame starts (the decoder holds a reply
+        until then, and answers no other read over SPI meanwhile).
     """
 
     sck: In(1)
@@ -77,23 +77,18 @@ class SPITarget(wiring.Component):
         # decoder takes an SPI frame on the clock it is offered.
         m.d.comb += [self.frames.payload.word.eq(shift), self.frames.payload.bits.eq(bits)]
 
-        pending = Signal(32)
-        pending_valid = Signal()
-        m.d.comb += self.replies.ready.eq(1)
-        with m.If(self.replies.valid):
-            m.d.sync += [pending.eq(self.replies.payload), pending_valid.eq(1)]
-
         reply = Signal(32)
         with m.If(self.frames.ready):
             m.d.sync += self.frames.valid.eq(0)
 
         with m.If(~cs_n & ~selected):
-            # Frame start: load the reply, if one is waiting; its first bit goes out now.
+            # Frame start: take the reply, if one is waiting (it waits in the decoder, not in
+            # a copy here); its first bit goes out now.
+            waiting = self.replies.valid
+            m.d.comb += self.replies.ready.eq(1)
             m.d.sync += [selected.eq(1), bits.eq(0), shift.eq(0)]
-            m.d.sync += [reply.eq(pending & pending_valid.replicate(32)),
-                         self.cipo.eq(pending[-1] & pending_valid)]
-            with m.If(~self.replies.valid):
-                m.d.sync += pending_valid.eq(0)
+            m.d.sync += [reply.eq(self.replies.payload & waiting.replicate(32)),
+                         self.cipo.eq(self.replies.payload[-1] & waiting)]
         with m.Elif(~cs_n & selected):
             with m.If(sck_rise):
                 m.d.sync += shift.eq(Cat(copi, shift))
