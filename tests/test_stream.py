@@ -12,6 +12,8 @@ from galvoscan.client import ClientError, HostClient, SerialTransport
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
 
+from sim_board import QUICK_SIM_BOARD
+
 
 class FakeBoard:
     """Registers in a dict, a queue that drains by ``drain`` segments per read of fifo_free,
@@ -141,7 +143,7 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
     arm = 0, and from the end of that frame every laser output is low within one XY2-100
     frame (10 µs)."""
     from galvoscan.sim.board import LASER_PINS, PTYServer, SimulatedBoard
-    board = SimulatedBoard()
+    board = SimulatedBoard(**QUICK_SIM_BOARD)
     server = PTYServer(board).start()
     emitting = threading.Event()
 
@@ -157,8 +159,10 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
         with SerialTransport(server.port, timeout=60) as link:
             client = HostClient(link)
             streamer = JobStreamer(client, poll_s=0.01)
+            # 12 marks of 50 points each at 50 kHz: 12 ms of emission, far more than the
+            # host takes to stop it (and few frames to send before it starts).
             segments = [("jump", 30000, 30000)] + \
-                [("mark", 30000 + 600 * (i % 2), 30000 + 40 * i) for i in range(1, 40)]
+                [("mark", 30000 + 600 * (i % 2), 30000 + 40 * i) for i in range(1, 13)]
             watcher.start()
             with pytest.raises(KeyboardInterrupt):
                 streamer.run_vector(segments, {"pitch": 12, "pulses_per_point": 1,
@@ -199,7 +203,7 @@ def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
     """`--frame`: the job's bounding box walked with the guide laser on, never armed."""
     from galvoscan.jobs.vector_job import frame_segments
     from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
-    board = SimulatedBoard()
+    board = SimulatedBoard(**QUICK_SIM_BOARD)
     client = HostClient(SimTransport(board))
     box = (-1.0, -0.5, 1.0, 0.5)                      # mm
     segments = frame_segments(box, 110, 2)
