@@ -166,9 +166,9 @@ SHORT_QUEUE = 48
 @pytest.mark.slow
 def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
     path = tmp_path / "parts.dxf"
-    # With the line, the arc and the bulge (30 segments), the job is longer than the queue by
-    # about a tenth, as 540 zigzag points were for the real board's 512 (the part past the
-    # queue must reach the board while the queue's is marked).
+    # With the line, the arc and the bulge (30 segments) the job is 55 segments, longer than
+    # the queue by a seventh, as 540 zigzag points (570 segments) were for the real board's
+    # 512: the part past the queue must reach the board while the queue's is marked.
     zigzag = SHORT_QUEUE // 2
     dxf_drawing(path, zigzag)
     machine = tmp_path / "machine.toml"
