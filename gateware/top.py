@@ -96,6 +96,10 @@ class GalvoScanTop(wiring.Component):
         Read answers the UART port queues (1 on the smallest boards).
     laser_alarms : int
         Laser alarm inputs, 0 … 4 (each latches an alarm fault while armed).
+    vector_queue_depth : int
+        Segments the vector queue holds (:data:`VECTOR_QUEUE_DEPTH`, the build's). A
+        simulation may build a shorter queue, so that filling it costs a few dozen segments;
+        the host learns the depth from ``fifo_free`` while the queue is empty.
 
     Interface attributes
     --------------------
@@ -131,7 +135,8 @@ class GalvoScanTop(wiring.Component):
     def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=None, table=None,
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
-                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2):
+                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2,
+                 vector_queue_depth=VECTOR_QUEUE_DEPTH):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -178,6 +183,11 @@ class GalvoScanTop(wiring.Component):
             raise ValueError(f"laser_alarms must be a whole number from 0 to {MAX_ALARMS}, "
                              f"not {laser_alarms!r}")
         self.laser_alarms = laser_alarms if self.laser else 0
+        if not isinstance(vector_queue_depth, int) or isinstance(vector_queue_depth, bool) or \
+                not 2 <= vector_queue_depth <= VECTOR_QUEUE_DEPTH:
+            raise ValueError(f"vector_queue_depth must be a whole number from 2 to "
+                             f"{VECTOR_QUEUE_DEPTH}, not {vector_queue_depth!r}")
+        self.vector_queue_depth = vector_queue_depth
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -320,7 +330,7 @@ class GalvoScanTop(wiring.Component):
         # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
         # queue is full, and the refusal is counted.
         m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
-                                                      depth=VECTOR_QUEUE_DEPTH)
+                                                      depth=self.vector_queue_depth)
         command = Signal(VectorCommand)
         m.d.comb += [
             command.op.eq(decoder.bus.write_data[0]),
@@ -329,7 +339,7 @@ class GalvoScanTop(wiring.Component):
             queue.w_stream.payload.eq(command),
             queue.w_stream.valid.eq(regs.vec_op_push),
             regs.vec_op_ready.eq(queue.w_stream.ready),
-            regs.fifo_free.eq(VECTOR_QUEUE_DEPTH - queue.level),
+            regs.fifo_free.eq(self.vector_queue_depth - queue.level),
             status.flags.vector_busy.eq(vector.busy),
             status.events.vec_rejected.eq(
                 decoder.write_refused & (decoder.bus.address == self.regmap["vec_op"].address)),

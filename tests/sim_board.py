@@ -5,13 +5,34 @@ plug into the real :class:`HostClient`, so the bytes the client produces are the
 simulated pins.
 """
 
+import contextlib
+import math
 from collections import deque
 
+import pytest
+from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
 from galvoscan.gateware.top import GalvoScanTop
 
 from wires import frames_from_samples
+
+
+class Counted(Elaboratable):
+    """A design with its clock domain made here, so the clock is a signal to read, and a count
+    of its rising edges."""
+
+    def __init__(self, top):
+        self.top = top
+        self.sync = ClockDomain("sync")
+        self.cycles = Signal(48)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.domains.sync = self.sync
+        m.submodules.top = self.top
+        m.d.sync += self.cycles.eq(self.cycles + 1)
+        return m
 
 
 class SimBoard:
@@ -20,7 +41,9 @@ class SimBoard:
         self.top = top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
         self.clk_freq = clk_freq
         self.bit_time = 1 / baud
-        self.sim = Simulator(top)
+        # Recording the laser counts the clocks beside the design.
+        self._counted = Counted(top) if record_laser else None
+        self.sim = Simulator(self._counted or top)
         self.sim.add_clock(1 / clk_freq)
         self.now = 0.0
 
@@ -38,14 +61,19 @@ class SimBoard:
         self.interlock_closed = interlock_closed
         self.alarms_clear = alarms_clear
         self.sim.add_testbench(self._interlock, background=True)
-        #: (laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power,
-        #: laser_enable, laser_alarm, laser_guide) on every clock, if recorded.
-        self.laser_pins = []
-        #: xy2_sync on every clock, if the laser is recorded (frame k's position is in force
-        #: from sync's (k+1)-th rising edge: the end of that frame).
-        self.sync_pins = []
-        if record_laser:
-            self.sim.add_testbench(self._laser_recorder, background=True)
+        # The recorded pins (laser_pins' and xy2_sync) as (clock, values) each time they change,
+        # made into one entry a clock by `laser_pins` and `sync_pins`.
+        self._pin_changes = []
+        self._by_clock = ([], [])
+        self._changes_seen = 0
+        if record_laser == "every clock":
+            # Sampled on every clock, as the tests' own check of the recording by changes.
+            self._every_clock = ([], [])
+            self.sim.add_testbench(self._laser_recorder_every_clock, background=True)
+        elif record_laser:
+            self._pin_changes.append(None)      # power-up's, filled in at once
+            self.sim.add_testbench(self._pins_at_power_up)
+            self.sim.add_process(self._laser_recorder)
         # Start the processes now, in this thread (a simulator never run leaves its testbench
         # coroutines un-awaited, which Python reports at garbage collection).
         self.run_for(1 / clk_freq)
@@ -61,26 +89,93 @@ class SimBoard:
                 # The end of the run_for() step in which the frame ended.
                 self.parity_times.append(self.now)
 
-    async def _laser_recorder(self, ctx):
+    def _recorded_pins(self):
         top = self.top
+        return [top.laser_mo, top.laser_am, top.laser_prr, top.interlock_open,
+                top.laser_latch, top.laser_power, top.laser_enable,
+                top.laser_alarm if hasattr(top, "laser_alarm") else C(0, 1), top.laser_guide,
+                top.xy2_sync]
+
+    async def _pins_at_power_up(self, ctx):
+        self._pin_changes[0] = (0, tuple(ctx.get(pin) for pin in self._recorded_pins()))
+
+    async def _laser_recorder(self, ctx):
+        # Clock k's entry is the pins once the design has settled after the k-th rising clock
+        # edge (entry 0: at power-up, as _pins_at_power_up finds them). A process sees every
+        # change, the last of a clock's the settled one: a change with clk high is on a rising
+        # edge, that edge's clock; one with clk low (the host's interlock and alarm pins
+        # change between edges) is first seen on the next edge.
+        pins = self._recorded_pins()
+        signals = [pin for pin in pins if isinstance(pin, Signal)]   # (no alarm: a constant)
+        async for sampled in ctx.changed(*signals).sample(*pins, self._counted.cycles,
+                                                          self._counted.sync.clk):
+            *values, clock, clk = sampled[len(signals):]
+            self._pin_changes.append((clock + (not clk), tuple(values)))
+
+    async def _laser_recorder_every_clock(self, ctx):
+        pins = self._recorded_pins()
         while True:
-            self.laser_pins.append((ctx.get(top.laser_mo), ctx.get(top.laser_am),
-                                    ctx.get(top.laser_prr), ctx.get(top.interlock_open),
-                                    ctx.get(top.laser_latch), ctx.get(top.laser_power),
-                                    ctx.get(top.laser_enable),
-                                    ctx.get(top.laser_alarm) if hasattr(top, "laser_alarm")
-                                    else 0, ctx.get(top.laser_guide)))
-            self.sync_pins.append(ctx.get(top.xy2_sync))
+            values = tuple(ctx.get(pin) for pin in pins)
+            self._every_clock[0].append(values[:-1])
+            self._every_clock[1].append(values[-1])
             await ctx.tick()
+
+    def _clocks_so_far(self):
+        """Rising clock edges simulated (the first at half a period, then one a period);
+        one at the very end of the last run_for() is not."""
+        edges = self.now * self.clk_freq - 0.5
+        nearest = round(edges)
+        return max(0, nearest if abs(edges - nearest) < 1e-6 else math.floor(edges) + 1)
+
+    def _pins_on_every_clock(self):
+        """Bring :attr:`laser_pins` and :attr:`sync_pins` up to now from the changes."""
+        laser, sync = self._by_clock
+        for clock, values in self._pin_changes[self._changes_seen:]:
+            if clock < len(laser):              # (a clock already filled in: from it on)
+                laser[clock:] = [values[:-1]] * (len(laser) - clock)
+                sync[clock:] = [values[-1]] * (len(sync) - clock)
+            else:
+                if clock > len(laser):
+                    laser.extend([laser[-1]] * (clock - len(laser)))
+                    sync.extend([sync[-1]] * (clock - len(sync)))
+                laser.append(values[:-1])
+                sync.append(values[-1])
+        self._changes_seen = len(self._pin_changes)
+        if laser:
+            missing = self._clocks_so_far() + 1 - len(laser)
+            laser.extend([laser[-1]] * missing)
+            sync.extend([sync[-1]] * missing)
+        return laser, sync
+
+    @property
+    def laser_pins(self):
+        """(laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power,
+        laser_enable, laser_alarm, laser_guide) on every clock, if recorded."""
+        if hasattr(self, "_every_clock"):
+            return self._every_clock[0]
+        return self._pins_on_every_clock()[0]
+
+    @property
+    def sync_pins(self):
+        """xy2_sync on every clock, if the laser is recorded (frame k's position is in force
+        from sync's (k+1)-th rising edge: the end of that frame)."""
+        if hasattr(self, "_every_clock"):
+            return self._every_clock[1]
+        return self._pins_on_every_clock()[1]
 
     async def _interlock(self, ctx):
         # The interlock loop and the laser's alarm outputs; a test opens or closes the loop by
         # setting `interlock_closed`, raises every alarm by clearing `alarms_clear`.
+        # (Each setting settles the design: only a change is set.)
         alarm = getattr(self.top, "laser_alarm", None)
+        pins = None
         while True:
-            ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
-            if alarm is not None:
-                ctx.set(alarm, 0 if self.alarms_clear else 2 ** len(alarm) - 1)
+            now = (self.interlock_closed, self.alarms_clear)
+            if now != pins:
+                ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
+                if alarm is not None:
+                    ctx.set(alarm, 0 if self.alarms_clear else 2 ** len(alarm) - 1)
+                pins = now
             await ctx.delay(1e-6)
 
     async def _uart_host_tx(self, ctx):
@@ -204,8 +299,9 @@ class SimUARTTransport:
     def query(self, frame):
         received = len(self.board.uart_from_board)
         self.send_bytes(frame)
+        # Looked for after every bit, so that the next frame follows the answer at once.
         self.board.run_until(lambda: len(self.board.uart_from_board) >= received + 4,
-                             timeout=0.01)
+                             timeout=0.01, step=self.board.bit_time)
         return bytes(self.board.uart_from_board[received:received + 4])
 
 
@@ -222,7 +318,12 @@ class SimSPITransport:
     def transfer_bits(self, bits):
         results = []
         self.board.spi_queue.append((list(bits), results, self.half_period, self.phase))
-        self.board.run_until(lambda: results and results[-1] == "done", timeout=0.01)
+        # The host's part of a transfer (its phase, two half periods a bit, one more, and four
+        # with cs_n high), then a look after every half period, so that the next transfer
+        # follows this one at once.
+        self.board.run_for(self.phase + (2 * len(bits) + 5) * self.half_period)
+        self.board.run_until(lambda: results and results[-1] == "done", timeout=0.01,
+                             step=self.half_period)
         return results[:-1]
 
     def transfer(self, frame):
@@ -237,3 +338,31 @@ class SimSPITransport:
         from galvoscan.client import FTDISPITransport
         self.transfer(frame)
         return self.transfer(FTDISPITransport.FETCH)
+
+
+#: What the tests' ``--sim`` boards differ in from the command line's (the iCEBreaker's 12 MHz,
+#: the 5 ms MO lead): 8 MHz, the slowest clock that carries the link's 1 Mbaud (8 clocks a
+#: bit) and XY2-100 (4 clocks a bit), so a third fewer clocks to simulate for the same frames,
+#: and a 0.5 ms MO lead, for jobs whose tests check what is marked, not the lead
+#: (tests/test_laser.py checks the lead).
+QUICK_SIM_BOARD = {"clk_freq": 8e6, "mo_lead": 0.5e-3}
+
+
+@contextlib.contextmanager
+def quick_sim_board(**top_kwargs):
+    """Within it, ``--sim`` (``galvoscan.sim.board.SimulatedBoard``) builds its board with
+    :data:`QUICK_SIM_BOARD` and ``top_kwargs`` (e.g. ``vector_queue_depth``)."""
+    import galvoscan.sim.board as module
+    original = module.SimulatedBoard
+
+    class QuickSimulatedBoard(original):
+        #: Every board built, for the test to look at.
+        built = []
+
+        def __init__(self, **kwargs):
+            super().__init__(**{**QUICK_SIM_BOARD, **top_kwargs, **kwargs})
+            self.built.append(self)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(module, "SimulatedBoard", QuickSimulatedBoard)
+        yield QuickSimulatedBoard

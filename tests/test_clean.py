@@ -11,6 +11,8 @@ from galvoscan.jobs.area import plan_area_job
 from galvoscan.jobs.plan import PlanError
 from galvoscan.jobs.profile import default_profile
 
+from sim_board import quick_sim_board
+
 
 NOPORT = ["--port", "/nonexistent/ttyUSB9"]
 
@@ -87,8 +89,9 @@ def test_bad_command_lines_are_refused_before_the_link(args, words, capsys):
 
 @pytest.mark.slow
 def test_clean_on_the_simulated_board_counts_its_pulses(capsys):
-    assert main(["clean", "--area", "3x2", "--speed", "2000", "--prr", "50",
-                 "--duration", "0.001", "--sim", "--json"]) == 0
+    with quick_sim_board():
+        assert main(["clean", "--area", "3x2", "--speed", "2000", "--prr", "50",
+                     "--duration", "0.001", "--sim", "--json"]) == 0
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     # 1 ms at 50 kHz is 50 pulses; the host stops once it has counted them.
     assert result["pulses"] >= 50

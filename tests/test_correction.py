@@ -250,19 +250,23 @@ def test_correction_on_the_wires_through_the_host_link():
 
     # Off: the wires carry the plain spiral again.
     client.write("cor_enable", 0)
+    # Frames that end more than 20 µs after the write (not the two on their way): a frame's
+    # time is the end of the run in which it ended, so the 20 µs are a run of their own.
+    board.run_for(20e-6)
     since = board.now
     board.run_for(1e-3)
     plain = set(points)
-    later = [f for t, f in board.xy2_frames() if t > since + 20e-6]
+    later = [f for t, f in board.xy2_frames() if t > since]
     assert later and all(f in plain for f in later)
 
     # A new table through the registers, then on again: the wires follow the new table.
     new = random_table(9, rng, -1500, 1500)
     upload_table(client, new, verify=True)
     client.write("cor_enable", 1)
+    board.run_for(20e-6)
     since = board.now
     board.run_for(1e-3)
-    later = [f for t, f in board.xy2_frames() if t > since + 20e-6]
+    later = [f for t, f in board.xy2_frames() if t > since]
     x, y, _ = new.apply([p[0] for p in points], [p[1] for p in points])
     corrected = set(zip(x.tolist(), y.tolist()))
     assert later and all(f in corrected for f in later)

@@ -26,29 +26,49 @@ def test_signature():
 
 
 def step_lines(lines):
-    """Points the DDA gives for each (x0, y0, x1, y1, pitch), with a stalling consumer."""
+    """Points the DDA gives for each (x0, y0, x1, y1, pitch), with a stalling consumer.
+
+    One wait on every clock edge for the whole run (a new wait each clock costs more than the
+    DDA itself): each line is offered until the edge that takes it, then the consumer, ready
+    on a random 70 % of clocks, takes points until the DDA is no longer busy."""
     dut = LineDDA()
     results = []
 
     async def testbench(ctx):
         stall = random.Random(7)
-        for x0, y0, x1, y1, pitch in lines:
+        todo = list(lines)
+
+        def offer():
+            x0, y0, x1, y1, pitch = todo.pop(0)
             ctx.set(dut.pitch, pitch)
             ctx.set(dut.segment.payload, {"x0": x0, "y0": y0, "x1": x1, "y1": y1})
             ctx.set(dut.segment.valid, 1)
-            await ctx.tick().until(dut.segment.ready)
-            ctx.set(dut.segment.valid, 0)
-            points = []
-            while True:
-                ready = stall.random() < 0.7
-                ctx.set(dut.points.ready, ready)
-                _, _, valid, x, y, busy = await ctx.tick().sample(
-                    dut.points.valid, dut.points.payload.x, dut.points.payload.y, dut.busy)
+
+        if not todo:
+            return
+        offer()
+        points = None                   # None: the line is offered, not taken yet
+        ready = False
+        async for _, _, taken, valid, x, y, busy in ctx.tick().sample(
+                dut.segment.ready, dut.points.valid, dut.points.payload.x,
+                dut.points.payload.y, dut.busy):
+            if points is None:
+                if not taken:
+                    continue
+                ctx.set(dut.segment.valid, 0)
+                points = []
+            else:
                 if valid and ready:
                     points.append((x, y))
                 if not busy:
-                    break
-            results.append(points)
+                    results.append(points)
+                    points = None
+                    if not todo:
+                        return
+                    offer()
+                    continue
+            ready = stall.random() < 0.7
+            ctx.set(dut.points.ready, ready)
 
     sim = Simulator(dut)
     sim.add_clock(1e-6)

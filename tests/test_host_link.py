@@ -60,6 +60,9 @@ def test_host_starts_stops_and_reshapes_the_spiral(kind):
 
     # Stop: the mirrors hold still.
     client.write("run", 0)
+    # (Not the two frames already on their way when the write lands: the one on the wires and
+    # the next, whose point was taken before.)
+    board.run_for(20e-6)
     stopped_at = board.now
     board.run_for(2e-3)
     held = board.frames_after(stopped_at)

@@ -14,6 +14,8 @@ import pytest
 
 from galvoscan.cli import main
 
+from sim_board import quick_sim_board
+
 
 SPEED_MM_S = 2000.0
 PRR_KHZ = 50.0
@@ -92,7 +94,8 @@ def svg_result(tmp_path_factory):
     import contextlib
     import io
     out = io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()), \
+            quick_sim_board():
         assert main(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
                      "--hatch", str(HATCH_MM), "--machine", str(machine), "--sim",
                      "--json"]) == 0
@@ -149,21 +152,33 @@ def dxf_drawing(path, zigzag_points):
     msp.add_arc((2, 2), 1.5, 0, 180)
     # A polyline with a bulge of 1: a half circle from (5, 0) to (7, 0), centre (6, 0).
     msp.add_lwpolyline([(5, 0, 0, 0, 1), (7, 0)], format="xyseb")
-    # Many short segments: more than the board's queue holds.
+    # Many short segments: with the rest, more than the board's queue holds.
     msp.add_lwpolyline([(0.05 * i, -1 - 0.03 * (i % 2)) for i in range(zigzag_points)])
     doc.saveas(path)
+
+
+# The vector queue of the board the DXF job runs on: a real board's holds 512 segments; this
+# one is built to hold 48, so that a job longer than the queue (the host refilling it as it
+# empties) is a few dozen segments to send, not several hundred.
+SHORT_QUEUE = 48
 
 
 @pytest.mark.slow
 def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
     path = tmp_path / "parts.dxf"
-    zigzag = 540
+    # With the line, the arc and the bulge (30 segments) the job is 55 segments, longer than
+    # the queue by a seventh, as 540 zigzag points (570 segments) were for the real board's
+    # 512: the part past the queue must reach the board while the queue's is marked.
+    zigzag = SHORT_QUEUE // 2
     dxf_drawing(path, zigzag)
     machine = tmp_path / "machine.toml"
     machine.write_text(PROFILE)
-    result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
-                       "--machine", str(machine), "--sim", "--json"], capsys)
-    assert result["segments"] > 512
+    with quick_sim_board(vector_queue_depth=SHORT_QUEUE) as board_class:
+        result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr",
+                           str(PRR_KHZ), "--machine", str(machine), "--sim", "--json"], capsys)
+    [board] = board_class.built
+    assert board.top.vector_queue_depth == SHORT_QUEUE
+    assert result["segments"] > SHORT_QUEUE
     assert result["underruns"] == result["errors"] == result["rejected"] == 0
     assert abs(result["speed_mm_s"] - SPEED_MM_S) / SPEED_MM_S <= 0.02
     tolerance = HALF_PITCH_MM + CHORD_MM + UNIT_MM
@@ -173,9 +188,11 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
         return min(distance_to_segment(p, (0, 0), (4, 0)),
                    abs(math.hypot(p[0] - 2, p[1] - 2) - 1.5) if p[1] >= 2 - 1e-3 else 9,
                    abs(math.hypot(p[0] - 6, p[1]) - 1) if p[1] <= 1e-3 else 9,
-                   min(distance_to_segment(p, zig[i], zig[i + 1]) for i in
-                       range(max(0, int(p[0] / 0.05) - 2), min(zigzag - 1,
-                                                                int(p[0] / 0.05) + 2))))
+                   # (the zigzag's segments near p's x: none past its end)
+                   min((distance_to_segment(p, zig[i], zig[i + 1]) for i in
+                        range(max(0, int(p[0] / 0.05) - 2), min(zigzag - 1,
+                                                                 int(p[0] / 0.05) + 2))),
+                       default=9))
 
     marks = np.array(result["marks"])
     for p in marks[::7]:                        # every 7th point keeps the test quick

@@ -12,14 +12,16 @@ from galvoscan.client import ClientError, HostClient, SerialTransport
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
 
+from sim_board import QUICK_SIM_BOARD
+
 
 class FakeBoard:
     """Registers in a dict, a queue that drains by ``drain`` segments per read of fifo_free,
     and a script of status flags; every write is logged."""
 
-    def __init__(self, *, drain=64, flags=(), fail_after=None):
+    def __init__(self, *, drain=64, flags=(), fail_after=None, depth=QUEUE_DEPTH):
         self.values = {r.name: r.reset for r in BY_NAME.values()}
-        self.values["fifo_free"] = QUEUE_DEPTH
+        self.depth = depth
         self.queue = 0
         self.drain = drain
         self.flags = set(flags)
@@ -39,7 +41,7 @@ class FakeBoard:
             raise ClientError("no answer from the board")
         self.log.append((name, value))
         if name == "vec_op":
-            assert self.queue < QUEUE_DEPTH, "written into a full queue"
+            assert self.queue < self.depth, "written into a full queue"
             self.queue += 1
         else:
             self.values[name] = value
@@ -50,7 +52,7 @@ class FakeBoard:
         if name == "fifo_free":
             if self.values["run"]:
                 self.queue = max(0, self.queue - self.drain)
-            return QUEUE_DEPTH - self.queue
+            return self.depth - self.queue
         if name == "mode":
             return self.values["mode"]
         return self.values.get(name, 0)
@@ -76,6 +78,24 @@ def test_every_segment_goes_in_order_and_the_queue_never_overflows():
     assert names.index("pitch") < names.index("vec_x")
     assert names.index("arm") < names.index("run", names.index("arm"))
     assert board.log[-3:] == [("arm", 0), ("run", 0), ("guide", 0)]
+
+
+def test_the_queue_depth_is_the_boards():
+    """A board whose queue is shorter than the bitstream's 512 (a simulated one): the streamer
+    reads its depth while it is empty, and never writes into a full queue."""
+    board = FakeBoard(drain=10, depth=32)
+    report = JobStreamer(board, poll_s=0).run_vector(job(300), {}, timeout_s=5)
+    assert report.segments == 301
+    assert sum(1 for name, _ in board.log if name == "vec_op") == 301
+
+
+def test_a_board_with_segments_left_is_refused():
+    board = FakeBoard()
+    board.values["run"] = 0
+    board.queue = 3                             # an earlier job's, not running
+    with pytest.raises(JobAborted, match="still holds segments"):
+        JobStreamer(board, poll_s=0).run_vector(job(10), {})
+    assert board.log == []
 
 
 def test_a_fault_mid_job_disarms_first():
@@ -123,7 +143,7 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
     arm = 0, and from the end of that frame every laser output is low within one XY2-100
     frame (10 µs)."""
     from galvoscan.sim.board import LASER_PINS, PTYServer, SimulatedBoard
-    board = SimulatedBoard()
+    board = SimulatedBoard(**QUICK_SIM_BOARD)
     server = PTYServer(board).start()
     emitting = threading.Event()
 
@@ -139,8 +159,10 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
         with SerialTransport(server.port, timeout=60) as link:
             client = HostClient(link)
             streamer = JobStreamer(client, poll_s=0.01)
+            # 12 marks of 250 points each at 50 kHz: 60 ms of emission, far more than the
+            # host takes to stop it (and few frames to send before it starts).
             segments = [("jump", 30000, 30000)] + \
-                [("mark", 30000 + 600 * (i % 2), 30000 + 40 * i) for i in range(1, 40)]
+                [("mark", 30000 + 3000 * (i % 2), 30000 + 40 * i) for i in range(1, 13)]
             watcher.start()
             with pytest.raises(KeyboardInterrupt):
                 streamer.run_vector(segments, {"pitch": 12, "pulses_per_point": 1,
@@ -181,7 +203,7 @@ def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
     """`--frame`: the job's bounding box walked with the guide laser on, never armed."""
     from galvoscan.jobs.vector_job import frame_segments
     from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
-    board = SimulatedBoard()
+    board = SimulatedBoard(**QUICK_SIM_BOARD)
     client = HostClient(SimTransport(board))
     box = (-1.0, -0.5, 1.0, 0.5)                      # mm
     segments = frame_segments(box, 110, 2)

@@ -11,6 +11,7 @@ from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
 from galvoscan.client import ClientError, HostClient
+from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
 from sim_board import SimBoard, SimSPITransport
@@ -28,8 +29,9 @@ def test_model_follows_001():
 
 # --- running a job on the simulated board -------------------------------------------------------
 
-def start_board(clk_freq=4e6, **settings):
+def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
     board = SimBoard(clk_freq=clk_freq, record_laser=True, mo_lead=0.2e-3,
+                     vector_queue_depth=vector_queue_depth,
                      settings=ScanSettings(mode="vector", run=False, **settings))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     return board, client
@@ -129,9 +131,22 @@ def test_line_speed_of_the_001_table(prr_100hz, speed):
     assert mm / seconds / 1e3 == pytest.approx(speed * 1.0067, rel=0.01)   # 60 units = 0.1007 mm
 
 
+def test_the_builds_queue_reads_512_free_when_empty():
+    board = SimBoard(settings=ScanSettings(mode="vector", run=False))
+    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    assert client.read("fifo_free") == VECTOR_QUEUE_DEPTH == 512
+    assert client.read("status") & (1 << STATUS_BITS["vector_busy"]) == 0
+
+
+# The queue filled here is built 16 deep, not the build's 512 (the same FIFO; fifo_free counts
+# down from its depth): full after 17 writes, not 513.
+SHORT_QUEUE = 16
+
+
 def test_full_queue_refuses_and_counts():
-    board, client = start_board()
-    for _ in range(VECTOR_QUEUE_DEPTH + 1):      # the queue, and one in the sequencer's hand
+    board, client = start_board(vector_queue_depth=SHORT_QUEUE)
+    assert client.read("fifo_free") == SHORT_QUEUE
+    for _ in range(SHORT_QUEUE + 1):             # the queue, and one in the sequencer's hand
         client.write("vec_op", 0)
     assert client.read("fifo_free") == 0
     assert client.read("errors") == 0
@@ -141,7 +156,7 @@ def test_full_queue_refuses_and_counts():
     # Nothing queued was lost: every jump comes out once the mode runs.
     client.write("jump_delay", 1)
     client.write("run", 1)
-    board.run_until(lambda: client.read("fifo_free") == VECTOR_QUEUE_DEPTH, timeout=20e-3)
+    board.run_until(lambda: client.read("fifo_free") == SHORT_QUEUE, timeout=20e-3)
 
 
 def test_underrun_holds_with_the_laser_off_and_resumes_without_repeating():

@@ -1,6 +1,9 @@
 """Running a job on a board: parameters set, the laser armed, vector segments streamed into the
 512-segment queue as it empties, and the laser disarmed however the job ends.
 
+The queue's depth is the board's: read off ``fifo_free`` while the queue is empty (a real
+board's is 512; a simulated one may be built shorter).
+
 The link carries one frame at a time; a segment is three (``vec_x``, ``vec_y``, ``vec_op``). The
 streamer writes at most a batch of segments between two reads of ``fifo_free``, so no more
 than a batch's frames are ever in flight, and a read answered tells it the board has taken
@@ -23,7 +26,7 @@ __all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS
            "DEFAULT_BATCH"]
 
 
-#: Segments the board's vector queue holds.
+#: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
 QUEUE_DEPTH = 512
 #: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
 DEFAULT_BATCH = 128
@@ -102,6 +105,8 @@ class JobStreamer:
         self.progress = progress
         self._pulses_seen = None
         self.pulses = 0
+        #: Segments the board's queue holds, read by :meth:`check_ready` (None before).
+        self.queue_depth = None
 
     # --- the board's state ---------------------------------------------------------------------
 
@@ -137,9 +142,12 @@ class JobStreamer:
             raise JobAborted("the board is armed already: another job may be running "
                              "(`galvoscan send arm=0` stops it)")
         free = self.board.read("fifo_free")
-        if free != QUEUE_DEPTH or flags.vector_busy:
-            raise JobAborted(f"the board's vector queue still holds {QUEUE_DEPTH - free} "
-                             f"segments of an earlier job: reset the board first")
+        # Not busy: the queue is empty and nothing is in the sequencer's hand, so every place
+        # is free and `free` is the queue's depth.
+        if flags.vector_busy:
+            raise JobAborted(f"the board's vector queue still holds segments of an earlier "
+                             f"job ({free} places free): reset the board first")
+        self.queue_depth = free
 
     # --- stopping ------------------------------------------------------------------------------
 
@@ -189,7 +197,9 @@ class JobStreamer:
         segments = list(segments)
         for segment in segments:
             _check_segment(*segment)
-        free = QUEUE_DEPTH
+        # Every place is free (checked by check_ready), else as many as the board says.
+        free = self.queue_depth if self.queue_depth is not None else \
+            self.board.read("fifo_free")
         sent = 0
         started = False
         deadline = time.monotonic() + timeout_s

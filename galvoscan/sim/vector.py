@@ -13,7 +13,7 @@ from amaranth.sim import Simulator
 
 from ..client import encode_read, encode_write
 from ..gateware.host.regmap import BY_NAME, Status
-from ..gateware.top import VECTOR_QUEUE_DEPTH, GalvoScanTop, ScanSettings
+from ..gateware.top import GalvoScanTop, ScanSettings
 from ..job import OPS
 from .link import Timed, spi_transfer
 from .xy2_receiver import XY2Receiver, frame_of_each_pulse
@@ -101,7 +101,7 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
                             ("watchdog", BY_NAME["watchdog"].high), ("arm", 1)):
             await write(ctx, name, value)
         pending = list(job)
-        free = VECTOR_QUEUE_DEPTH
+        free = await read(ctx, "fifo_free")     # the queue is empty: its depth
         started = False
         while pending:
             if free == 0:
