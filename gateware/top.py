@@ -94,6 +94,10 @@ class GalvoScanTop(wiring.Component):
         unknown addresses, and vector mode (timed by the laser's pulses) cannot be built.
     uart_reply_depth : int
         Read answers the UART port queues (1 on the smallest boards).
+    register_reads : str
+        How the register file reads back what it holds: ``"ram"``, from a copy in block RAM
+        (two RAMs, some 90 cells fewer on the full build), or ``"mux"``, through a multiplexer
+        (the smallest boards).
     laser_alarms : int
         Laser alarm inputs, 0 … 4 (each latches an alarm fault while armed).
     vector_queue_depth : int
@@ -135,7 +139,7 @@ class GalvoScanTop(wiring.Component):
     def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=None, table=None,
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
-                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2,
+                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
                  vector_queue_depth=VECTOR_QUEUE_DEPTH):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
@@ -172,6 +176,9 @@ class GalvoScanTop(wiring.Component):
         self.links = links
         self.laser = bool(laser)
         self.uart_reply_depth = uart_reply_depth
+        if register_reads not in ("ram", "mux"):
+            raise ValueError(f"register_reads must be ram or mux, not {register_reads!r}")
+        self.register_reads = register_reads
         if not self.laser and "vector" in modes:
             raise ValueError("vector mode times its points by the laser's pulses: it needs the "
                              "laser controller")
@@ -214,7 +221,8 @@ class GalvoScanTop(wiring.Component):
 
         # --- host link ----------------------------------------------------------------------
         m.submodules.decoder = decoder = CommandDecoder()
-        m.submodules.registers = regs = RegisterFile(self.regmap)
+        m.submodules.registers = regs = RegisterFile(
+            self.regmap, reads_from_ram=self.register_reads == "ram")
         # A link left out of the build: its pins are unused (the outputs idle) and the decoder
         # never hears from it.
         if "spi" in self.links:

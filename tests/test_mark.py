@@ -265,7 +265,7 @@ def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
     path = tmp_path / "shape.svg"
     path.write_text(SVG)
     process = subprocess.Popen([sys.executable, "-m", "galvoscan.cli", "mark", str(path),
-                                "--sim", "--speed", "1000", "--prr", "50"],
+                                "--sim", "--speed", "1000", "--prr", "50", "--passes", "20"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                env=dict(os.environ, PYTHONUNBUFFERED="1"))
     time.sleep(8)

@@ -238,6 +238,17 @@ def test_each_access_kind():
         inputs={"status": 0x1a5, "errors": 12345, "cor_nodes": 17, "pulses": 65535})
 
 
+def test_each_access_kind_read_through_a_multiplexer():
+    """The smallest boards' register file (no RAM copy): the same rules."""
+    model = RegisterModel(table())
+    accesses = [(0x04, 7, True, True), (0x04, 0, False, True), (0x12, 2001, True, True),
+                (0x00, 5, True, True), (0x44, 1, True, True), (0x44, 0, False, True),
+                (0x22, 1, True, True), (0x22, 0, False, True), (0x0a, 0, False, True),
+                (0x7f, 0, False, True)]
+    run(RegisterFile(register_map(), reads_from_ram=False), model, accesses,
+        inputs={"status": 0x1a5, "errors": 12345, "cor_nodes": 17})
+
+
 def test_strobe_is_one_clock_per_write():
     model = RegisterModel(table())
     # Two writes of 1 in a row: two one-clock pulses, back to back; then it falls.

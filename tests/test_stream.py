@@ -159,10 +159,10 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
         with SerialTransport(server.port, timeout=60) as link:
             client = HostClient(link)
             streamer = JobStreamer(client, poll_s=0.01)
-            # 12 marks of 250 points each at 50 kHz: 60 ms of emission, far more than the
-            # host takes to stop it (and few frames to send before it starts).
+            # 40 marks of 250 points each at 50 kHz: 200 ms of emission, far more than the
+            # host takes to stop it, however busy the machine (the interrupt cuts it short).
             segments = [("jump", 30000, 30000)] + \
-                [("mark", 30000 + 3000 * (i % 2), 30000 + 40 * i) for i in range(1, 13)]
+                [("mark", 30000 + 3000 * (i % 2), 30000 + 40 * i) for i in range(1, 41)]
             watcher.start()
             with pytest.raises(KeyboardInterrupt):
                 streamer.run_vector(segments, {"pitch": 12, "pulses_per_point": 1,

@@ -13,6 +13,7 @@ own time (its laser pulses) rather than by the host's clock.
 import os
 import select
 import threading
+import time
 from collections import deque
 
 from amaranth.sim import Simulator
@@ -211,8 +212,17 @@ class PTYServer:
         return self
 
     def serve_forever(self):
-        """Serve in this thread until :meth:`stop` (or Ctrl-C)."""
-        self._serve()
+        """Serve until Ctrl-C (or :meth:`stop` from another thread).
+
+        The simulation runs in the server's own thread, and this one only waits: a Ctrl-C then
+        lands here, never inside a step of the simulator (whose coroutines it would leave
+        half-run), and the server stops between two steps."""
+        self.start()
+        try:
+            while self._thread.is_alive():
+                time.sleep(0.1)
+        finally:
+            self.stop()
 
     def _serve(self):
         board = self.board

@@ -67,11 +67,16 @@ class RegisterFile(wiring.Component):
         drive: the command proofs drive it with any value at all, since none of their
         properties depends on a value read, and the read path's two memories would make every
         step of their search far slower (the read path is simulated against a model instead).
+    reads_from_ram : bool
+        Read the registers that hold a value back from the block RAM copy (default), or
+        through a multiplexer (the smallest boards: few registers, and an HX1K whose placer
+        fares better without the RAMs). Either way the value comes a clock after the address.
     """
 
-    def __init__(self, regmap=None, *, read_back=True):
+    def __init__(self, regmap=None, *, read_back=True, reads_from_ram=True):
         regmap = register_map() if regmap is None else regmap
         self.read_back = bool(read_back)
+        self.reads_from_ram = bool(reads_from_ram)
         if not isinstance(regmap, RegisterMap):
             raise TypeError(f"regmap must be a RegisterMap, not {regmap!r}")
         for name in regmap.choices:
@@ -136,6 +141,17 @@ class RegisterFile(wiring.Component):
                                          written[held.index(reg)].eq(1)]
 
         if not self.read_back:
+            return m
+        if not self.reads_from_ram:
+            # Every register's value through one multiplexer, held for the clock after.
+            value_read = Signal(16)
+            m.d.sync += value_read.eq(0)
+            with m.Switch(bus.address):
+                for reg in self.regmap:
+                    if reg.access != "strobe":
+                        with m.Case(reg.address):
+                            m.d.sync += value_read.eq(getattr(self, reg.name))
+            m.d.comb += bus.read_data.eq(value_read)
             return m
 
         # --- reads --------------------------------------------------------------------------
