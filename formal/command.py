@@ -29,15 +29,16 @@ class CommandPathSpec(Elaboratable):
     simulated against a model in ``tests/test_uart_port.py``). The reset is free too, mid-frame
     included. The spec reads the SPI pins as the design must: through two flip-flops. Proved:
 
-    * **writes**: a register is written only on the clock after ``cs_n`` rose at the end of a
+    * **writes**: a register is written only two clocks after ``cs_n`` rose at the end of a
       frame of exactly 32 SCK rising edges (counted since ``cs_n`` fell after the last reset)
-      whose last byte is 0x64 and whose address bit 7 is clear, or on the clock a UART frame
-      event of 32 bits with those bytes is taken; and it writes that frame's address and data.
-      So a frame cut short, run over, or cut by a reset never writes;
+      whose last byte is 0x64 and whose address bit 7 is clear, or on the clock after a UART
+      frame event of 32 bits with those bytes is taken; and the access given to the register
+      file on the clock the frame was taken is that frame's address and data. So a frame cut
+      short, run over, or cut by a reset never writes;
     * **one frame a clock**: a UART frame waits while an SPI frame is decoded;
-    * **counting**: ``errors`` goes up by one on the clock after a frame is taken and not
-      accepted (up to 65535), and changes at no other time; a frame is accepted only if it is
-      complete with check byte 0x64.
+    * **counting**: a frame is accepted or not on the clock after it is taken, and only if it
+      is complete with check byte 0x64; ``errors`` goes up by one on the clock after a frame is
+      not accepted (up to 65535), and changes at no other time.
 
     A frame may last for ever, so k-induction alone cannot relate the spec's view of the frame
     to the SPI target's; helper invariants (also proved) say that the two agree.
@@ -165,25 +166,36 @@ class CommandPathSpec(Elaboratable):
             return (frame_bits == FRAME_BITS) & (frame_word[0:8] == CHECK_BYTE)
 
         uart_taken = uart.valid & ~ended
+        taken = ended | uart_taken
+        # A frame taken on one clock is decided on the next (the register file checks the
+        # access on the clock it is given and writes on the next): what was taken, as seen
+        # on the clock after.
+        good_q, complete_q, taken_q, ended_q = Signal(), Signal(), Signal(), Signal()
+        m.d.sync += [
+            good_q.eq((ended & good_write(word_bits, word)) |
+                      (uart_taken & good_write(uart.payload.bits, uart.payload.word))),
+            complete_q.eq(Mux(ended, complete(word_bits, word),
+                              uart_taken & complete(uart.payload.bits, uart.payload.word))),
+            taken_q.eq(taken),
+            ended_q.eq(ended),
+        ]
         write = registers.bus.write_en & registers.bus.write_ok
         m.d.comb += [
-            Assert(~write | (ended & good_write(word_bits, word)) |
-                   (uart_taken & good_write(uart.payload.bits, uart.payload.word)),
+            # On the clock after the frame was taken, the access given on that clock being
+            # the frame's address and data.
+            Assert(~write | good_q,
                    "a register is written only by a complete frame with check byte 0x64"),
             Assert(uart.ready == ~ended, "one frame a clock: a UART frame waits for SPI"),
         ]
 
         # --- every frame accepted or counted ------------------------------------------------
-        taken = ended | uart_taken
         accepted = decoder.accepted
-        m.d.comb += Assert(
-            ~accepted | Mux(ended, complete(word_bits, word),
-                            uart_taken & complete(uart.payload.bits, uart.payload.word)),
-            "only a complete frame with check byte 0x64 is accepted")
+        m.d.comb += Assert(~accepted | (taken_q & complete_q),
+                           "only a complete frame with check byte 0x64 is accepted")
         m.d.comb += Assert(~write | accepted, "a write is an accepted frame")
         errors_q = Signal.like(decoder.errors)
         rejected_q = Signal()
-        m.d.sync += [errors_q.eq(decoder.errors), rejected_q.eq(taken & ~accepted)]
+        m.d.sync += [errors_q.eq(decoder.errors), rejected_q.eq(taken_q & ~accepted)]
         m.d.comb += Assert(
             decoder.errors == Mux((errors_q == _ERRORS_TOP) | ~rejected_q, errors_q,
                                   errors_q + 1),
@@ -204,13 +216,13 @@ class CommandPathSpec(Elaboratable):
         # --- covers -------------------------------------------------------------------------
         if self.uart_live:
             m.d.comb += [
-                Cover(write & uart_taken, "a register is written over the UART"),
+                Cover(write & taken_q & ~ended_q, "a register is written over the UART"),
                 Cover(rejected_q & (errors_q != 0), "a second rejected frame counted"),
                 Cover(decoder.uart_replies.valid, "a read is answered over the UART"),
             ]
         else:
             m.d.comb += [
-                Cover(write & ended, "a register is written over SPI"),
+                Cover(write & ended_q, "a register is written over SPI"),
                 Cover(ended & (word_bits == FRAME_BITS - 1) & (word[0:8] == CHECK_BYTE),
                       "a frame with a good check byte cut short by cs_n"),
                 Cover(decoder.spi_replies.valid, "a read is answered over SPI"),

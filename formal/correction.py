@@ -234,8 +234,10 @@ class CorrectionLinkSpec(Elaboratable):
 
         reset = ResetSignal("sync")
         bus = regs.bus
-        asked = (bus.write_en & bus.write_ok & (bus.address == regmap["cor_write"].address) &
-                 (bus.write_data == 1))
+        # The access being written is the one given on the clock before (RegisterBus).
+        asked = (bus.write_en & bus.write_ok &
+                 (regs._write_address == regmap["cor_write"].address) &
+                 (regs._write_data == 1))
         owed = Signal()
         node = Signal.like(regs.cor_node)
         dx, dy = Signal(16), Signal(16)
@@ -275,12 +277,13 @@ class CorrectionLinkSpec(Elaboratable):
 
         changed = Signal()
         with m.If(stage.write_pending & bus.write_en & bus.write_ok &
-                  (bus.address == regmap["cor_dx"].address)):
+                  (regs._write_address == regmap["cor_dx"].address)):
             m.d.sync += changed.eq(1)
         m.d.comb += [
             Cover(stage._ram_write & changed,
                   "a write made after cor_dx changed while it waited"),
-            Cover(owed & decoder.write_refused & (bus.address == regmap["cor_write"].address),
+            Cover(owed & decoder.write_refused &
+                  (regs._write_address == regmap["cor_write"].address),
                   "a cor_write refused while one waits"),
         ]
         return m

@@ -290,7 +290,7 @@ class GalvoScanTop(wiring.Component):
             m.submodules.vector = sources[Mode.VECTOR] = vector = VectorSequencer()
             for name in ("pitch", "pulses_per_point", "jump_delay"):
                 m.d.comb += getattr(vector, name).eq(getattr(regs, name))
-            self._elaborate_vector_queue(m, decoder, regs, vector, status)
+            self._elaborate_vector_queue(m, regs, vector, status)
 
         m.submodules.select = select = SourceSelect(sources)
         m.d.comb += [select.mode.eq(regs.mode), select.run.eq(regs.run)]
@@ -333,15 +333,15 @@ class GalvoScanTop(wiring.Component):
             self._elaborate_laser(m, decoder, regs, phy, sources, select, status)
         return m
 
-    def _elaborate_vector_queue(self, m, decoder, regs, vector, status):
+    def _elaborate_vector_queue(self, m, regs, vector, status):
         """The queue between the ``vec_op`` register and the vector sequencer."""
         # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
-        # queue is full, and the refusal is counted.
+        # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
         m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
                                                       depth=self.vector_queue_depth)
         command = Signal(VectorCommand)
         m.d.comb += [
-            command.op.eq(decoder.bus.write_data[0]),
+            command.op.eq(regs.vec_op),
             command.x.eq(regs.vec_x),
             command.y.eq(regs.vec_y),
             queue.w_stream.payload.eq(command),
@@ -349,8 +349,7 @@ class GalvoScanTop(wiring.Component):
             regs.vec_op_ready.eq(queue.w_stream.ready),
             regs.fifo_free.eq(self.vector_queue_depth - queue.level),
             status.flags.vector_busy.eq(vector.busy),
-            status.events.vec_rejected.eq(
-                decoder.write_refused & (decoder.bus.address == self.regmap["vec_op"].address)),
+            status.events.vec_rejected.eq(regs.vec_op_refused),
             status.events.vec_underruns.eq(vector.underrun),
             status.events.vec_stalls.eq(vector.stall),
         ]

@@ -149,43 +149,65 @@ class RegisterModel:
 
 def run(regfile, model, accesses, *, inputs=None):
     """Drive ``accesses`` (address, data, write, queue_ready) through the bus of ``regfile``,
-    checking every output against ``model`` at every step."""
+    as the command decoder does, checking every output against ``model`` at every step.
+
+    Access ``k`` is given on clock ``k``; on clock ``k + 1`` it is checked (``write_ok``, with
+    the ``queue_ready`` of the access standing for the blocks' room on that clock) and, if it
+    is a write, ``write_en`` asks for it (the decoder asks for every well-formed write and
+    leaves the refusing to the register file); its value read comes on clock ``k + 2``."""
     names = [(e.name, e.access) for e in model.by_address.values()]
     strobes = [name for name, access in names if access == "strobe"]
     queues = [name for name, access in names if access == "queue"]
+    ready_inputs = queues + [name for name in strobes if name in REFUSABLE]
 
     async def testbench(ctx):
         bus = regfile.bus
         for name, value in (inputs or {}).items():
             ctx.set(getattr(regfile, name), value)
             model.inputs[name] = value
-        for address, data, write, queue_ready in accesses:
-            ctx.set(bus.address, address)
-            ctx.set(bus.write_data, data)
-            for name in queues + [name for name in strobes if name in REFUSABLE]:
-                ctx.set(getattr(regfile, f"{name}_ready"), queue_ready)
-            read_ok, read_data = model.read(address)
-            assert ctx.get(bus.read_ok) == read_ok, (address, data)
-            write_ok = model.write_ok(address, data, queue_ready)
-            assert ctx.get(bus.write_ok) == write_ok, (address, data)
-            # As the command decoder does: a write is offered only once it is known good.
-            ctx.set(bus.write_en, write and write_ok)
-            if write:
-                _, pushed, pulsed = model.write(address, data, queue_ready)
+        previous = None             # the access given on the clock before
+        for access in list(accesses) + [None, None]:
+            if access is not None:
+                address, data, _, _ = access
+                ctx.set(bus.address, address)
+                ctx.set(bus.write_data, data)
+                read_ok, _ = model.read(address)
+                assert ctx.get(bus.read_ok) == read_ok, access
             else:
-                pushed, pulsed = False, set()
-            for name in queues:
-                assert ctx.get(getattr(regfile, f"{name}_push")) == pushed
+                ctx.set(bus.address, 0x7F)
+            pushed, pulsed = False, set()
+            if previous is not None:
+                p_address, p_data, p_write, p_ready = previous
+                for name in ready_inputs:
+                    ctx.set(getattr(regfile, f"{name}_ready"), p_ready)
+                ctx.set(bus.write_en, p_write)
+                write_ok = model.write_ok(p_address, p_data, p_ready)
+                assert ctx.get(bus.write_ok) == write_ok, previous
+                # Read on this clock, before this clock's write: the value the model holds now.
+                this_read = model.read(p_address)
+                if p_write:
+                    _, pushed, pulsed = model.write(p_address, p_data, p_ready)
+                in_range = model.write_ok(p_address, p_data, True)
+                for name in queues:
+                    assert ctx.get(getattr(regfile, f"{name}_push")) == pushed, previous
+                    refused = p_write and in_range and not p_ready and \
+                        model.by_address[p_address].name == name
+                    assert ctx.get(getattr(regfile, f"{name}_refused")) == refused, previous
+                    # While pushed, the output is the value pushed.
+                    assert ctx.get(getattr(regfile, name)) == model.held[name], previous
+            else:
+                ctx.set(bus.write_en, 0)
+                this_read = None
             await ctx.tick()
-            ctx.set(bus.write_en, 0)
-            # The value read comes on the clock after the address: what the register held
-            # before this clock's write.
-            if read_ok:
-                assert ctx.get(bus.read_data) == read_data, (address, data)
+            # The value read for the access checked on the clock before.
+            if this_read is not None and this_read[0]:
+                assert ctx.get(bus.read_data) == this_read[1], ("read", previous)
             for name in strobes:
                 assert ctx.get(getattr(regfile, name)) == (name in pulsed), name
             for name, value in model.held.items():
-                assert ctx.get(getattr(regfile, name)) == value, name
+                if name not in queues:
+                    assert ctx.get(getattr(regfile, name)) == value, name
+            previous = access
 
     sim = Simulator(regfile)
     sim.add_clock(1e-6)
