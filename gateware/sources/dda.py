@@ -22,8 +22,8 @@ odd multiples of ``p²``. The accumulated error stays below 2⁻¹⁵ unit, so a
 from the exact rounding only when the exact value lies that close to a half.
 
 Built with ``direction=True`` (for the wobble stage) it also gives the line's direction, the
-unit vector ``|dx|/L`` and ``|dy|/L`` to 14 fractional bits (two more divisions, 17 clocks
-each, so the set-up takes 174 clocks), kept until the next line longer than the pitch.
+unit vector ``|dx|/L`` and ``|dy|/L`` to 10 fractional bits (two more divisions, 13 clocks
+each, so the set-up takes 166 clocks), kept until the next line longer than the pitch.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
@@ -41,8 +41,9 @@ FRACTION_BITS = 32
 # Fractional bits of the line length.
 _LENGTH_FRACTION = 16
 
-#: Fractional bits of the direction's components (Q2.14: 16384 = 1.0).
-DIRECTION_BITS = 14
+#: Fractional bits of the direction's components (1024 = 1.0): the wobble figure's few
+#: thousand units at most turned onto the line within a few units.
+DIRECTION_BITS = 10
 
 #: A line's direction: magnitudes of its unit vector's components and their signs.
 Direction = data.StructLayout({

@@ -224,6 +224,8 @@ class DirectedVectorSequencer(VectorSequencer):
         The direction of the line the point on :attr:`points` lies on, held with the point (see
         :class:`~.dda.LineDDA`): a mark's first point, and a line no longer than the pitch,
         carry the direction of the last line longer than the pitch.
+
+    Working the direction out makes a segment's set-up 166 clocks rather than 140.
     """
 
     direction: Out(Direction, init={"ux": 1 << DIRECTION_BITS})

@@ -18,13 +18,14 @@ The arithmetic is cheap in cells: sines from a quarter-wave table in one block R
 turn, each sample at the middle of its step), and the seven products of a frame (two for the
 figure, four to turn it onto the line, one for the phase step) one after the other through one
 16 × 16 multiplier (one DSP), within :attr:`Wobble.CLOCKS` of the frame boundary. The frequency
-register is in Hz: the phase (31 bits, 2^31 to a turn) advances ``f × ⌊2^31 / frame rate⌉`` a
-frame, the product made on the same multiplier, so the figure turns at ``f`` to within 10 ppm.
+register is in Hz: the phase (24 bits to a turn) advances ``⌊f × ⌊2^31 / frame rate⌉ / 2^7⌋``
+a frame, the product made on the same multiplier, so the figure turns at ``f`` to within
+10 ppm from 100 Hz up (0.6 % at 1 Hz).
 """
 
 import math
 
-from amaranth.hdl import Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -38,7 +39,10 @@ __all__ = ["Wobble", "PHASE_BITS", "SINE_STEPS", "sine_table"]
 
 
 #: Bits of the phase accumulator: 2^PHASE_BITS is a turn.
-PHASE_BITS = 31
+PHASE_BITS = 24
+# The phase step is made in 2^-31 turns (f × round(2^31 / frame rate) fits the multiplier's
+# 30 bits at 25 kHz and keeps its rounding within 10 ppm), then cut to the phase's bits.
+_PHASE_SHIFT = 31 - PHASE_BITS
 #: Sine samples per turn (a quarter of them stored).
 SINE_STEPS = 1024
 # Fractional bits of the stored sines.
@@ -93,14 +97,14 @@ class Wobble(wiring.Component):
     clipped: Out(1)
 
     #: Clocks from a frame strobe to the point being offered on :attr:`points`.
-    CLOCKS = 10
+    CLOCKS = 11
 
     def __init__(self, *, frame_rate):
         #: Phase step per Hz and frame, in 2^-31 turns.
-        self.phase_per_hz = round(2 ** PHASE_BITS / frame_rate)
+        self.phase_per_hz = round(2 ** (PHASE_BITS + _PHASE_SHIFT) / frame_rate)
         if not 0 < self.phase_per_hz < 2 ** 15 or WOBBLE_MAX_HZ > frame_rate / 4:
             raise ValueError(f"the wobble stage needs a frame rate from {4 * WOBBLE_MAX_HZ} to "
-                             f"{2 ** PHASE_BITS} frames/s, not {frame_rate!r}")
+                             f"{2 ** 31 // 2 ** 15} frames/s, not {frame_rate!r}")
         self.frame_rate = frame_rate
         super().__init__()
 
@@ -111,7 +115,8 @@ class Wobble(wiring.Component):
         sine = sines.read_port()
         quarter_bits = (SINE_STEPS // 4).bit_length() - 1
 
-        # One multiplier, shared (one DSP): operands on one clock, product on the next.
+        # One multiplier, shared (one DSP): operands on one clock, product on the next. Every
+        # operand is a magnitude; the signs are kept beside them and applied when summing.
         mul_a = Signal(16)
         mul_b = Signal(16)
         product = Signal(32)
@@ -122,76 +127,78 @@ class Wobble(wiring.Component):
         busy = Signal()
         wobbling = Signal()                 # this frame's point is marked and the shape is on
         tick = Signal()                     # the clock after a strobe: the sequencer has spoken
-        m.d.sync += tick.eq(self.frame_strobe)
+        m.d.sync += [tick.eq(self.frame_strobe), step.eq(Mux(busy, step + 1, 0))]
 
         # Sine of the step the phase is in, then its cosine (a quarter turn on): the quarter
         # wave read forwards or backwards, the sign from the half turn.
-        index = phase[-10:]
-        quadrant = Mux(step == 0, index[quarter_bits:], index[quarter_bits:] + 1)[:2]
-        offset_in_quarter = index[:quarter_bits]
-        m.d.comb += sine.addr.eq(offset_in_quarter ^ quadrant[0].replicate(quarter_bits))
+        index = phase[-(quarter_bits + 2):]
+        quadrant = (index[quarter_bits:] + (step != 0))[:2]
+        m.d.comb += sine.addr.eq(index[:quarter_bits] ^ quadrant[0].replicate(quarter_bits))
         negative_sin = Signal()
         negative_cos = Signal()
-        # The figure's two terms, magnitudes (below 2^12) and signs.
+        # The figure's two terms before turning onto the line: magnitudes below 2^12.
         along_term = Signal(12)
         across_term = Signal(12)
-        along_x = Signal()                  # the along term's sign in x (else -)
-        # Offsets · 2^14, accumulated with the sign of each product.
-        acc_x = Signal(signed(30))
-        acc_y = Signal(signed(30))
-        subtract = Signal()
-        to_x = Signal()
-        d = self.direction
-        m.d.sync += step.eq(Mux(busy, step + 1, 0))
 
+        d = self.direction
+        negative = Signal()                 # the sign of this clock's product in the sum
         with m.Switch(step):
             with m.Case(0):
-                m.d.sync += [negative_sin.eq(quadrant[1]), acc_x.eq(0), acc_y.eq(0)]
+                m.d.sync += negative_sin.eq(quadrant[1])
             with m.Case(1):
                 m.d.sync += negative_cos.eq(quadrant[1])
-                m.d.comb += [mul_a.eq(Mux(wobbling, self.along, 0)), mul_b.eq(sine.data)]
+                m.d.comb += [mul_a.eq(self.along), mul_b.eq(sine.data)]
             with m.Case(2):
-                m.d.comb += [mul_a.eq(Mux(wobbling, self.across, 0)), mul_b.eq(sine.data)]
+                m.d.comb += [mul_a.eq(self.across), mul_b.eq(sine.data)]
                 m.d.sync += along_term.eq(product[_SINE_BITS:])
             with m.Case(3):
                 m.d.comb += [mul_a.eq(along_term), mul_b.eq(d.ux)]
                 m.d.sync += across_term.eq(product[_SINE_BITS:])
-            with m.Case(4):             # x += along · sin · ux
+            with m.Case(4):             # x = along · sin · ux …
                 m.d.comb += [mul_a.eq(across_term), mul_b.eq(d.uy),
-                             subtract.eq(negative_sin ^ d.negative_x), to_x.eq(1)]
-            with m.Case(5):             # x -= across · cos · uy
+                             negative.eq(negative_sin ^ d.negative_x)]
+            with m.Case(5):             # … - across · cos · uy
                 m.d.comb += [mul_a.eq(along_term), mul_b.eq(d.uy),
-                             subtract.eq(~(negative_cos ^ d.negative_y)), to_x.eq(1)]
-            with m.Case(6):             # y += along · sin · uy
+                             negative.eq(~(negative_cos ^ d.negative_y))]
+            with m.Case(6):             # y = along · sin · uy …
                 m.d.comb += [mul_a.eq(across_term), mul_b.eq(d.ux),
-                             subtract.eq(negative_sin ^ d.negative_y)]
-            with m.Case(7):             # y += across · cos · ux
+                             negative.eq(negative_sin ^ d.negative_y)]
+            with m.Case(7):             # … + across · cos · ux
                 m.d.comb += [mul_a.eq(self.frequency), mul_b.eq(self.phase_per_hz),
-                             subtract.eq(negative_cos ^ d.negative_x)]
-            with m.Case(8):             # the next frame's phase
-                m.d.sync += phase.eq(Mux(wobbling, phase + product, 0))
-        with m.If((step >= 4) & (step <= 7)):
-            term = Mux(subtract, -product[:27], product[:27])
-            with m.If(to_x):
-                m.d.sync += acc_x.eq(acc_x + term)
-            with m.Else():
-                m.d.sync += acc_y.eq(acc_y + term)
+                             negative.eq(negative_cos ^ d.negative_x)]
 
-        # The point with its offset, clamped at the field's edge.
+        # The offset, one axis after the other: each term is a product · 2^-14 (the
+        # direction's fraction), added or subtracted by its sign in one adder (the
+        # complement and a carry in, through an extra low bit).
+        offset = Signal(signed(15))
+        term = product[DIRECTION_BITS:DIRECTION_BITS + 13]
+        first = (step == 4) | (step == 6)
+        flip = negative.replicate(len(offset))
+        summed = (Cat(1, Mux(first, 0, offset)) + Cat(negative, term ^ flip))[1:]
+        with m.If((step >= 4) & (step <= 7)):
+            m.d.sync += offset.eq(Mux(wobbling, summed, 0))
+
+        # The point plus its offset, saturated at the field's edge (a sum that overflows 16
+        # bits takes the edge nearest to it).
         base = self.line_points.payload
+        total = Signal(signed(17))
+        m.d.comb += total.eq(Mux(step == 6, base.x, base.y) + offset)
+        overflow = total[16] ^ total[15]
+        clamped = Mux(overflow, Cat((~total[16]).replicate(15), total[16]), total[:16])
         with m.If(self.points.ready):
             m.d.sync += self.points.valid.eq(0)
+        with m.If(step == 6):
+            m.d.sync += self.points.payload.x.eq(clamped)
+            m.d.comb += self.clipped.eq(overflow)
         with m.If(step == 8):
-            m.d.sync += busy.eq(0)
-            for axis, acc in (("x", acc_x), ("y", acc_y)):
-                total = Signal(signed(18), name=f"total_{axis}")
-                m.d.comb += total.eq(getattr(base, axis) + (acc >> DIRECTION_BITS))
-                low, high = -2 ** 15, 2 ** 15 - 1
-                m.d.sync += getattr(self.points.payload, axis).eq(
-                    Mux(total < low, low, Mux(total > high, high, total)))
-                with m.If((total < low) | (total > high)):
-                    m.d.comb += self.clipped.eq(1)
-            m.d.sync += self.points.valid.eq(1)
+            m.d.sync += [
+                self.points.payload.y.eq(clamped),
+                self.points.valid.eq(1),
+                busy.eq(0),
+                # The next frame's phase (2^-31 turns in the product).
+                phase.eq(Mux(wobbling, phase + product[_PHASE_SHIFT:], 0)),
+            ]
+            m.d.comb += self.clipped.eq(overflow)
 
         # At the clock after a strobe: a new point, or a marked point held while the shape is
         # on, gives this frame a position.
@@ -202,6 +209,6 @@ class Wobble(wiring.Component):
             # The first frame after wobbling goes back to the point itself.
             with m.If(self.line_points.valid | on | wobbling):
                 m.d.sync += busy.eq(1)
-            with m.Elif(~on):
+            with m.Else():
                 m.d.sync += phase.eq(0)
         return m
