@@ -8,7 +8,7 @@ import time
 
 from .gateware.clocking import DEFAULT_BAUD
 from .gateware.field.correction_table import CorrectionTable
-from .gateware.top import DEFAULT_CORRECTION_NODES
+from .gateware.top import DEFAULT_CORRECTION_NODES, MODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
 from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check, \
     icestick_platform
@@ -115,6 +115,9 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     else:
         system_clock(clock, bit_rate, baud)
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
+    if wobble and len(set(modes)) == len(MODES):
+        raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
+                         "leave one out (--modes spiral,vector or raster,vector)")
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()

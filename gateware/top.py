@@ -205,6 +205,8 @@ class GalvoScanTop(wiring.Component):
         self.wobble = bool(wobble)
         if self.wobble and "vector" not in modes:
             raise ValueError("the wobble stage works on vector points: it needs vector mode")
+        if self.wobble:
+            Wobble.check_frame_rate(bit_rate / FRAME_BITS)
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud

@@ -4,7 +4,6 @@ whose answer is known from the spot's Gaussian and the circle's geometry."""
 import json
 import math
 
-import numpy as np
 import pytest
 
 from galvoscan.analysis.dose import Laser

@@ -7,7 +7,6 @@ the figure says."""
 import contextlib
 import io
 import json
-import math
 
 from hypothesis import given, settings, strategies as st
 import pytest

@@ -8,7 +8,6 @@ first run gives the frames and the laser's pulses as the line alone puts them (c
 the vector model), the second must put the model's figure on every marked frame and change
 nothing else: not which frame a point reaches the head, not a pulse, not a jump."""
 
-import bisect
 import math
 
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
@@ -151,7 +150,55 @@ def test_a_build_without_wobble_has_no_wobble_registers():
 
 
 def test_wobble_needs_vector_mode_and_a_fast_enough_frame_rate():
+    GalvoScanTop(clk_freq=CLK, wobble=True)                 # XY2-100: fine
     with pytest.raises(ValueError, match="needs vector mode"):
         GalvoScanTop(clk_freq=CLK, modes=("spiral",), wobble=True)
-    with pytest.raises(ValueError, match="frame rate"):
+    with pytest.raises(ValueError, match="at least 100000 frames/s"):
         Wobble(frame_rate=50_000)
+    with pytest.raises(ValueError, match="at least 100000 frames/s"):
+        GalvoScanTop(clk_freq=CLK, bit_rate=1e6, wobble=True)
+
+
+# --- the DDA's direction ------------------------------------------------------------------------
+
+def directions(lines, pitch):
+    """The DDA's direction after each (x0, y0, x1, y1) is stepped (``direction=True``)."""
+    from amaranth.sim import Simulator
+    from galvoscan.gateware.sources.dda import LineDDA
+    dut = LineDDA(direction=True)
+    out = []
+
+    async def testbench(ctx):
+        ctx.set(dut.pitch, pitch)
+        ctx.set(dut.points.ready, 1)
+        for x0, y0, x1, y1 in lines:
+            ctx.set(dut.segment.payload, {"x0": x0, "y0": y0, "x1": x1, "y1": y1})
+            ctx.set(dut.segment.valid, 1)
+            await ctx.tick().until(dut.segment.ready)
+            ctx.set(dut.segment.valid, 0)
+            await ctx.tick()
+            await ctx.tick().until(~dut.busy)
+            d = ctx.get(dut.direction)
+            out.append(((-1) ** d["negative_x"] * d["ux"] / 1024,
+                        (-1) ** d["negative_y"] * d["uy"] / 1024))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    return out
+
+
+@settings(max_examples=8, deadline=None)
+@given(st.lists(st.tuples(*[st.integers(0, 65535)] * 4), min_size=1, max_size=6),
+       st.integers(1, 300))
+def test_the_dda_gives_each_long_lines_unit_vector(lines, pitch):
+    """To 1/1024 each axis; a line no longer than the pitch keeps the one before (+X first)."""
+    expected, last = [], (1.0, 0.0)
+    for x0, y0, x1, y1 in lines:
+        length = math.hypot(x1 - x0, y1 - y0)
+        if length > pitch:
+            last = ((x1 - x0) / length, (y1 - y0) / length)
+        expected.append(last)
+    for (gx, gy), (ex, ey) in zip(directions(lines, pitch), expected):
+        assert abs(gx - ex) <= 1 / 1024 and abs(gy - ey) <= 1 / 1024, ((gx, gy), (ex, ey))

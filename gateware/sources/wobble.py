@@ -100,13 +100,20 @@ class Wobble(wiring.Component):
     CLOCKS = 11
 
     def __init__(self, *, frame_rate):
+        self.check_frame_rate(frame_rate)
         #: Phase step per Hz and frame, in 2^-31 turns.
         self.phase_per_hz = round(2 ** (PHASE_BITS + _PHASE_SHIFT) / frame_rate)
-        if not 0 < self.phase_per_hz < 2 ** 15 or WOBBLE_MAX_HZ > frame_rate / 4:
-            raise ValueError(f"the wobble stage needs a frame rate from {4 * WOBBLE_MAX_HZ} to "
-                             f"{2 ** 31 // 2 ** 15} frames/s, not {frame_rate!r}")
         self.frame_rate = frame_rate
         super().__init__()
+
+    @staticmethod
+    def check_frame_rate(frame_rate):
+        """Raise ValueError unless the stage can run at ``frame_rate`` frames a second: at
+        least four frames a turn at the highest frequency (XY2-100's 100 000 and up)."""
+        if not isinstance(frame_rate, (int, float)) or not \
+                4 * WOBBLE_MAX_HZ <= frame_rate < 2 ** (PHASE_BITS + _PHASE_SHIFT):
+            raise ValueError(f"the wobble stage needs at least {4 * WOBBLE_MAX_HZ} frames/s "
+                             f"(four frames a turn at {WOBBLE_MAX_HZ} Hz), not {frame_rate!r}")
 
     def elaborate(self, platform):
         m = Module()
