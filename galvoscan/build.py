@@ -117,7 +117,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
     if wobble and len(set(modes)) == len(MODES):
         raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
-                         "leave one out (--modes spiral,vector or raster,vector)")
+                         "leave one out with --modes (spiral,vector fits)")
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()

@@ -119,7 +119,8 @@ def add_parsers(commands):
                        help="where the bitstream and logs go (default: %(default)s)")
     build.add_argument("--wobble", action="store_true",
                        help="add the wobble stage to vector mode (galvoscan mark --wobble); "
-                            "with every mode it does not fit the UP5K: drop one with --modes")
+                            "with every mode it does not fit the UP5K: drop one with --modes "
+                            "(spiral,vector fits)")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
                        help="scan modes to build: spiral, raster, vector (default: the "
                             "board's, see README); fewer take less of the FPGA")
