@@ -154,6 +154,14 @@ def test_a_board_without_the_stage_is_refused_before_arming():
     assert ("arm", 1) not in board.log
 
 
+def test_a_wobbled_job_leaves_the_wobble_off():
+    board = FakeBoard()
+    regs = wobble_registers(WobbleSettings(50, 50, 1000), default_profile())
+    JobStreamer(board, poll_s=0).run_vector(job(10), {"pitch": 60, **regs})
+    assert ("wob_shape", 1) in board.log and board.values["wob_shape"] == 0
+    assert board.log.index(("wob_shape", 1)) < board.log.index(("arm", 1))
+
+
 @pytest.mark.slow
 def test_a_wobbled_line_marked_on_the_simulated_board(line, tmp_path):
     """The marks off the wires lie within the figure around the line, and reach its width

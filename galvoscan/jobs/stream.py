@@ -285,6 +285,9 @@ class JobStreamer:
             sent = self.stream(segments, timeout_s=timeout_s, start=lambda: self._start(
                 armed=armed, ready_timeout_s=ready_timeout_s))
             self.wait_idle(timeout_s)
+            if registers.get("wob_shape"):
+                # A later job that does not ask for wobble must not inherit it.
+                self.board.write("wob_shape", 0)
             return sent
         return self._job(body)
 
