@@ -8,7 +8,7 @@ import time
 
 from .gateware.clocking import DEFAULT_BAUD
 from .gateware.field.correction_table import CorrectionTable
-from .gateware.top import DEFAULT_CORRECTION_NODES
+from .gateware.top import DEFAULT_CORRECTION_NODES, MODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
 from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check, \
     icestick_platform
@@ -89,14 +89,14 @@ class TimingError(BuildError):
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
-                    baud=DEFAULT_BAUD, seed=1, require_timing=True):
+                    baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
     :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
     RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
     the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200),
-    ``baud`` the host serial port's rate.
+    ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode.
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -106,6 +106,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
     # What the board cannot run raises here, before anything is built.
+    if wobble and board == "icestick":
+        raise ValueError("the iCEstick has no room for the wobble stage")
     if board == "icestick":
         icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate,
                        baud=baud)
@@ -113,6 +115,9 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     else:
         system_clock(clock, bit_rate, baud)
     modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
+    if wobble and len(set(modes)) == len(MODES):
+        raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
+                         "leave one out with --modes (spiral,vector fits)")
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()
@@ -122,7 +127,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     start = time.monotonic()
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
                                   correction=correction, clock=clock, bit_rate=bit_rate,
-                                  baud=baud), name=name,
+                                  baud=baud, **({"wobble": True} if wobble else {})),
+                          name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design
                           # gives its figures rather than a failed subprocess.

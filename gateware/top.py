@@ -31,7 +31,8 @@ from .sources.raster import RasterSequencer
 from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
-from .sources.vector import VectorCommand, VectorSequencer
+from .sources.vector import DirectedVectorSequencer, VectorCommand, VectorSequencer
+from .sources.wobble import Wobble
 
 
 __all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
@@ -47,6 +48,8 @@ VECTOR_QUEUE_DEPTH = 512
 # The correction stage finishes a point within the shortest possible frame (two clocks per
 # bit), so a point taken at a frame boundary is always ready for the next one.
 assert FieldCorrection.CLOCKS + 1 < 2 * FRAME_BITS
+# So does a vector point the wobble stage has offset.
+assert Wobble.CLOCKS + FieldCorrection.CLOCKS + 1 < 2 * FRAME_BITS
 
 
 class GalvoScanTop(wiring.Component):
@@ -104,6 +107,10 @@ class GalvoScanTop(wiring.Component):
         Segments the vector queue holds (:data:`VECTOR_QUEUE_DEPTH`, the build's). A
         simulation may build a shorter queue, so that filling it costs a few dozen segments;
         the host learns the depth from ``fifo_free`` while the queue is empty.
+    wobble : bool
+        Build the wobble stage on vector mode's marked points (:class:`~.sources.wobble.Wobble`)
+        and its ``wob_*`` registers; needs vector mode. Without it those registers are unknown
+        addresses.
 
     Interface attributes
     --------------------
@@ -140,7 +147,7 @@ class GalvoScanTop(wiring.Component):
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
-                 vector_queue_depth=VECTOR_QUEUE_DEPTH):
+                 vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -195,6 +202,11 @@ class GalvoScanTop(wiring.Component):
             raise ValueError(f"vector_queue_depth must be a whole number from 2 to "
                              f"{VECTOR_QUEUE_DEPTH}, not {vector_queue_depth!r}")
         self.vector_queue_depth = vector_queue_depth
+        self.wobble = bool(wobble)
+        if self.wobble and "vector" not in modes:
+            raise ValueError("the wobble stage works on vector points: it needs vector mode")
+        if self.wobble:
+            Wobble.check_frame_rate(bit_rate / FRAME_BITS)
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -202,7 +214,8 @@ class GalvoScanTop(wiring.Component):
         self.regmap = register_map(
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
-            modes=modes, laser=self.laser, resets=self.settings.register_resets())
+            modes=modes, laser=self.laser, wobble=self.wobble,
+            resets=self.settings.register_resets())
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
             "spi_sck": In(1), "spi_cs_n": In(1, init=1), "spi_copi": In(1), "spi_cipo": Out(1),
@@ -287,15 +300,34 @@ class GalvoScanTop(wiring.Component):
                 raster.turn_gate.eq(regs.ras_turn_gate),
             ]
         if "vector" in self.modes:
-            m.submodules.vector = sources[Mode.VECTOR] = vector = VectorSequencer()
+            sequencer = DirectedVectorSequencer if self.wobble else VectorSequencer
+            m.submodules.vector = sources[Mode.VECTOR] = vector = sequencer()
             for name in ("pitch", "pulses_per_point", "jump_delay"):
                 m.d.comb += getattr(vector, name).eq(getattr(regs, name))
             self._elaborate_vector_queue(m, regs, vector, status)
 
         m.submodules.select = select = SourceSelect(sources)
         m.d.comb += [select.mode.eq(regs.mode), select.run.eq(regs.run)]
-        for index, source in enumerate(sources.values()):
-            connect(m, source.points, select.sources[index])
+        # Each mode's points: the vector sequencer's through the wobble stage, if built.
+        streams = {mode: source.points for mode, source in sources.items()}
+        clipped = scale.clipped
+        if self.wobble:
+            m.submodules.wobble = wobble = Wobble(
+                frame_rate=self.bit_rate / FRAME_BITS)
+            connect(m, vector.points, wobble.line_points)
+            m.d.comb += [
+                wobble.direction.eq(vector.direction),
+                wobble.marking.eq(vector.laser),
+                wobble.frame_strobe.eq(phy.frame_strobe),
+                wobble.shape.eq(regs.wob_shape),
+                wobble.along.eq(regs.wob_along),
+                wobble.across.eq(regs.wob_across),
+                wobble.frequency.eq(regs.wob_freq),
+            ]
+            streams[Mode.VECTOR] = wobble.points
+            clipped = clipped | wobble.clipped
+        for index, (mode, source) in enumerate(sources.items()):
+            connect(m, streams[mode], select.sources[index])
             m.d.comb += [
                 source.run.eq(select.source_run[index]),
                 source.frame_strobe.eq(phy.frame_strobe),
@@ -305,7 +337,7 @@ class GalvoScanTop(wiring.Component):
 
         if self.correction is None:
             connect(m, scale.positions, phy.position)
-            m.d.comb += status.flags.clipped.eq(scale.clipped)
+            m.d.comb += status.flags.clipped.eq(clipped)
         else:
             m.submodules.correction = correction = FieldCorrection(self.correction)
             connect(m, scale.positions, correction.positions_in)
@@ -320,7 +352,7 @@ class GalvoScanTop(wiring.Component):
                 # (the stage keeps one write's values).
                 regs.cor_write_ready.eq(~regs.cor_write & ~correction.write_pending),
                 regs.cor_nodes.eq(self.correction.n),
-                status.flags.clipped.eq(scale.clipped | correction.clipped),
+                status.flags.clipped.eq(clipped | correction.clipped),
             ]
 
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):

@@ -142,7 +142,7 @@ class ICEBreakerScanner(Elaboratable):
 
     Parameters
     ----------
-    table, settings, modes, correction, bit_rate, baud
+    table, settings, modes, correction, bit_rate, baud, wobble
         As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
         ``correction`` ``"identity"``: the default identity table).
     clock : float or None
@@ -151,8 +151,9 @@ class ICEBreakerScanner(Elaboratable):
     """
 
     def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
-                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD):
+                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False):
         self.table = table
+        self.wobble = wobble
         self.settings = settings
         self.modes = modes
         self.correction = correction
@@ -170,7 +171,7 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, correction=self.correction,
-            laser_alarms=len(ALARM_PMOD_PINS[1].split()), **extra)
+            laser_alarms=len(ALARM_PMOD_PINS[1].split()), wobble=self.wobble, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.

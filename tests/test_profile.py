@@ -31,6 +31,9 @@ RANGES = {
     ("defaults", "power_percent"): (0, 100, False),
     ("defaults", "prr_khz"): (20, 200, False),               # laser_prr 200 … 2000 × 100 Hz
     ("defaults", "passes"): (1, 1000, True),
+    ("wobble", "across_um"): (0, 10_000, False),
+    ("wobble", "along_um"): (0, 10_000, False),
+    ("wobble", "freq_hz"): (1, 25_000, False),               # wob_freq 1 … 25 000 Hz
 }
 # Keys that are not numbers: (section, key): a valid value in TOML.
 OTHER_KEYS = {
@@ -51,6 +54,7 @@ DEFAULTS = {
     "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
     "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0},
     "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
+    "wobble": {"across_um": 0.0, "along_um": 0.0, "freq_hz": 1000.0},
 }
 
 

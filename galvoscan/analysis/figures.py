@@ -5,7 +5,8 @@ import numpy as np
 from .study import FILL_STAGES, fill_points
 
 
-__all__ = ["plot_fill", "plot_dose_maps", "plot_sigma_sweep", "plot_spiral_vs_raster"]
+__all__ = ["plot_fill", "plot_dose_maps", "plot_sigma_sweep", "plot_spiral_vs_raster",
+           "plot_wobble"]
 
 
 def _pyplot():
@@ -178,6 +179,56 @@ def plot_spiral_vs_raster(path, pairs, setup):
         ax.set_ylabel("share of the points reached")
         ax.set_title("time to cool before the spot returns (within 0.1 mm)", fontsize=8)
         ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def plot_wobble(path, amplitudes, frequencies, *, map_runs=None):
+    """The wobble study: the dose across the track for each amplitude, the track's width, the
+    mirror's reach and the ripple along it against the frequency, and the dose maps of two
+    runs (``map_runs``: indices into ``frequencies``; default its first and its middle)."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7), dpi=110)
+    ax = axes[0, 0]
+    for metrics, dose, profile in amplitudes:
+        ax.plot(dose.y * 1000, profile, label=f"±{metrics['across_um']:g} µm" if
+                metrics["across_um"] else "no wobble")
+    ax.set_xlabel("across the line (µm)")
+    ax.set_ylabel("dose, averaged along (J/cm²)")
+    ax.set_title(f"circles at {amplitudes[0][0]['hz']:g} Hz, "
+                 f"{amplitudes[0][0]['speed_mm_s']:g} mm/s")
+    ax.legend(fontsize=8)
+    ax = axes[0, 1]
+    hz = [m["hz"] for m, _, _ in frequencies]
+    ax.semilogx(hz, [m["width_mm"] * 1000 for m, _, _ in frequencies], "o-",
+                label="track width (µm)")
+    ax.set_xticks(hz, [f"{h:g}" for h in hz])
+    ax.minorticks_off()
+    ax.set_xlabel("wobble frequency (Hz)")
+    ax.set_ylabel("track width at half peak (µm)")
+    twin = ax.twinx()
+    twin.semilogx(hz, [m["reach"] for m, _, _ in frequencies], "s--", color="tab:green",
+                  label="mirror reach / commanded")
+    twin.semilogx(hz, [m["ripple"] for m, _, _ in frequencies], "^:", color="tab:red",
+                  label="ripple along (CV)")
+    twin.set_ylim(0, max(1.05, max(m["ripple"] for m, _, _ in frequencies) * 1.05))
+    twin.minorticks_off()
+    lines = ax.get_legend_handles_labels()
+    more = twin.get_legend_handles_labels()
+    ax.legend(lines[0] + more[0], lines[1] + more[1], fontsize=8, loc="center left")
+    ax.set_title(f"±{frequencies[0][0]['across_um']:g} µm circles")
+    picks = map_runs or (0, len(frequencies) // 2)
+    for ax, index in zip(axes[1], picks):
+        metrics, dose, _ = frequencies[index]
+        keep = np.abs(dose.x) <= 0.5
+        image = ax.imshow(dose.dose[keep].T, origin="lower", aspect="auto", cmap="inferno",
+                          extent=(dose.x[keep][0], dose.x[keep][-1], dose.y[0] * 1000,
+                                  dose.y[-1] * 1000))
+        ax.set_xlabel("along the line (mm)")
+        ax.set_ylabel("across (µm)")
+        ax.set_title(f"{metrics['hz']:g} Hz: a turn every {metrics['turn_um']:.0f} µm")
+        fig.colorbar(image, ax=ax, label="J/cm²")
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

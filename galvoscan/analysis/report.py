@@ -49,11 +49,12 @@ def _cell(value, style):
     return style(value) if callable(style) else style.format(value)
 
 
-def format_table(runs, headers=None):
-    """Metrics of several runs as a plain text table, one column per run."""
-    headers = headers or [m["pattern"] for m in runs]
+def format_table(runs, headers=None, *, rows=ROWS):
+    """Metrics of several runs as a plain text table, one column per run (``rows``: which
+    metrics, labelled and formatted how; default :data:`ROWS`)."""
+    headers = headers or [m.get("pattern", str(i + 1)) for i, m in enumerate(runs)]
     rows = [[label] + [_cell(m.get(key), style) for m in runs]
-            for key, label, style in ROWS if any(key in m for m in runs)]
+            for key, label, style in rows if any(key in m for m in runs)]
     widths = [max(len(r[i]) for r in rows + [["metric"] + headers])
               for i in range(len(headers) + 1)]
     lines = ["  ".join(h.ljust(w) for h, w in zip(["metric"] + headers, widths))]
@@ -67,10 +68,68 @@ def _json_ready(metrics):
             for k, v in metrics.items()}
 
 
+#: Rows of the wobble table: key, label, format.
+WOBBLE_ROWS = (
+    ("across_um", "amplitude (µm)", "{:g}"),
+    ("hz", "frequency (Hz)", "{:g}"),
+    ("turn_um", "a turn every (µm)", "{:.1f}"),
+    ("width_mm", "track width (µm)", lambda v: f"{v * 1000:.0f}"),
+    ("centre", "dose on the line / peak", "{:.2f}"),
+    ("peak_rel", "peak / plain line's", "{:.2f}"),
+    ("ripple", "ripple along (CV)", "{:.3f}"),
+    ("reach", "mirror reach / commanded", "{:.2f}"),
+)
+
+
+def _run_wobble(args, head, laser, galvo):
+    """``analyze --wobble``: the wobble study (:mod:`.wobble`), its table and figure."""
+    from tqdm import tqdm
+    from . import figures
+    from .wobble import WOBBLE_AMPLITUDES_UM, WOBBLE_FREQUENCIES_HZ, wobble_study
+    bar = tqdm(total=len(WOBBLE_AMPLITUDES_UM) - 1 + len(WOBBLE_FREQUENCIES_HZ),
+               desc="wobble", unit="run", file=sys.stderr, disable=args.quiet)
+    amplitudes, frequencies = wobble_study(head, laser, galvo, speed_mm_s=args.wobble_speed,
+                                           progress=bar.update)
+    bar.close()
+    written = []
+    if not args.no_plots:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        figures.plot_wobble(out / "wobble.png", amplitudes, frequencies)
+        written.append(out / "wobble.png")
+    if args.json:
+        print(json.dumps({"amplitudes": [_json_ready(m) for m, _, _ in amplitudes],
+                          "frequencies": [_json_ready(m) for m, _, _ in frequencies],
+                          "figures": [str(p) for p in written]}, indent=2, ensure_ascii=False))
+        return 0
+    print(f"a line marked at {args.wobble_speed:g} mm/s, one pulse a point; laser "
+          f"{laser.prr_hz / 1e3:g} kHz, spot {laser.spot_mm:g} mm; "
+          + ("ideal mirror" if args.ideal_galvo else
+             f"galvo model: {galvo.omega_n / (2 * math.pi):.0f} Hz"))
+    for title, runs in (("circles, amplitude swept:", amplitudes),
+                        ("circles, frequency swept:", frequencies)):
+        print(f"\n{title}")
+        print(format_table([m for m, _, _ in runs], rows=WOBBLE_ROWS))
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
 def run_analyze(args):
     """The ``analyze`` command (args from the CLI parser)."""
     from tqdm import tqdm
     from . import figures
+    if args.wobble:
+        try:
+            head = ScanHead(args.lens_field)
+            laser = Laser(power_w=args.power, prr_hz=args.prr, spot_mm=args.spot)
+            if laser.prr_hz > 100e3:
+                raise ValueError("vector mode fires at most one pulse a 10 µs frame: --prr "
+                                 "must be at most 100e3 with --wobble")
+            galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
+        except ValueError as error:
+            raise SystemExit(f"galvoscan: error: {error}")
+        return _run_wobble(args, head, laser, galvo)
 
     try:
         head = ScanHead(args.lens_field)

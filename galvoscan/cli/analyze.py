@@ -51,6 +51,13 @@ def add_parsers(commands):
                            "mirror acceleration")
     what.add_argument("--compare", action="store_true",
                       help="also spiral against line-by-line raster on 50x20 and 20x80 mm")
+    what.add_argument("--wobble", action="store_true",
+                      help="instead: a line marked in vector mode with the wobble figure "
+                           "(circles), amplitude and frequency swept: track width, dose "
+                           "across and along it, how far the mirror follows")
+    what.add_argument("--wobble-speed", type=number_in("wobble speed", 1, 10_000),
+                      default=50.0, metavar="MM_S",
+                      help="line speed for --wobble, mm/s (default: 50)")
     what.add_argument("--out", type=output_dir, default="build/analysis", metavar="DIR",
                       help="where figures go (default: %(default)s)")
     what.add_argument("--no-plots", action="store_true", help="write no figures")

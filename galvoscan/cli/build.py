@@ -58,7 +58,8 @@ def _cmd_build(args):
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
-                                 clock=args.clock, bit_rate=args.bit_rate, baud=args.baud)
+                                 clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
+                                 wobble=args.wobble)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -116,6 +117,10 @@ def add_parsers(commands):
                        help="target board (default: %(default)s)")
     build.add_argument("--build-dir", type=output_dir, default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
+    build.add_argument("--wobble", action="store_true",
+                       help="add the wobble stage to vector mode (galvoscan mark --wobble); "
+                            "with every mode it does not fit the UP5K: drop one with --modes "
+                            "(spiral,vector fits)")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
                        help="scan modes to build: spiral, raster, vector (default: the "
                             "board's, see README); fewer take less of the FPGA")

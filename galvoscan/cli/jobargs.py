@@ -67,13 +67,14 @@ def has_link(args, profile):
 
 
 @contextlib.contextmanager
-def board_link(args, profile):
-    """``(client, simulated_board or None)`` for the job's board, opened; closed after."""
+def board_link(args, profile, *, wobble=False):
+    """``(client, simulated_board or None)`` for the job's board, opened; closed after
+    (``wobble``: a simulated board is built with the wobble stage)."""
     from ..client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
         from ..sim.board import SIM_TIMEOUT_S, PTYServer, SimulatedBoard
-        board = SimulatedBoard(baud=baud_rate)
+        board = SimulatedBoard(baud=baud_rate, **({"wobble": True} if wobble else {}))
         server = PTYServer(board).start()
         try:
             with SerialTransport(server.port, baud=baud_rate,

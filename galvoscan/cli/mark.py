@@ -37,6 +37,23 @@ def _hatch(text):
     return spacing, angle
 
 
+def _wobble(args, profile):
+    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings` (the command line's, else the
+    profile's [wobble]) and its ``wob_*`` registers (empty: no wobble), or one line and exit."""
+    from ..jobs.plan import PlanError
+    from ..jobs.wobble import WobbleSettings, wobble_registers
+    section = profile.wobble
+    across = args.wobble if args.wobble is not None else section.across_um
+    along = args.wobble_along if args.wobble_along is not None else \
+        (args.wobble if args.wobble is not None else section.along_um)
+    hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
+    wobble = WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
+    try:
+        return wobble, wobble_registers(wobble, profile)
+    except PlanError as error:
+        fail(error)
+
+
 def _plan(args, profile):
     """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` and the placement, or one
     line and exit."""
@@ -80,6 +97,12 @@ def _describe(job, profile, settings_line):
         f"({pitch.error:+.2%})",
         f"jump delay {regs['jump_delay'] * 10} µs; estimated time {job.estimate_s:.3f} s",
     ]
+    if "wob_shape" in regs:
+        lines.append(f"wobble: ±{regs['wob_across'] * profile.mm_per_unit * 1000:.0f} µm across "
+                     f"× ±{regs['wob_along'] * profile.mm_per_unit * 1000:.0f} µm along "
+                     f"({regs['wob_across']} × {regs['wob_along']} units) at "
+                     f"{regs['wob_freq']} Hz: a turn every "
+                     f"{pitch.speed_mm_s / regs['wob_freq'] * 1000:.0f} µm of line")
     lines += [f"note: {note}" for note in job.notes]
     return lines
 
@@ -151,7 +174,18 @@ def _sim_report(board, job, placement, drawing, profile, report):
 def _cmd_mark(args):
     from ..jobs.stream import JobStreamer
     profile = profile_from(args)
+    wobble, wobble_regs = _wobble(args, profile)
     job, placement, drawing = _plan(args, profile)
+    if wobble_regs:
+        # The figure reaches past the lines by its larger amplitude: that too must be in the
+        # field (the board would clamp it at the edge).
+        reach = max(wobble_regs["wob_across"], wobble_regs["wob_along"]) * profile.mm_per_unit
+        half = profile.field.size_mm / 2
+        xmin, ymin, xmax, ymax = job.bounds_mm
+        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
+            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
+                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
+        job.registers.update(wobble_regs)
     speed, power, prr = job_settings_values(args, profile)
     say = (lambda line: print(line, file=sys.stderr)) if args.json else print
     for line in _describe(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
@@ -172,7 +206,7 @@ def _cmd_mark(args):
     if warning:
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
-    with board_link(args, profile) as (client, board):
+    with board_link(args, profile, wobble=bool(wobble_regs)) as (client, board):
         bar = progress_bar(None if args.frame else len(job.segments), "seg")
         streamer = JobStreamer(client, progress=bar.update)
         try:
@@ -222,6 +256,16 @@ def add_parsers(commands):
     shape.add_argument("--tolerance", type=number_in("tolerance", 0.0005, 1), default=0.01,
                        metavar="MM", help="curves as chords at most this far off "
                                           "(default: 0.01 mm)")
+    wobble = mark.add_argument_group(
+        "wobble (an ellipse laid over marked lines; needs a bitstream with the wobble stage; "
+        "defaults: the profile's [wobble])")
+    wobble.add_argument("--wobble", type=number_in("wobble", 0, 10_000), metavar="UM",
+                        help="amplitude across the line (to each side), µm; a circle unless "
+                             "--wobble-along; 0: no wobble")
+    wobble.add_argument("--wobble-along", type=number_in("wobble-along", 0, 10_000),
+                        metavar="UM", help="amplitude along the line, µm (an ellipse)")
+    wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, 25_000), metavar="HZ",
+                        help="turns of the figure a second (default: the profile's, 1000)")
     place = mark.add_argument_group("placement")
     place.add_argument("--origin", choices=["centre", "center", "lower-left"],
                        default="centre", help="what of the drawing's bounding box goes to "

@@ -11,6 +11,7 @@ comment on every key (:func:`profile_text`)::
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
     [galvo]     jump_delay_us, settle_us_per_mm, max_speed_mm_s
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
+    [wobble]    across_um, along_um, freq_hz
 
 Every key is optional (its default is safe near a laser: 10 % power, one pass). A key or section
 that is not known is an error, with the nearest known name suggested: a typo must not pass
@@ -50,7 +51,7 @@ from .profile_template import profile_text
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
-           "GalvoSection", "JobDefaults", "load_profile", "parse_profile", "default_profile",
+           "GalvoSection", "JobDefaults", "WobbleSection", "load_profile", "parse_profile", "default_profile",
            "profile_text", "DEFAULT_PROFILE_NAME", "SECTIONS", "FULL_RANGE", "FRAME_US",
            "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX"]
 
@@ -118,6 +119,16 @@ class JobDefaults:
 
 
 @dataclass(frozen=True)
+class WobbleSection:
+    #: Wobble amplitude across marked lines (to each side), µm; 0 with along_um 0: no wobble.
+    across_um: float = 0.0
+    #: Wobble amplitude along marked lines, µm (equal to across_um: a circle).
+    along_um: float = 0.0
+    #: Turns of the wobble figure a second, Hz.
+    freq_hz: float = 1000.0
+
+
+@dataclass(frozen=True)
 class MachineProfile:
     """A machine profile, checked. Two profiles are equal if their settings are (where they were
     read from is not compared)."""
@@ -127,6 +138,7 @@ class MachineProfile:
     laser: LaserSection = LaserSection()
     galvo: GalvoSection = GalvoSection()
     defaults: JobDefaults = JobDefaults()
+    wobble: WobbleSection = WobbleSection()
     #: The file it was read from, or None for the built-in defaults.
     source: Optional[Path] = _field(default=None, compare=False)
     _table: object = _field(default=None, compare=False, repr=False)
@@ -211,6 +223,8 @@ class MachineProfile:
             "defaults": {"speed_mm_s": self.defaults.speed_mm_s,
                          "power_percent": self.defaults.power_percent,
                          "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},
+            "wobble": {"across_um": self.wobble.across_um, "along_um": self.wobble.along_um,
+                       "freq_hz": self.wobble.freq_hz},
             "derived": {
                 "units_per_mm": self.units_per_mm,
                 "mm_per_unit": self.mm_per_unit,
@@ -231,7 +245,7 @@ def default_profile():
 # --- reading ---------------------------------------------------------------------------------
 
 _SECTION_CLASSES = {"field": FieldSection, "link": LinkSection, "laser": LaserSection,
-                    "galvo": GalvoSection, "defaults": JobDefaults}
+                    "galvo": GalvoSection, "defaults": JobDefaults, "wobble": WobbleSection}
 assert all(tuple(k.name for k in keys) == tuple(_SECTION_CLASSES[name].__dataclass_fields__)
            for name, keys in SECTIONS.items())
 

@@ -21,7 +21,7 @@ import difflib
 import math
 import re
 
-from ..gateware.host.regmap import BY_NAME
+from ..gateware.host.regmap import BY_NAME, WOBBLE_MAX_HZ
 
 
 # --- what the registers fix ------------------------------------------------------------------
@@ -79,6 +79,9 @@ SECTIONS = {
                  _Key("power_percent", "number", 0, 100, "%"),
                  _Key("prr_khz", "number", *PRR_RANGE_KHZ, "kHz"),
                  _Key("passes", "integer", 1, 1000, "")),
+    "wobble": (_Key("across_um", "number", 0, 10_000, "µm"),
+               _Key("along_um", "number", 0, 10_000, "µm"),
+               _Key("freq_hz", "number", BY_NAME["wob_freq"].low, WOBBLE_MAX_HZ, "Hz")),
 }
 
 

@@ -104,4 +104,18 @@ power_percent = {n(d.defaults.power_percent)}
 prr_khz = {n(d.defaults.prr_khz)}
 # Times each job is marked, one pass over the other. {s("defaults", "passes")}.
 passes = {n(d.defaults.passes)}
+
+[wobble]
+# A small ellipse laid over every marked line, to widen a weld or cleaning track (needs
+# a bitstream built with the wobble stage). `galvoscan mark --wobble` overrides these.
+# Amplitude across the line, to each side, in µm: the track grows by twice this.
+# 0 here and in along_um: no wobble. {s("wobble", "across_um")} µm (the board holds at
+# most 4095 galvo units: 6.9 mm on a 110 mm field).
+across_um = {n(d.wobble.across_um)}
+# Amplitude along the line, forwards and back, in µm; equal to across_um: a circle.
+# {s("wobble", "along_um")} µm.
+along_um = {n(d.wobble.along_um)}
+# Turns of the figure a second, in Hz: with the line speed v, the figure repeats every
+# v / freq_hz along the line. {s("wobble", "freq_hz")} Hz.
+freq_hz = {n(d.wobble.freq_hz)}
 """

@@ -172,6 +172,15 @@ class JobStreamer:
         if "mode" in registers and self.board.read("mode") != registers["mode"]:
             raise JobAborted(f"the board has no {Mode(registers['mode']).label} mode: its "
                              f"bitstream was built without it (galvoscan build --modes)")
+        if "wob_shape" in registers:
+            from ..client import ClientError
+            try:
+                shape = self.board.read("wob_shape")
+            except ClientError:             # the address is unknown: no answer but a refusal
+                shape = None
+            if shape != registers["wob_shape"]:
+                raise JobAborted("the board has no wobble stage: its bitstream was built "
+                                 "without it (galvoscan build --wobble)")
 
     def wait_ready(self, timeout_s):
         """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""
@@ -276,6 +285,9 @@ class JobStreamer:
             sent = self.stream(segments, timeout_s=timeout_s, start=lambda: self._start(
                 armed=armed, ready_timeout_s=ready_timeout_s))
             self.wait_idle(timeout_s)
+            if registers.get("wob_shape"):
+                # A later job that does not ask for wobble must not inherit it.
+                self.board.write("wob_shape", 0)
             return sent
         return self._job(body)
 

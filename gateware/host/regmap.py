@@ -39,7 +39,8 @@ __all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "VectorOp", "Status", "STATUS_BITS
            "register_map", "DEFAULT_TABLE_POINTS", "DEFAULT_CORRECTION_NODES", "MAX_TABLE_POINTS",
            "HOST_MAP",
            "REGISTERS", "BY_NAME", "BY_ADDRESS", "MODE_REGISTERS", "CORRECTION_REGISTERS",
-           "LASER_REGISTERS", "encode_frame", "decode_frame", "FrameError"]
+           "LASER_REGISTERS", "WOBBLE_REGISTERS", "WobbleShape", "WOBBLE_MAX_AMPLITUDE",
+           "WOBBLE_MAX_HZ", "encode_frame", "decode_frame", "FrameError"]
 
 
 #: The last byte of every frame.
@@ -86,6 +87,25 @@ class VectorOp(enum.Enum, shape=1):
     def label(self):
         """The word a job file uses."""
         return self.name.lower()
+
+
+class WobbleShape(enum.Enum, shape=1):
+    """Values of the ``wob_shape`` register: the figure laid over marked vector points."""
+    OFF = 0         #: marked points as the line gives them
+    ELLIPSE = 1     #: an ellipse (a circle when both amplitudes are equal) around each point
+
+    @property
+    def label(self):
+        """The word the command line uses."""
+        return self.name.lower()
+
+
+#: Largest wobble amplitude, galvo units (≈ 6.9 mm on a 110 mm field): the figure's products
+#: stay within 12 bits.
+WOBBLE_MAX_AMPLITUDE = 4095
+#: Highest wobble frequency, Hz: a quarter of the XY2-100 frame rate, so a turn of the figure
+#: has at least four points.
+WOBBLE_MAX_HZ = 25_000
 
 
 #: Bits of the ``status`` register, bit 0 first.
@@ -210,6 +230,21 @@ def _all_registers(table_points, correction_nodes):
         Register("vec_stalls", 0x29, "ro", 0, 0, 0, "frames",
                  "frames a marked line waited, laser off, for the next segment to be set up (140 "
                  "clocks: at 12 MHz only after two one-point segments in a row); stops at 65535"),
+        # --- wobble group (built with GalvoScanTop(wobble=True)) -------------------------------
+        Register("wob_shape", 0x50, "rw", WobbleShape.OFF.value, 0, len(WobbleShape) - 1, "enum",
+                 "figure laid over every marked vector point, a new position each frame while "
+                 "the point is held: 0 = off, 1 = ellipse (wob_along × wob_across; a circle when "
+                 "equal)", width=Shape.cast(WobbleShape).width),
+        Register("wob_along", 0x51, "rw", 30, 0, WOBBLE_MAX_AMPLITUDE, "galvo units",
+                 "wobble amplitude along the line (half the figure's length; the host converts "
+                 "µm through the field size: 30 ≈ 50 µm on a 110 mm field)",
+                 width=_width(WOBBLE_MAX_AMPLITUDE)),
+        Register("wob_across", 0x52, "rw", 30, 0, WOBBLE_MAX_AMPLITUDE, "galvo units",
+                 "wobble amplitude across the line (half the track's added width)",
+                 width=_width(WOBBLE_MAX_AMPLITUDE)),
+        Register("wob_freq", 0x53, "rw", 1000, 1, WOBBLE_MAX_HZ, "Hz",
+                 "turns of the figure per second (at most a quarter of the 100 kHz frame rate); "
+                 "each mark starts at the figure's first point", width=_width(WOBBLE_MAX_HZ)),
         # --- raster group -----------------------------------------------------------------------
         Register("ras_x", 0x30, "rw", 28768, 0, WORD_MAX, "galvo units",
                  "raster rectangle: X of its lower-left corner"),
@@ -286,6 +321,9 @@ MODE_REGISTERS = {
                         "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"),
 }
 
+#: Registers only a build with the wobble stage has (``GalvoScanTop(wobble=True)``, vector mode).
+WOBBLE_REGISTERS = ("wob_shape", "wob_along", "wob_across", "wob_freq")
+
 #: Registers only a build with the laser controller has.
 LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses",
                    "guide")
@@ -310,9 +348,11 @@ class RegisterMap:
     correction_nodes : int or None
     modes : tuple of :class:`Mode`
     laser : bool
+    wobble : bool
     """
 
-    def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser):
+    def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
+                 wobble=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -323,6 +363,7 @@ class RegisterMap:
         self.correction_nodes = correction_nodes
         self.modes = tuple(modes)
         self.laser = laser
+        self.wobble = wobble
 
     def __iter__(self):
         return iter(self.registers)
@@ -339,11 +380,12 @@ class RegisterMap:
     def __repr__(self):
         return (f"register_map(table_points={self.table_points}, "
                 f"correction_nodes={self.correction_nodes}, "
-                f"modes={tuple(m.label for m in self.modes)}, laser={self.laser})")
+                f"modes={tuple(m.label for m in self.modes)}, laser={self.laser}, "
+                f"wobble={self.wobble})")
 
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
-                 modes=tuple(Mode), laser=True, resets=None):
+                 modes=tuple(Mode), laser=True, wobble=False, resets=None):
     """The register map of a build.
 
     Parameters
@@ -359,6 +401,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         others are left out.
     laser : bool
         The build has the laser controller (else its registers are left out).
+    wobble : bool
+        The build has the wobble stage on vector points (else its registers are left out).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -383,6 +427,10 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         leave_out |= set(CORRECTION_REGISTERS)
     if not laser:
         leave_out |= set(LASER_REGISTERS)
+    if not wobble:
+        leave_out |= set(WOBBLE_REGISTERS)
+    elif Mode.VECTOR not in modes:
+        raise ValueError("the wobble stage works on vector points: it needs vector mode")
     every = {r.name: r for r in _all_registers(table_points, correction_nodes or 2)}
     by_name = {name: r for name, r in every.items() if name not in leave_out}
     for name, value in (resets or {}).items():
@@ -400,7 +448,7 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                          f"which it does not have")
     return RegisterMap(by_name.values(), choices={"mode": [mode.value for mode in modes]},
                        table_points=table_points, correction_nodes=correction_nodes,
-                       modes=modes, laser=bool(laser))
+                       modes=modes, laser=bool(laser), wobble=bool(wobble))
 
 
 #: Largest spiral table a build may have (samples per axis).
@@ -414,7 +462,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        resets={name: default[name].reset
+                        wobble=True, resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
 
@@ -427,7 +475,7 @@ BY_NAME = HOST_MAP.by_name
 BY_ADDRESS = HOST_MAP.by_address
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
-assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS)
+assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS + WOBBLE_REGISTERS)
 
 
 class FrameError(ValueError):

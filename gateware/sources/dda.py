@@ -20,6 +20,10 @@ Then each point costs one clock: the positions are accumulated with 32 fractiona
 whether another point fits (``(k·p)² < D²``) is decided exactly with integers, by adding the
 odd multiples of ``p²``. The accumulated error stays below 2⁻¹⁵ unit, so a point can differ
 from the exact rounding only when the exact value lies that close to a half.
+
+Built with ``direction=True`` (for the wobble stage) it also gives the line's direction, the
+unit vector ``|dx|/L`` and ``|dy|/L`` to 10 fractional bits (two more divisions, 13 clocks
+each, so the set-up takes 166 clocks), kept until the next line longer than the pitch.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
@@ -29,13 +33,23 @@ from amaranth.lib.wiring import In, Out
 from ..points import FieldPoint
 
 
-__all__ = ["LineDDA", "Segment", "FRACTION_BITS"]
+__all__ = ["LineDDA", "Segment", "FRACTION_BITS", "DIRECTION_BITS", "Direction"]
 
 
 #: Fractional bits of the step and of the accumulated positions.
 FRACTION_BITS = 32
 # Fractional bits of the line length.
 _LENGTH_FRACTION = 16
+
+#: Fractional bits of the direction's components (1024 = 1.0): the wobble figure's few
+#: thousand units at most turned onto the line within a few units.
+DIRECTION_BITS = 10
+
+#: A line's direction: magnitudes of its unit vector's components and their signs.
+Direction = data.StructLayout({
+    "ux": unsigned(DIRECTION_BITS + 1), "uy": unsigned(DIRECTION_BITS + 1),
+    "negative_x": 1, "negative_y": 1,
+})
 
 #: A line to interpolate, in galvo units.
 Segment = data.StructLayout({
@@ -58,12 +72,27 @@ class LineDDA(wiring.Component):
         The segment's points after its start, the end point last.
     busy : ``Out(1)``
         A segment is being set up or stepped.
+    direction : ``Out(Direction)``, with ``direction=True``
+        The direction of the last line longer than the pitch (+X after reset): that of the
+        points being given, or, for a line no longer than the pitch, of the line before.
+
+    Parameters
+    ----------
+    direction : bool
+        Work out each line's direction too (:attr:`direction`).
     """
 
-    segment: In(stream.Signature(Segment))
-    pitch: In(16)
-    points: Out(stream.Signature(FieldPoint))
-    busy: Out(1)
+    def __init__(self, *, direction=False):
+        self.with_direction = bool(direction)
+        members = {
+            "segment": In(stream.Signature(Segment)),
+            "pitch": In(16),
+            "points": Out(stream.Signature(FieldPoint)),
+            "busy": Out(1),
+        }
+        if self.with_direction:
+            members["direction"] = Out(Direction, init={"ux": 1 << DIRECTION_BITS})
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
@@ -186,9 +215,35 @@ class LineDDA(wiring.Component):
                 with m.If(steps == 0):
                     m.d.sync += second_axis.eq(1)
                     with m.If(second_axis):
-                        m.next = "NEXT"
+                        if self.with_direction:
+                            m.d.sync += second_axis.eq(0)
+                            m.next = "UNIT_LOAD"
+                        else:
+                            m.next = "NEXT"
                     with m.Else():
                         m.next = "PRODUCT"
+            if self.with_direction:
+                # The unit vector, |dx|/L then |dy|/L, on the same remainder and subtractor:
+                # |dx|·2^(B+1) < L·2^G, so B + 2 quotient bits give |dx|·2^B / L ≤ 2^B.
+                B = DIRECTION_BITS
+                unit = Signal(B + 2)
+                with m.State("UNIT_LOAD"):
+                    m.d.sync += [remainder.eq(Mux(second_axis, ay, ax) << (G - 2)),
+                                 steps.eq(B + 1)]
+                    m.next = "UNIT"
+                with m.State("UNIT"):
+                    m.d.sync += [remainder.eq(next_remainder), steps.eq(steps - 1),
+                                 unit.eq(Cat(fits, unit))]
+                    with m.If(steps == 0):
+                        m.d.sync += second_axis.eq(1)
+                        with m.If(second_axis):
+                            m.d.sync += [self.direction.uy.eq(Cat(fits, unit)),
+                                         self.direction.negative_x.eq(negative_x),
+                                         self.direction.negative_y.eq(negative_y)]
+                            m.next = "NEXT"
+                        with m.Else():
+                            m.d.sync += self.direction.ux.eq(Cat(fits, unit))
+                            m.next = "UNIT_LOAD"
             with m.State("NEXT"):
                 # Is there a point k·p < L before the end?
                 next_kp2 = kp2 + odd

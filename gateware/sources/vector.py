@@ -27,10 +27,10 @@ from amaranth.lib.wiring import In, Out
 
 from ..host.regmap import VectorOp
 from ..points import FIELD_CENTRE, OffsetPoint
-from .dda import LineDDA
+from .dda import DIRECTION_BITS, Direction, LineDDA
 
 
-__all__ = ["VectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
+__all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
 
 
 #: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
@@ -89,9 +89,12 @@ class VectorSequencer(wiring.Component):
     stall: Out(1)
     busy: Out(1)
 
+    #: Hand each point's line direction on (:class:`DirectedVectorSequencer`).
+    with_direction = False
+
     def elaborate(self, platform):
         m = Module()
-        m.submodules.dda = dda = LineDDA()
+        m.submodules.dda = dda = LineDDA(direction=self.with_direction)
         m.d.comb += dda.pitch.eq(self.pitch)
 
         # --- point generator ----------------------------------------------------------------
@@ -168,6 +171,13 @@ class VectorSequencer(wiring.Component):
 
         with m.If(self.points.ready):
             m.d.sync += self.points.valid.eq(0)
+        if self.with_direction:
+            # Each point keeps the direction the DDA had when it took the point.
+            slot_direction = Signal(Direction)
+            with m.If(~slot_valid):
+                m.d.sync += slot_direction.eq(dda.direction)
+            with m.If(taken):
+                m.d.sync += self.direction.eq(slot_direction)
         m.d.comb += self.busy.eq(self.commands.valid | ~fetching | slot_valid | holding_mark |
                                  holding_jump)
 
@@ -203,3 +213,21 @@ class VectorSequencer(wiring.Component):
             with m.Else():
                 m.d.sync += frames.eq(frames + (frames != 0xFFFF))
         return m
+
+
+class DirectedVectorSequencer(VectorSequencer):
+    """A :class:`VectorSequencer` that hands on the direction of each point's line too.
+
+    Interface attributes
+    --------------------
+    direction : ``Out(Direction)``
+        The direction of the line the point on :attr:`points` lies on, held with the point (see
+        :class:`~.dda.LineDDA`): a mark's first point, and a line no longer than the pitch,
+        carry the direction of the last line longer than the pitch.
+
+    Working the direction out makes a segment's set-up 166 clocks rather than 140.
+    """
+
+    direction: Out(Direction, init={"ux": 1 << DIRECTION_BITS})
+
+    with_direction = True
