@@ -104,6 +104,9 @@ class GalvoScanTop(wiring.Component):
         Segments the vector queue holds (:data:`VECTOR_QUEUE_DEPTH`, the build's). A
         simulation may build a shorter queue, so that filling it costs a few dozen segments;
         the host learns the depth from ``fifo_free`` while the queue is empty.
+    spiral_interpolation : bool
+        Build the spiral's linear interpolation between points and its ``spiral_interp``
+        register (some LC_INTERP cells; False leaves both out).
 
     Interface attributes
     --------------------
@@ -140,7 +143,7 @@ class GalvoScanTop(wiring.Component):
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
-                 vector_queue_depth=VECTOR_QUEUE_DEPTH):
+                 vector_queue_depth=VECTOR_QUEUE_DEPTH, spiral_interpolation=True):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -195,6 +198,7 @@ class GalvoScanTop(wiring.Component):
             raise ValueError(f"vector_queue_depth must be a whole number from 2 to "
                              f"{VECTOR_QUEUE_DEPTH}, not {vector_queue_depth!r}")
         self.vector_queue_depth = vector_queue_depth
+        self.spiral_interpolation = bool(spiral_interpolation) and "spiral" in modes
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -202,7 +206,8 @@ class GalvoScanTop(wiring.Component):
         self.regmap = register_map(
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
-            modes=modes, laser=self.laser, resets=self.settings.register_resets())
+            modes=modes, laser=self.laser, spiral_interpolation=self.spiral_interpolation,
+            resets=self.settings.register_resets())
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
             "spi_sck": In(1), "spi_cs_n": In(1, init=1), "spi_copi": In(1), "spi_cipo": Out(1),
@@ -273,10 +278,13 @@ class GalvoScanTop(wiring.Component):
 
         sources = {}
         if "spiral" in self.modes:
-            m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(self.table)
+            m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(
+                self.table, interpolation=self.spiral_interpolation)
             # Registers and ports of the same name.
             for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
                 m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
+            if self.spiral_interpolation:
+                m.d.comb += spiral.interpolate.eq(regs.spiral_interp)
         if "raster" in self.modes:
             m.submodules.raster = sources[Mode.RASTER] = raster = RasterSequencer()
             m.d.comb += [
