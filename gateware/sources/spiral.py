@@ -159,54 +159,61 @@ class SpiralSequencer(wiring.Component):
                                  dwell, table_due, between):
         """Interpolated frames between table points (``between`` high while one is offered).
 
-        Every point, a table point too, comes from the interpolators' position registers (no
-        multiplexer in front of the output): a table point is loaded into them on the clock it
-        is due and offered on the next."""
+        Every point comes from the interpolators' position registers (no multiplexer in front
+        of the output, and no load from the ROMs): the last step from a point lands on the next
+        one, on the clock that point is due; it is offered on the next clock. A held point (or
+        the first after a start) is one step of its whole way, made when the next is due."""
         m.submodules.interp_x = interp_x = AxisInterpolator()
         m.submodules.interp_y = interp_y = AxisInterpolator()
 
-        loaded = Signal()
-        m.d.sync += loaded.eq(table_due & ~issued & ~restart)
-        m.d.comb += self.points.valid.eq(self.run & ~restart & ((table_due & loaded) | between))
-
-        # The point's setting and dwell, held from its issue to its end (the Bresenham step
-        # needs the same d all along). Longer dwells are held, not interpolated.
-        interpolating = Signal()
-        point_frames = Signal(8)
-        # The next point is read from the ROMs two clocks after an issue (`fetched` low, then
-        # high): then the division starts, and takes a quotient bit a clock.
+        # The next table point is due, and the way to it divided (after a start the division
+        # may still run when the first frame strobe comes).
         dividing_due = Signal()
         divide_left = Signal(range(DIVIDE_CLOCKS + 1))
+        due = Signal()
+        m.d.comb += due.eq(table_due & ~dividing_due & (divide_left == 0) & ~restart)
+        arrived = Signal()
+        m.d.sync += arrived.eq(due & ~issued)
+        m.d.comb += self.points.valid.eq(self.run & ~restart & ((due & arrived) | between))
+
+        # The point's setting and dwell, held from its issue until the next point arrives (the
+        # Bresenham steps need the same d all along). Longer dwells are held, not interpolated:
+        # their way is divided by 1 and made in the one step onto the next point.
+        interpolating = Signal()
+        point_frames = Signal(8)
+        # The next point is read from the ROMs two clocks after an issue or a start (`fetched`
+        # low, then high): then the division starts, and takes a quotient bit a clock.
         start = dividing_due & fetched & ~issued
-        with m.If(issued):
+        with m.If(restart):
+            m.d.sync += [interpolating.eq(0), point_frames.eq(1), dividing_due.eq(1)]
+        with m.Elif(issued):
+            interpolate = self.interpolate & (dwell <= MAX_INTERPOLATED_DWELL)
             m.d.sync += [
-                interpolating.eq(self.interpolate & (dwell <= MAX_INTERPOLATED_DWELL)),
-                point_frames.eq(dwell[:8]),
+                interpolating.eq(interpolate),
+                point_frames.eq(Mux(interpolate, dwell[:8], 1)),
                 dividing_due.eq(1),
             ]
-        with m.Elif(fetched | restart):
+        with m.Elif(fetched):
             m.d.sync += dividing_due.eq(0)
         with m.If(start):
             m.d.sync += divide_left.eq(DIVIDE_CLOCKS)
         with m.Elif(divide_left != 0):
             m.d.sync += divide_left.eq(divide_left - 1)
 
-        # At a frame strobe with more frames of this point to come, the next one moves on.
-        step = Signal()
-        m.d.comb += step.eq(self.frame_strobe & interpolating & (frames_left > 1) & ~restart)
+        # At a frame strobe with more frames of this point to come, the next one moves on; and
+        # when the next table point is due, the last step lands on it.
+        between_step = self.frame_strobe & interpolating & (frames_left > 1) & ~restart
         with m.If(restart | (self.points.valid & self.points.ready)):
             m.d.sync += between.eq(0)
-        with m.Elif(step):
+        with m.Elif(between_step):
             m.d.sync += between.eq(1)
 
         for interp, read, axis in ((interp_x, read_x, "x"), (interp_y, read_y, "y")):
             m.d.comb += [
-                interp.origin.eq(table_due),
-                interp.p.eq(read.data),
                 interp.start.eq(start),
                 interp.q.eq(read.data),
                 interp.divide.eq(divide_left != 0),
                 interp.frames.eq(point_frames),
-                interp.step.eq(step),
+                interp.step.eq(between_step | (due & ~arrived)),
                 getattr(self.points.payload, axis).eq(interp.position),
             ]

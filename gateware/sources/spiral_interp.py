@@ -40,10 +40,6 @@ class AxisInterpolator(wiring.Component):
 
     Interface attributes
     --------------------
-    origin : ``In(1)``
-        The position jumps to ``p`` (a table point is shown).
-    p : ``In(signed(16))``
-        The table point, sampled on ``origin``.
     start : ``In(1)``
         Take the way from the position (``p``) to ``q`` as the dividend.
     q : ``In(signed(16))``
@@ -54,13 +50,13 @@ class AxisInterpolator(wiring.Component):
         The dwell ``d``, 1 … :data:`MAX_INTERPOLATED_DWELL`, held by the caller from ``start``
         to the point's end.
     step : ``In(1)``
-        Move one frame on (at most ``d - 1`` times per point, after the division).
+        Move one frame on, after the division: the ``d``-th step lands on ``q`` exactly.
     position : ``Out(signed(16))``
-        ``p`` plus the displacement after the steps so far.
+        ``p`` plus the displacement after the steps so far. The position is never loaded: it
+        reaches each table point by the last step from the one before (from wherever it was,
+        in one step, for the first point after a start).
     """
 
-    origin: In(1)
-    p: In(signed(16))
     start: In(1)
     q: In(signed(16))
     divide: In(1)
@@ -80,25 +76,23 @@ class AxisInterpolator(wiring.Component):
         m.d.comb += difference.eq(self.q - self.position)
         negative = difference[16]
 
-        # Restoring division: shift the next dividend bit into the remainder; keep the
-        # difference with d if it is not negative. The quotient bits go in already complemented
-        # for q < p, so a step adds the quotient's two's complement with no more cells.
-        trial = Signal(signed(10))
-        m.d.comb += trial.eq(Cat(quotient[15], remainder) - self.frames)
-        fits = trial >= 0
-
-        # Bresenham: R (+1 for q < p) more per frame; past d, one unit more this frame.
-        sum_error = Signal(9)
+        # One "add, then take d off if that leaves no less than 0" serves both the restoring
+        # division (the remainder doubled plus the next dividend bit) and the Bresenham step
+        # (the accumulator plus R, plus 1 for q < p): they never run on the same clock.
+        addend = Signal(8)
+        carry_in = Signal()
+        total = Signal(9)
         past = Signal(signed(10))
         m.d.comb += [
-            sum_error.eq(error + remainder + towards_minus),
-            past.eq(sum_error - self.frames),
+            addend.eq(Mux(self.divide, remainder, error)),
+            carry_in.eq(Mux(self.divide, quotient[15], towards_minus)),
+            total.eq(addend + remainder + carry_in),
+            past.eq(total - self.frames),
         ]
-        carry = past >= 0
+        fits = past >= 0
+        kept = Mux(fits, past[:8], total[:8])
 
-        with m.If(self.origin):
-            m.d.sync += self.position.eq(self.p)
-        with m.Elif(self.start):
+        with m.If(self.start):
             m.d.sync += [
                 towards_minus.eq(negative),
                 quotient.eq(difference[:16] ^ Cat(*[negative] * 16)),
@@ -106,15 +100,17 @@ class AxisInterpolator(wiring.Component):
                 error.eq(0),
             ]
         with m.Elif(self.divide):
+            # The quotient bits go in already complemented for q < p, so that a step adds the
+            # quotient's two's complement with no more cells.
             m.d.sync += [
                 quotient.eq(Cat(fits ^ towards_minus, quotient[:15])),
-                remainder.eq(Mux(fits, trial[:8], Cat(quotient[15], remainder[:7]))),
+                remainder.eq(kept),
             ]
         with m.Elif(self.step):
             # q < p: the quotient holds ~Q; adding ~Q + (1 - carry) subtracts Q + carry.
             m.d.sync += [
-                error.eq(Mux(carry, past[:8], sum_error[:8])),
-                self.position.eq(self.position + quotient + (carry ^ towards_minus)),
+                error.eq(kept),
+                self.position.eq(self.position + quotient + (fits ^ towards_minus)),
             ]
 
         return m
