@@ -29,8 +29,9 @@ MIN_POINTS = 8
 MAX_POINTS = 4096
 
 
-#: Sampling kinds.
-SAMPLINGS = ("gaussian", "uniform")
+#: Sampling kinds: ``"triangle"`` spaces the amplitudes evenly (the mirror swept at constant
+#: speed), the limit of the Gaussian sampling as σ grows.
+SAMPLINGS = ("gaussian", "uniform", "triangle")
 
 #: Default σ of the Gaussian sampling, in half-swings, chosen by the scan analysis's σ sweep
 #: (``galvoscan analyze --sweep``, README "Results"): on the paper's 50 × 20 mm field with the
@@ -55,7 +56,8 @@ class SpiralTable:
         Samples per sine period, a multiple of 4 from :data:`MIN_POINTS` to :data:`MAX_POINTS`.
         The paper uses 128.
     sampling : str
-        ``"gaussian"`` (the paper's choice) or ``"uniform"`` (equal phase steps).
+        ``"gaussian"`` (the paper's choice), ``"uniform"`` (equal phase steps) or
+        ``"triangle"`` (equal amplitude steps: σ → ∞).
     sigma : float
         Width of the Gaussian sampling in half-swings, from 0.05 to 100. Ignored for uniform
         sampling.
@@ -95,6 +97,8 @@ class SpiralTable:
         """Amplitude (0 … 1 half-swings) reached after ``level`` of a quarter period."""
         if self.sampling == "uniform":
             return math.sin(math.pi / 2 * level)
+        if self.sampling == "triangle":
+            return level
         if level >= 1:
             return 1.0
         normal = NormalDist(0, self.sigma)
