@@ -187,7 +187,8 @@ def _all_registers(table_points, correction_nodes):
         Register("spiral_interp", 0x0D, "rw", 1, 0, 1, "enum",
                  "between spiral points: 0 = hold each point for dwell frames, then jump; 1 = "
                  "linear, every frame moves part of the way to the next point (same points at "
-                 "the same times; peak mirror speed 1.1× the mean instead of 1.7×)", width=1),
+                 "the same times; dwells over 255 frames are held); see README \"Held points\"",
+                 width=1),
         # --- vector group -----------------------------------------------------------------------
         Register("vec_x", 0x20, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
                  "X of the next segment's end point (offset binary, 32768 = centre)"),
