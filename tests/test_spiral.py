@@ -108,8 +108,9 @@ def test_full_pattern_replays_point_for_point():
     # gateware emits, so its dose figures speak of the real output.
     model = analysis_spiral_frames(table, dwell=settings.dwell, interpolation="linear")
     assert frames[2:] == list(zip(model.x.tolist(), model.y.tolist()))
-    # The pattern closes: the next point would be the first again.
-    assert expected(table, settings, points + 1)[-1] == frames[2]
+    # The pattern closes: the next point would be the first again (its first frame is the
+    # table point itself), and the last point's frames walk towards it.
+    assert expected(table, settings, points + 1)[-settings.dwell] == frames[2]
 
 
 @pytest.mark.parametrize("dwell", [1, 2, 5])
