@@ -322,7 +322,8 @@ def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
     assert code == 0 and summary["x_range"] == [0, 511] and summary["y_range"] == [1, 510]
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
     table = SpiralTable(points=512)
-    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"],
+    assert summary["interpolation"] == "linear"
+    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"], interp=1,
                          x_range=(0, 511), y_range=(1, 510))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
 
