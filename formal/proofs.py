@@ -130,8 +130,10 @@ def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_l
     """
     kwargs = {"helpers": helpers, "uart_live": uart_live, "reset_free": reset_free}
     if not uart_live:
-        # The spiral-only build's map, without laser or correction: 13 registers, not 44.
-        kwargs["regmap"] = register_map(modes=("spiral",), laser=False, correction_nodes=None)
+        # The spiral-only build's map, without laser, correction or interpolation: 13 registers,
+        # not 45.
+        kwargs["regmap"] = register_map(modes=("spiral",), laser=False, correction_nodes=None,
+                                        spiral_interpolation=False)
     if make_spi is not None:
         kwargs["make_spi"] = make_spi
     if make_decoder is not None:

@@ -89,14 +89,17 @@ class TimingError(BuildError):
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
-                    baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False):
+                    baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False,
+                    interpolation=False):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
     :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
     RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
     the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200),
-    ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode.
+    ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode,
+    ``interpolation`` the spiral's interpolator (about 280 cells; not in the default build,
+    which it would not fit beside all three modes).
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -108,6 +111,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     # What the board cannot run raises here, before anything is built.
     if wobble and board == "icestick":
         raise ValueError("the iCEstick has no room for the wobble stage")
+    if interpolation and board == "icestick":
+        raise ValueError("the iCEstick has no room for the spiral's interpolator")
     if board == "icestick":
         icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate,
                        baud=baud)
@@ -118,6 +123,11 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     if wobble and len(set(modes)) == len(MODES):
         raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
                          "leave one out with --modes (spiral,vector fits)")
+    if interpolation and len(set(modes)) == len(MODES):
+        raise ValueError("the spiral's interpolator does not fit the UP5K beside all three "
+                         "scan modes: leave one out with --modes (spiral,vector fits)")
+    if interpolation and "spiral" not in modes:
+        raise ValueError("the interpolator is the spiral's: build it with the spiral mode")
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()
@@ -127,7 +137,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     start = time.monotonic()
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
                                   correction=correction, clock=clock, bit_rate=bit_rate,
-                                  baud=baud, **({"wobble": True} if wobble else {})),
+                                  baud=baud, **({"wobble": True} if wobble else {}),
+                                  **({"interpolation": True} if interpolation else {})),
                           name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design

@@ -35,6 +35,9 @@ class ScanSettings:
         ``(first, last)`` ROM addresses walked by each axis, inclusive. The paper's
         ``(0, 127)`` and ``(1, 126)`` (the default, for the default 128-point table) make the
         ellipse precess.
+    spiral_interp : int
+        Between spiral points: 0 = hold, 1 = linear interpolation (the ``spiral_interp``
+        register).
     run : bool
         Start sweeping out of reset.
     mode : str or :class:`Mode`
@@ -46,14 +49,17 @@ class ScanSettings:
                  center_x=_DEFAULT_MAP["center_x"].reset, center_y=_DEFAULT_MAP["center_y"].reset,
                  x_range=(_DEFAULT_MAP["x_first"].reset, _DEFAULT_MAP["x_last"].reset),
                  y_range=(_DEFAULT_MAP["y_first"].reset, _DEFAULT_MAP["y_last"].reset),
+                 spiral_interp=_DEFAULT_MAP["spiral_interp"].reset,
                  run=True, mode=Mode(_DEFAULT_MAP["mode"].reset).label):
         self.mode = Mode.named(mode).label
         for name, value in (("dwell", dwell), ("amp_x", amp_x), ("amp_y", amp_y),
-                            ("center_x", center_x), ("center_y", center_y)):
+                            ("center_x", center_x), ("center_y", center_y),
+                            ("spiral_interp", spiral_interp)):
             _check_register_value(name, value)
         self.dwell = dwell
         self.amp_x, self.amp_y = amp_x, amp_y
         self.center_x, self.center_y = center_x, center_y
+        self.spiral_interp = spiral_interp
         self.x_range = tuple(x_range)
         self.y_range = tuple(y_range)
         self.run = bool(run)
@@ -66,6 +72,7 @@ class ScanSettings:
             "center_x": self.center_x, "center_y": self.center_y,
             "x_first": self.x_range[0], "x_last": self.x_range[1],
             "y_first": self.y_range[0], "y_last": self.y_range[1],
+            "spiral_interp": self.spiral_interp,
         }
 
     def check_ranges(self, points):

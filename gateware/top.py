@@ -111,6 +111,9 @@ class GalvoScanTop(wiring.Component):
         Build the wobble stage on vector mode's marked points (:class:`~.sources.wobble.Wobble`)
         and its ``wob_*`` registers; needs vector mode. Without it those registers are unknown
         addresses.
+    spiral_interpolation : bool
+        Build the spiral's linear interpolation between points and its ``spiral_interp``
+        register (about 280 cells on the UP5K; False leaves both out).
 
     Interface attributes
     --------------------
@@ -147,7 +150,8 @@ class GalvoScanTop(wiring.Component):
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
-                 vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False):
+                 vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
+                 spiral_interpolation=True):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -207,6 +211,7 @@ class GalvoScanTop(wiring.Component):
             raise ValueError("the wobble stage works on vector points: it needs vector mode")
         if self.wobble:
             Wobble.check_frame_rate(bit_rate / FRAME_BITS)
+        self.spiral_interpolation = bool(spiral_interpolation) and "spiral" in modes
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -215,6 +220,7 @@ class GalvoScanTop(wiring.Component):
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
             modes=modes, laser=self.laser, wobble=self.wobble,
+            spiral_interpolation=self.spiral_interpolation,
             resets=self.settings.register_resets())
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
@@ -286,10 +292,13 @@ class GalvoScanTop(wiring.Component):
 
         sources = {}
         if "spiral" in self.modes:
-            m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(self.table)
+            m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(
+                self.table, interpolation=self.spiral_interpolation)
             # Registers and ports of the same name.
             for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
                 m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
+            if self.spiral_interpolation:
+                m.d.comb += spiral.interpolate.eq(regs.spiral_interp)
         if "raster" in self.modes:
             m.submodules.raster = sources[Mode.RASTER] = raster = RasterSequencer()
             m.d.comb += [

@@ -145,15 +145,20 @@ class ICEBreakerScanner(Elaboratable):
     table, settings, modes, correction, bit_rate, baud, wobble
         As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
         ``correction`` ``"identity"``: the default identity table).
+    interpolation : bool
+        Build the spiral's interpolator (``GalvoScanTop(spiral_interpolation=...)``); off by
+        default: beside all three modes it does not fit the UP5K.
     clock : float or None
         System clock in Hz: None runs on the 12 MHz crystal, anything else from the PLL
         (:func:`~galvoscan.platforms.pll.pll_settings` must reach it exactly).
     """
 
     def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
-                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False):
+                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False,
+                 interpolation=False):
         self.table = table
         self.wobble = wobble
+        self.interpolation = interpolation
         self.settings = settings
         self.modes = modes
         self.correction = correction
@@ -171,7 +176,8 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, correction=self.correction,
-            laser_alarms=len(ALARM_PMOD_PINS[1].split()), wobble=self.wobble, **extra)
+            laser_alarms=len(ALARM_PMOD_PINS[1].split()), wobble=self.wobble,
+            spiral_interpolation=self.interpolation, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.

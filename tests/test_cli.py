@@ -55,6 +55,10 @@ def test_rom_csv(capsys):
     (["rom", "--table-points", "130"], "multiple of 4"),
     (["sim", "--points", "-3"], "points must be from 1"),
     (["sim", "--points", "10", "--dwell", "0"], "dwell must be from 1"),
+    (["sim", "--points", "10", "--interp", "cubic"], "invalid choice"),
+    (["sim", "--points", "10", "--interp", ""], "invalid choice"),
+    (["sim", "--mode", "vector", "--job", "x.job", "--interp", "off"], "--interp is for the spiral"),
+    (["analyze", "--interp", "1"], "invalid choice"),
     (["sim"], "--points"),
     (["build", "--board", "de0nano"], "invalid choice"),
     (["export", "verilog"], "-o/--output"),
@@ -72,17 +76,21 @@ def test_prove_unknown_name(capsys):
         main(["prove", "--only", "nonesuch"])
 
 
-def test_sim_writes_frames_and_plot(tmp_path, capsys):
+@pytest.mark.parametrize("interp", [None, "off", "linear"])
+def test_sim_writes_frames_and_plot(tmp_path, capsys, interp):
     csv_path, png_path = tmp_path / "frames.csv", tmp_path / "path.png"
     code, out, _ = run(capsys, "sim", "--points", "40", "--dwell", "2", "--csv", str(csv_path),
-                       "--png", str(png_path), "--json")
+                       "--png", str(png_path), "--json",
+                       *(["--interp", interp] if interp else []))
     assert code == 0
     summary = json.loads(out)
     assert summary["frames"] == PARK_FRAMES + 80
+    assert summary["interpolation"] == (interp or "linear")      # the register's reset
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
     assert [int(r["frame"]) for r in rows] == list(range(PARK_FRAMES + 80))
     table = SpiralTable()
-    want = spiral_frames(table.x, table.y, 40, dwell=2, x_range=(0, 127), y_range=(1, 126))
+    want = spiral_frames(table.x, table.y, 40, dwell=2, interp=int(interp != "off"),
+                         x_range=(0, 127), y_range=(1, 126))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
     assert png_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
@@ -317,7 +325,8 @@ def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
     assert code == 0 and summary["x_range"] == [0, 511] and summary["y_range"] == [1, 510]
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
     table = SpiralTable(points=512)
-    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"],
+    assert summary["interpolation"] == "linear"
+    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"], interp=1,
                          x_range=(0, 511), y_range=(1, 510))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
 

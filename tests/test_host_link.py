@@ -70,7 +70,8 @@ def test_host_starts_stops_and_reshapes_the_spiral(kind):
 
     # Reshape while stopped, then start: the pattern begins again with the new settings.
     new = {"dwell": 2, "amp_x": 20000, "amp_y": 40000, "center_x": 30000, "center_y": 36000,
-           "x_first": 4, "x_last": 60, "y_first": 9, "y_last": 50}
+           "x_first": 4, "x_last": 60, "y_first": 9, "y_last": 50,
+           "spiral_interp": 0}     # held points, so that a dwell shows as runs of one frame
     for name, value in new.items():
         client.write(name, value)
     started_at = board.now

@@ -29,6 +29,7 @@ DEFAULT_BUILD = [
     ("x_last", 0x0a, "rw", 127, 0, 127, 7),
     ("y_first", 0x0b, "rw", 1, 0, 127, 7),
     ("y_last", 0x0c, "rw", 126, 0, 127, 7),
+    ("spiral_interp", 0x0d, "rw", 1, 0, 1, 1),
     ("vec_x", 0x20, "rw", 32768, 0, 65535, 16),
     ("vec_y", 0x21, "rw", 32768, 0, 65535, 16),
     ("vec_op", 0x22, "queue", 0, 0, 1, 1),
@@ -66,7 +67,7 @@ DEFAULT_BUILD = [
 REFUSABLE = {"cor_write"}
 
 #: Registers of each part a build may leave out.
-SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last"}
+SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp"}
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
 VECTOR_ONLY = {"vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"}
@@ -290,6 +291,12 @@ def test_left_out_registers_are_unknown():
     # The mode register takes spiral only.
     accesses += [(0x02, 1, True, True), (0x02, 2, True, True), (0x02, 0, True, True)]
     run(RegisterFile(regmap), model, accesses)
+
+
+def test_a_build_without_interpolation_leaves_its_register_out():
+    regmap = register_map(spiral_interpolation=False)
+    assert {r.name for r in regmap} == {name for name, *_ in DEFAULT_BUILD} - {"spiral_interp"}
+    assert "spiral_interp" not in register_map(modes=("spiral",), spiral_interpolation=False)
 
 
 @pytest.mark.parametrize("points", [8, 512, 4096])

@@ -17,7 +17,7 @@ from wires import frames_from_samples, record_falling_edges
 
 #: The iCEstick's top, as platforms/icestick.py builds it.
 SMALL = dict(modes=("spiral",), correction=None, multiplier="serial", links=("uart",),
-             laser=False, uart_reply_depth=1)
+             laser=False, uart_reply_depth=1, spiral_interpolation=False)
 
 
 @pytest.mark.parametrize("dwell", [1, 3])

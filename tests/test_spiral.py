@@ -6,6 +6,7 @@ import time
 
 import pytest
 from amaranth.lib import stream, wiring
+from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 from amaranth.lib.wiring import In, Out
 
 from galvoscan.analysis.patterns import spiral_frames as analysis_spiral_frames
@@ -27,6 +28,12 @@ def test_sequencer_signature():
         "points": Out(stream.Signature(OffsetPoint)),
     })
     assert SpiralSequencer.Signature(points=64).members["x_first"] == In(range(64))
+
+
+def test_sequencer_with_interpolation_has_its_input():
+    sequencer = SpiralSequencer(SpiralTable(points=128), interpolation=True)
+    assert sequencer.signature.members["interpolate"] == In(1)
+    assert "interpolate" not in SpiralSequencer(SpiralTable(points=128)).signature.members
 
 
 def test_sequencer_rejects_bad_parameters():
@@ -69,26 +76,28 @@ def test_top_rejects_bad_clock():
         GalvoScanTop(clk_freq=13e6)
 
 
-def replay(table, settings, points, *, clocks_per_bit=2):
+def replay(table, settings, points, *, clocks_per_bit=2, **top_kwargs):
     """Frames decoded from the system top's wires, enough for ``points`` spiral points."""
     clk_freq = clocks_per_bit * 2e6
-    top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings)
+    top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings, **top_kwargs)
     samples = record_falling_edges(top, clk_freq, frames=PARK_FRAMES + points * settings.dwell)
     return frames_from_samples(samples)
 
 
 def expected(table, settings, points):
     return spiral_frames(table.x, table.y, points, dwell=settings.dwell,
-                         x_range=settings.x_range, y_range=settings.y_range,
+                         interp=settings.spiral_interp, x_range=settings.x_range, y_range=settings.y_range,
                          gain=(settings.amp_x, settings.amp_y),
                          centre=(settings.center_x, settings.center_y))
 
 
 @pytest.mark.slow
 def test_full_pattern_replays_point_for_point():
-    """All lcm(128, 126) = 8064 points of the precessing spiral, each held 3 frames (30 µs),
-    read off the XY2-100 wires, equal the model frame for frame."""
+    """All lcm(128, 126) = 8064 points of the precessing spiral, 3 frames (30 µs) each, linear
+    interpolation between them (the reset), read off the XY2-100 wires, equal the model frame
+    for frame. (Points held without interpolation: test_held_points and others.)"""
     table, settings = SpiralTable(), ScanSettings()
+    assert settings.spiral_interp == 1
     points = math.lcm(128, 126)
     assert points == 8064
     start = time.monotonic()
@@ -97,16 +106,78 @@ def test_full_pattern_replays_point_for_point():
     assert frames == expected(table, settings, points)
     # The scan analysis' numpy model of the same pattern (galvoscan.analysis) is what the
     # gateware emits, so its dose figures speak of the real output.
-    model = analysis_spiral_frames(table, dwell=settings.dwell)
+    model = analysis_spiral_frames(table, dwell=settings.dwell, interpolation="linear")
     assert frames[2:] == list(zip(model.x.tolist(), model.y.tolist()))
-    # The pattern closes: the next point would be the first again.
-    assert expected(table, settings, points + 1)[-1] == frames[2]
+    # The pattern closes: the next point would be the first again (its first frame is the
+    # table point itself), and the last point's frames walk towards it.
+    assert expected(table, settings, points + 1)[-settings.dwell] == frames[2]
 
 
 @pytest.mark.parametrize("dwell", [1, 2, 5])
-def test_dwell(dwell):
-    table, settings = SpiralTable(), ScanSettings(dwell=dwell)
+@pytest.mark.parametrize("interp", [0, 1])
+def test_dwell(dwell, interp):
+    table, settings = SpiralTable(), ScanSettings(dwell=dwell, spiral_interp=interp)
     assert replay(table, settings, 150) == expected(table, settings, 150)
+
+
+def test_held_points():
+    """Interpolation off: each point is held for its dwell and the mirror jumps, as before
+    interpolation was built; the full pattern's first points are those of the linear replay."""
+    table, settings = SpiralTable(), ScanSettings(spiral_interp=0)
+    frames = replay(table, settings, 400)
+    assert frames == expected(table, settings, 400)
+    assert all(frames[i] == frames[i + 1] == frames[i + 2] for i in range(2, len(frames), 3))
+    linear = expected(table, ScanSettings(), 400)
+    assert frames[2::3] == linear[2::3] and frames != linear
+
+
+def test_interpolated_frames_walk_between_the_points():
+    """Linear: every frame moves; frame k of d is part of the way to the next point, never past
+    it, and the points themselves are where and when they were."""
+    table, settings = SpiralTable(), ScanSettings(dwell=4, spiral_interp=1)
+    frames = replay(table, settings, 100)
+    assert frames == expected(table, settings, 100)
+    points = frames[2::4]
+    assert points == expected(table, ScanSettings(dwell=4, spiral_interp=0), 100)[2::4]
+    for i in range(len(points) - 1):
+        walk = frames[2 + 4 * i: 2 + 4 * i + 5]
+        for axis in (0, 1):
+            values = [f[axis] for f in walk]
+            assert values == sorted(values) or values == sorted(values, reverse=True)
+    assert all(a != b for a, b in zip(frames[2:], frames[3:]))
+
+
+def test_a_build_without_interpolation_holds_points_and_has_no_register():
+    table, settings = SpiralTable(), ScanSettings(dwell=2)
+    top = GalvoScanTop(clk_freq=4e6, table=table, settings=settings, spiral_interpolation=False)
+    assert "spiral_interp" not in top.regmap
+    assert "spiral_interp" in GalvoScanTop(clk_freq=4e6).regmap
+    held = expected(table, ScanSettings(dwell=2, spiral_interp=0), 60)
+    assert replay(table, settings, 60, spiral_interpolation=False) == held
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+          phases=[Phase.explicit, Phase.reuse, Phase.generate])
+@given(st.data())
+def test_interpolation_over_random_tables_ranges_and_dwells(data):
+    """Random tables, address ranges (a wrap from the last address to the first is a long way
+    back), gains and dwells (1 … 9, and a long one): the wires equal the model."""
+    points = data.draw(st.sampled_from([8, 16, 32]), label="table points")
+    table = SpiralTable(points=points, sampling=data.draw(st.sampled_from(["gaussian", "uniform"])),
+                        sigma=data.draw(st.sampled_from([0.3, 1.0, 2.0, 50.0])))
+    ranges = []
+    for _ in range(2):
+        first = data.draw(st.integers(0, points - 1))
+        ranges.append((first, data.draw(st.integers(first, points - 1))))
+    dwell = data.draw(st.one_of(st.integers(1, 9), st.just(300)), label="dwell")
+    count = max(3, min(40, 600 // dwell))
+    scan = ScanSettings(dwell=dwell, spiral_interp=data.draw(st.integers(0, 1)),
+                        x_range=ranges[0], y_range=ranges[1],
+                        amp_x=data.draw(st.integers(0, 65535)),
+                        amp_y=data.draw(st.sampled_from([32768, 65535, 1000])),
+                        center_x=data.draw(st.integers(0, 65535)), center_y=32768)
+    assert replay(table, scan, count, modes=("spiral",), correction=None) == \
+        expected(table, scan, count)
 
 
 def test_ranges_gain_centre_and_saturation():

@@ -6,7 +6,7 @@ from .study import FILL_STAGES, fill_points
 
 
 __all__ = ["plot_fill", "plot_dose_maps", "plot_sigma_sweep", "plot_spiral_vs_raster",
-           "plot_wobble"]
+           "plot_wobble", "plot_interpolation"]
 
 
 def _pyplot():
@@ -110,6 +110,7 @@ def plot_sigma_sweep(path, results, *, chosen_sigma):
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4), dpi=110)
     gauss = [r for r in results if r.table.sampling == "gaussian"]
     uniform = [r for r in results if r.table.sampling == "uniform"]
+    triangle = [r for r in results if r.table.sampling == "triangle"]
     sigmas = [r.table.sigma for r in gauss]
     top = 0.0
     for key, label, style in (("cv_1mm", "CV of 1 mm blocks", "o-"),
@@ -119,7 +120,11 @@ def plot_sigma_sweep(path, results, *, chosen_sigma):
         top = max(top, *values)
         if uniform:
             label += f" (uniform: {uniform[0].metrics[key]:.2f})"
-        left.plot(sigmas, values, style, label=label, markersize=4)
+        line, = left.plot(sigmas, values, style, label=label, markersize=4)
+        if triangle:
+            # σ → ∞: the triangle wave, drawn as a level across the plot.
+            left.axhline(triangle[0].metrics[key], color=line.get_color(), linewidth=0.6,
+                         linestyle=":", alpha=0.8)
     left.axvline(chosen_sigma, color="grey", linewidth=0.8)
     left.annotate(f"default σ = {chosen_sigma:g}", (chosen_sigma, top * 1.05), fontsize=7,
                   xytext=(3, 0), textcoords="offset points")
@@ -128,16 +133,20 @@ def plot_sigma_sweep(path, results, *, chosen_sigma):
     left.xaxis.set_minor_formatter(ScalarFormatter())
     left.tick_params(axis="x", which="both", labelsize=7)
     left.set_ylim(0, top * 1.15)
+    if triangle:
+        left.annotate("dotted: triangle wave (σ → ∞)", (sigmas[0], top * 1.08), fontsize=7)
     left.set_xlabel("σ (half-swings)")
     left.legend(fontsize=7, loc="center right")
     left.set_title("uniformity against σ (same dwell)", fontsize=9)
     for n, r in enumerate(results):
         uniform_run = r.table.sampling == "uniform"
-        label = "uniform" if uniform_run else f"σ={r.table.sigma:g}"
-        colour = "tab:red" if uniform_run else (
-            "tab:green" if r.table.sigma == chosen_sigma else "tab:blue")
+        label = {"uniform": "uniform", "triangle": "triangle"}.get(r.table.sampling,
+                                                                   f"σ={r.table.sigma:g}")
+        colour = "tab:red" if uniform_run else "tab:orange" if r.table.sampling == "triangle" \
+            else ("tab:green" if r.table.sigma == chosen_sigma else "tab:blue")
         right.plot(r.metrics["peak_accel_km_s2"], r.metrics["cv_1mm"], "o", color=colour)
-        if uniform_run or r.table.sigma in (0.4, 0.5, 0.6, 0.8, 1.0, 1.5, chosen_sigma, 5.0):
+        if r.table.sampling != "gaussian" or \
+                r.table.sigma in (0.4, 0.5, 0.6, 0.8, 1.0, 1.5, chosen_sigma, 5.0):
             right.annotate(label, (r.metrics["peak_accel_km_s2"], r.metrics["cv_1mm"]),
                            fontsize=7, xytext=(4, -10 if n % 2 else 3),
                            textcoords="offset points")
@@ -229,6 +238,45 @@ def plot_wobble(path, amplitudes, frequencies, *, map_runs=None):
         ax.set_ylabel("across (µm)")
         ax.set_title(f"{metrics['hz']:g} Hz: a turn every {metrics['turn_um']:.0f} µm")
         fig.colorbar(image, ax=ax, label="J/cm²")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def plot_interpolation(path, held, linear, head, *, stretch_s=1.2e-3):
+    """The same spiral held point by point and interpolated: the spot's speed over a stretch,
+    and the commanded positions and mirror path over a few points."""
+    plt = _pyplot()
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 3.8), dpi=110)
+    for result, label, colour, dot in ((held, "held (spiral_interp = 0)", "tab:red", 6),
+                                       (linear, "linear (spiral_interp = 1)", "tab:blue", 2)):
+        path_ = result.path
+        start = int(round(result.warmup_s / path_.dt))
+        count = int(round(stretch_s / path_.dt))
+        vx, vy = path_.velocity()
+        speed = np.hypot(vx[start:start + count], vy[start:start + count])
+        speed_m_s = speed * float(head.mm(1)) / 1e3
+        t_ms = np.arange(len(speed)) * path_.dt * 1e3
+        m = result.metrics
+        left.plot(t_ms, speed_m_s, color=colour, linewidth=0.9,
+                  label=f"{label}: peak {m['peak_speed_m_s']:.1f} m/s, "
+                        f"{m['peak_over_mean']:.2f}× the mean")
+        left.axhline(m["mean_speed_m_s"], color=colour, linewidth=0.6, linestyle=":")
+        frames = result.frames
+        shown = 4 * result.dwell
+        right.plot(head.mm(path_.x[start:start + shown * 10]),
+                   head.mm(path_.y[start:start + shown * 10]), color=colour, linewidth=0.9)
+        right.plot(head.mm(frames.x[:shown]), head.mm(frames.y[:shown]), "o", color=colour,
+                   markersize=dot)
+    left.set_xlabel("time (ms)")
+    left.set_ylabel("spot speed (m/s)")
+    left.set_ylim(bottom=0)
+    left.legend(fontsize=7, loc="lower right")
+    left.set_title(f"spot speed, dwell {linear.dwell} (dotted: mean)", fontsize=9)
+    right.set_aspect("equal", adjustable="datalim")
+    right.set_xlabel("x (mm)")
+    right.set_ylabel("y (mm)")
+    right.set_title("four points: commanded frames (dots) and mirror path", fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

@@ -20,7 +20,7 @@ from ..gateware.sources.spiral_table import SpiralTable
 from .galvo import FRAME_PERIOD, FULL_RANGE
 
 
-__all__ = ["ScanHead", "Frames", "spiral_frames", "spiral_amplitude", "spiral_dwell_for_speed",
+__all__ = ["ScanHead", "Frames", "INTERPOLATIONS", "spiral_frames", "spiral_amplitude", "spiral_dwell_for_speed",
            "raster_frames"]
 
 
@@ -83,6 +83,21 @@ class Frames:
         return len(self.x) * FRAME_PERIOD
 
 
+#: Settings of the ``spiral_interp`` register, by value.
+INTERPOLATIONS = ("off", "linear")
+
+#: Longest dwell the gateware interpolates (frames); longer ones are held.
+MAX_INTERPOLATED_DWELL = 255
+
+
+def _between(p, q, dwell):
+    """Frames ``0 … dwell-1`` of the straight way from offsets ``p`` to ``q`` (arrays, one row
+    per point): ``p + sign(q - p) × floor(|q - p| × k / dwell)``, rounded towards ``p``."""
+    k = np.arange(dwell)
+    p, q = np.asarray(p, np.int64)[:, None], np.asarray(q, np.int64)[:, None]
+    return (p + np.sign(q - p) * (np.abs(q - p) * k // dwell)).ravel()
+
+
 def _scaled(offsets, amp, centre):
     # The gateware's scale stage: centre + floor(offset × amp / AMP_ONE), saturated to 16 bits.
     return np.clip(centre + (np.asarray(offsets, np.int64) * amp) // AMP_ONE, 0, FULL_RANGE - 1)
@@ -91,7 +106,8 @@ def _scaled(offsets, amp, centre):
 def spiral_frames(table, *, dwell=BY_NAME["dwell"].reset,
                   amp=(BY_NAME["amp_x"].reset, BY_NAME["amp_y"].reset),
                   centre=(BY_NAME["center_x"].reset, BY_NAME["center_y"].reset),
-                  x_range=None, y_range=None, count=None):
+                  x_range=None, y_range=None, count=None,
+                  interpolation=INTERPOLATIONS[BY_NAME["spiral_interp"].reset]):
     """The spiral sequencer's frames after the scale stage, from its first point.
 
     Parameters
@@ -105,6 +121,10 @@ def spiral_frames(table, *, dwell=BY_NAME["dwell"].reset,
         ROM addresses walked, inclusive; default the paper's ``(0, N-1)`` and ``(1, N-2)``.
     count : int, optional
         Points to produce; default one whole pattern, lcm of the two cycle lengths.
+    interpolation : str
+        The ``spiral_interp`` register: ``"off"`` holds each point for its dwell, ``"linear"``
+        (the reset) walks each frame part of the way to the next point (dwells up to
+        :data:`MAX_INTERPOLATED_DWELL`).
     """
     if not isinstance(table, SpiralTable):
         raise TypeError(f"table must be a SpiralTable, not {table!r}")
@@ -121,10 +141,18 @@ def spiral_frames(table, *, dwell=BY_NAME["dwell"].reset,
     y_len = y_range[1] - y_range[0] + 1
     if count is None:
         count = math.lcm(x_len, y_len)
-    k = np.arange(count)
-    x = _scaled(np.asarray(table.x)[x_range[0] + k % x_len], amp[0], centre[0])
-    y = _scaled(np.asarray(table.y)[y_range[0] + k % y_len], amp[1], centre[1])
-    return Frames(np.repeat(x, dwell), np.repeat(y, dwell), points=np.repeat(k, dwell))
+    if interpolation not in INTERPOLATIONS:
+        raise ValueError(f"interpolation must be one of {', '.join(INTERPOLATIONS)}, "
+                         f"not {interpolation!r}")
+    k = np.arange(count + 1)
+    x = np.asarray(table.x)[x_range[0] + k % x_len]
+    y = np.asarray(table.y)[y_range[0] + k % y_len]
+    if interpolation == "linear" and dwell <= MAX_INTERPOLATED_DWELL:
+        x, y = _between(x[:-1], x[1:], dwell), _between(y[:-1], y[1:], dwell)
+    else:
+        x, y = np.repeat(x[:-1], dwell), np.repeat(y[:-1], dwell)
+    return Frames(_scaled(x, amp[0], centre[0]), _scaled(y, amp[1], centre[1]),
+                  points=np.repeat(k[:-1], dwell))
 
 
 def spiral_amplitude(width_mm, head):

@@ -5,10 +5,11 @@ import math
 from pathlib import Path
 import sys
 
+from ..gateware.host.regmap import BY_NAME
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser
 from .galvo import GalvoModel
-from .patterns import ScanHead
+from .patterns import INTERPOLATIONS, ScanHead
 from .study import (PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
                     sigma_sweep, spiral_vs_raster)
 
@@ -21,7 +22,10 @@ ROWS = (
     ("field_mm", "field (mm)", lambda v: f"{v[0]:g} x {v[1]:g}"),
     ("dwell", "dwell (frames/point)", "{}"),
     ("duration_s", "pass time (s)", "{:.3f}"),
+    ("interpolation", "between points", "{}"),
+    ("mean_speed_m_s", "mean spot speed (m/s)", "{:.2f}"),
     ("peak_speed_m_s", "peak spot speed (m/s)", "{:.2f}"),
+    ("peak_over_mean", "peak / mean speed", "{:.2f}"),
     ("peak_accel_km_s2", "peak axis accel. (km/s²)", "{:.0f}"),
     ("dose_mean_j_cm2", "mean dose/pass (J/cm²)", "{:.2f}"),
     ("cv", "CV, spot scale", "{:.3f}"),
@@ -142,16 +146,27 @@ def run_analyze(args):
             if table.sampling == "gaussian" else \
             SpiralTable(points=args.table_points, sigma=DEFAULT_SIGMA)
         field = tuple(args.field)
-        steps = 2 + (1 + len(SWEEP_SIGMAS) if args.sweep else 0) + \
+        interpolation = args.interp or INTERPOLATIONS[BY_NAME["spiral_interp"].reset]
+        steps = 3 + (2 + len(SWEEP_SIGMAS) if args.sweep else 0) + \
             (2 * len(PAPER_FIELDS_MM) if args.compare else 0)
         bar = tqdm(total=steps, desc="analyse", unit="run", file=sys.stderr,
                    disable=args.quiet)
-        chosen = run_spiral(setup, field_mm=field, table=table, dwell=args.dwell)
+        chosen = run_spiral(setup, field_mm=field, table=table, dwell=args.dwell,
+                            interpolation=interpolation)
         bar.update(1)
-        contrast = run_spiral(setup, field_mm=field, table=other, dwell=chosen.dwell)
+        contrast = run_spiral(setup, field_mm=field, table=other, dwell=chosen.dwell,
+                              interpolation=interpolation)
         bar.update(1)
-        sweep = sigma_sweep(setup, field_mm=field, progress=bar.update) if args.sweep else []
-        pairs = spiral_vs_raster(setup, progress=bar.update) if args.compare else []
+        # The same pattern held point by point and interpolated (the spiral_interp register).
+        otherwise = run_spiral(setup, field_mm=field, table=table, dwell=chosen.dwell,
+                               interpolation=INTERPOLATIONS[1 - INTERPOLATIONS.index(
+                                   interpolation)])
+        held, linear = (chosen, otherwise) if interpolation == "off" else (otherwise, chosen)
+        bar.update(1)
+        sweep = sigma_sweep(setup, field_mm=field, progress=bar.update,
+                            interpolation=interpolation) if args.sweep else []
+        pairs = spiral_vs_raster(setup, progress=bar.update,
+                                 interpolation=interpolation) if args.compare else []
         bar.close()
     except ValueError as error:
         raise SystemExit(f"galvoscan: error: {error}")
@@ -164,7 +179,8 @@ def run_analyze(args):
         pair = [contrast, chosen] if table.sampling == "gaussian" else [chosen, contrast]
         figures.plot_fill(out / "fill.png", pair, head, region)
         figures.plot_dose_maps(out / "dose.png", pair, region)
-        written += [out / "fill.png", out / "dose.png"]
+        figures.plot_interpolation(out / "interpolation.png", held, linear, head)
+        written += [out / "fill.png", out / "dose.png", out / "interpolation.png"]
         if sweep:
             figures.plot_sigma_sweep(out / "sigma_sweep.png", sweep, chosen_sigma=DEFAULT_SIGMA)
             written.append(out / "sigma_sweep.png")
@@ -182,6 +198,7 @@ def run_analyze(args):
         print(json.dumps({
             "setup": _json_ready(setup_summary),
             "runs": [_json_ready(r.metrics) for r in (chosen, contrast)],
+            "interpolation": [_json_ready(r.metrics) for r in (held, linear)],
             "sweep": [_json_ready(r.metrics) for r in sweep],
             "compare": [[_json_ready(s.metrics), _json_ready(r.metrics)] for s, r in pairs],
             "figures": [str(p) for p in written],
@@ -195,6 +212,8 @@ def run_analyze(args):
              f"{float(head.mm(galvo.v_max)) / 1e3:.1f} m/s top speed"))
     print()
     print(format_table([chosen.metrics, contrast.metrics]))
+    print("\nheld points against linear interpolation (same table and dwell):")
+    print(format_table([held.metrics, linear.metrics], ["held (off)", "linear"]))
     if sweep:
         print("\nσ sweep (same dwell):")
         print(format_table([r.metrics for r in sweep],

@@ -68,11 +68,14 @@ def analyse(frames, *, head, laser, galvo, region, periodic=True, warmup_s=2e-3,
     vx, vy = path.velocity()
     ax, ay = path.acceleration()
     mm_per_unit = float(head.mm(1))
+    speed = np.hypot(vx[skip:], vy[skip:])
     metrics = {
         "frames": len(frames),
         "duration_s": frames.duration,
         "pulses": len(pulses),
-        "peak_speed_m_s": float(np.max(np.hypot(vx[skip:], vy[skip:])) * mm_per_unit / 1e3),
+        "mean_speed_m_s": float(np.mean(speed) * mm_per_unit / 1e3),
+        "peak_speed_m_s": float(np.max(speed) * mm_per_unit / 1e3),
+        "peak_over_mean": float(np.max(speed) / np.mean(speed)) if np.mean(speed) > 0 else None,
         "peak_accel_km_s2": float(max(np.max(np.abs(ax[skip:])), np.max(np.abs(ay[skip:])))
                                   * mm_per_unit / 1e6),
     }

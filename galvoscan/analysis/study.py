@@ -10,11 +10,12 @@ Every run uses the same rules, so numbers compare:
   Dai & Tang's (50 W, 100 kHz).
 """
 
+from ..gateware.host.regmap import BY_NAME
 from ..gateware.points import FIELD_CENTRE
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser, Region
 from .galvo import FRAME_PERIOD, GalvoModel
-from .patterns import (ScanHead, raster_frames, spiral_amplitude, spiral_dwell_for_speed,
+from .patterns import (INTERPOLATIONS, ScanHead, raster_frames, spiral_amplitude, spiral_dwell_for_speed,
                        spiral_frames)
 from .scan import analyse
 
@@ -84,19 +85,23 @@ def _check_field(field_mm, head):
                          f"{head.field_mm:g} mm field")
 
 
-def run_spiral(setup, *, field_mm=DEFAULT_FIELD_MM, table=None, dwell=None, fraction=1.0):
-    """Analyse the spiral on ``field_mm``; ``fraction`` < 1 runs only the first part of it."""
+def run_spiral(setup, *, field_mm=DEFAULT_FIELD_MM, table=None, dwell=None, fraction=1.0,
+               interpolation=INTERPOLATIONS[BY_NAME["spiral_interp"].reset]):
+    """Analyse the spiral on ``field_mm``; ``fraction`` < 1 runs only the first part of it.
+    ``interpolation`` is the ``spiral_interp`` register's setting (default its reset)."""
     _check_field(field_mm, setup.head)
     table = table or SpiralTable()
     amp = (spiral_amplitude(field_mm[0], setup.head), spiral_amplitude(field_mm[1], setup.head))
     if dwell is None:
         dwell = spiral_dwell_for_speed(SpiralTable(points=table.points), amp=amp,
                                        speed_m_s=setup.speed_m_s, head=setup.head)
-    frames = spiral_frames(table, dwell=dwell, amp=amp)
+    frames = spiral_frames(table, dwell=dwell, amp=amp, interpolation=interpolation)
     result = analyse(frames, head=setup.head, laser=setup.laser, galvo=setup.galvo,
                      region=setup.region(field_mm), target_dose_j_cm2=setup.target_dose_j_cm2)
     result.metrics = {"pattern": f"spiral {table.sampling}"
-                      + (f" σ={table.sigma:g}" if table.sampling == "gaussian" else ""),
+                      + (f" σ={table.sigma:g}" if table.sampling == "gaussian" else "")
+                      + (" (σ → ∞)" if table.sampling == "triangle" else ""),
+                      "interpolation": interpolation,
                       "field_mm": list(field_mm), "dwell": dwell,
                       "points_per_period": table.points, **result.metrics}
     result.table, result.dwell = table, dwell
@@ -128,28 +133,33 @@ def run_raster(setup, *, field_mm=DEFAULT_FIELD_MM, bidirectional=True, turn_gat
     return result
 
 
-def sigma_sweep(setup, *, field_mm=DEFAULT_FIELD_MM, sigmas=SWEEP_SIGMAS, progress=None):
-    """Uniform sampling and Gaussian sampling at each σ, all at one dwell (that of the default
-    table), so they take the same time and differ only in where the points sit."""
+def sigma_sweep(setup, *, field_mm=DEFAULT_FIELD_MM, sigmas=SWEEP_SIGMAS, progress=None,
+                interpolation=INTERPOLATIONS[BY_NAME["spiral_interp"].reset]):
+    """Uniform sampling, Gaussian sampling at each σ and the triangle wave (σ → ∞), all at one
+    dwell (that of the default table), so they take the same time and differ only in where the
+    points sit."""
     results = []
-    reference = run_spiral(setup, field_mm=field_mm)
+    reference = run_spiral(setup, field_mm=field_mm, interpolation=interpolation)
     dwell = reference.dwell
-    for table in [SpiralTable(sampling="uniform")] + [SpiralTable(sigma=s) for s in sigmas]:
+    for table in [SpiralTable(sampling="uniform")] + [SpiralTable(sigma=s) for s in sigmas] + \
+            [SpiralTable(sampling="triangle")]:
         if table.sampling == "gaussian" and table.sigma == DEFAULT_SIGMA:
             result = reference
         else:
-            result = run_spiral(setup, field_mm=field_mm, table=table, dwell=dwell)
+            result = run_spiral(setup, field_mm=field_mm, table=table, dwell=dwell,
+                                interpolation=interpolation)
         results.append(result)
         if progress:
             progress(1)
     return results
 
 
-def spiral_vs_raster(setup, *, fields_mm=PAPER_FIELDS_MM, progress=None):
+def spiral_vs_raster(setup, *, fields_mm=PAPER_FIELDS_MM, progress=None,
+                     interpolation=INTERPOLATIONS[BY_NAME["spiral_interp"].reset]):
     """Spiral (default table) and raster on each field: a list of (spiral, raster) pairs."""
     pairs = []
     for field in fields_mm:
-        spiral = run_spiral(setup, field_mm=field)
+        spiral = run_spiral(setup, field_mm=field, interpolation=interpolation)
         if progress:
             progress(1)
         raster = run_raster(setup, field_mm=field)

@@ -1,6 +1,6 @@
 """``galvoscan analyze``: how a scan pattern doses a part, before burning one."""
 
-from .args import (add_table_options, field_mm, number_in, output_dir, register_int)
+from .args import (INTERPOLATIONS, add_table_options, field_mm, number_in, output_dir, register_int)
 
 
 __all__ = ["add_parsers"]
@@ -25,6 +25,9 @@ def add_parsers(commands):
     job.add_argument("--dwell", type=register_int("dwell"), default=None,
                      help="frames per spiral point (default: the smallest that keeps each "
                           "axis at --speed)")
+    job.add_argument("--interp", choices=INTERPOLATIONS, default=None,
+                     help="between spiral points: off (held, then a jump) or linear (default: "
+                          "the spiral_interp register's reset); the other is printed beside it")
     job.add_argument("--speed", type=number_in("speed", 0.01, 100), default=5.0,
                      metavar="M_S", help="per-axis speed limit for the patterns, m/s "
                                          "(default: 5, the paper's galvo maximum)")

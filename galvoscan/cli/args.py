@@ -13,7 +13,7 @@ from pathlib import Path
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
-           "add_table_options", "table_from", "settings_from", "baud", "add_baud_option",
+           "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link"]
 
 
@@ -191,6 +191,10 @@ def table_from(args):
         fail(error)
 
 
+#: Settings of the ``spiral_interp`` register, by value: what ``--interp`` takes.
+INTERPOLATIONS = ("off", "linear")
+
+
 def settings_from(args, table, **overrides):
     """The scan settings a build or simulation starts with, for ``table``'s size: the resets
     its register map gives (the paper's ranges, X over the whole table, Y one short at each
@@ -202,6 +206,8 @@ def settings_from(args, table, **overrides):
                     y_range=(regmap["y_first"].reset, regmap["y_last"].reset))
     if getattr(args, "dwell", None) is not None:
         settings["dwell"] = args.dwell
+    if getattr(args, "interp", None) is not None:
+        settings["spiral_interp"] = INTERPOLATIONS.index(args.interp)
     settings.update(overrides)
     try:
         return ScanSettings(**settings)

@@ -59,7 +59,7 @@ def _cmd_build(args):
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
                                  clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
-                                 wobble=args.wobble)
+                                 wobble=args.wobble, interpolation=args.interpolation)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -121,6 +121,10 @@ def add_parsers(commands):
                        help="add the wobble stage to vector mode (galvoscan mark --wobble); "
                             "with every mode it does not fit the UP5K: drop one with --modes "
                             "(spiral,vector fits)")
+    build.add_argument("--interpolation", action="store_true",
+                       help="add the spiral's interpolator (the spiral_interp register: the "
+                            "mirror moves every frame instead of holding each point); with "
+                            "every mode it does not fit the UP5K: drop one with --modes")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
                        help="scan modes to build: spiral, raster, vector (default: the "
                             "board's, see README); fewer take less of the FPGA")

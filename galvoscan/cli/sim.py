@@ -5,8 +5,8 @@ import json
 import sys
 import time
 
-from .args import (add_table_options, fail, image_file, int_in, number_in, output_file,
-                   read_text, register_int, settings_from, table_from)
+from .args import (INTERPOLATIONS, add_table_options, fail, image_file, int_in, number_in,
+                   output_file, read_text, register_int, settings_from, table_from)
 
 
 __all__ = ["add_parsers"]
@@ -155,9 +155,12 @@ def _sim_spiral(args):
         sampling = (f"Gaussian sampling, σ = {table.sigma:g}" if table.sampling == "gaussian"
                     else "uniform sampling")
         plot_path(args.png, received[PARK_FRAMES:], title=(
-            f"{args.points} spiral points, {sampling}\n(decoded from the simulated XY2-100 wires)"))
+            f"{args.points} spiral points, {sampling}, "
+            f"{INTERPOLATIONS[settings.spiral_interp]} between points\n"
+            f"(decoded from the simulated XY2-100 wires)"))
     summary = {
-        "points": args.points, "dwell_frames": settings.dwell, "frames": len(received),
+        "points": args.points, "dwell_frames": settings.dwell,
+        "interpolation": INTERPOLATIONS[settings.spiral_interp], "frames": len(received),
         "table_points": table.points, "x_range": list(settings.x_range),
         "y_range": list(settings.y_range),
         "scan_time_s": len(received) * 10e-6, "sim_seconds": round(seconds, 2),
@@ -169,6 +172,7 @@ def _sim_spiral(args):
         return 0
     print(f"{len(received)} frames decoded from the XY2-100 wires "
           f"({args.points} points × {settings.dwell} frames + {PARK_FRAMES} park frames, "
+          f"{INTERPOLATIONS[settings.spiral_interp]} between points, "
           f"{summary['scan_time_s'] * 1e3:.2f} ms of scanning) in {seconds:.1f} s "
           f"({summary['sim_cycles_per_s']:,} system clocks/s)")
     for what in ("csv", "png", "vcd"):
@@ -185,6 +189,8 @@ def _cmd_sim(args):
     from ..gateware.host.regmap import BY_NAME
     vector_only = ("prr", "pulses_per_point", "pitch", "jump_delay", "lens_field", "points_csv")
     if args.mode == "vector":
+        if args.interp is not None:
+            fail("--interp is for the spiral")
         if not args.job:
             fail("--mode vector needs --job FILE")
         for name in vector_only:
@@ -223,6 +229,11 @@ def add_parsers(commands):
     sim.add_argument("--dwell", type=register_int("dwell"), default=None,
                      help=f"10 µs frames each spiral point is held, {dwell.low} … {dwell.high} "
                           f"(default: the register's {dwell.reset})")
+    interp = BY_NAME["spiral_interp"]
+    sim.add_argument("--interp", choices=INTERPOLATIONS, default=None,
+                     help=f"between spiral points: off (hold each point, then jump) or linear "
+                          f"(every frame moves part of the way to the next; default: the "
+                          f"register's {INTERPOLATIONS[interp.reset]})")
     sim.add_argument("--correction", metavar="FILE",
                      help="distortion correction table (.json, .ctb, .cor) the top starts with "
                           "(default: the identity); the wires carry corrected positions")

@@ -40,7 +40,8 @@ __all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "VectorOp", "Status", "STATUS_BITS
            "HOST_MAP",
            "REGISTERS", "BY_NAME", "BY_ADDRESS", "MODE_REGISTERS", "CORRECTION_REGISTERS",
            "LASER_REGISTERS", "WOBBLE_REGISTERS", "WobbleShape", "WOBBLE_MAX_AMPLITUDE",
-           "WOBBLE_MAX_HZ", "encode_frame", "decode_frame", "FrameError"]
+           "WOBBLE_MAX_HZ", "INTERPOLATION_REGISTERS", "encode_frame", "decode_frame",
+           "FrameError"]
 
 
 #: The last byte of every frame.
@@ -204,6 +205,11 @@ def _all_registers(table_points, correction_nodes):
                  "makes the ellipse precess", width=address_width),
         Register("y_last", 0x0C, "rw", last_address - 1, 0, last_address, "ROM address",
                  "last Y table address walked (inclusive)", width=address_width),
+        Register("spiral_interp", 0x0D, "rw", 1, 0, 1, "enum",
+                 "between spiral points: 0 = hold each point for dwell frames, then jump; 1 = "
+                 "linear, every frame moves part of the way to the next point (same points at "
+                 "the same times; dwells over 255 frames are held); see README \"Held points\"",
+                 width=1),
         # --- vector group -----------------------------------------------------------------------
         Register("vec_x", 0x20, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
                  "X of the next segment's end point (offset binary, 32768 = centre)"),
@@ -314,7 +320,7 @@ def _all_registers(table_points, correction_nodes):
 #: Registers that only a build with that scan mode has (see ``GalvoScanTop(modes=...)``); a
 #: build without the mode answers their addresses as unknown.
 MODE_REGISTERS = {
-    Mode.SPIRAL.label: ("dwell", "x_first", "x_last", "y_first", "y_last"),
+    Mode.SPIRAL.label: ("dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp"),
     Mode.RASTER.label: ("ras_x", "ras_y", "ras_w", "ras_h", "ras_spacing", "ras_step",
                         "ras_flags", "ras_turn_gate"),
     Mode.VECTOR.label: ("vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
@@ -323,6 +329,9 @@ MODE_REGISTERS = {
 
 #: Registers only a build with the wobble stage has (``GalvoScanTop(wobble=True)``, vector mode).
 WOBBLE_REGISTERS = ("wob_shape", "wob_along", "wob_across", "wob_freq")
+
+#: Registers only a build with the spiral's interpolation has.
+INTERPOLATION_REGISTERS = ("spiral_interp",)
 
 #: Registers only a build with the laser controller has.
 LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses",
@@ -385,7 +394,8 @@ class RegisterMap:
 
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
-                 modes=tuple(Mode), laser=True, wobble=False, resets=None):
+                 modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
+                 resets=None):
     """The register map of a build.
 
     Parameters
@@ -403,6 +413,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         The build has the laser controller (else its registers are left out).
     wobble : bool
         The build has the wobble stage on vector points (else its registers are left out).
+    spiral_interpolation : bool
+        The build interpolates between spiral points (else ``spiral_interp`` is left out).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -431,6 +443,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         leave_out |= set(WOBBLE_REGISTERS)
     elif Mode.VECTOR not in modes:
         raise ValueError("the wobble stage works on vector points: it needs vector mode")
+    if not spiral_interpolation:
+        leave_out |= set(INTERPOLATION_REGISTERS)
     every = {r.name: r for r in _all_registers(table_points, correction_nodes or 2)}
     by_name = {name: r for name, r in every.items() if name not in leave_out}
     for name, value in (resets or {}).items():

@@ -6,6 +6,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..points import OffsetPoint
+from .spiral_interp import DIVIDE_CLOCKS, MAX_INTERPOLATED_DWELL, AxisInterpolator
 from .spiral_table import SpiralTable
 
 
@@ -31,10 +32,19 @@ class SpiralSequencer(wiring.Component):
     when nothing new is offered. Register inputs are sampled when a point is issued, so a change
     takes effect at a point boundary.
 
+    Built with ``interpolation=True`` and with ``interpolate`` high when a point is issued, that
+    point's frames after its first are offered too, each part of the way to the next point
+    (:class:`~.spiral_interp.AxisInterpolator`: frame ``k`` of ``d`` shows
+    ``p + sign(q - p) × floor(|q - p| × k / d)``): the same points at the same times, joined by
+    straight steps instead of held and jumped between. A point held longer than
+    :data:`~.spiral_interp.MAX_INTERPOLATED_DWELL` frames is held.
+
     Parameters
     ----------
     table : :class:`SpiralTable`
         The angle tables, placed in two ROMs (block RAM on iCE40).
+    interpolation : bool
+        Build the linear interpolation and its ``interpolate`` input.
 
     Interface attributes
     --------------------
@@ -48,6 +58,8 @@ class SpiralSequencer(wiring.Component):
     x_first, x_last, y_first, y_last : ``In(range(points))``
         ROM address ranges walked by each axis, inclusive. An address past ``*_last`` (after
         the range is changed) wraps to ``*_first``.
+    interpolate : ``In(1)``, with ``interpolation``
+        1 = linear interpolation between points, 0 = each point held.
     points : ``Out(stream.Signature(OffsetPoint))``
         Spiral points, signed offsets from the field centre.
     """
@@ -55,11 +67,11 @@ class SpiralSequencer(wiring.Component):
     class Signature(wiring.Signature):
         """Signature of a spiral sequencer whose ROMs hold ``points`` samples per axis."""
 
-        def __init__(self, *, points):
+        def __init__(self, *, points, interpolation=False):
             if not isinstance(points, int) or points < 2:
                 raise TypeError(f"points must be an integer of at least 2, not {points!r}")
             self.rom_points = points
-            super().__init__({
+            members = {
                 "frame_strobe": In(1),
                 "run":          In(1),
                 "dwell":        In(16),
@@ -67,14 +79,18 @@ class SpiralSequencer(wiring.Component):
                 "x_last":       In(range(points)),
                 "y_first":      In(range(points)),
                 "y_last":       In(range(points)),
-                "points":       Out(stream.Signature(OffsetPoint)),
-            })
+            }
+            if interpolation:
+                members["interpolate"] = In(1)
+            members["points"] = Out(stream.Signature(OffsetPoint))
+            super().__init__(members)
 
-    def __init__(self, table):
+    def __init__(self, table, *, interpolation=False):
         if not isinstance(table, SpiralTable):
             raise TypeError(f"table must be a SpiralTable, not {table!r}")
         self.table = table
-        super().__init__(self.Signature(points=table.points))
+        self.interpolation = bool(interpolation)
+        super().__init__(self.Signature(points=table.points, interpolation=self.interpolation))
 
     def elaborate(self, platform):
         m = Module()
@@ -89,7 +105,9 @@ class SpiralSequencer(wiring.Component):
         addr_y = Signal(range(depth))
         m.d.comb += [read_x.addr.eq(addr_x), read_y.addr.eq(addr_y)]
 
-        issued = self.points.valid & self.points.ready
+        # A table point taken (not an interpolated frame between two of them).
+        between = Signal()
+        issued = self.points.valid & self.points.ready & ~between
 
         # After reset, and whenever `run` is low, the walk starts again from the first
         # addresses, so every start replays the pattern from its beginning.
@@ -116,17 +134,86 @@ class SpiralSequencer(wiring.Component):
         # The first point after a start waits for a frame strobe too, like every other one: a
         # point always arrives just after a frame boundary, a whole frame before it is sent.
         frames_left = Signal(16)
+        dwell = Mux(self.dwell == 0, 1, self.dwell)
         with m.If(restart):
             m.d.sync += frames_left.eq(1)
         with m.Elif(issued):
-            m.d.sync += frames_left.eq(Mux(self.dwell == 0, 1, self.dwell))
+            m.d.sync += frames_left.eq(dwell)
         with m.Elif(self.frame_strobe & (frames_left != 0)):
             m.d.sync += frames_left.eq(frames_left - 1)
 
-        m.d.comb += [
-            self.points.payload.x.eq(read_x.data),
-            self.points.payload.y.eq(read_y.data),
-            self.points.valid.eq(self.run & ~restart & fetched & (frames_left == 0)),
-        ]
+        table_due = fetched & (frames_left == 0)
+        if self.interpolation:
+            self._elaborate_interpolation(m, read_x, read_y, restart, issued, fetched,
+                                          frames_left, dwell, table_due, between)
+        else:
+            m.d.comb += [
+                self.points.payload.x.eq(read_x.data),
+                self.points.payload.y.eq(read_y.data),
+                self.points.valid.eq(self.run & ~restart & table_due),
+            ]
 
         return m
+
+    def _elaborate_interpolation(self, m, read_x, read_y, restart, issued, fetched, frames_left,
+                                 dwell, table_due, between):
+        """Interpolated frames between table points (``between`` high while one is offered).
+
+        Every point comes from the interpolators' position registers (no multiplexer in front
+        of the output, and no load from the ROMs): the last step from a point lands on the next
+        one, on the clock that point is due; it is offered on the next clock. A held point (or
+        the first after a start) is one step of its whole way, made when the next is due."""
+        m.submodules.interp_x = interp_x = AxisInterpolator()
+        m.submodules.interp_y = interp_y = AxisInterpolator()
+
+        # The next table point is due, and the way to it divided (after a start the division
+        # may still run when the first frame strobe comes).
+        dividing_due = Signal()
+        divide_left = Signal(range(DIVIDE_CLOCKS + 1))
+        due = Signal()
+        m.d.comb += due.eq(table_due & ~dividing_due & (divide_left == 0) & ~restart)
+        arrived = Signal()
+        m.d.sync += arrived.eq(due & ~issued)
+        m.d.comb += self.points.valid.eq(self.run & ~restart & ((due & arrived) | between))
+
+        # The point's setting and dwell, held from its issue until the next point arrives (the
+        # Bresenham steps need the same d all along). Longer dwells are held, not interpolated:
+        # their way is divided by 1 and made in the one step onto the next point.
+        interpolating = Signal()
+        point_frames = Signal(8)
+        # The next point is read from the ROMs two clocks after an issue or a start (`fetched`
+        # low, then high): then the division starts, and takes a quotient bit a clock.
+        start = dividing_due & fetched & ~issued
+        with m.If(restart):
+            m.d.sync += [interpolating.eq(0), point_frames.eq(1), dividing_due.eq(1)]
+        with m.Elif(issued):
+            interpolate = self.interpolate & (dwell <= MAX_INTERPOLATED_DWELL)
+            m.d.sync += [
+                interpolating.eq(interpolate),
+                point_frames.eq(Mux(interpolate, dwell[:8], 1)),
+                dividing_due.eq(1),
+            ]
+        with m.Elif(fetched):
+            m.d.sync += dividing_due.eq(0)
+        with m.If(start):
+            m.d.sync += divide_left.eq(DIVIDE_CLOCKS)
+        with m.Elif(divide_left != 0):
+            m.d.sync += divide_left.eq(divide_left - 1)
+
+        # At a frame strobe with more frames of this point to come, the next one moves on; and
+        # when the next table point is due, the last step lands on it.
+        between_step = self.frame_strobe & interpolating & (frames_left > 1) & ~restart
+        with m.If(restart | (self.points.valid & self.points.ready)):
+            m.d.sync += between.eq(0)
+        with m.Elif(between_step):
+            m.d.sync += between.eq(1)
+
+        for interp, read, axis in ((interp_x, read_x, "x"), (interp_y, read_y, "y")):
+            m.d.comb += [
+                interp.start.eq(start),
+                interp.q.eq(read.data),
+                interp.divide.eq(divide_left != 0),
+                interp.frames.eq(point_frames),
+                interp.step.eq(between_step | (due & ~arrived)),
+                getattr(self.points.payload, axis).eq(interp.position),
+            ]
