@@ -51,11 +51,15 @@ BUILDS = {
 
 
 def _build(label):
-    from .build import build_bitstream
+    from .build import BuildError, build_bitstream
     board, kwargs = BUILDS[label]
     with tempfile.TemporaryDirectory() as directory:
-        # The bench records a slow build's figures rather than stopping at it.
-        report = build_bitstream(board, build_dir=directory, require_timing=False, **kwargs)
+        # The bench records a slow build's figures rather than stopping at it, and a build
+        # that fails (a placer that gives up) as a failure, with the others' figures kept.
+        try:
+            report = build_bitstream(board, build_dir=directory, require_timing=False, **kwargs)
+        except BuildError as error:
+            return label, {"board": board, "failed": str(error).split(";")[0]}
     return label, {"board": board, "luts": report.luts, "luts_available": report.luts_available,
                    "brams": report.brams, "dsps": report.dsps, "fmax_mhz": report.fmax_mhz,
                    "clock_mhz": report.clock_mhz, "meets_timing": report.meets_timing,
@@ -195,6 +199,9 @@ def table(result):
                      f"{sim['sim_cycles_per_s']:,.0f} system clocks/s"))
         rows.append(("full 8064-point spiral replay", f"{sim['replay_s']:.0f} s"))
     for label, board in result.get("boards", {}).items():
+        if "failed" in board:
+            rows.append((f"build {label}", f"FAILED: {board['failed']}"))
+            continue
         rows.append((f"build {label} ({', '.join(board['modes'])}; correction "
                      f"{board['correction_nodes'] or 'none'}; {board['clock_mhz']:g} MHz, "
                      f"{board['bit_rate_mhz']:g} Mbit/s)",
@@ -208,7 +215,8 @@ def table(result):
                      ", ".join(f"{name.removeprefix('top.') or 'top'} {c['luts']} / {c['ffs']}"
                                for name, c in largest)))
     seeds = [board["fmax_mhz"] for label, board in result.get("boards", {}).items()
-             if label == "icebreaker" or label.startswith("icebreaker_seed")]
+             if (label == "icebreaker" or label.startswith("icebreaker_seed")) and
+             "failed" not in board]
     if len(seeds) > 1:
         rows.append((f"default build, lowest Fmax of {len(seeds)} placer seeds",
                      f"{min(seeds):.1f} MHz"))
