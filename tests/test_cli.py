@@ -341,3 +341,15 @@ def test_sim_vector_writes_its_vcd(tmp_path, capsys):
     assert code == 0 and json.loads(out)["vcd"] == str(vcd)
     text = vcd.read_text()
     assert "$timescale" in text and "xy2_sync" in text and "laser_am" in text
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--interpolation"], "interpolator does not fit the UP5K beside all three scan modes"),
+    (["--interpolation", "--modes", "vector"], "the interpolator is the spiral's"),
+    (["--interpolation", "--board", "icestick"], "no room for the spiral's interpolator"),
+    (["--wobble"], "wobble stage does not fit the UP5K beside all three scan modes"),
+])
+def test_build_refuses_options_that_do_not_fit_before_building(argv, message, tmp_path):
+    with pytest.raises(SystemExit, match=message):
+        main(["build", "--build-dir", str(tmp_path), *argv])
+    assert not list(tmp_path.iterdir())
