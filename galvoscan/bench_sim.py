@@ -139,16 +139,20 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
 
 # --- simulator -----------------------------------------------------------------------------------
 
-def stream_figures(*, segments=600, baud=None):
+def stream_figures(*, segments=600, baud=None, clk_freq=12e6):
     """Vector segments a second streamed end to end: ``JobStreamer`` (batches, reads of
     ``fifo_free``) through the UART pins of the simulated board at the default baud, one-point
     marks that the board takes faster than the link brings them (so each one finds the queue
-    empty: ``underruns`` counts them all, by design); in the board's own time."""
+    empty: ``underruns`` counts them all, by design); in the board's own time.
+
+    The rate is the link's: any clock that carries the baud gives it to within the few clocks
+    a ``fifo_free`` answer takes (``clk_freq``: 12 MHz, the board's; the quick bench's 8 MHz,
+    the slowest that carries 1 Mbaud, is two thirds of the clocks to simulate)."""
     from .client import HostClient
     from .gateware.clocking import DEFAULT_BAUD
     from .jobs.stream import JobStreamer
     from .sim.board import SimTransport, SimulatedBoard
-    board = SimulatedBoard(baud=baud or DEFAULT_BAUD)
+    board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD)
     client = HostClient(SimTransport(board))
     streamer = JobStreamer(client, poll_s=0)
     streamer.setup({"run": 1, "mode": 2, "pitch": 1000, "pulses_per_point": 1,
@@ -158,6 +162,7 @@ def stream_figures(*, segments=600, baud=None):
     streamer.stream(job, start=lambda: None, timeout_s=1e9)
     seconds = board.now - start
     return {"segments_per_s": segments / seconds, "baud": board.baud,
+            "segments": segments, "clock_mhz": clk_freq / 1e6,
             "underruns": client.read("vec_underruns"), "errors": client.read("errors")}
 
 

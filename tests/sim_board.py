@@ -35,6 +35,20 @@ class Counted(Elaboratable):
         return m
 
 
+def _arguments_key(value):
+    """``value`` (arguments of a build) as a string that two equal builds share."""
+    import enum
+    if isinstance(value, (bool, int, float, str, type(None), enum.Enum)):
+        return repr(value)
+    if isinstance(value, (tuple, list)):
+        return "(" + ", ".join(map(_arguments_key, value)) + ")"
+    if isinstance(value, dict):
+        return _arguments_key(sorted(value.items()))
+    if hasattr(value, "__dict__"):          # ScanSettings and the like: by their contents
+        return type(value).__qualname__ + _arguments_key(vars(value))
+    raise TypeError(f"no key for {value!r}")
+
+
 class SimBoard:
     def __init__(self, *, clk_freq=4e6, baud=500_000, interlock_closed=True, alarms_clear=True,
                  record_laser=False, **top_kwargs):
@@ -45,38 +59,61 @@ class SimBoard:
         self._counted = Counted(top) if record_laser else None
         self.sim = Simulator(self._counted or top)
         self.sim.add_clock(1 / clk_freq)
-        self.now = 0.0
+        self._record_laser = record_laser
+        self._initially = (interlock_closed, alarms_clear)
 
+        self.sim.add_testbench(self._scan_head, background=True)
+        self.sim.add_testbench(self._uart_host_tx, background=True)
+        self.sim.add_testbench(self._uart_host_rx, background=True)
+        self.sim.add_testbench(self._spi_host, background=True)
+        self.sim.add_testbench(self._interlock, background=True)
+        if record_laser == "every clock":
+            # Sampled on every clock, as the tests' own check of the recording by changes.
+            self.sim.add_testbench(self._laser_recorder_every_clock, background=True)
+        elif record_laser:
+            self.sim.add_testbench(self._pins_at_power_up)
+            self.sim.add_process(self._laser_recorder)
+        self._power_up()
+
+    def _power_up(self):
+        """What the host and the recorders know at power-up, then the first clock."""
+        self.now = 0.0
         self.xy2_samples = []           # (sync, x, y) at each falling xy2_clk edge
         self.parity_times = []          # when each frame's last bit was sampled
         self.uart_to_board = deque()    # bytes, or ("pause", seconds), or ("bad_stop", byte)
         self.uart_from_board = []       # bytes received on uart_tx
         self.uart_framing_errors = 0
         self.spi_queue = deque()        # (bits, results list)
-
-        self.sim.add_testbench(self._scan_head, background=True)
-        self.sim.add_testbench(self._uart_host_tx, background=True)
-        self.sim.add_testbench(self._uart_host_rx, background=True)
-        self.sim.add_testbench(self._spi_host, background=True)
-        self.interlock_closed = interlock_closed
-        self.alarms_clear = alarms_clear
-        self.sim.add_testbench(self._interlock, background=True)
+        self.interlock_closed, self.alarms_clear = self._initially
         # The recorded pins (laser_pins' and xy2_sync) as (clock, values) each time they change,
         # made into one entry a clock by `laser_pins` and `sync_pins`.
         self._pin_changes = []
         self._by_clock = ([], [])
         self._changes_seen = 0
-        if record_laser == "every clock":
-            # Sampled on every clock, as the tests' own check of the recording by changes.
+        if self._record_laser == "every clock":
             self._every_clock = ([], [])
-            self.sim.add_testbench(self._laser_recorder_every_clock, background=True)
-        elif record_laser:
+        elif self._record_laser:
             self._pin_changes.append(None)      # power-up's, filled in at once
-            self.sim.add_testbench(self._pins_at_power_up)
-            self.sim.add_process(self._laser_recorder)
         # Start the processes now, in this thread (a simulator never run leaves its testbench
         # coroutines un-awaited, which Python reports at garbage collection).
-        self.run_for(1 / clk_freq)
+        self.run_for(1 / self.clk_freq)
+
+    _built = {}
+
+    @classmethod
+    def powered_up(cls, **kwargs):
+        """A board as :class:`SimBoard` ``(**kwargs)`` builds it, from power-up: the one built
+        for the same arguments before, reset (every signal and memory to its initial value,
+        every process started again), if there is one. For property tests, whose examples
+        each want a new board: a reset is a millisecond, a build half a second."""
+        key = _arguments_key(kwargs)
+        board = cls._built.get(key)
+        if board is None:
+            board = cls._built[key] = cls(**kwargs)
+        else:
+            board.sim.reset()
+            board._power_up()
+        return board
 
     # --- processes ---------------------------------------------------------------------------
 
@@ -366,3 +403,17 @@ def quick_sim_board(**top_kwargs):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(module, "SimulatedBoard", QuickSimulatedBoard)
         yield QuickSimulatedBoard
+
+
+@contextlib.contextmanager
+def quick_replay_job():
+    """Within it, ``galvoscan sim --mode vector`` (``galvoscan.sim.replay_job``) simulates at
+    4 MHz, 2 clocks per XY2 bit (the same frames and pulses as at the board's 12 MHz, a third
+    of the clocks), with a 0.2 ms MO lead where the board's is 5 ms (the lead, which the host
+    only waits out, is checked on the pins by tests/test_laser.py)."""
+    import functools
+    import galvoscan.sim as module
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(module, "replay_job", functools.partial(module.replay_job, clk_freq=4e6,
+                                                              mo_lead=0.2e-3))
+        yield

@@ -9,28 +9,63 @@ import sys
 import pytest
 
 
+# `python -m galvoscan.cli ARGS --port PORT`, the port read from stdin: the command's imports
+# are done before the port is known, so the board (which runs flat out while it is served)
+# serves only the command's own work, not its start-up.
+CLIENT = """
+import runpy, sys
+import galvoscan.cli, galvoscan.client, galvoscan.gateware.host.regmap, serial
+sys.argv = ["galvoscan", *sys.argv[1:], "--port", sys.stdin.readline().strip()]
+runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
+"""
+
+
+# `python -m galvoscan.cli ARGS` stopped by Ctrl-C as from a terminal: a shell that starts the
+# tests in the background has them, and so this process, ignore SIGINT (and Python then leaves
+# it ignored), where a terminal's Ctrl-C reaches a board started by hand.
+BOARD = """
+import runpy, signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
+sys.argv[0] = "galvoscan"
+runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
+"""
+
+
+def _client(*argv):
+    return subprocess.Popen([sys.executable, "-c", CLIENT, *argv], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _served(client, port):
+    out, err = client.communicate(port + "\n", timeout=300)
+    return client.returncode, out, err
+
+
 @pytest.mark.slow
 def test_send_and_read_a_served_simulated_board():
-    board = subprocess.Popen([sys.executable, "-m", "galvoscan.cli", "board", "--sim"],
+    # Both commands start (and import) while the board does.
+    link = ["--timeout", "60"]
+    send = _client("send", "dwell=9", "guide=1", "--verify", *link)
+    read = _client("read", "dwell", "guide", "errors", "--json", *link)
+    board = subprocess.Popen([sys.executable, "-c", BOARD, "board", "--sim"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         first = board.stdout.readline()
         assert first.startswith("simulated board") and " on /dev/" in first
         port = first.rsplit(" on ", 1)[1].strip()
-        link = ["--port", port, "--timeout", "60"]
-        sent = subprocess.run([sys.executable, "-m", "galvoscan.cli", "send", "dwell=9",
-                               "guide=1", "--verify", *link], capture_output=True, text=True,
-                              timeout=300)
-        assert sent.returncode == 0, sent.stderr
-        assert "dwell = 9 (read back)" in sent.stdout
-        read = subprocess.run([sys.executable, "-m", "galvoscan.cli", "read", "dwell", "guide",
-                               "errors", "--json", *link], capture_output=True, text=True,
-                              timeout=300)
-        assert read.returncode == 0, read.stderr
-        assert json.loads(read.stdout) == {"dwell": 9, "guide": 1, "errors": 0}
+        code, out, err = _served(send, port)
+        assert code == 0, err
+        assert "dwell = 9 (read back)" in out
+        code, out, err = _served(read, port)
+        assert code == 0, err
+        assert json.loads(out) == {"dwell": 9, "guide": 1, "errors": 0}
     finally:
+        for client in (send, read):
+            if client.poll() is None:
+                client.kill()
+                client.communicate()
         board.send_signal(signal.SIGINT)
-        out, err = board.communicate(timeout=120)
+        out, err = board.communicate(timeout=600)
     assert board.returncode == 0, err
     assert "stopped after" in out and "XY2-100 frames" in out
 

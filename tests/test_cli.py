@@ -336,8 +336,10 @@ def test_sim_vector_writes_its_vcd(tmp_path, capsys):
     job = tmp_path / "line.job"
     job.write_text("jump 30000 30000\nmark 30240 30000\n")
     vcd = tmp_path / "waves" / "line.vcd"
-    code, out, _ = run(capsys, "sim", "--mode", "vector", "--job", str(job), "--vcd", str(vcd),
-                       "--json")
+    from sim_board import quick_replay_job
+    with quick_replay_job():
+        code, out, _ = run(capsys, "sim", "--mode", "vector", "--job", str(job), "--vcd",
+                           str(vcd), "--json")
     assert code == 0 and json.loads(out)["vcd"] == str(vcd)
     text = vcd.read_text()
     assert "$timescale" in text and "xy2_sync" in text and "laser_am" in text

@@ -233,7 +233,9 @@ def test_correction_on_the_wires_through_the_host_link():
     applied to the spiral model; the host then switches correction off, and rewrites a node
     through the SPI pins, and the wires follow."""
     rng = np.random.default_rng(5)
-    table = random_table(9, rng, -1500, 1500)
+    # 5 x 5 nodes (a node's address still a multiply by 5, not a shift): the whole new table
+    # below is 100 frames through the SPI pins, where 9 x 9 was 324.
+    table = random_table(5, rng, -1500, 1500)
     spiral = SpiralTable()
     settings_ = ScanSettings(dwell=1)
     board = SimBoard(table=spiral, settings=settings_, correction=table)
@@ -246,7 +248,7 @@ def test_correction_on_the_wires_through_the_host_link():
     assert frames[:2] == [PARK, PARK]
     want = list(zip(x.tolist(), y.tolist()))
     assert frames[2:2 + len(want)] == want[:len(frames) - 2]
-    assert client.read("cor_nodes") == 9
+    assert client.read("cor_nodes") == 5
 
     # Off: the wires carry the plain spiral again.
     client.write("cor_enable", 0)
@@ -260,7 +262,7 @@ def test_correction_on_the_wires_through_the_host_link():
     assert later and all(f in plain for f in later)
 
     # A new table through the registers, then on again: the wires follow the new table.
-    new = random_table(9, rng, -1500, 1500)
+    new = random_table(5, rng, -1500, 1500)
     upload_table(client, new, verify=True)
     client.write("cor_enable", 1)
     board.run_for(20e-6)

@@ -87,6 +87,8 @@ def read_back(link, regs):
     """Each of ``regs`` read by a valid frame, the frames back to back (the host does not wait
     for one answer before it sends the next read): ``{name: value}``, each answer checked to
     be for the register asked for, as :meth:`HostClient.read` checks it."""
+    if not regs:
+        return {}
     frames = [frame_bytes(0x80 | reg.address, 0) for reg in regs]
     board = link.board
     if isinstance(link, SimUARTTransport):
@@ -109,12 +111,32 @@ def read_back(link, regs):
     return values
 
 
-def check_board(link, model, replies):
-    # The model's register values, read back by valid frames (which the model then sees too).
-    values = read_back(link, RW)
-    for reg in RW:
+def named_by(addresses, also=()):
+    """The registers whose address is one of ``addresses`` (the address bytes of every frame
+    the board could have taken from the stream: a decoder that took a frame from the wrong
+    place in it still takes the address from the stream, so no other register can have been
+    written), and ``also`` (a few more at random, as a check of that argument)."""
+    addresses = {address & 0x7F for address in addresses}
+    return [reg for reg in RW if reg.address in addresses or reg in also]
+
+
+def bytes_at_every_bit(bits):
+    """The byte that starts at each bit of an SPI transaction (a target that lost count of the
+    bits takes its address from one of these)."""
+    return [int("".join(map(str, bits[k:k + 8])), 2) for k in range(len(bits) - 7)]
+
+
+# Registers read back besides the ones the stream could name.
+others = st.lists(st.sampled_from(RW), max_size=3, unique=True)
+
+
+def check_board(link, model, replies, regs=RW):
+    # The model's register values, read back by valid frames (which the model then sees too):
+    # every register the stream could have named (``regs``), the rest untouched by it.
+    values = read_back(link, regs)
+    for reg in regs:
         assert values[reg.name] == model.values[reg.name], reg.name
-    for reg in RW:
+    for reg in regs:
         model.frame(frame_bytes(0x80 | reg.address, 0))
     assert HostClient(link).read("errors") == model.errors
     # Every answer the board gave was to a read the model accepted, in order, with its value.
@@ -130,9 +152,9 @@ fuzz_settings = settings(max_examples=20, deadline=None,
 
 
 @fuzz_settings
-@given(st.lists(st.tuples(pieces, st.booleans()), min_size=1, max_size=8), valid_write)
-def test_uart_garbage(stream, then):
-    board = SimBoard()
+@given(st.lists(st.tuples(pieces, st.booleans()), min_size=1, max_size=8), valid_write, others)
+def test_uart_garbage(stream, then, also):
+    board = SimBoard.powered_up()
     link = SimUARTTransport(board)
     model = CommandModel()
 
@@ -151,8 +173,11 @@ def test_uart_garbage(stream, then):
         link.queue(b"")                     # the pause that ends it
         model.cut_short()
     link.flush()
-    # Let the answers to the reads in the stream finish going out (up to four are queued).
-    board.run_for(5 * 4 * 10 * board.bit_time)
+    # Let the answers to the reads in the stream finish going out (up to four are queued),
+    # and a character more: a reply the model does not expect would have started by then.
+    board.run_until(lambda: len(board.uart_from_board) >= 4 * len(model.replies),
+                    timeout=5 * 4 * 10 * board.bit_time, step=10 * board.bit_time)
+    board.run_for(2 * 10 * board.bit_time)
     answers_before = bytes(board.uart_from_board)
 
     # The next valid frame is accepted.
@@ -160,7 +185,8 @@ def test_uart_garbage(stream, then):
     model.frame(then)
     replies = [answers_before[i:i + 4] for i in range(0, len(answers_before), 4)]
     assert len(answers_before) % 4 == 0 and board.uart_framing_errors == 0
-    check_board(link, model, replies)
+    check_board(link, model, replies,
+                named_by(b"".join(data for data, _ in stream) + then, also))
 
 
 spi_transactions = st.one_of(
@@ -170,9 +196,9 @@ spi_transactions = st.one_of(
 
 
 @fuzz_settings
-@given(st.lists(spi_transactions, min_size=1, max_size=8), valid_write)
-def test_spi_garbage(transactions, then):
-    board = SimBoard()
+@given(st.lists(spi_transactions, min_size=1, max_size=8), valid_write, others)
+def test_spi_garbage(transactions, then, also):
+    board = SimBoard.powered_up()
     link = SimSPITransport(board)
     model = CommandModel()
     pending_reply = None
@@ -202,4 +228,5 @@ def test_spi_garbage(transactions, then):
 
     link.write_frame(then)
     model.frame(then)
-    check_board(link, model, [])
+    named = [byte for bits in transactions for byte in bytes_at_every_bit(bits)] + list(then)
+    check_board(link, model, [], named_by(named, also))

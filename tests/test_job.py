@@ -9,6 +9,7 @@ from hypothesis import given, settings, strategies as st
 from galvoscan.cli import main
 from galvoscan.job import JobError, parse_job
 
+from sim_board import quick_replay_job
 from vector_model import job_model
 
 
@@ -47,8 +48,9 @@ def test_sim_vector_job(tmp_path, capsys):
     job = tmp_path / "corner.job"
     job.write_text("jump 30000 30000\nmark 30300 30000\nmark 30300 30200\njump 32768 32768\n")
     points_csv = tmp_path / "points.csv"
-    code = main(["sim", "--mode", "vector", "--job", str(job), "--prr", "50e3",
-                 "--pulses-per-point", "2", "--points-csv", str(points_csv), "--json"])
+    with quick_replay_job():
+        code = main(["sim", "--mode", "vector", "--job", str(job), "--prr", "50e3",
+                     "--pulses-per-point", "2", "--points-csv", str(points_csv), "--json"])
     report = json.loads(capsys.readouterr().out)
     assert code == 0
     assert report["pulses_per_marked_point"] == [2]

@@ -32,14 +32,20 @@ HALF_PITCH_MM = 0.025
 UNIT_MM = 110 / 65536
 CHORD_MM = 0.01
 
-# A 2 mm square with a 0.6 mm square hole (one path, even-odd) and a circle, SVG units = mm.
-SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="4mm" viewBox="0 0 4 4">
-  <path d="M 0.5 0.5 H 2.5 V 2.5 H 0.5 Z M 1.2 1.2 H 1.8 V 1.8 H 1.2 Z"
+# A 1 mm square with a 0.3 mm square hole (one path, even-odd) and a circle, SVG units = mm:
+# small, so that the simulated board marks it in a few milliseconds of its time (the hatch
+# lines are still a dozen, the circle still dozens of chords).
+SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="2mm" height="2mm" viewBox="0 0 2 2">
+  <path d="M 0.25 0.25 H 1.25 V 1.25 H 0.25 Z M 0.6 0.6 H 0.9 V 0.9 H 0.6 Z"
         fill-rule="evenodd" fill="none" stroke="black"/>
-  <circle cx="3.2" cy="3.2" r="0.6" fill="none" stroke="black"/>
+  <circle cx="1.6" cy="1.6" r="0.3" fill="none" stroke="black"/>
 </svg>
 """
-HATCH_MM = 0.25
+HATCH_MM = 0.125
+# The simulated board's answers, in host seconds: a batch of 128 segments is 15 ms of the
+# board's time, a minute of a busy machine's (the command line's 60 s is for a machine to
+# itself).
+SIM_TIMEOUT = ["--timeout", "600"]
 # A port that cannot be opened: an error about the drawing or the profile, not about the port,
 # shows the job was refused before the link was touched.
 NOPORT = ["--port", "/nonexistent/ttyUSB9"]
@@ -64,16 +70,16 @@ def distance_to_polygon(p, corners):
 
 
 # The SVG's shapes with Y up (the drawing's mm as the JSON reports them: y = -y_svg).
-OUTER = [(0.5, -0.5), (2.5, -0.5), (2.5, -2.5), (0.5, -2.5)]
-HOLE = [(1.2, -1.2), (1.8, -1.2), (1.8, -1.8), (1.2, -1.8)]
-CIRCLE = ((3.2, -3.2), 0.6)
+OUTER = [(0.25, -0.25), (1.25, -0.25), (1.25, -1.25), (0.25, -1.25)]
+HOLE = [(0.6, -0.6), (0.9, -0.6), (0.9, -0.9), (0.6, -0.9)]
+CIRCLE = ((1.6, -1.6), 0.3)
 
 
 def inside_region(p):
     """Even-odd: in the outer square and not in the hole, or in the circle."""
     x, y = p
-    in_outer = 0.5 <= x <= 2.5 and -2.5 <= y <= -0.5
-    in_hole = 1.2 < x < 1.8 and -1.8 < y < -1.2
+    in_outer = 0.25 <= x <= 1.25 and -1.25 <= y <= -0.25
+    in_hole = 0.6 < x < 0.9 and -0.9 < y < -0.6
     (cx, cy), r = CIRCLE
     return (in_outer and not in_hole) or math.hypot(x - cx, y - cy) <= r
 
@@ -97,7 +103,7 @@ def svg_result(tmp_path_factory):
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()), \
             quick_sim_board():
         assert main(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
-                     "--hatch", str(HATCH_MM), "--machine", str(machine), "--sim",
+                     "--hatch", str(HATCH_MM), "--machine", str(machine), "--sim", *SIM_TIMEOUT,
                      "--json"]) == 0
     return json.loads(out.getvalue().strip().splitlines()[-1])
 
@@ -175,7 +181,8 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
     machine.write_text(PROFILE)
     with quick_sim_board(vector_queue_depth=SHORT_QUEUE) as board_class:
         result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr",
-                           str(PRR_KHZ), "--machine", str(machine), "--sim", "--json"], capsys)
+                           str(PRR_KHZ), "--machine", str(machine), "--sim", *SIM_TIMEOUT,
+                           "--json"], capsys)
     [board] = board_class.built
     assert board.top.vector_queue_depth == SHORT_QUEUE
     assert result["segments"] > SHORT_QUEUE
@@ -204,7 +211,7 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
 
 def test_out_of_field_drawing_is_refused_before_anything(tmp_path, capsys):
     path = tmp_path / "big.svg"
-    big = SVG.replace('width="4mm" height="4mm"', 'width="400mm" height="400mm"')
+    big = SVG.replace('width="2mm" height="2mm"', 'width="200mm" height="200mm"')
     assert big != SVG
     path.write_text(big)
     with pytest.raises(SystemExit) as stop:
@@ -258,20 +265,60 @@ def test_units_and_placement_in_the_plan(tmp_path, capsys):
     assert "X 10.00 … 35.40 mm, Y 5.00 … 5.00 mm" in out
 
 
+# `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead, a
+# 16-segment queue, so the job starts after 16 segments, not 512), and a line on stdout at the
+# first laser pulse: the sign that the job is mid-way with the laser on.
+CTRL_C_CHILD = """
+import runpy, signal, sys, threading, time
+# Ctrl-C as from a terminal (a shell that starts the tests in the background has them, and so
+# this process, ignore SIGINT; Python then leaves it ignored).
+signal.signal(signal.SIGINT, signal.default_int_handler)
+sys.path.insert(0, sys.argv.pop(1))
+from sim_board import quick_sim_board
+
+def watch(built):
+    while not (built and built[0].pulses):
+        time.sleep(0.02)
+    print("galvoscan-test: emitting", flush=True)
+
+with quick_sim_board(vector_queue_depth=16) as board_class:
+    threading.Thread(target=watch, args=(board_class.built,), daemon=True).start()
+    sys.argv[0] = "galvoscan"
+    runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
+"""
+
+
 def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
-    """A real SIGINT to `galvoscan mark --sim` mid-job: exit 130, one line, no traceback."""
+    """A real SIGINT to `galvoscan mark --sim` while the laser emits: exit 130, one line, no
+    traceback."""
+    import select
     import signal
     import time
     path = tmp_path / "shape.svg"
     path.write_text(SVG)
-    process = subprocess.Popen([sys.executable, "-m", "galvoscan.cli", "mark", str(path),
-                                "--sim", "--speed", "1000", "--prr", "50", "--passes", "20"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    process = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, os.path.dirname(__file__),
+                                "mark", str(path), "--sim", *SIM_TIMEOUT, "--speed", "1000",
+                                "--prr", "50",
+                                "--passes", "20"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                env=dict(os.environ, PYTHONUNBUFFERED="1"))
-    time.sleep(8)
-    process.send_signal(signal.SIGINT)
-    out, err = process.communicate(timeout=120)
-    assert process.returncode == 130, (out, err)
+    try:
+        # Stopped the moment it is seen mid-job, however long the machine takes to get there.
+        deadline = time.monotonic() + 600
+        out = b""
+        while b"galvoscan-test: emitting" not in out:
+            assert process.poll() is None, (out, process.stderr.read())
+            assert time.monotonic() < deadline, "the job never got under way"
+            if select.select([process.stdout], [], [], 1)[0]:
+                out += os.read(process.stdout.fileno(), 4096)
+        process.send_signal(signal.SIGINT)
+        # (The board finishes the step it is in, which a busy machine may take minutes over.)
+        rest, err = (text.decode() for text in process.communicate(timeout=600))
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.communicate()
+    assert process.returncode == 130, (out, rest, err)
     assert "Traceback" not in err
     assert err.strip().splitlines()[-1] == "galvoscan: stopped (Ctrl-C)"
 
@@ -279,7 +326,7 @@ def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
 def test_unknown_units_are_refused_before_anything(tmp_path):
     import ezdxf
     svg = tmp_path / "furlongs.svg"
-    svg.write_text(SVG.replace('width="4mm"', 'width="4furlong"'))
+    svg.write_text(SVG.replace('width="2mm"', 'width="2furlong"'))
     doc = ezdxf.new()
     doc.header["$INSUNITS"] = 99
     doc.modelspace().add_line((0, 0), (1, 0))

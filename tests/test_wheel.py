@@ -31,18 +31,101 @@ def _commands(top):
     return paths
 
 
+def _closure(requirements):
+    """The distributions of this environment that ``requirements`` (Requires-Dist lines) need,
+    with everything they need in turn: ``{name: distribution}``. Each must be installed at a
+    version the requirement allows."""
+    from importlib.metadata import PackageNotFoundError, distribution
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+    found = {}
+    todo = [(Requirement(text), "") for text in requirements]
+    while todo:
+        requirement, extra = todo.pop()
+        if requirement.marker and not requirement.marker.evaluate({"extra": extra}):
+            continue
+        name = canonicalize_name(requirement.name)
+        try:
+            dist = distribution(name)
+        except PackageNotFoundError:
+            pytest.fail(f"{requirement} is required but not installed here")
+        assert requirement.specifier.contains(dist.version, prereleases=True), \
+            (str(requirement), dist.version)
+        for wanted in requirement.extras | {""}:
+            if (name, wanted) not in found:
+                found[(name, wanted)] = dist
+                todo += [(Requirement(text), wanted) for text in dist.requires or ()]
+    return {name: dist for (name, _), dist in found.items()}
+
+
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
-    """The ``galvoscan`` script of a fresh venv holding the wheel built from this tree."""
+    """The ``galvoscan`` script of a fresh venv holding the wheel built from this tree, and
+    nothing else but the wheel's dependencies.
+
+    The wheel is installed as a user installs it (not editable, ``--no-deps``); its declared
+    dependencies, and theirs, are linked in from this environment (where they are installed
+    already) rather than downloaded and installed again: the venv holds exactly what pip
+    would put there, nothing of the tests' own packages, so a module the wheel leaves out or a
+    dependency it does not declare still fails here."""
+    import zipfile
     where = tmp_path_factory.mktemp("wheel")
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
                     "--wheel-dir", str(where / "dist"), str(ROOT)], check=True)
     wheel, = (where / "dist").glob("galvoscan-*.whl")
-    venv.create(where / "venv", with_pip=True)
+    venv.create(where / "venv", with_pip=False, symlinks=sys.platform != "win32")
     bin_dir = where / "venv" / ("Scripts" if sys.platform == "win32" else "bin")
-    subprocess.run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(wheel)],
-                   check=True)
-    return bin_dir / "galvoscan", where
+    python = bin_dir / "python"
+    subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet",
+                    "--no-deps", "--no-index", str(wheel)], check=True)
+    with zipfile.ZipFile(wheel) as archive:
+        metadata, = (n for n in archive.namelist() if n.endswith(".dist-info/METADATA"))
+        requires = [line.split(":", 1)[1].strip() for line in
+                    archive.read(metadata).decode().splitlines()
+                    if line.startswith("Requires-Dist:")]
+    site = Path(subprocess.run([str(python), "-c", "import sysconfig; "
+                                "print(sysconfig.get_paths()['purelib'])"],
+                               capture_output=True, text=True, check=True).stdout.strip())
+    for dist in _closure(requires).values():
+        for top in {Path(str(f)).parts[0] for f in dist.files}:
+            if top in ("..", "__pycache__") or (site / top).exists():
+                continue
+            (site / top).symlink_to(dist.locate_file(top))
+        # Their commands (the YoWASP tools are found beside the interpreter), as pip writes
+        # them: run by this venv's Python.
+        for entry in dist.entry_points.select(group="console_scripts"):
+            script = bin_dir / entry.name
+            script.write_text(f"#!{python}\nimport sys\nfrom {entry.module} import "
+                              f"{entry.attr.split('.')[0]}\n"
+                              f"sys.exit({entry.attr}())\n")
+            script.chmod(0o755)
+    return bin_dir / "galvoscan", where, requires
+
+
+def test_wheel_declares_the_projects_dependencies(installed):
+    """The wheel's Requires-Dist is pyproject.toml's dependencies and extras, no more, no less
+    (the venv above holds what it declares, so what it declares is what a user gets)."""
+    try:
+        import tomllib
+    except ImportError:                          # Python < 3.11
+        import tomli as tomllib
+    from packaging.markers import Marker
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+    _, _, requires = installed
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+
+    def key(requirement, extra=None):
+        r = Requirement(requirement)
+        marker = r.marker
+        if extra is not None:
+            marker = Marker(f'({marker}) and extra == "{extra}"' if marker
+                            else f'extra == "{extra}"')
+        return canonicalize_name(r.name), str(r.specifier), frozenset(r.extras), str(marker)
+    wanted = {key(r) for r in project["dependencies"]}
+    wanted |= {key(r, extra) for extra, rs in project["optional-dependencies"].items()
+               for r in rs}
+    assert {key(r) for r in requires} == wanted
 
 
 def _run(script, *argv, cwd):
@@ -51,20 +134,44 @@ def _run(script, *argv, cwd):
 
 
 def test_wheel_runs_every_command_help(installed):
-    script, where = installed
+    script, where, _ = installed
     result = _run(script, "--help", cwd=where)
     assert result.returncode == 0, result.stderr
     assert _run(script, "--version", cwd=where).stdout.startswith("galvoscan ")
     commands = _commands(parser())
     assert ["correct", "upload"] in commands and ["sim"] in commands
-    for command in commands:
-        result = _run(script, *command, "--help", cwd=where)
-        assert result.returncode == 0, (command, result.stderr)
-        assert f"usage: galvoscan {' '.join(command)}" in result.stdout
+    # Every command's help from the wheel's own code, in one interpreter of the venv (one
+    # start-up, not one a command: the script itself ran above).
+    helps = _run(script.parent / "python", "-c", HELPS, json.dumps(commands), cwd=where)
+    assert helps.returncode == 0, helps.stderr
+    for command, (code, out, err) in zip(commands, json.loads(helps.stdout)):
+        assert code == 0, (command, err)
+        assert f"usage: galvoscan {' '.join(command)}" in out
+
+
+# Runs `galvoscan COMMAND --help` for each command of argv[1] (JSON), from whichever galvoscan
+# this interpreter imports: [exit code, stdout, stderr] for each, as JSON. The imports are
+# checked to come from the venv, not the source tree.
+HELPS = """
+import contextlib, io, json, sys
+import galvoscan
+assert "site-packages" in galvoscan.__file__, galvoscan.__file__
+from galvoscan.cli import main
+results = []
+for command in json.loads(sys.argv[1]):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([*command, "--help"])
+        except SystemExit as stop:
+            code = stop.code
+    results.append([code or 0, out.getvalue(), err.getvalue()])
+print(json.dumps(results))
+"""
 
 
 def test_wheel_regs_export_and_sim(installed):
-    script, where = installed
+    script, where, _ = installed
     result = _run(script, "regs", "--json", cwd=where)
     assert result.returncode == 0, result.stderr
     assert {"status", "dwell", "cor_node"} <= {r["name"] for r in json.loads(result.stdout)}
@@ -84,7 +191,7 @@ def test_wheel_regs_export_and_sim(installed):
 
 def test_wheel_plans_a_drawing(installed):
     """The job path's libraries (svgelements, ezdxf, shapely, the TOML reader) come with it."""
-    script, where = installed
+    script, where, _ = installed
     result = _run(script, "machine", "init", "wheel.toml", cwd=where)
     assert result.returncode == 0, result.stderr
     (where / "box.svg").write_text(
