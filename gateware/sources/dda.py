@@ -58,12 +58,15 @@ class LineDDA(wiring.Component):
         The segment's points after its start, the end point last.
     busy : ``Out(1)``
         A segment is being set up or stepped.
+    last : ``Out(1)``
+        The point offered is the segment's end point.
     """
 
     segment: In(stream.Signature(Segment))
     pitch: In(16)
     points: Out(stream.Signature(FieldPoint))
     busy: Out(1)
+    last: Out(1)
 
     def elaborate(self, platform):
         m = Module()
@@ -218,6 +221,7 @@ class LineDDA(wiring.Component):
             with m.State("END"):
                 m.d.comb += [
                     self.points.valid.eq(1),
+                    self.last.eq(1),
                     self.points.payload.x.eq(x1),
                     self.points.payload.y.eq(y1),
                 ]

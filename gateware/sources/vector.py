@@ -12,7 +12,15 @@ Two halves:
   the pulse gap (Wan et al. 2018: t = N·T − 10 µs before the next pulse, the frame's
   transmission time; here the pacer counts the laser's PRR clock ahead by the two frames a
   point takes to reach the head, through ``pulse_ahead``). A jump's point is held
-  ``jump_delay`` frames with the laser off. The line speed is ``pitch × PRR / pulses_per_point``.
+  ``jump_delay`` µs (whole frames, at least one) with the laser off. The line speed is
+  ``pitch × PRR / pulses_per_point``.
+
+With the RTC's scanner delays (``delays=True``; SCANLAB RTC5/6), a mark's end point is held
+longer: ``polygon_delay`` with the laser on when another mark follows (scaled by the corner
+factor sent with that mark if ``polygon_scaled``), ``mark_delay`` with the laser off when a jump
+follows; both in whole frames, rounded up, none for 0. A zero-length mark after a jump (a dot)
+has no end point of its own, so no mark delay. The laser delays act on :attr:`laser` further on
+(:class:`~.laser_delays.LaserDelays`).
 
 This needs at most one pulse per frame: the PRR must not exceed the frame rate (100 kHz at
 XY2-100), as Wan et al. say. Above it a point would get more pulses than asked.
@@ -21,7 +29,7 @@ The pacer's decision for a frame, :attr:`laser`, applies from the moment that fr
 sent; the system top delays it by two frames to the laser's ``marking`` input.
 """
 
-from amaranth.hdl import Cat, Module, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -30,7 +38,7 @@ from ..points import FIELD_CENTRE, OffsetPoint
 from .dda import LineDDA
 
 
-__all__ = ["VectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
+__all__ = ["VectorSequencer", "VectorCommand", "DelayedVectorCommand", "OP_JUMP", "OP_MARK"]
 
 
 #: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
@@ -38,6 +46,9 @@ OP_JUMP, OP_MARK = VectorOp.JUMP, VectorOp.MARK
 
 #: One queued segment: where to go, and how.
 VectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16})
+#: The same with a mark's corner factor (1 - cos φ) in 1/64 (``vec_op`` bits 7:1). The queue's
+#: block RAMs are 8 bits wide, so its 33 bits already take 40: the factor costs no RAM.
+DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "factor": 7})
 
 
 class VectorSequencer(wiring.Component):
@@ -59,7 +70,11 @@ class VectorSequencer(wiring.Component):
     pulses_per_point : ``In(8)``
         Laser pulses each marked point gets (0 is taken as 1).
     jump_delay : ``In(16)``
-        Frames a jump's end point is held with the laser off (0 is taken as 1).
+        µs a jump's end point is held with the laser off (whole frames, at least one).
+    mark_delay, polygon_delay : ``In(12)``, when ``delays``
+        µs a mark's end point is held before a jump (laser off) or another mark (laser on).
+    polygon_scaled : ``In(1)``, when ``delays``
+        Scale ``polygon_delay`` by the next mark's corner factor.
     points : ``Out(stream.Signature(OffsetPoint))``
         To the scale stage: offsets from the field centre (position − 32768).
     laser : ``Out(1)``
@@ -74,20 +89,29 @@ class VectorSequencer(wiring.Component):
         set up (the mirrors hold with the laser off for a frame). Set-up takes 140 clocks,
         so at 12 MHz and XY2-100 (120 clocks a frame) only a one-point segment after another
         one-point segment can stall.
+
+    Parameters
+    ----------
+    frame_us : int
+        µs a frame lasts (10 at XY2-100).
+    delays : bool
+        Build the mark and polygon delays.
     """
 
-    commands: In(stream.Signature(VectorCommand))
-    frame_strobe: In(1)
-    pulse_ahead: In(1)
-    run: In(1)
-    pitch: In(16)
-    pulses_per_point: In(8)
-    jump_delay: In(16)
-    points: Out(stream.Signature(OffsetPoint))
-    laser: Out(1)
-    underrun: Out(1)
-    stall: Out(1)
-    busy: Out(1)
+    def __init__(self, *, frame_us=10, delays=False):
+        self.frame_us = frame_us
+        self.delays = delays
+        members = {
+            "commands": In(stream.Signature(DelayedVectorCommand if delays else VectorCommand)),
+            "frame_strobe": In(1), "pulse_ahead": In(1), "run": In(1),
+            "pitch": In(16), "pulses_per_point": In(8), "jump_delay": In(16),
+            "points": Out(stream.Signature(OffsetPoint)),
+            "laser": Out(1), "underrun": Out(1), "stall": Out(1), "busy": Out(1),
+        }
+        if delays:
+            members.update({"mark_delay": In(12), "polygon_delay": In(12),
+                            "polygon_scaled": In(1)})
+        super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
@@ -102,6 +126,8 @@ class VectorSequencer(wiring.Component):
         slot_x = Signal(16)
         slot_y = Signal(16)
         slot_mark = Signal()
+        slot_end = Signal()                        # the slot's point ends a mark segment
+        factor = Signal(7)                         # the corner factor of the last mark fetched
         taken = Signal()                           # the pacer takes the slot this clock
 
         with m.If(taken):
@@ -134,6 +160,8 @@ class VectorSequencer(wiring.Component):
                         ]
                     with m.Else():
                         m.d.comb += self.commands.ready.eq(1)
+                        if self.delays:
+                            m.d.sync += factor.eq(command.factor)
                         # The line from where we are; its start is marked first if the laser
                         # was off.
                         m.d.sync += [
@@ -144,32 +172,69 @@ class VectorSequencer(wiring.Component):
                         ]
                         with m.If(~pen_down):
                             m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x), slot_y.eq(cur_y),
-                                         slot_mark.eq(1)]
+                                         slot_mark.eq(1), slot_end.eq(0)]
                         m.next = "STEP"
             with m.State("STEP"):
                 m.d.comb += dda.points.ready.eq(slot_free)
                 with m.If(dda.points.valid & slot_free):
                     m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
-                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1)]
+                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1),
+                                 slot_end.eq(dda.last)]
                 with m.Elif(~segment_valid & ~dda.busy):
                     m.next = "FETCH"
 
         # --- pacer --------------------------------------------------------------------------
-        holding_mark = Signal()
-        holding_jump = Signal()
+        holding_mark = Signal()     # a marked point waits for its pulses
+        waiting = Signal()          # a point is held for a time: a jump's, or a mark's end
+        held_end = Signal()         # the marked point held ends a mark segment
         pulses = Signal(8)          # early PRR edges since the held point was handed on
-        frames = Signal(16)         # frame strobes since then
+        waited = Signal(17)         # µs of whole frames since the wait began
         pulses_now = Signal(8)
         m.d.comb += pulses_now.eq(pulses + (self.pulse_ahead & (pulses != 0xFF)))
         need = Signal(8)
         m.d.comb += need.eq(self.pulses_per_point | (self.pulses_per_point == 0))
-        delay = Signal(16)
-        m.d.comb += delay.eq(self.jump_delay | (self.jump_delay == 0))
+        # What the current wait lasts, in µs: a jump's, or (delays) a mark end's.
+        wait_us = Signal(16)
+        m.d.comb += wait_us.eq(self.jump_delay)
 
         with m.If(self.points.ready):
             m.d.sync += self.points.valid.eq(0)
         m.d.comb += self.busy.eq(self.commands.valid | ~fetching | slot_valid | holding_mark |
-                                 holding_jump)
+                                 waiting)
+
+        # A held mark end goes on to a polygon wait (another mark next) or a mark-delay wait
+        # (a jump next); neither for a 0 delay or a 0 corner factor.
+        to_polygon = Signal()
+        to_mark_delay = Signal()
+        if self.delays:
+            WAIT_JUMP, WAIT_MARK, WAIT_POLYGON = range(3)
+            wait_kind = Signal(2)
+            # polygon_delay × factor / 64, shift-and-add over the factor's bits, over and over
+            # (8 clocks a round; the factor and the delay hold still while a corner waits, and
+            # a frame is far longer): a few dozen cells where a multiplier is a DSP.
+            scaled = Signal(13)         # up to 4000 × 127 / 64
+            product = Signal(19)
+            bit = Signal(range(8))
+            # The factor's bits, most significant first.
+            factor_bit = Cat(factor[i] for i in reversed(range(7))).bit_select(bit, 1)
+            with m.If(bit == 7):
+                m.d.sync += [scaled.eq(product[6:]), product.eq(0), bit.eq(0)]
+            with m.Else():
+                m.d.sync += [product.eq((product << 1) +
+                                        Mux(factor_bit, self.polygon_delay, 0)),
+                             bit.eq(bit + 1)]
+            polygon_us = Mux(self.polygon_scaled, scaled, self.polygon_delay)
+            with m.Switch(wait_kind):
+                with m.Case(WAIT_MARK):
+                    m.d.comb += wait_us.eq(self.mark_delay)
+                with m.Case(WAIT_POLYGON):
+                    m.d.comb += wait_us.eq(polygon_us)
+            at_end = holding_mark & held_end & slot_valid
+            m.d.comb += [
+                to_polygon.eq(at_end & slot_mark & (self.polygon_delay != 0) &
+                              (~self.polygon_scaled | (factor != 0))),
+                to_mark_delay.eq(at_end & ~slot_mark & (self.mark_delay != 0)),
+            ]
 
         m.d.sync += pulses.eq(pulses_now)
         with m.If(self.frame_strobe):
@@ -178,9 +243,16 @@ class VectorSequencer(wiring.Component):
             # short and a pulse is coming now.
             enough = (pulses >= need) | (self.pulse_ahead & (pulses >= need - 1))
             done = (~holding_mark | enough) & \
-                   (~holding_jump | (frames + 1 >= delay))
+                   (~waiting | (waited + self.frame_us >= wait_us))
             with m.If(~self.run):
-                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
+            with m.Elif(done & (to_polygon | to_mark_delay)):
+                # The mirrors catch up with the end point: the laser stays on into a corner,
+                # goes off before a jump.
+                m.d.sync += [waiting.eq(1), holding_mark.eq(0), waited.eq(0),
+                             self.laser.eq(to_polygon)]
+                if self.delays:
+                    m.d.sync += wait_kind.eq(Mux(to_polygon, WAIT_POLYGON, WAIT_MARK))
             with m.Elif(done & slot_valid):
                 m.d.comb += taken.eq(1)
                 m.d.sync += [
@@ -190,16 +262,19 @@ class VectorSequencer(wiring.Component):
                     self.points.payload.y.eq(Cat(slot_y[:15], ~slot_y[15])),
                     self.laser.eq(slot_mark),
                     holding_mark.eq(slot_mark),
-                    holding_jump.eq(~slot_mark),
+                    held_end.eq(slot_end),
+                    waiting.eq(~slot_mark),
                     pulses.eq(0),
-                    frames.eq(0),
+                    waited.eq(0),
                 ]
+                if self.delays:
+                    m.d.sync += wait_kind.eq(WAIT_JUMP)
             with m.Elif(done):
                 # Nothing to go on with: hold here with the laser off.
                 queue_empty = fetching & ~self.commands.valid
                 m.d.comb += [self.underrun.eq(holding_mark & queue_empty),
                              self.stall.eq(holding_mark & ~queue_empty)]
-                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
             with m.Else():
-                m.d.sync += frames.eq(frames + (frames != 0xFFFF))
+                m.d.sync += waited.eq(waited + Mux(waited[-1], 0, self.frame_us))
         return m
