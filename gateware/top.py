@@ -362,7 +362,7 @@ class GalvoScanTop(wiring.Component):
                                                       depth=self.vector_queue_depth)
         command = Signal(layout)
         if self.vector_delays:
-            m.d.comb += command.factor.eq(decoder.bus.write_data[1:8])
+            m.d.comb += command.corner_frames.eq(decoder.bus.write_data[1:8])
         m.d.comb += [
             command.op.eq(decoder.bus.write_data[0]),
             command.x.eq(regs.vec_x),

@@ -40,7 +40,7 @@ __all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "VectorOp", "Status", "STATUS_BITS
            "HOST_MAP",
            "REGISTERS", "BY_NAME", "BY_ADDRESS", "MODE_REGISTERS", "CORRECTION_REGISTERS",
            "LASER_REGISTERS", "DELAY_REGISTERS", "LASER_ON_LEAD_US", "LASER_DELAY_MAX_US",
-           "SCANNER_DELAY_MAX_US", "CORNER_FACTOR_ONE", "encode_frame", "decode_frame", "FrameError"]
+           "SCANNER_DELAY_MAX_US", "CORNER_FRAMES_MAX", "encode_frame", "decode_frame", "FrameError"]
 
 
 #: The last byte of every frame.
@@ -53,11 +53,11 @@ WORD_MAX = 0xFFFF
 #: reaches the head: how far ahead a negative ``laser_on_delay`` can reach, plus one µs.
 LASER_ON_LEAD_US = 20
 #: Largest laser-on and laser-off delays, in µs.
-LASER_DELAY_MAX_US = 2000
+LASER_DELAY_MAX_US = 2047
 #: Largest mark and polygon delays, in µs.
-SCANNER_DELAY_MAX_US = 4000
-#: ``vec_op`` bits 7:1 of a mark: the corner factor (1 - cos φ) in units of this.
-CORNER_FACTOR_ONE = 64
+SCANNER_DELAY_MAX_US = 4095
+#: Largest scaled corner hold a mark carries (``vec_op`` bits 7:1), in frames.
+CORNER_FRAMES_MAX = 127
 
 #: Samples per axis of the default spiral table (the paper's 128).
 DEFAULT_TABLE_POINTS = DEFAULT_POINTS
@@ -212,9 +212,9 @@ def _all_registers(table_points, correction_nodes):
                  "Y of the next segment's end point"),
         Register("vec_op", 0x22, "queue", 0, 0, 255, "enum + factor",
                  "writing queues a segment to (vec_x, vec_y): bit 0: 0 = jump (laser off, then "
-                 "jump_delay), 1 = mark (laser on, points every pitch); bits 7:1 of a mark: its "
-                 "corner factor for polygon_scaled (0 on builds without the delays); refused if "
-                 "the queue is full", width=8),
+                 "jump_delay), 1 = mark (laser on, points every pitch); bits 7:1 of a mark: the hold "
+                 "in 10 µs frames of the corner it leaves, if polygon_scaled; refused if the "
+                 "queue is full", width=8),
         Register("fifo_free", 0x23, "ro", 0, 0, 0, "segments",
                  "free places in the vector queue"),
         Register("pitch", 0x24, "rw", 60, 1, WORD_MAX, "galvo units",
@@ -253,9 +253,9 @@ def _all_registers(table_points, correction_nodes):
                  "between two marks, the mirrors hold the corner this long with the laser on; "
                  "whole 10 µs frames, rounded up", width=12),
         Register("polygon_scaled", 0x2E, "rw", 0, 0, 1, "bool",
-                 "1 = scale each corner's polygon_delay by the factor (1 - cos φ) the host sends "
-                 "with the mark that leaves it (vec_op bits 7:1, 64 = 1.0: a right angle); 0 = "
-                 "the full polygon_delay at every corner", width=1),
+                 "1 = hold each corner for the frames sent with the mark that leaves it (vec_op "
+                 "bits 7:1: the host's polygon delay × (1 - cos φ), RTC's variable polygon "
+                 "delay); 0 = polygon_delay at every corner", width=1),
         # --- raster group -----------------------------------------------------------------------
         Register("ras_x", 0x30, "rw", 28768, 0, WORD_MAX, "galvo units",
                  "raster rectangle: X of its lower-left corner"),

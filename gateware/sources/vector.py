@@ -16,9 +16,8 @@ Two halves:
   ``pitch × PRR / pulses_per_point``.
 
 With the RTC's scanner delays (``delays=True``; SCANLAB RTC5/6), a mark's end point is held
-longer: ``polygon_delay`` with the laser on when another mark follows (scaled by the corner
-factor sent with that mark if ``polygon_scaled``), ``mark_delay`` with the laser off when a jump
-follows; both in whole frames, rounded up, none for 0. A zero-length mark after a jump (a dot)
+longer: ``polygon_delay`` with the laser on when another mark follows, ``mark_delay`` with the
+laser off when a jump follows; both in whole frames, rounded up, none for 0. A zero-length mark after a jump (a dot)
 has no end point of its own, so no mark delay. The laser delays act on :attr:`laser` further on
 (:class:`~.laser_delays.LaserDelays`).
 
@@ -46,9 +45,9 @@ OP_JUMP, OP_MARK = VectorOp.JUMP, VectorOp.MARK
 
 #: One queued segment: where to go, and how.
 VectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16})
-#: The same with a mark's corner factor (1 - cos φ) in 1/64 (``vec_op`` bits 7:1). The queue's
-#: block RAMs are 8 bits wide, so its 33 bits already take 40: the factor costs no RAM.
-DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "factor": 7})
+#: The same with a mark's scaled corner hold in frames (``vec_op`` bits 7:1). The queue's block
+#: RAMs are 8 bits wide, so its 33 bits already take 40: the field costs no RAM.
+DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7})
 
 
 class VectorSequencer(wiring.Component):
@@ -74,7 +73,7 @@ class VectorSequencer(wiring.Component):
     mark_delay, polygon_delay : ``In(12)``, when ``delays``
         µs a mark's end point is held before a jump (laser off) or another mark (laser on).
     polygon_scaled : ``In(1)``, when ``delays``
-        Scale ``polygon_delay`` by the next mark's corner factor.
+        Hold each corner for the frames sent with the mark that leaves it instead.
     points : ``Out(stream.Signature(OffsetPoint))``
         To the scale stage: offsets from the field centre (position − 32768).
     laser : ``Out(1)``
@@ -127,7 +126,7 @@ class VectorSequencer(wiring.Component):
         slot_y = Signal(16)
         slot_mark = Signal()
         slot_end = Signal()                        # the slot's point ends a mark segment
-        factor = Signal(7)                         # the corner factor of the last mark fetched
+        corner_frames = Signal(7)                         # the corner hold (frames) of the last mark
         taken = Signal()                           # the pacer takes the slot this clock
 
         with m.If(taken):
@@ -161,7 +160,7 @@ class VectorSequencer(wiring.Component):
                     with m.Else():
                         m.d.comb += self.commands.ready.eq(1)
                         if self.delays:
-                            m.d.sync += factor.eq(command.factor)
+                            m.d.sync += corner_frames.eq(command.corner_frames)
                         # The line from where we are; its start is marked first if the laser
                         # was off.
                         m.d.sync += [
@@ -188,7 +187,7 @@ class VectorSequencer(wiring.Component):
         waiting = Signal()          # a point is held for a time: a jump's, or a mark's end
         held_end = Signal()         # the marked point held ends a mark segment
         pulses = Signal(8)          # early PRR edges since the held point was handed on
-        waited = Signal(17)         # µs of whole frames since the wait began
+        waited = Signal(17)         # µs of whole frames the wait has lasted by the next strobe
         pulses_now = Signal(8)
         m.d.comb += pulses_now.eq(pulses + (self.pulse_ahead & (pulses != 0xFF)))
         need = Signal(8)
@@ -203,27 +202,15 @@ class VectorSequencer(wiring.Component):
                                  waiting)
 
         # A held mark end goes on to a polygon wait (another mark next) or a mark-delay wait
-        # (a jump next); neither for a 0 delay or a 0 corner factor.
+        # (a jump next); neither for a 0 delay or a 0 corner hold.
         to_polygon = Signal()
         to_mark_delay = Signal()
         if self.delays:
             WAIT_JUMP, WAIT_MARK, WAIT_POLYGON = range(3)
             wait_kind = Signal(2)
-            # polygon_delay × factor / 64, shift-and-add over the factor's bits, over and over
-            # (8 clocks a round; the factor and the delay hold still while a corner waits, and
-            # a frame is far longer): a few dozen cells where a multiplier is a DSP.
-            scaled = Signal(13)         # up to 4000 × 127 / 64
-            product = Signal(19)
-            bit = Signal(range(8))
-            # The factor's bits, most significant first.
-            factor_bit = Cat(factor[i] for i in reversed(range(7))).bit_select(bit, 1)
-            with m.If(bit == 7):
-                m.d.sync += [scaled.eq(product[6:]), product.eq(0), bit.eq(0)]
-            with m.Else():
-                m.d.sync += [product.eq((product << 1) +
-                                        Mux(factor_bit, self.polygon_delay, 0)),
-                             bit.eq(bit + 1)]
-            polygon_us = Mux(self.polygon_scaled, scaled, self.polygon_delay)
+            # A scaled corner's hold comes with its mark, in frames, worked out by the host
+            # (which knows the angle): no multiplier here.
+            polygon_us = Mux(self.polygon_scaled, corner_frames * self.frame_us, self.polygon_delay)
             with m.Switch(wait_kind):
                 with m.Case(WAIT_MARK):
                     m.d.comb += wait_us.eq(self.mark_delay)
@@ -231,8 +218,8 @@ class VectorSequencer(wiring.Component):
                     m.d.comb += wait_us.eq(polygon_us)
             at_end = holding_mark & held_end & slot_valid
             m.d.comb += [
-                to_polygon.eq(at_end & slot_mark & (self.polygon_delay != 0) &
-                              (~self.polygon_scaled | (factor != 0))),
+                to_polygon.eq(at_end & slot_mark & Mux(self.polygon_scaled, corner_frames != 0,
+                                                       self.polygon_delay != 0)),
                 to_mark_delay.eq(at_end & ~slot_mark & (self.mark_delay != 0)),
             ]
 
@@ -243,13 +230,13 @@ class VectorSequencer(wiring.Component):
             # short and a pulse is coming now.
             enough = (pulses >= need) | (self.pulse_ahead & (pulses >= need - 1))
             done = (~holding_mark | enough) & \
-                   (~waiting | (waited + self.frame_us >= wait_us))
+                   (~waiting | (waited >= wait_us))
             with m.If(~self.run):
                 m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
             with m.Elif(done & (to_polygon | to_mark_delay)):
                 # The mirrors catch up with the end point: the laser stays on into a corner,
                 # goes off before a jump.
-                m.d.sync += [waiting.eq(1), holding_mark.eq(0), waited.eq(0),
+                m.d.sync += [waiting.eq(1), holding_mark.eq(0), waited.eq(self.frame_us),
                              self.laser.eq(to_polygon)]
                 if self.delays:
                     m.d.sync += wait_kind.eq(Mux(to_polygon, WAIT_POLYGON, WAIT_MARK))
@@ -265,7 +252,7 @@ class VectorSequencer(wiring.Component):
                     held_end.eq(slot_end),
                     waiting.eq(~slot_mark),
                     pulses.eq(0),
-                    waited.eq(0),
+                    waited.eq(self.frame_us),
                 ]
                 if self.delays:
                     m.d.sync += wait_kind.eq(WAIT_JUMP)
