@@ -5,7 +5,7 @@ SCANLAB's delay definitions (tests/vector_delay_model.py); bad delay values refu
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient
+from galvoscan.client import ClientError, HostClient, encode_write
 from galvoscan.gateware.top import ScanSettings
 
 from sim_board import SimBoard, SimSPITransport
@@ -164,7 +164,7 @@ def test_the_client_refuses_bad_delay_values(name, value):
     if isinstance(value, int) and not isinstance(value, bool) and reg.low <= value <= reg.high:
         return
     with pytest.raises(ClientError, match=f"{name} takes an integer from {reg.low} to {reg.high}"):
-        HostClient(None).write(name, value)
+        encode_write(name, value)
 
 
 def test_the_board_refuses_out_of_range_delays_and_counts_them():
@@ -175,8 +175,8 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19
-    bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 2048),
-           ("laser_on_delay", 0x8000), ("laser_off_delay", 2048), ("mark_delay", 4096),
+    bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 1024),
+           ("laser_on_delay", 0x8000), ("laser_off_delay", 1024), ("mark_delay", 4096),
            ("polygon_delay", 0xFFFF), ("polygon_scaled", 2)]
     for name, data in bad:
         client.transport.write_frame(encode_frame(BY_NAME[name].address, data))

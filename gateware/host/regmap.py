@@ -53,7 +53,7 @@ WORD_MAX = 0xFFFF
 #: reaches the head: how far ahead a negative ``laser_on_delay`` can reach, plus one µs.
 LASER_ON_LEAD_US = 20
 #: Largest laser-on and laser-off delays, in µs.
-LASER_DELAY_MAX_US = 2047
+LASER_DELAY_MAX_US = 1023
 #: Largest mark and polygon delays, in µs.
 SCANNER_DELAY_MAX_US = 4095
 #: Largest scaled corner hold a mark carries (``vec_op`` bits 7:1), in frames.
@@ -241,10 +241,10 @@ def _all_registers(table_points, correction_nodes):
                  "laser (DB25 modulation, pin 19) on this long after a mark's first point reaches "
                  "the head; negative switches it on that much earlier, down to -19 µs (the "
                  "sequencer decides two frames ahead); placed to the clock on the modulation edge",
-                 width=12, signed=True),
+                 width=11, signed=True),
         Register("laser_off_delay", 0x2B, "rw", 150, 0, LASER_DELAY_MAX_US, "µs",
                  "laser stays on this long after a mark's last point reaches the head (the mirror "
-                 "still lags it); placed to the clock on the modulation edge", width=11),
+                 "still lags it); placed to the clock on the modulation edge", width=10),
         Register("mark_delay", 0x2C, "rw", 200, 0, SCANNER_DELAY_MAX_US, "µs",
                  "after a mark followed by a jump, the mirrors hold its end point this long, laser "
                  "off (after laser_off_delay runs out), before the jump; whole 10 µs frames, "

@@ -21,6 +21,8 @@ from amaranth.hdl import Module, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..host.regmap import LASER_ON_LEAD_US
+
 
 __all__ = ["LaserDelays"]
 
@@ -43,9 +45,9 @@ class LaserDelays(wiring.Component):
         Low: the output goes low at once and waiting edges are dropped.
     decision : ``In(1)``
         The laser the sequencer wants for the frame it last handed on.
-    on_delay : ``In(signed(12))``
-        µs, ``1 - lead_us`` … 2047.
-    off_delay : ``In(11)``
+    on_delay : ``In(signed(11))``
+        µs, ``1 - lead_us`` … 1023.
+    off_delay : ``In(10)``
         µs.
     marking : ``Out(1)``
         The decision with its edges delayed.
@@ -54,8 +56,8 @@ class LaserDelays(wiring.Component):
     frame_strobe: In(1)
     run: In(1)
     decision: In(1)
-    on_delay: In(signed(12))
-    off_delay: In(11)
+    on_delay: In(signed(11))
+    off_delay: In(10)
     marking: Out(1)
 
     def __init__(self, *, clocks_per_us, lead_us):
@@ -84,15 +86,18 @@ class LaserDelays(wiring.Component):
         fall = ~self.decision & previous
         # Each counts µs down from its delay; the edge is due on the tick that takes it to
         # -lead_us, lead_us µs of ticks after a delay of 0 (when the point reaches the head).
-        on_left = Signal(signed(13))
-        off_left = Signal(signed(13))
+        on_left = Signal(signed(11))
+        off_left = Signal(signed(11))
         on_waiting = Signal()
         off_waiting = Signal()
         on_newer = Signal()         # the waiting rising edge was decided after the falling one
         due = 1 - self.lead_us
-        # (At or below: a shorter lead, XY2-200's, takes a negative delay beyond its reach as
-        # its earliest edge.)
-        on_due = on_waiting & tick & (on_left <= due)
+        # (At or below with a lead shorter than the register's reach, XY2-200's: a negative
+        # delay beyond it comes as early as it can.)
+        if self.lead_us < LASER_ON_LEAD_US:
+            on_due = on_waiting & tick & (on_left <= due)
+        else:
+            on_due = on_waiting & tick & (on_left == due)
         off_due = off_waiting & tick & (off_left == due)
         with m.If(tick):
             m.d.sync += [on_left.eq(on_left - 1), off_left.eq(off_left - 1)]
