@@ -92,7 +92,7 @@ def test_show_prints_user_units(here, capsys):
     assert captured.err == ""                  # the file is there: no note
     assert "galvoscan.toml" in out
     for piece in ("110 × 110 mm", "595.782 galvo units per mm", "20 W", "20 … 200 kHz",
-                  "0.05 mm", "500 µs", "10 mm jump", "jump_delay 500", "laser on / off delay", "100 / 150 µs", "10000 mm/s", "1000 mm/s",
+                  "0.05 mm", "500 µs", "10 mm jump", "jump_delay 500", "laser on / off delay", "100 / 50 µs", "10000 mm/s", "1000 mm/s",
                   "10 %", "laser_power 26", "50 kHz (laser_prr 500)", "identity table"):
         assert piece in out, piece
 

@@ -55,8 +55,8 @@ DEFAULTS = {
     "link": {"port": None, "baud": 1_000_000, "spi": None, "timeout_s": 0.5},
     "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
     "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0,
-              "laser_on_delay_us": 100.0, "laser_off_delay_us": 150.0, "mark_delay_us": 200.0,
-              "polygon_delay_us": 100.0, "polygon_scaled": True},
+              "laser_on_delay_us": 100.0, "laser_off_delay_us": 50.0, "mark_delay_us": 100.0,
+              "polygon_delay_us": 0.0, "polygon_scaled": True},
     "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
 }
 
@@ -514,7 +514,7 @@ def test_delay_registers_from_the_profile():
                                          "mark_delay": 0, "polygon_delay": 4095,
                                          "polygon_scaled": 0}
     assert default_profile().delay_registers() == {
-        "laser_on_delay": 100, "laser_off_delay": 150, "mark_delay": 200, "polygon_delay": 100,
+        "laser_on_delay": 100, "laser_off_delay": 50, "mark_delay": 100, "polygon_delay": 0,
         "polygon_scaled": 1}
 
 

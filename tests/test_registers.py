@@ -40,9 +40,9 @@ DEFAULT_BUILD = [
     ("vec_underruns", 0x28, "ro", 0, 0, 0, 16),
     ("vec_stalls", 0x29, "ro", 0, 0, 0, 16),
     ("laser_on_delay", 0x2a, "rw", 100, -19, 1023, 11),      # two's complement
-    ("laser_off_delay", 0x2b, "rw", 150, 0, 1023, 10),
-    ("mark_delay", 0x2c, "rw", 200, 0, 4095, 12),
-    ("polygon_delay", 0x2d, "rw", 100, 0, 4095, 12),
+    ("laser_off_delay", 0x2b, "rw", 50, 0, 1023, 10),
+    ("mark_delay", 0x2c, "rw", 100, 0, 4095, 12),
+    ("polygon_delay", 0x2d, "rw", 0, 0, 4095, 12),
     ("polygon_scaled", 0x2e, "rw", 0, 0, 1, 1),
     ("ras_x", 0x30, "rw", 28768, 0, 65535, 16),
     ("ras_y", 0x31, "rw", 28768, 0, 65535, 16),

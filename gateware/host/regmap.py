@@ -242,14 +242,14 @@ def _all_registers(table_points, correction_nodes):
                  "the head; negative switches it on that much earlier, down to -19 µs (the "
                  "sequencer decides two frames ahead); placed to the clock on the modulation edge",
                  width=11, signed=True),
-        Register("laser_off_delay", 0x2B, "rw", 150, 0, LASER_DELAY_MAX_US, "µs",
+        Register("laser_off_delay", 0x2B, "rw", 50, 0, LASER_DELAY_MAX_US, "µs",
                  "laser stays on this long after a mark's last point reaches the head (the mirror "
                  "still lags it); placed to the clock on the modulation edge", width=10),
-        Register("mark_delay", 0x2C, "rw", 200, 0, SCANNER_DELAY_MAX_US, "µs",
+        Register("mark_delay", 0x2C, "rw", 100, 0, SCANNER_DELAY_MAX_US, "µs",
                  "after a mark followed by a jump, the mirrors hold its end point this long, laser "
                  "off (after laser_off_delay runs out), before the jump; whole 10 µs frames, "
                  "rounded up", width=12),
-        Register("polygon_delay", 0x2D, "rw", 100, 0, SCANNER_DELAY_MAX_US, "µs",
+        Register("polygon_delay", 0x2D, "rw", 0, 0, SCANNER_DELAY_MAX_US, "µs",
                  "between two marks, the mirrors hold the corner this long with the laser on; "
                  "whole 10 µs frames, rounded up", width=12),
         Register("polygon_scaled", 0x2E, "rw", 0, 0, 1, "bool",
