@@ -18,6 +18,7 @@ clocks; an edge due after a later-decided edge has come is dropped, and one edge
 direction waits at a time (a newer replaces it).
 """
 
+import bisect
 import math
 
 from vector_model import PARK, dda
@@ -35,7 +36,7 @@ def hold_frames(us, *, at_least_one):
     return max(1, frames) if at_least_one or us else 0
 
 
-def items(job, factors=None):
+def items(job, pitch, factors=None):
     """The points a job hands on, in order: ``(position, kind, ends_mark, corner_frames)``; kind
     is "jump" or "mark"; a mark's corner_frames is the scaled hold sent with it."""
     position, pen_down, out = PARK, False, []
@@ -48,27 +49,23 @@ def items(job, factors=None):
             if not pen_down:
                 out.append((position, "mark", False, factor))
                 pen_down = True
-            points = dda(position, (x, y), pitch=ITEMS_PITCH[0])
+            points = dda(position, (x, y), pitch)
             out += [(p, "mark", i == len(points) - 1, factor) for i, p in enumerate(points)]
         position = (x, y)
     return out
 
-
-ITEMS_PITCH = [60]
 
 
 def frames_model(job, *, boundaries, pulse_clocks, start, pitch, pulses_per_point, jump_us,
                  mark_us=0, polygon_us=0, scaled=False, factors=None):
     """Position and laser wanted for every frame from ``start`` (the first point's first frame)
     to the last boundary given: a list of ``(position, laser)``."""
-    ITEMS_PITCH[0] = pitch
-    todo = items(job, factors)
+    todo = items(job, pitch, factors)
     frames = []
     f = start
     last = len(boundaries) - 1
 
     def pulses_between(b0, b1):
-        import bisect
         return bisect.bisect_right(pulse_clocks, b1) - bisect.bisect_right(pulse_clocks, b0)
 
     position = None
