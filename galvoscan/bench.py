@@ -74,7 +74,8 @@ def _blocks():
     from .platforms.icebreaker import ALARM_PMOD_PINS
     from .utilisation import block_utilisation
     top = GalvoScanTop(clk_freq=12e6, modes=DEFAULT_MODES["icebreaker"],
-                       laser_alarms=len(ALARM_PMOD_PINS[1].split()), spiral_interpolation=False)
+                       laser_alarms=len(ALARM_PMOD_PINS[1].split()), spiral_interpolation=False,
+                       vector_delays=False)
     return "blocks", block_utilisation(top)
 
 

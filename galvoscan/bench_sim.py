@@ -107,7 +107,7 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
             ctx.set(top.laser_alarm, 0)     # the laser reports no alarm
         await ctx.delay(20e-6)
         # Jumps held one frame, so that each jump's latency is its own.
-        await spi_frame(ctx, encode_write("jump_delay", 1))
+        await spi_frame(ctx, encode_write("jump_delay", 10))
         for name, send in (("spi", spi_frame), ("uart", uart_frame)):
             start = ctx.get(counted.cycles)
             for k in range(frames):
@@ -156,7 +156,7 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6):
     client = HostClient(SimTransport(board))
     streamer = JobStreamer(client, poll_s=0)
     streamer.setup({"run": 1, "mode": 2, "pitch": 1000, "pulses_per_point": 1,
-                    "laser_prr": 1000, "jump_delay": 1})
+                    "laser_prr": 1000, "jump_delay": 10})
     job = [("mark", 30000 + 100 * (k % 2), 30000) for k in range(segments)]
     start = board.now
     streamer.stream(job, start=lambda: None, timeout_s=1e9)

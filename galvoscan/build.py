@@ -90,7 +90,7 @@ class TimingError(BuildError):
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
                     baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False,
-                    interpolation=False):
+                    interpolation=False, delays=False):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
@@ -99,7 +99,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200),
     ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode,
     ``interpolation`` the spiral's interpolator (about 280 cells; not in the default build,
-    which it would not fit beside all three modes).
+    which it would not fit beside all three modes), ``delays`` vector mode's RTC delays (about
+    240 cells; likewise).
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -123,6 +124,11 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     if wobble and len(set(modes)) == len(MODES):
         raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
                          "leave one out with --modes (spiral,vector fits)")
+    if delays and "vector" not in modes:
+        raise ValueError("the delays are vector mode's: build them with the vector mode")
+    if delays and len(set(modes)) == len(MODES):
+        raise ValueError("vector mode's delays do not fit the UP5K beside all three scan "
+                         "modes: leave one out with --modes (spiral,vector fits)")
     if interpolation and len(set(modes)) == len(MODES):
         raise ValueError("the spiral's interpolator does not fit the UP5K beside all three "
                          "scan modes: leave one out with --modes (spiral,vector fits)")
@@ -138,7 +144,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     plan = platform.build(make_top(table=table, settings=settings, modes=modes,
                                   correction=correction, clock=clock, bit_rate=bit_rate,
                                   baud=baud, **({"wobble": True} if wobble else {}),
-                                  **({"interpolation": True} if interpolation else {})),
+                                  **({"interpolation": True} if interpolation else {}),
+                                  **({"delays": True} if delays else {})),
                           name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design

@@ -38,7 +38,7 @@ def encode_write(name, value):
     if isinstance(value, bool) or not isinstance(value, int) or not reg.low <= value <= reg.high:
         raise ClientError(f"{name} takes an integer from {reg.low} to {reg.high} ({reg.unit}), "
                           f"not {value!r}")
-    return encode_frame(reg.address, value)
+    return encode_frame(reg.address, reg.encode(value))
 
 
 def encode_read(name):
@@ -77,7 +77,7 @@ class HostClient:
             other = BY_ADDRESS.get(address)
             raise ClientError(f"asked for {name}, got an answer for "
                               f"{other.name if other else hex(address)}")
-        return value
+        return reg.decode(value)
 
     def write_verified(self, name, value):
         """Write, then read back; raise if the board did not take the value."""

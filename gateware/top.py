@@ -31,7 +31,9 @@ from .sources.raster import RasterSequencer
 from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
-from .sources.vector import DirectedVectorSequencer, VectorCommand, VectorSequencer
+from .sources.laser_delays import LaserDelays
+from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VectorCommand,
+                             VectorSequencer)
 from .sources.wobble import Wobble
 
 
@@ -114,6 +116,10 @@ class GalvoScanTop(wiring.Component):
     spiral_interpolation : bool
         Build the spiral's linear interpolation between points and its ``spiral_interp``
         register (about 280 cells on the UP5K; False leaves both out).
+    vector_delays : bool
+        Build vector mode's RTC delays (laser-on, laser-off, mark, polygon; README "Laser and
+        scanner delays"). Without them their registers are left out and ``vec_op`` takes
+        only 0 and 1. They need a clock of a whole number of MHz.
 
     Interface attributes
     --------------------
@@ -151,7 +157,7 @@ class GalvoScanTop(wiring.Component):
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
                  vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
-                 spiral_interpolation=True):
+                 spiral_interpolation=True, vector_delays=True):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -212,6 +218,16 @@ class GalvoScanTop(wiring.Component):
         if self.wobble:
             Wobble.check_frame_rate(bit_rate / FRAME_BITS)
         self.spiral_interpolation = bool(spiral_interpolation) and "spiral" in modes
+        self.vector_delays = bool(vector_delays) and "vector" in modes
+        #: µs an XY2 frame lasts (10 at XY2-100), and system clocks per µs.
+        self.frame_us = FRAME_BITS * 1e6 / bit_rate
+        if self.vector_delays:
+            clocks_per_us = clk_freq / 1e6
+            if self.frame_us != int(self.frame_us) or clocks_per_us != int(clocks_per_us):
+                raise ValueError(f"the vector delays count whole µs: they need a clock of a "
+                                 f"whole number of MHz and frames of whole µs, not "
+                                 f"{clk_freq:g} Hz and {self.frame_us:g} µs (build with "
+                                 f"vector_delays=False)")
         self.clk_freq = clk_freq
         self.bit_rate = bit_rate
         self.baud = baud
@@ -220,7 +236,7 @@ class GalvoScanTop(wiring.Component):
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
             modes=modes, laser=self.laser, wobble=self.wobble,
-            spiral_interpolation=self.spiral_interpolation,
+            spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
             resets=self.settings.register_resets())
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
@@ -310,8 +326,12 @@ class GalvoScanTop(wiring.Component):
             ]
         if "vector" in self.modes:
             sequencer = DirectedVectorSequencer if self.wobble else VectorSequencer
-            m.submodules.vector = sources[Mode.VECTOR] = vector = sequencer()
-            for name in ("pitch", "pulses_per_point", "jump_delay"):
+            m.submodules.vector = sources[Mode.VECTOR] = vector = sequencer(
+                frame_us=int(self.frame_us), delays=self.vector_delays)
+            names = ("pitch", "pulses_per_point", "jump_delay")
+            if self.vector_delays:
+                names += ("mark_delay", "polygon_delay", "polygon_scaled")
+            for name in names:
                 m.d.comb += getattr(vector, name).eq(getattr(regs, name))
             self._elaborate_vector_queue(m, regs, vector, status)
 
@@ -378,11 +398,14 @@ class GalvoScanTop(wiring.Component):
         """The queue between the ``vec_op`` register and the vector sequencer."""
         # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
         # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
-        m.submodules.queue = queue = SyncFIFOBuffered(width=VectorCommand.size,
+        layout = DelayedVectorCommand if self.vector_delays else VectorCommand
+        m.submodules.queue = queue = SyncFIFOBuffered(width=layout.size,
                                                       depth=self.vector_queue_depth)
-        command = Signal(VectorCommand)
+        command = Signal(layout)
+        if self.vector_delays:
+            m.d.comb += command.corner_frames.eq(regs.vec_op[1:8])
         m.d.comb += [
-            command.op.eq(regs.vec_op),
+            command.op.eq(regs.vec_op[0]),
             command.x.eq(regs.vec_x),
             command.y.eq(regs.vec_y),
             queue.w_stream.payload.eq(command),
@@ -426,7 +449,8 @@ class GalvoScanTop(wiring.Component):
             m.d.comb += sources[Mode.VECTOR].pulse_ahead.eq(laser.pulse_ahead)
         # Raster and vector: each frame's laser decision, from the moment that frame has been
         # sent: two frame strobes after it was made.
-        framed = [mode for mode in (Mode.RASTER, Mode.VECTOR) if mode in sources]
+        framed = [mode for mode in (Mode.RASTER, Mode.VECTOR) if mode in sources and
+                  not (mode == Mode.VECTOR and self.vector_delays)]
         if framed:
             decided = Signal()
             frame_marking = Signal()
@@ -437,6 +461,21 @@ class GalvoScanTop(wiring.Component):
                 ]
             with m.If(select.mode != Mode.SPIRAL):
                 m.d.comb += marking.eq(frame_marking)
+        if self.vector_delays:
+            # Vector mode's laser through its delays instead: the same two frames, moved by
+            # laser_on_delay and laser_off_delay.
+            vector = sources[Mode.VECTOR]
+            m.submodules.laser_delays = delays = LaserDelays(
+                clocks_per_us=int(self.clk_freq / 1e6), lead_us=2 * int(self.frame_us))
+            m.d.comb += [
+                delays.frame_strobe.eq(phy.frame_strobe),
+                delays.run.eq(vector.run),
+                delays.decision.eq(vector.laser),
+                delays.on_delay.eq(regs.laser_on_delay.as_signed()),
+                delays.off_delay.eq(regs.laser_off_delay),
+            ]
+            with m.If(select.mode == Mode.VECTOR):
+                m.d.comb += marking.eq(delays.marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),
             laser.power.eq(regs.laser_power),

@@ -148,6 +148,9 @@ class ICEBreakerScanner(Elaboratable):
     interpolation : bool
         Build the spiral's interpolator (``GalvoScanTop(spiral_interpolation=...)``); off by
         default: beside all three modes it does not fit the UP5K.
+    delays : bool
+        Build vector mode's RTC delays (``GalvoScanTop(vector_delays=...)``); off by default,
+        for the same reason.
     clock : float or None
         System clock in Hz: None runs on the 12 MHz crystal, anything else from the PLL
         (:func:`~galvoscan.platforms.pll.pll_settings` must reach it exactly).
@@ -155,7 +158,8 @@ class ICEBreakerScanner(Elaboratable):
 
     def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
                  bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False,
-                 interpolation=False):
+                 interpolation=False, delays=False):
+        self.delays = delays
         self.table = table
         self.wobble = wobble
         self.interpolation = interpolation
@@ -177,7 +181,7 @@ class ICEBreakerScanner(Elaboratable):
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, correction=self.correction,
             laser_alarms=len(ALARM_PMOD_PINS[1].split()), wobble=self.wobble,
-            spiral_interpolation=self.interpolation, **extra)
+            spiral_interpolation=self.interpolation, vector_delays=self.delays, **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.

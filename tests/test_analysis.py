@@ -326,3 +326,37 @@ def test_field_parser_takes_any_text(text):
         assert "field" in str(error)
     else:
         assert 0.5 <= width <= 2000 and 0.5 <= height <= 2000
+
+
+# --- the RTC delays on a vector mark (galvoscan/analysis/delays.py) -----------------------------
+
+def test_delays_take_the_burnt_dot_and_the_corner_within_20_percent():
+    """Through the JD1403 model at 1 m/s: without delays a burnt dot at the line's start (over
+    twice the mid-line dose); with the README's recommended delays (the defaults) the start,
+    the corner and the end within 20 % of it, and the line's ends within a spot of their set
+    points."""
+    from galvoscan.analysis.delays import NONE, DelaySettings, corner_job_dose
+    from galvoscan.jobs.profile import default_profile
+    without = corner_job_dose(NONE)
+    assert without["start"] > 2
+    galvo = default_profile().galvo
+    recommended = DelaySettings(galvo.laser_on_delay_us, galvo.laser_off_delay_us,
+                                galvo.mark_delay_us, galvo.polygon_delay_us)
+    with_delays = corner_job_dose(recommended)
+    for where in ("start", "corner", "end"):
+        assert with_delays[where] <= 1.2, where
+    assert abs(with_delays["start_shift_mm"]) < 0.05
+    assert abs(with_delays["end_shift_mm"]) < abs(without["end_shift_mm"])
+    # A long laser-off delay makes the end dot instead; a polygon delay over-doses the corner.
+    assert corner_job_dose(DelaySettings(100, 150, 200, 0))["end"] > 2
+    assert corner_job_dose(DelaySettings(100, 50, 100, 30))["corner"] > 1.2
+
+
+def test_analyze_delays_cli_prints_both_runs(tmp_path, capsys):
+    import json
+    from galvoscan.cli import main
+    assert main(["analyze", "--delays", "--json", "--out", str(tmp_path)]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [row["run"] for row in rows] == ["no delays", "with delays"]
+    assert rows[1]["start_peak"] <= 1.2 and rows[1]["corner_peak"] <= 1.2
+    assert (tmp_path / "delays.png").stat().st_size > 10_000

@@ -350,6 +350,8 @@ def test_sim_vector_writes_its_vcd(tmp_path, capsys):
     (["--interpolation", "--modes", "vector"], "the interpolator is the spiral's"),
     (["--interpolation", "--board", "icestick"], "no room for the spiral's interpolator"),
     (["--wobble"], "wobble stage does not fit the UP5K beside all three scan modes"),
+    (["--delays"], "delays do not fit the UP5K beside all three scan modes"),
+    (["--delays", "--modes", "spiral,raster"], "the delays are vector mode's"),
 ])
 def test_build_refuses_options_that_do_not_fit_before_building(argv, message, tmp_path):
     with pytest.raises(SystemExit, match=message):

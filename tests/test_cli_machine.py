@@ -92,7 +92,7 @@ def test_show_prints_user_units(here, capsys):
     assert captured.err == ""                  # the file is there: no note
     assert "galvoscan.toml" in out
     for piece in ("110 × 110 mm", "595.782 galvo units per mm", "20 W", "20 … 200 kHz",
-                  "0.05 mm", "500 µs", "10 mm jump", "50 frames", "10000 mm/s", "1000 mm/s",
+                  "0.05 mm", "500 µs", "10 mm jump", "jump_delay 500", "laser on / off delay", "100 / 50 µs", "10000 mm/s", "1000 mm/s",
                   "10 %", "laser_power 26", "50 kHz (laser_prr 500)", "identity table"):
         assert piece in out, piece
 
@@ -106,8 +106,9 @@ def test_show_json_parses(here, capsys):
     assert data["link"]["port"] == "/dev/ttyUSB1"
     assert data["field"]["size_mm"] == 110
     assert data["laser"]["prr_khz"] == [20, 200]
-    assert data["derived"]["jump_delay_frames_0mm"] == 30
-    assert data["derived"]["jump_delay_frames_10mm"] == 50         # 300 + 20 × 10 µs
+    assert data["derived"]["jump_delay_us_0mm"] == 300
+    assert data["derived"]["jump_delay_us_10mm"] == 500            # 300 + 20 × 10 µs
+    assert data["derived"]["delay_registers"]["laser_on_delay"] == 100
     assert data["derived"]["units_per_mm"] == pytest.approx(65536 / 110)
 
 
@@ -198,10 +199,28 @@ def test_profile_from_nothing_is_the_default_with_a_note(here, capsys):
 
 
 def test_profile_from_a_bad_file_is_a_cli_error(here):
-    (here / "m.toml").write_text("[galvo]\njump_delay_us = 5\n")
+    (here / "m.toml").write_text("[galvo]\njump_delay_us = 70000\n")
     with pytest.raises(CLIError) as error:
         profile_from(_parser().parse_args(["--machine", "m.toml"]))
     assert str(error.value.code).startswith("galvoscan: error: m.toml: [galvo] jump_delay_us")
+
+
+@pytest.mark.parametrize("text, key", [
+    ("laser_on_delay_us = -20", "laser_on_delay_us"),        # beyond the board's reach
+    ("laser_off_delay_us = 1024", "laser_off_delay_us"),
+    ("mark_delay_us = -1", "mark_delay_us"),
+    ("polygon_delay_us = 4096", "polygon_delay_us"),
+    ("polygon_delay_us = \"100\"", "polygon_delay_us"),
+    ("polygon_scaled = 1", "polygon_scaled"),
+    ("mark_delay_us = nan", "mark_delay_us"),
+])
+def test_bad_delays_in_a_profile_are_one_line_errors(here, text, key):
+    (here / "m.toml").write_text(f"[galvo]\n{text}\n")
+    with pytest.raises(CLIError) as error:
+        profile_from(_parser().parse_args(["--machine", "m.toml"]))
+    message = str(error.value.code)
+    assert message.startswith(f"galvoscan: error: m.toml: [galvo] {key}")
+    assert "\n" not in message and "Traceback" not in message
 
 
 def test_machine_needs_a_subcommand(capsys):

@@ -22,6 +22,7 @@ def test_signature():
         "pitch": In(16),
         "points": Out(stream.Signature(FieldPoint)),
         "busy": Out(1),
+        "last": Out(1),
     })
 
 

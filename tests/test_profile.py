@@ -24,7 +24,11 @@ RANGES = {
     ("link", "timeout_s"): (0.01, 600, False),
     ("laser", "max_power_w"): (0.1, 10_000, False),
     ("laser", "spot_mm"): (0.001, 10, False),
-    ("galvo", "jump_delay_us"): (10, 655_350, False),       # jump_delay 1 … 65535 frames
+    ("galvo", "jump_delay_us"): (0, 65_535, False),          # jump_delay 0 … 65535 µs
+    ("galvo", "laser_on_delay_us"): (-19, 1023, False),      # laser_on_delay, signed
+    ("galvo", "laser_off_delay_us"): (0, 1023, False),
+    ("galvo", "mark_delay_us"): (0, 4095, False),
+    ("galvo", "polygon_delay_us"): (0, 4095, False),
     ("galvo", "settle_us_per_mm"): (0, 10_000, False),
     ("galvo", "max_speed_mm_s"): (1, 100_000, False),
     ("defaults", "speed_mm_s"): (0.1, 100_000, False),
@@ -42,6 +46,7 @@ OTHER_KEYS = {
     ("link", "spi"): '"ftdi://ftdi:2232h/1"',
     ("laser", "prr_khz"): "[20, 200]",
     ("laser", "guide"): "false",
+    ("galvo", "polygon_scaled"): "false",
 }
 # Other keys a value at an edge needs, so that only the key under test can be refused.
 COMPANIONS = {
@@ -52,7 +57,9 @@ DEFAULTS = {
     "field": {"size_mm": 110.0, "correction": None},
     "link": {"port": None, "baud": 1_000_000, "spi": None, "timeout_s": 0.5},
     "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
-    "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0},
+    "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0,
+              "laser_on_delay_us": 100.0, "laser_off_delay_us": 50.0, "mark_delay_us": 100.0,
+              "polygon_delay_us": 0.0, "polygon_scaled": True},
     "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
     "wobble": {"across_um": 0.0, "along_um": 0.0, "freq_hz": 1000.0},
 }
@@ -124,7 +131,7 @@ def test_template_explains_every_key(section, key):
     assert len(comment) > 40, (key, comment)
     if (section, key) in RANGES:
         low, high, _ = RANGES[section, key]
-        numbers = {float(n.replace("_", "")) for n in re.findall(r"[\d_.]+\d|\d", comment)}
+        numbers = {float(n.replace("_", "")) for n in re.findall(r"-?[\d_.]+\d|-?\d", comment)}
         if (section, key) != ("defaults", "prr_khz"):      # "within [laser] prr_khz"
             assert {low, high} <= numbers, (key, comment)
 
@@ -477,34 +484,47 @@ def test_power_outside_refused():
             default_profile().power_register(percent)
 
 
-JUMP_FRAMES = [
-    ("", 0, 50),                                            # 500 µs
-    ("", 100, 50),
-    ("jump_delay_us = 505", 0, 51),                          # rounded up to a frame
-    ("jump_delay_us = 10", 0, 1),
-    ("jump_delay_us = 10\nsettle_us_per_mm = 0.5", 0.1, 2),   # 10.05 µs
-    ("settle_us_per_mm = 20", 10, 70),                       # 500 + 200 µs
-    ("settle_us_per_mm = 3", 1 / 3, 51),                     # 501 µs
-    ("jump_delay_us = 655350", 0, 65535),
-    ("jump_delay_us = 655350\nsettle_us_per_mm = 10000", 2000, 65535),   # clamped
+JUMP_US = [
+    ("", 0, 500),
+    ("", 100, 500),
+    ("jump_delay_us = 505.2", 0, 506),                       # rounded up to a µs
+    ("jump_delay_us = 10", 0, 10),
+    ("jump_delay_us = 10\nsettle_us_per_mm = 0.5", 0.1, 11),  # 10.05 µs
+    ("settle_us_per_mm = 20", 10, 700),                      # 500 + 200 µs
+    ("settle_us_per_mm = 3", 1 / 3, 501),                    # 501 µs
+    ("jump_delay_us = 65535", 0, 65535),
+    ("jump_delay_us = 65535\nsettle_us_per_mm = 10000", 2000, 65535),   # clamped
 ]
 
 
-def test_jump_delay_frames():
-    for galvo, jump_mm, frames in JUMP_FRAMES:
+def test_jump_delay_register():
+    for galvo, jump_mm, us in JUMP_US:
         profile = parse_profile(f"[galvo]\n{galvo}\n")
-        assert profile.jump_delay_frames(jump_mm) == frames, (galvo, jump_mm)
+        assert profile.jump_delay_register(jump_mm) == us, (galvo, jump_mm)
 
 
 def test_jump_length_refused():
     for jump_mm in (-1, math.nan, math.inf, "1"):
         with pytest.raises(ValueError):
-            default_profile().jump_delay_frames(jump_mm)
+            default_profile().jump_delay_register(jump_mm)
+
+
+def test_delay_registers_from_the_profile():
+    """The delays go to their registers in µs, to the nearest; a negative laser-on delay as
+    the signed value the client encodes."""
+    profile = parse_profile("[galvo]\nlaser_on_delay_us = -12.6\nlaser_off_delay_us = 80.5\n"
+                            "mark_delay_us = 0\npolygon_delay_us = 4095\npolygon_scaled = false\n")
+    assert profile.delay_registers() == {"laser_on_delay": -13, "laser_off_delay": 81,
+                                         "mark_delay": 0, "polygon_delay": 4095,
+                                         "polygon_scaled": 0}
+    assert default_profile().delay_registers() == {
+        "laser_on_delay": 100, "laser_off_delay": 50, "mark_delay": 100, "polygon_delay": 0,
+        "polygon_scaled": 1}
 
 
 def test_as_dict_is_json():
     data = json.loads(json.dumps(default_profile().as_dict()))
-    assert data["derived"]["jump_delay_frames_10mm"] == 50
+    assert data["derived"]["jump_delay_us_10mm"] == 500
     assert data["derived"]["default_prr_register"] == 500
     assert data["derived"]["default_power_register"] == 26
     assert data["source"] is None

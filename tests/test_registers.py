@@ -32,14 +32,19 @@ DEFAULT_BUILD = [
     ("spiral_interp", 0x0d, "rw", 1, 0, 1, 1),
     ("vec_x", 0x20, "rw", 32768, 0, 65535, 16),
     ("vec_y", 0x21, "rw", 32768, 0, 65535, 16),
-    ("vec_op", 0x22, "queue", 0, 0, 1, 1),
+    ("vec_op", 0x22, "queue", 0, 0, 255, 8),
     ("fifo_free", 0x23, "ro", 0, 0, 0, 16),
     ("pitch", 0x24, "rw", 60, 1, 65535, 16),
     ("pulses_per_point", 0x25, "rw", 1, 1, 255, 8),
-    ("jump_delay", 0x26, "rw", 50, 1, 65535, 16),
+    ("jump_delay", 0x26, "rw", 500, 0, 65535, 16),
     ("vec_rejected", 0x27, "ro", 0, 0, 0, 16),
     ("vec_underruns", 0x28, "ro", 0, 0, 0, 16),
     ("vec_stalls", 0x29, "ro", 0, 0, 0, 16),
+    ("laser_on_delay", 0x2a, "rw", 100, -19, 1023, 11),      # two's complement
+    ("laser_off_delay", 0x2b, "rw", 50, 0, 1023, 10),
+    ("mark_delay", 0x2c, "rw", 100, 0, 4095, 12),
+    ("polygon_delay", 0x2d, "rw", 0, 0, 4095, 12),
+    ("polygon_scaled", 0x2e, "rw", 0, 0, 1, 1),
     ("ras_x", 0x30, "rw", 28768, 0, 65535, 16),
     ("ras_y", 0x31, "rw", 28768, 0, 65535, 16),
     ("ras_w", 0x32, "rw", 8000, 0, 65535, 16),
@@ -70,7 +75,8 @@ REFUSABLE = {"cor_write"}
 SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp"}
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
 VECTOR_ONLY = {"vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
-               "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"}
+               "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls", "laser_on_delay",
+               "laser_off_delay", "mark_delay", "polygon_delay", "polygon_scaled"}
 LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses", "guide"}
 CORRECTION_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("cor_")}
 

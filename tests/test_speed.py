@@ -74,9 +74,9 @@ SEGMENTS = [("jump", 32768 + 300, 32768), ("mark", 32768 + 300, 32768 + 400),
 
 def test_estimate_by_hand():
     # Marks 400, 300, 5 units at pitch 10: 40 + 30 + 1 points, 3 pulses at 30 kHz = 100 µs
-    # each; jumps 2 × (1 + 4) frames of 10 µs.
+    # each; jumps 2 × (1 + 4) frames of 10 µs (a 35 µs delay is rounded up to 4 frames).
     seconds = estimate_seconds(SEGMENTS, pitch_units=10, pulses_per_point=3, prr_hz=30e3,
-                               jump_delay_frames=4)
+                               jump_delay_us=35)
     assert seconds == pytest.approx(71 * 100e-6 + 10 * 10e-6)
 
 

@@ -81,6 +81,34 @@ def test_every_segment_goes_in_order_and_the_queue_never_overflows():
     assert board.log[-3:] == [("arm", 0), ("run", 0), ("guide", 0)]
 
 
+def test_scaled_polygon_delay_rides_in_vec_op():
+    """polygon_scaled: each mark after a mark carries its corner's hold, polygon_delay ×
+    (1 - cos φ) in 10 µs frames rounded up, in vec_op bits 7:1; jumps and first marks none."""
+    board = FakeBoard()
+    square = [("jump", 30000, 30000), ("mark", 31000, 30000), ("mark", 32000, 30000),
+              ("mark", 32000, 31000), ("mark", 32000, 30000), ("mark", 33000, 31000),
+              ("mark", 33000, 31000), ("jump", 30000, 30000)]
+    JobStreamer(board, poll_s=0).run_vector(square, {"polygon_delay": 100, "polygon_scaled": 1},
+                                            timeout_s=5)
+    ops = [value for name, value in board.log if name == "vec_op"]
+    # straight on: 0; a right angle: 10 frames; a reversal: 20; 135°: 1.707 → 18; zero
+    # length: 0.
+    assert ops == [0, 1, 1 | 0 << 1, 1 | 10 << 1, 1 | 20 << 1, 1 | 18 << 1, 1, 0]
+    board = FakeBoard()
+    JobStreamer(board, poll_s=0).run_vector(square, {"polygon_delay": 100, "polygon_scaled": 0},
+                                            timeout_s=5)
+    assert [v for n, v in board.log if n == "vec_op"] == [0, 1, 1, 1, 1, 1, 1, 0]
+
+
+def test_corner_frames_refuses_a_bad_delay_and_caps_at_the_field():
+    from galvoscan.jobs.corners import corner_frames
+    for bad in (-1, float("nan"), "100", True):
+        with pytest.raises(ValueError):
+            corner_frames([("mark", 1, 1)], bad)
+    reversal = [("mark", 40000, 32768), ("mark", 32768, 32768)]
+    assert corner_frames(reversal, 4095) == [0, 127]          # 819 frames, capped
+
+
 def test_the_queue_depth_is_the_boards():
     """A board whose queue is shorter than the bitstream's 512 (a simulated one): the streamer
     reads its depth while it is empty, and never writes into a full queue."""

@@ -65,12 +65,18 @@ def runs_on_the_wires(board):
     return merge(pulses_per_frame(board))
 
 
+#: The RTC delays switched off: vector mode as Wan et al.'s (tests/test_vector_delays.py has them).
+NO_DELAYS = {"laser_on_delay": 0, "laser_off_delay": 0, "mark_delay": 0, "polygon_delay": 0}
+
+
 def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e6):
     board, client = start_board(clk_freq)
     client.write("laser_prr", prr_100hz)
     client.write("pulses_per_point", pulses)
     client.write("pitch", pitch)
-    client.write("jump_delay", 5)
+    client.write("jump_delay", 50)
+    for name, value in NO_DELAYS.items():
+        client.write(name, value)
     client.write("laser_power", 200)
     queue(client, job)
     client.write("arm", 1)
@@ -164,7 +170,7 @@ def test_full_queue_refuses_and_counts():
     assert client.read("vec_rejected") == 1
     assert client.read("errors") == 1
     # Nothing queued was lost: every jump comes out once the mode runs.
-    client.write("jump_delay", 1)
+    client.write("jump_delay", 10)
     client.write("run", 1)
     board.run_until(lambda: client.read("fifo_free") == SHORT_QUEUE, timeout=20e-3)
 
@@ -172,7 +178,9 @@ def test_full_queue_refuses_and_counts():
 def test_underrun_holds_with_the_laser_off_and_resumes_without_repeating():
     board, client = start_board()
     client.write("laser_prr", 500)
-    client.write("jump_delay", 3)
+    client.write("jump_delay", 30)
+    for name, value in NO_DELAYS.items():
+        client.write(name, value)
     client.write("arm", 1)
     board.run_for(0.3e-3)
     client.write("run", 1)

@@ -7,8 +7,38 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_analyze(args):
+    if args.delays:
+        return _cmd_delays(args)
     from ..analysis.report import run_analyze
     return run_analyze(args)
+
+
+def _cmd_delays(args):
+    """The RTC delays on an L-shaped mark: dose at its ends and corner, without and with."""
+    import json
+    from ..analysis.delays import delay_report, delay_study, plot_delays
+    from ..analysis.galvo import GalvoModel
+    galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
+    without, chosen = delay_study(galvo=galvo, field_mm=args.lens_field,
+                                  speed_mm_s=args.mark_speed, prr_hz=args.prr,
+                                  spot_mm=args.spot)
+    rows = delay_report(without, chosen)
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        for row in rows:
+            print(f"{row['run']:12} on {row['laser_on_delay_us']:4g} off "
+                  f"{row['laser_off_delay_us']:4g} mark {row['mark_delay_us']:4g} polygon "
+                  f"{row['polygon_delay_us']:4g} µs: peak dose / mid-line at the start "
+                  f"{row['start_peak']:.2f}, corner {row['corner_peak']:.2f}, end "
+                  f"{row['end_peak']:.2f}; line starts {row['start_shift_um']:+.0f} µm, ends "
+                  f"{row['end_shift_um']:+.0f} µm from its set points")
+    if not args.no_plots:
+        from pathlib import Path
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_delays(out / "delays.png", without, chosen)
+    return 0
 
 
 def add_parsers(commands):
@@ -61,6 +91,12 @@ def add_parsers(commands):
     what.add_argument("--wobble-speed", type=number_in("wobble speed", 1, 10_000),
                       default=50.0, metavar="MM_S",
                       help="line speed for --wobble, mm/s (default: 50)")
+    what.add_argument("--delays", action="store_true",
+                      help="instead: the RTC laser and scanner delays on an L-shaped vector "
+                           "mark (dose at its ends and corner without and with the delays "
+                           "that keep them within 20 %% of mid-line; figure delays.png)")
+    what.add_argument("--mark-speed", type=number_in("mark speed", 1, 10_000), default=1000.0,
+                      metavar="MM_S", help="marking speed for --delays, mm/s (default: 1000)")
     what.add_argument("--out", type=output_dir, default="build/analysis", metavar="DIR",
                       help="where figures go (default: %(default)s)")
     what.add_argument("--no-plots", action="store_true", help="write no figures")

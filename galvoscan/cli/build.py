@@ -59,7 +59,8 @@ def _cmd_build(args):
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
                                  clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
-                                 wobble=args.wobble, interpolation=args.interpolation)
+                                 wobble=args.wobble, interpolation=args.interpolation,
+                                 delays=args.delays)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -125,6 +126,10 @@ def add_parsers(commands):
                        help="add the spiral's interpolator (the spiral_interp register: the "
                             "mirror moves every frame instead of holding each point); with "
                             "every mode it does not fit the UP5K: drop one with --modes")
+    build.add_argument("--delays", action="store_true",
+                       help="add vector mode's RTC laser and scanner delays (laser on/off, "
+                            "mark, polygon); with every mode they do not fit the UP5K: drop "
+                            "one with --modes")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
                        help="scan modes to build: spiral, raster, vector (default: the "
                             "board's, see README); fewer take less of the FPGA")

@@ -19,7 +19,7 @@ def _frame_registers(profile, prr_register):
     """Vector-mode settings to walk the area's outline at (with the guide laser)."""
     pitch = max(1, round(profile.laser.spot_mm / 2 * profile.units_per_mm))
     return {"pitch": pitch, "pulses_per_point": 1, "laser_prr": prr_register,
-            "jump_delay": profile.jump_delay_frames()}
+            "jump_delay": profile.jump_delay_register(), **profile.delay_registers()}
 
 
 def _cmd_clean(args):

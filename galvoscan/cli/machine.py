@@ -69,7 +69,7 @@ def _describe(profile):
         where = f"not set (give --port or --spi; serial at {link.baud} baud)"
     settle = f" + {_n(galvo.settle_us_per_mm)} µs per mm of jump" \
         if galvo.settle_us_per_mm else ""
-    frames = profile.jump_delay_frames(10)
+    jump_10mm = profile.jump_delay_register(10)
     power_reg = profile.power_register(d.power_percent)
     rows = [
         ("profile", source),
@@ -88,9 +88,13 @@ def _describe(profile):
         ("guide laser", "yes" if laser.guide else "no"),
         ("[galvo]", None),
         ("jump delay", f"{_n(galvo.jump_delay_us)} µs{settle} "
-                       f"({profile.jump_delay_frames(0)} frames of {FRAME_US} µs)"),
-        ("  for a 10 mm jump", f"{frames} frames = {frames * FRAME_US} µs"),
+                       f"(jump_delay {profile.jump_delay_register(0)}, in {FRAME_US} µs frames)"),
+        ("  for a 10 mm jump", f"{jump_10mm} µs"),
         ("max speed", f"{_n(galvo.max_speed_mm_s)} mm/s"),
+        ("laser on / off delay", f"{_n(galvo.laser_on_delay_us)} / "
+                                 f"{_n(galvo.laser_off_delay_us)} µs"),
+        ("mark / polygon delay", f"{_n(galvo.mark_delay_us)} / {_n(galvo.polygon_delay_us)} µs"
+                                 f"{' × (1 - cos φ)' if galvo.polygon_scaled else ''}"),
         ("[defaults]", None),
         ("speed", f"{_n(d.speed_mm_s)} mm/s"),
         ("power", f"{_n(d.power_percent)} % = {_n(profile.power_w(d.power_percent), 3)} W "

@@ -95,7 +95,10 @@ def _describe(job, profile, settings_line):
         f"{regs['laser_prr'] / 10:g} kHz / {pitch.pulses_per_point} pulse"
         f"{'s' if pitch.pulses_per_point > 1 else ''} per point = {pitch.speed_mm_s:.1f} mm/s "
         f"({pitch.error:+.2%})",
-        f"jump delay {regs['jump_delay'] * 10} µs; estimated time {job.estimate_s:.3f} s",
+        f"jump delay {regs['jump_delay']} µs; laser on/off delay {regs['laser_on_delay']} / "
+        f"{regs['laser_off_delay']} µs; mark/polygon delay {regs['mark_delay']} / "
+        f"{regs['polygon_delay']} µs{' × (1 - cos φ)' if regs['polygon_scaled'] else ''}; "
+        f"estimated time {job.estimate_s:.3f} s",
     ]
     if "wob_shape" in regs:
         lines.append(f"wobble: ±{regs['wob_across'] * profile.mm_per_unit * 1000:.0f} µm across "

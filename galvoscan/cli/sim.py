@@ -254,7 +254,7 @@ def add_parsers(commands):
                              f"al.'s table)")
     for name, what in (("pulses_per_point", "pulses on every marked point"),
                        ("pitch", "galvo units between marked points"),
-                       ("jump_delay", "laser-off wait after a jump, 10 µs frames")):
+                       ("jump_delay", "laser-off wait after a jump, µs (whole 10 µs frames)")):
         reg = BY_NAME[name]
         vector.add_argument(f"--{name.replace('_', '-')}", type=register_int(name),
                             metavar="N", help=f"{what}, {reg.low} … {reg.high} (default: the "

@@ -9,7 +9,8 @@ comment on every key (:func:`profile_text`)::
     [field]     size_mm, correction
     [link]      port, baud, spi, timeout_s
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
-    [galvo]     jump_delay_us, settle_us_per_mm, max_speed_mm_s
+    [galvo]     jump_delay_us, settle_us_per_mm, max_speed_mm_s, laser_on_delay_us,
+                laser_off_delay_us, mark_delay_us, polygon_delay_us, polygon_scaled
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
 
@@ -19,7 +20,8 @@ silently into a job. Every problem with a file is a :class:`ProfileError`, one l
 file and the key; nothing else escapes :func:`load_profile`.
 
 Ranges that the board fixes are taken from the register map (``laser_prr``, ``laser_power``,
-``jump_delay``), so a profile can never ask for what a register cannot hold.
+``jump_delay`` and the other delays), so a profile can never ask for what a register cannot
+hold.
 
 This module holds the profile itself: :class:`ProfileError`, the section dataclasses
 (:class:`FieldSection`, :class:`LinkSection`, :class:`LaserSection`, :class:`GalvoSection`,
@@ -44,7 +46,7 @@ except ModuleNotFoundError:                      # Python < 3.11
 
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.points import FIELD_MAX
-from .profile_keys import FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ, \
+from .profile_keys import DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ, \
     SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown, \
     _unknown_key, _unknown_section
 from .profile_template import profile_text
@@ -98,12 +100,27 @@ class LaserSection:
 
 @dataclass(frozen=True)
 class GalvoSection:
+    """The head's delays as SCANLAB's RTC defines them (README "Laser and scanner delays"): the
+    defaults are what ``galvoscan analyze --delays`` finds for Wan et al.'s JD1403 galvo (a
+    10 mm head lagging its set point by some 80 µs) at 1 m/s: a line's ends and corners within
+    20 % of its mid-line dose."""
     #: Laser-off wait after every jump, µs (rounded up to whole 10 µs frames).
     jump_delay_us: float = 500.0
     #: Extra wait per mm of jump, µs/mm (0: the same delay for every jump).
     settle_us_per_mm: float = 0.0
     #: Fastest marking speed a job may ask for, mm/s.
     max_speed_mm_s: float = 10_000.0
+    #: The laser switches on this long after a mark's first point (negative: before), µs.
+    laser_on_delay_us: float = 100.0
+    #: The laser stays on this long after a mark's last point, µs.
+    laser_off_delay_us: float = 50.0
+    #: The mirrors hold a mark's end this long before a jump, µs.
+    mark_delay_us: float = 100.0
+    #: The mirrors hold a corner between two marks this long, laser on, µs (0: the corner is
+    #: rounded by the mirror's lag, but not over-dosed).
+    polygon_delay_us: float = 0.0
+    #: Scale each corner's polygon delay by (1 - cos φ) (RTC's variable polygon delay).
+    polygon_scaled: bool = True
 
 
 @dataclass(frozen=True)
@@ -154,17 +171,24 @@ class MachineProfile:
     def mm_per_unit(self):
         return self.field.size_mm / FULL_RANGE
 
-    def jump_delay_frames(self, jump_mm=0.0):
-        """``jump_delay`` for a jump of ``jump_mm``: ``jump_delay_us + settle_us_per_mm ×
-        jump_mm`` rounded *up* to whole 10 µs frames, at least one, and at most what the register
-        holds (655 350 µs)."""
+    def jump_delay_register(self, jump_mm=0.0):
+        """``jump_delay`` (µs) for a jump of ``jump_mm``: ``jump_delay_us + settle_us_per_mm ×
+        jump_mm`` rounded *up* to a whole µs, at most what the register holds (65 535 µs); the
+        board rounds it up to whole 10 µs frames."""
         if isinstance(jump_mm, bool) or not isinstance(jump_mm, (int, float)) or \
                 not math.isfinite(jump_mm) or jump_mm < 0:
             raise ValueError(f"a jump length must be a number of mm from 0 up, not {jump_mm!r}")
         us = self.galvo.jump_delay_us + self.galvo.settle_us_per_mm * jump_mm
-        # 1e-9: 500 µs is 50 frames, not 51 because of a rounding error in the sum.
-        frames = math.ceil(us / FRAME_US - 1e-9)
-        return max(_JUMP.low, min(_JUMP.high, frames))
+        # 1e-9: 500 µs is 500, not 501 because of a rounding error in the sum.
+        return max(_JUMP.low, min(_JUMP.high, math.ceil(us - 1e-9)))
+
+    def delay_registers(self):
+        """The laser, mark and polygon delay registers (µs to the nearest, half up) and
+        ``polygon_scaled``, as ``galvoscan mark`` writes them before a job."""
+        registers = {reg: math.floor(getattr(self.galvo, key) + 0.5)
+                     for key, reg in DELAY_KEYS.items()}
+        registers["polygon_scaled"] = int(self.galvo.polygon_scaled)
+        return registers
 
     def power_register(self, percent):
         """``laser_power`` for ``percent`` of full power (0 … 100 → 0 … 255, to the nearest
@@ -219,7 +243,9 @@ class MachineProfile:
                       "guide": self.laser.guide},
             "galvo": {"jump_delay_us": self.galvo.jump_delay_us,
                       "settle_us_per_mm": self.galvo.settle_us_per_mm,
-                      "max_speed_mm_s": self.galvo.max_speed_mm_s},
+                      "max_speed_mm_s": self.galvo.max_speed_mm_s,
+                      **{key: getattr(self.galvo, key) for key in DELAY_KEYS},
+                      "polygon_scaled": self.galvo.polygon_scaled},
             "defaults": {"speed_mm_s": self.defaults.speed_mm_s,
                          "power_percent": self.defaults.power_percent,
                          "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},
@@ -228,8 +254,9 @@ class MachineProfile:
             "derived": {
                 "units_per_mm": self.units_per_mm,
                 "mm_per_unit": self.mm_per_unit,
-                "jump_delay_frames_0mm": self.jump_delay_frames(0),
-                "jump_delay_frames_10mm": self.jump_delay_frames(10),
+                "jump_delay_us_0mm": self.jump_delay_register(0),
+                "jump_delay_us_10mm": self.jump_delay_register(10),
+                "delay_registers": self.delay_registers(),
                 "default_power_register": self.power_register(self.defaults.power_percent),
                 "default_power_w": self.power_w(self.defaults.power_percent),
                 "default_prr_register": self.prr_register(self.defaults.prr_khz),

@@ -2,10 +2,10 @@
 
 This module holds what :mod:`galvoscan.jobs.profile` reads a file with, below the profile itself:
 
-* the ranges that the board's registers fix (``laser_prr``, ``laser_power``, ``jump_delay``),
-  taken from the register map so that a profile can never ask for what a register cannot hold:
-  :data:`FRAME_US`, :data:`PRR_RANGE_KHZ`, :data:`JUMP_DELAY_RANGE_US`,
-  :data:`POWER_REGISTER_MAX`;
+* the ranges that the board's registers fix (``laser_prr``, ``laser_power``, ``jump_delay`` and
+  the other delays), taken from the register map so that a profile can never ask for what a
+  register cannot hold: :data:`FRAME_US`, :data:`PRR_RANGE_KHZ`, :data:`JUMP_DELAY_RANGE_US`,
+  :data:`DELAY_KEYS`, :data:`POWER_REGISTER_MAX`;
 * :class:`ProfileError`, the one error a profile that cannot be used raises;
 * the key table: :data:`SECTIONS`, every section and its keys (:class:`_Key`: kind, range,
   unit), in the template's order;
@@ -33,14 +33,18 @@ _JUMP = BY_NAME["jump_delay"]
 #: Steps of ``laser_prr`` per kHz (its unit is 100 Hz).
 _PRR_STEPS_PER_KHZ = 10
 assert _PRR.unit == "100 Hz", "laser_prr's unit changed: update _PRR_STEPS_PER_KHZ"
-#: One step of ``jump_delay``: an XY2-100 frame, 10 µs.
+#: An XY2-100 frame, 10 µs: the scanner delays' resolution.
 FRAME_US = 10
-assert _JUMP.unit == "frames (10 µs)", "jump_delay's unit changed: update FRAME_US"
+assert _JUMP.unit == "µs", "jump_delay's unit changed: update the profile"
+#: ``[galvo]`` keys that go to a delay register as they are, in µs: key → register.
+DELAY_KEYS = {"laser_on_delay_us": "laser_on_delay", "laser_off_delay_us": "laser_off_delay",
+              "mark_delay_us": "mark_delay", "polygon_delay_us": "polygon_delay"}
+assert all(BY_NAME[r].unit.startswith("µs") for r in DELAY_KEYS.values())
 
 #: The pulse repetition rates the board can make, in kHz (``laser_prr``'s range).
 PRR_RANGE_KHZ = (_PRR.low / _PRR_STEPS_PER_KHZ, _PRR.high / _PRR_STEPS_PER_KHZ)
 #: The jump delays the board can wait, in µs (``jump_delay``'s range).
-JUMP_DELAY_RANGE_US = (_JUMP.low * FRAME_US, _JUMP.high * FRAME_US)
+JUMP_DELAY_RANGE_US = (_JUMP.low, _JUMP.high)
 #: ``laser_power`` at 100 %.
 POWER_REGISTER_MAX = _POWER.high
 
@@ -74,7 +78,10 @@ SECTIONS = {
               _Key("guide", "bool")),
     "galvo": (_Key("jump_delay_us", "number", *JUMP_DELAY_RANGE_US, "µs"),
               _Key("settle_us_per_mm", "number", 0, 10_000, "µs/mm"),
-              _Key("max_speed_mm_s", "number", 1, 100_000, "mm/s")),
+              _Key("max_speed_mm_s", "number", 1, 100_000, "mm/s"),
+              *(_Key(key, "number", BY_NAME[reg].low, BY_NAME[reg].high, "µs")
+                for key, reg in DELAY_KEYS.items()),
+              _Key("polygon_scaled", "bool")),
     "defaults": (_Key("speed_mm_s", "number", 0.1, 100_000, "mm/s"),
                  _Key("power_percent", "number", 0, 100, "%"),
                  _Key("prr_khz", "number", *PRR_RANGE_KHZ, "kHz"),

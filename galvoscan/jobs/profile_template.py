@@ -92,6 +92,26 @@ settle_us_per_mm = {n(d.galvo.settle_us_per_mm)}
 # Fastest marking or cleaning speed a job may ask for, in mm/s: faster is refused. Take
 # it from the scan head's data sheet. {s("galvo", "max_speed_mm_s")} mm/s.
 max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}
+# The laser and scanner delays of SCANLAB's RTC (EzCad's start, end and corner TC): the
+# mirrors lag the set point by their tracking error (about 100-200 µs on a 10 mm head), so
+# without them a line starts and ends with a burnt dot and corners over-dose. Tune them with
+# a test mark (README "Laser and scanner delays"). The laser delays are placed to the
+# board's clock; mark and polygon delays are rounded up to {FRAME_US} µs frames.
+# Laser on this long after a mark's first point; negative: that much before.
+# {s("galvo", "laser_on_delay_us")} µs.
+laser_on_delay_us = {n(d.galvo.laser_on_delay_us)}
+# Laser stays on this long after a mark's last point. {s("galvo", "laser_off_delay_us")} µs.
+laser_off_delay_us = {n(d.galvo.laser_off_delay_us)}
+# Mirrors hold a mark's end this long, laser off, before the next jump; keep it above
+# laser_off_delay_us (RTC's rule). {s("galvo", "mark_delay_us")} µs.
+mark_delay_us = {n(d.galvo.mark_delay_us)}
+# Mirrors hold each corner between two marks this long, laser on.
+# {s("galvo", "polygon_delay_us")} µs.
+polygon_delay_us = {n(d.galvo.polygon_delay_us)}
+# true: scale each corner's polygon delay by (1 - cos φ), φ the turn at the corner (RTC's
+# variable polygon delay: none straight on, the full delay at a right angle, twice it at a
+# reversal, at most 1270 µs); false: the full delay at every corner.
+polygon_scaled = {"true" if d.galvo.polygon_scaled else "false"}
 
 [defaults]
 # Job settings used when the command line does not give them.

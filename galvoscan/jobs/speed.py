@@ -91,14 +91,15 @@ def _walk(segments):
     return out
 
 
-def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_delay_frames,
+def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_delay_us,
                      frame_s=10e-6):
     """An estimate of the time the board takes for the segments.
 
     ``segments`` are ``(op, x, y)`` in galvo units, op ``"jump"`` or ``"mark"``, from the field
     centre. A mark of ``L`` units is ``ceil(L / pitch_units)`` points, each held
-    ``pulses_per_point / prr_hz`` s; a jump is ``1 + jump_delay_frames`` frames. Laser on/off
-    delays, the host link and anything the board adds are not counted.
+    ``pulses_per_point / prr_hz`` s; a jump is one frame and ``jump_delay_us`` rounded up to
+    whole frames (at least one). Mark and polygon delays, the host link and anything the board
+    adds are not counted.
     """
     dwell_s = pulses_per_point / prr_hz
     total = 0.0
@@ -106,7 +107,7 @@ def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_de
         if op == "mark":
             total += math.ceil(length / pitch_units - 1e-12) * dwell_s
         else:
-            total += (1 + jump_delay_frames) * frame_s
+            total += (1 + max(1, math.ceil(jump_delay_us * 1e-6 / frame_s - 1e-9))) * frame_s
     return total
 
 

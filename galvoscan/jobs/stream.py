@@ -20,6 +20,7 @@ import time
 from dataclasses import dataclass, field
 
 from ..gateware.host.regmap import BY_NAME, Mode, Status, VectorOp
+from .corners import corner_frames
 
 
 __all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
@@ -198,14 +199,17 @@ class JobStreamer:
                 raise JobAborted(f"the board was still marking after {timeout_s:g} s")
             time.sleep(self.poll_s)
 
-    def stream(self, segments, *, start, timeout_s):
+    def stream(self, segments, *, start, timeout_s, corners=None):
         """Feed ``segments`` (``(op, x, y)``, galvo units) into the queue as it frees up.
 
         ``start()`` is called once, when the first batch is in (or the job is all in): it
-        arms and starts the scan. Returns the number of segments written."""
+        arms and starts the scan. ``corners``: each segment's corner hold in frames, sent in
+        ``vec_op`` bits 7:1 (:func:`~.corners.corner_frames`; for ``polygon_scaled``).
+        Returns the number of segments written."""
         segments = list(segments)
         for segment in segments:
             _check_segment(*segment)
+        corners = [0] * len(segments) if corners is None else list(corners)
         # Every place is free (checked by check_ready), else as many as the board says.
         free = self.queue_depth if self.queue_depth is not None else \
             self.board.read("fifo_free")
@@ -223,10 +227,11 @@ class JobStreamer:
                     continue
                 deadline = time.monotonic() + timeout_s
             count = min(free, self.batch, len(segments) - sent)
-            for op, x, y in segments[sent:sent + count]:
+            for (op, x, y), hold in zip(segments[sent:sent + count],
+                                        corners[sent:sent + count]):
                 self.board.write("vec_x", x)
                 self.board.write("vec_y", y)
-                self.board.write("vec_op", VectorOp[op.upper()].value)
+                self.board.write("vec_op", VectorOp[op.upper()].value | hold << 1)
             sent += count
             free -= count
             # A read: the board has taken all of the batch before it answers.
@@ -282,7 +287,10 @@ class JobStreamer:
 
         def body():
             self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
-            sent = self.stream(segments, timeout_s=timeout_s, start=lambda: self._start(
+            corners = corner_frames(segments, registers["polygon_delay"]) \
+                if registers.get("polygon_scaled") else None
+            sent = self.stream(segments, timeout_s=timeout_s, corners=corners,
+                               start=lambda: self._start(
                 armed=armed, ready_timeout_s=ready_timeout_s))
             self.wait_idle(timeout_s)
             if registers.get("wob_shape"):

@@ -134,19 +134,20 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
                                   math.hypot(x - here[0], y - here[1]) / units_per_mm)
         here = (x, y)
     # One jump delay for the whole job (the board has one register): the longest jump's.
-    jump_delay = profile.jump_delay_frames(longest_jump_mm)
+    jump_delay = profile.jump_delay_register(longest_jump_mm)
     registers = {
         "pitch": pitch.pitch_units,
         "pulses_per_point": pitch.pulses_per_point,
         "jump_delay": jump_delay,
         "laser_prr": prr_register,
         "laser_power": profile.power_register(settings.power_percent),
+        **profile.delay_registers(),
     }
     if table is not None:
         registers["cor_enable"] = 1
     estimate = estimate_seconds(segments, pitch_units=pitch.pitch_units,
                                 pulses_per_point=pitch.pulses_per_point, prr_hz=prr_hz,
-                                jump_delay_frames=jump_delay)
+                                jump_delay_us=jump_delay)
     mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm)
     notes = list(notes)
     if prr_hz / pitch.pulses_per_point > _STALL_FREE_POINTS_HZ:

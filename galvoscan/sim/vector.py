@@ -52,7 +52,7 @@ class JobResult:
         return [p for p in self.points if p[2] > 0]
 
 
-def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=50,
+def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=500,
                clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity", vcd=None):
     """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`.
 

@@ -101,13 +101,14 @@ class RegisterFile(wiring.Component):
         members = {"bus": In(RegisterBus())}
         for reg in regmap:
             if reg.access == "rw":
-                members[reg.name] = Out(reg.width, init=reg.reset)
+                # (A signed register holds its low bits, two's complement.)
+                members[reg.name] = Out(reg.width, init=reg.encode(reg.reset) % 2 ** reg.width)
             elif reg.access == "strobe":
                 members[reg.name] = Out(reg.width)
                 if reg.refusable:
                     members[f"{reg.name}_ready"] = In(1)
             elif reg.access == "queue":
-                members[reg.name] = Out(reg.width, init=reg.reset)
+                members[reg.name] = Out(reg.width, init=reg.encode(reg.reset) % 2 ** reg.width)
                 members[f"{reg.name}_push"] = Out(1)
                 members[f"{reg.name}_ready"] = In(1)
                 members[f"{reg.name}_refused"] = Out(1)
@@ -138,7 +139,8 @@ class RegisterFile(wiring.Component):
                     if reg.access == "strobe":
                         m.d.sync += in_range.eq(bus.write_data <= reg.high)
                     elif reg.access in ("rw", "queue"):
-                        ok = (bus.write_data >= reg.low) & (bus.write_data <= reg.high)
+                        data = bus.write_data.as_signed() if reg.signed else bus.write_data
+                        ok = (data >= reg.low) & (data <= reg.high)
                         if reg.name in self.regmap.choices:
                             ok &= Cat(bus.write_data == v
                                       for v in self.regmap.choices[reg.name]).any()
@@ -212,7 +214,7 @@ class RegisterFile(wiring.Component):
             m.submodules.copy = copy = Memory(shape=16, depth=depth, init=[0] * depth)
             resets = [0] * depth
             for reg in held:
-                resets[reg.address] = reg.reset
+                resets[reg.address] = reg.encode(reg.reset)
             m.submodules.resets = reset_values = Memory(shape=16, depth=depth, init=resets)
             copy_write = copy.write_port()
             copy_read = copy.read_port()
@@ -231,7 +233,8 @@ class RegisterFile(wiring.Component):
                         m.d.sync += [from_ram.eq(1),
                                      from_copy.eq(written[held.index(reg)])]
                     elif reg.access != "strobe":
-                        m.d.sync += direct.eq(holds[reg.name])
+                        value = holds[reg.name]
+                        m.d.sync += direct.eq(value.as_signed() if reg.signed else value)
         if self.reads_from_ram:
             m.d.comb += bus.read_data.eq(
                 Mux(from_ram, Mux(from_copy, copy_read.data, reset_read.data), direct))

@@ -40,8 +40,9 @@ __all__ = ["CHECK_BYTE", "READ_FLAG", "Mode", "VectorOp", "Status", "STATUS_BITS
            "HOST_MAP",
            "REGISTERS", "BY_NAME", "BY_ADDRESS", "MODE_REGISTERS", "CORRECTION_REGISTERS",
            "LASER_REGISTERS", "WOBBLE_REGISTERS", "WobbleShape", "WOBBLE_MAX_AMPLITUDE",
-           "WOBBLE_MAX_HZ", "INTERPOLATION_REGISTERS", "encode_frame", "decode_frame",
-           "FrameError"]
+           "WOBBLE_MAX_HZ", "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_ON_LEAD_US",
+           "LASER_DELAY_MAX_US", "SCANNER_DELAY_MAX_US", "CORNER_FRAMES_MAX", "encode_frame",
+           "decode_frame", "FrameError"]
 
 
 #: The last byte of every frame.
@@ -50,6 +51,15 @@ CHECK_BYTE = 0x64
 READ_FLAG = 0x80
 #: Largest value a frame's data field carries.
 WORD_MAX = 0xFFFF
+#: The vector sequencer decides a frame's laser two 10 µs frames before that frame's point
+#: reaches the head: how far ahead a negative ``laser_on_delay`` can reach, plus one µs.
+LASER_ON_LEAD_US = 20
+#: Largest laser-on and laser-off delays, in µs.
+LASER_DELAY_MAX_US = 1023
+#: Largest mark and polygon delays, in µs.
+SCANNER_DELAY_MAX_US = 4095
+#: Largest scaled corner hold a mark carries (``vec_op`` bits 7:1), in frames.
+CORNER_FRAMES_MAX = 127
 
 #: Samples per axis of the default spiral table (the paper's 128).
 DEFAULT_TABLE_POINTS = DEFAULT_POINTS
@@ -144,6 +154,17 @@ class Register:
     #: A strobe the block it acts on can refuse while busy: the register file then refuses
     #: (and the decoder counts) a write of 1 (``<name>_ready`` low).
     refusable: bool = False
+    #: The value is two's complement: ``low`` and ``high`` are signed, the frame carries the
+    #: value modulo 65536 and the register holds its low ``width`` bits.
+    signed: bool = False
+
+    def encode(self, value):
+        """The 16-bit frame data of ``value`` (two's complement for a signed register)."""
+        return value & 0xFFFF
+
+    def decode(self, data):
+        """The value of 16-bit frame data read back."""
+        return data - 0x10000 if self.signed and data & 0x8000 else data
 
     def as_dict(self):
         return {"name": self.name, "address": self.address, "width": self.width,
@@ -215,10 +236,11 @@ def _all_registers(table_points, correction_nodes):
                  "X of the next segment's end point (offset binary, 32768 = centre)"),
         Register("vec_y", 0x21, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
                  "Y of the next segment's end point"),
-        Register("vec_op", 0x22, "queue", 0, 0, 1, "enum",
-                 "writing queues a segment to (vec_x, vec_y): 0 = jump (laser off, then "
-                 "jump_delay), 1 = mark (laser on, points every pitch); refused if the queue is full"
-                 , width=1),
+        Register("vec_op", 0x22, "queue", 0, 0, 255, "enum + factor",
+                 "writing queues a segment to (vec_x, vec_y): bit 0: 0 = jump (laser off, then "
+                 "jump_delay), 1 = mark (laser on, points every pitch); bits 7:1 of a mark: the hold "
+                 "in 10 µs frames of the corner it leaves, if polygon_scaled; refused if the "
+                 "queue is full", width=8),
         Register("fifo_free", 0x23, "ro", 0, 0, 0, "segments",
                  "free places in the vector queue"),
         Register("pitch", 0x24, "rw", 60, 1, WORD_MAX, "galvo units",
@@ -226,8 +248,9 @@ def _all_registers(table_points, correction_nodes):
         Register("pulses_per_point", 0x25, "rw", 1, 1, 255, "laser pulses",
                  "pulses each marked point gets; the line speed is pitch × PRR / pulses_per_point"
                  , width=8),
-        Register("jump_delay", 0x26, "rw", 50, 1, WORD_MAX, "frames (10 µs)",
-                 "laser-off wait after a jump for the mirrors to settle, before marking resumes"),
+        Register("jump_delay", 0x26, "rw", 500, 0, WORD_MAX, "µs",
+                 "laser-off wait after a jump for the mirrors to settle, before marking resumes; "
+                 "rounded up to whole 10 µs frames, at least one"),
         Register("vec_rejected", 0x27, "ro", 0, 0, 0, "writes",
                  "vec_op writes refused because the queue was full; stops at 65535"),
         Register("vec_underruns", 0x28, "ro", 0, 0, 0, "times",
@@ -236,6 +259,29 @@ def _all_registers(table_points, correction_nodes):
         Register("vec_stalls", 0x29, "ro", 0, 0, 0, "frames",
                  "frames a marked line waited, laser off, for the next segment to be set up (140 "
                  "clocks: at 12 MHz only after two one-point segments in a row); stops at 65535"),
+        # The RTC's delays (SCANLAB RTC5/6 manuals; EzCad's start/end/corner TC): the laser
+        # ones move the modulation edges to the clock, the scanner ones hold the mirrors for
+        # whole frames.
+        Register("laser_on_delay", 0x2A, "rw", 100, -LASER_ON_LEAD_US + 1, LASER_DELAY_MAX_US,
+                 "µs, two's complement",
+                 "laser (DB25 modulation, pin 19) on this long after a mark's first point reaches "
+                 "the head; negative switches it on that much earlier, down to -19 µs (the "
+                 "sequencer decides two frames ahead); placed to the clock on the modulation edge",
+                 width=11, signed=True),
+        Register("laser_off_delay", 0x2B, "rw", 50, 0, LASER_DELAY_MAX_US, "µs",
+                 "laser stays on this long after a mark's last point reaches the head (the mirror "
+                 "still lags it); placed to the clock on the modulation edge", width=10),
+        Register("mark_delay", 0x2C, "rw", 100, 0, SCANNER_DELAY_MAX_US, "µs",
+                 "after a mark followed by a jump, the mirrors hold its end point this long, laser "
+                 "off (after laser_off_delay runs out), before the jump; whole 10 µs frames, "
+                 "rounded up", width=12),
+        Register("polygon_delay", 0x2D, "rw", 0, 0, SCANNER_DELAY_MAX_US, "µs",
+                 "between two marks, the mirrors hold the corner this long with the laser on; "
+                 "whole 10 µs frames, rounded up", width=12),
+        Register("polygon_scaled", 0x2E, "rw", 0, 0, 1, "bool",
+                 "1 = hold each corner for the frames sent with the mark that leaves it (vec_op "
+                 "bits 7:1: the host's polygon delay × (1 - cos φ), RTC's variable polygon "
+                 "delay); 0 = polygon_delay at every corner", width=1),
         # --- wobble group (built with GalvoScanTop(wobble=True)) -------------------------------
         Register("wob_shape", 0x50, "rw", WobbleShape.OFF.value, 0, len(WobbleShape) - 1, "enum",
                  "figure laid over every marked vector point, a new position each frame while "
@@ -324,7 +370,9 @@ MODE_REGISTERS = {
     Mode.RASTER.label: ("ras_x", "ras_y", "ras_w", "ras_h", "ras_spacing", "ras_step",
                         "ras_flags", "ras_turn_gate"),
     Mode.VECTOR.label: ("vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
-                        "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls"),
+                        "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls",
+                        "laser_on_delay", "laser_off_delay", "mark_delay", "polygon_delay",
+                        "polygon_scaled"),
 }
 
 #: Registers only a build with the wobble stage has (``GalvoScanTop(wobble=True)``, vector mode).
@@ -332,6 +380,10 @@ WOBBLE_REGISTERS = ("wob_shape", "wob_along", "wob_across", "wob_freq")
 
 #: Registers only a build with the spiral's interpolation has.
 INTERPOLATION_REGISTERS = ("spiral_interp",)
+
+#: Registers of vector mode's RTC delays (``GalvoScanTop(vector_delays=True)``).
+DELAY_REGISTERS = ("laser_on_delay", "laser_off_delay", "mark_delay", "polygon_delay",
+                   "polygon_scaled")
 
 #: Registers only a build with the laser controller has.
 LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses",
@@ -358,10 +410,11 @@ class RegisterMap:
     modes : tuple of :class:`Mode`
     laser : bool
     wobble : bool
+    vector_delays : bool
     """
 
     def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
-                 wobble=False):
+                 wobble=False, vector_delays=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -373,6 +426,7 @@ class RegisterMap:
         self.modes = tuple(modes)
         self.laser = laser
         self.wobble = wobble
+        self.vector_delays = vector_delays
 
     def __iter__(self):
         return iter(self.registers)
@@ -395,7 +449,7 @@ class RegisterMap:
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
-                 resets=None):
+                 vector_delays=True, resets=None):
     """The register map of a build.
 
     Parameters
@@ -415,6 +469,9 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         The build has the wobble stage on vector points (else its registers are left out).
     spiral_interpolation : bool
         The build interpolates between spiral points (else ``spiral_interp`` is left out).
+    vector_delays : bool
+        The build has vector mode's laser and scanner delays (else their registers are left
+        out and ``vec_op`` takes only 0 and 1).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -446,6 +503,11 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     if not spiral_interpolation:
         leave_out |= set(INTERPOLATION_REGISTERS)
     every = {r.name: r for r in _all_registers(table_points, correction_nodes or 2)}
+    if not vector_delays:
+        leave_out |= set(DELAY_REGISTERS)
+        every["vec_op"] = replace(every["vec_op"], high=1, width=1, unit="enum", description=(
+            "writing queues a segment to (vec_x, vec_y): 0 = jump (laser off, then jump_delay), "
+            "1 = mark (laser on, points every pitch); refused if the queue is full"))
     by_name = {name: r for name, r in every.items() if name not in leave_out}
     for name, value in (resets or {}).items():
         if name not in every or every[name].access != "rw":
@@ -462,7 +524,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                          f"which it does not have")
     return RegisterMap(by_name.values(), choices={"mode": [mode.value for mode in modes]},
                        table_points=table_points, correction_nodes=correction_nodes,
-                       modes=modes, laser=bool(laser), wobble=bool(wobble))
+                       modes=modes, laser=bool(laser), wobble=bool(wobble),
+                       vector_delays=bool(vector_delays) and Mode.VECTOR in modes)
 
 
 #: Largest spiral table a build may have (samples per axis).
@@ -489,7 +552,8 @@ BY_NAME = HOST_MAP.by_name
 BY_ADDRESS = HOST_MAP.by_address
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
-assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS + WOBBLE_REGISTERS)
+assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
+           WOBBLE_REGISTERS + DELAY_REGISTERS)
 
 
 class FrameError(ValueError):

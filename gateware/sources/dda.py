@@ -80,6 +80,8 @@ class LineDDA(wiring.Component):
     ----------
     direction : bool
         Work out each line's direction too (:attr:`direction`).
+    last : ``Out(1)``
+        The point offered is the segment's end point.
     """
 
     def __init__(self, *, direction=False):
@@ -89,6 +91,7 @@ class LineDDA(wiring.Component):
             "pitch": In(16),
             "points": Out(stream.Signature(FieldPoint)),
             "busy": Out(1),
+            "last": Out(1),
         }
         if self.with_direction:
             members["direction"] = Out(Direction, init={"ux": 1 << DIRECTION_BITS})
@@ -273,6 +276,7 @@ class LineDDA(wiring.Component):
             with m.State("END"):
                 m.d.comb += [
                     self.points.valid.eq(1),
+                    self.last.eq(1),
                     self.points.payload.x.eq(x1),
                     self.points.payload.y.eq(y1),
                 ]

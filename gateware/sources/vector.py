@@ -12,7 +12,14 @@ Two halves:
   the pulse gap (Wan et al. 2018: t = N·T − 10 µs before the next pulse, the frame's
   transmission time; here the pacer counts the laser's PRR clock ahead by the two frames a
   point takes to reach the head, through ``pulse_ahead``). A jump's point is held
-  ``jump_delay`` frames with the laser off. The line speed is ``pitch × PRR / pulses_per_point``.
+  ``jump_delay`` µs (whole frames, at least one) with the laser off. The line speed is
+  ``pitch × PRR / pulses_per_point``.
+
+With the RTC's scanner delays (``delays=True``; SCANLAB RTC5/6), a mark's end point is held
+longer: ``polygon_delay`` with the laser on when another mark follows, ``mark_delay`` with the
+laser off when a jump follows; both in whole frames, rounded up, none for 0. A zero-length mark after a jump (a dot)
+has no end point of its own, so no mark delay. The laser delays act on :attr:`laser` further on
+(:class:`~.laser_delays.LaserDelays`).
 
 This needs at most one pulse per frame: the PRR must not exceed the frame rate (100 kHz at
 XY2-100), as Wan et al. say. Above it a point would get more pulses than asked.
@@ -21,7 +28,7 @@ The pacer's decision for a frame, :attr:`laser`, applies from the moment that fr
 sent; the system top delays it by two frames to the laser's ``marking`` input.
 """
 
-from amaranth.hdl import Cat, Module, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -30,7 +37,8 @@ from ..points import FIELD_CENTRE, OffsetPoint
 from .dda import DIRECTION_BITS, Direction, LineDDA
 
 
-__all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand", "OP_JUMP", "OP_MARK"]
+__all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand",
+           "DelayedVectorCommand", "OP_JUMP", "OP_MARK"]
 
 
 #: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
@@ -38,6 +46,9 @@ OP_JUMP, OP_MARK = VectorOp.JUMP, VectorOp.MARK
 
 #: One queued segment: where to go, and how.
 VectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16})
+#: The same with a mark's scaled corner hold in frames (``vec_op`` bits 7:1). The queue's block
+#: RAMs are 8 bits wide, so its 33 bits already take 40: the field costs no RAM.
+DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7})
 
 
 class VectorSequencer(wiring.Component):
@@ -59,7 +70,11 @@ class VectorSequencer(wiring.Component):
     pulses_per_point : ``In(8)``
         Laser pulses each marked point gets (0 is taken as 1).
     jump_delay : ``In(16)``
-        Frames a jump's end point is held with the laser off (0 is taken as 1).
+        µs a jump's end point is held with the laser off (whole frames, at least one).
+    mark_delay, polygon_delay : ``In(12)``, when ``delays``
+        µs a mark's end point is held before a jump (laser off) or another mark (laser on).
+    polygon_scaled : ``In(1)``, when ``delays``
+        Hold each corner for the frames sent with the mark that leaves it instead.
     points : ``Out(stream.Signature(OffsetPoint))``
         To the scale stage: offsets from the field centre (position − 32768).
     laser : ``Out(1)``
@@ -74,20 +89,31 @@ class VectorSequencer(wiring.Component):
         set up (the mirrors hold with the laser off for a frame). Set-up takes 140 clocks,
         so at 12 MHz and XY2-100 (120 clocks a frame) only a one-point segment after another
         one-point segment can stall.
+
+    Parameters
+    ----------
+    frame_us : int
+        µs a frame lasts (10 at XY2-100).
+    delays : bool
+        Build the mark and polygon delays.
     """
 
-    commands: In(stream.Signature(VectorCommand))
-    frame_strobe: In(1)
-    pulse_ahead: In(1)
-    run: In(1)
-    pitch: In(16)
-    pulses_per_point: In(8)
-    jump_delay: In(16)
-    points: Out(stream.Signature(OffsetPoint))
-    laser: Out(1)
-    underrun: Out(1)
-    stall: Out(1)
-    busy: Out(1)
+    def __init__(self, *, frame_us=10, delays=False):
+        self.frame_us = frame_us
+        self.delays = delays
+        members = {
+            "commands": In(stream.Signature(DelayedVectorCommand if delays else VectorCommand)),
+            "frame_strobe": In(1), "pulse_ahead": In(1), "run": In(1),
+            "pitch": In(16), "pulses_per_point": In(8), "jump_delay": In(16),
+            "points": Out(stream.Signature(OffsetPoint)),
+            "laser": Out(1), "underrun": Out(1), "stall": Out(1), "busy": Out(1),
+        }
+        if delays:
+            members.update({"mark_delay": In(12), "polygon_delay": In(12),
+                            "polygon_scaled": In(1)})
+        if self.with_direction:
+            members["direction"] = Out(Direction, init={"ux": 1 << DIRECTION_BITS})
+        super().__init__(members)
 
     #: Hand each point's line direction on (:class:`DirectedVectorSequencer`).
     with_direction = False
@@ -105,6 +131,8 @@ class VectorSequencer(wiring.Component):
         slot_x = Signal(16)
         slot_y = Signal(16)
         slot_mark = Signal()
+        slot_end = Signal()                        # the slot's point ends a mark segment
+        corner_frames = Signal(7)                         # the corner hold (frames) of the last mark
         taken = Signal()                           # the pacer takes the slot this clock
 
         with m.If(taken):
@@ -137,6 +165,8 @@ class VectorSequencer(wiring.Component):
                         ]
                     with m.Else():
                         m.d.comb += self.commands.ready.eq(1)
+                        if self.delays:
+                            m.d.sync += corner_frames.eq(command.corner_frames)
                         # The line from where we are; its start is marked first if the laser
                         # was off.
                         m.d.sync += [
@@ -147,27 +177,30 @@ class VectorSequencer(wiring.Component):
                         ]
                         with m.If(~pen_down):
                             m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x), slot_y.eq(cur_y),
-                                         slot_mark.eq(1)]
+                                         slot_mark.eq(1), slot_end.eq(0)]
                         m.next = "STEP"
             with m.State("STEP"):
                 m.d.comb += dda.points.ready.eq(slot_free)
                 with m.If(dda.points.valid & slot_free):
                     m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
-                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1)]
+                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1),
+                                 slot_end.eq(dda.last)]
                 with m.Elif(~segment_valid & ~dda.busy):
                     m.next = "FETCH"
 
         # --- pacer --------------------------------------------------------------------------
-        holding_mark = Signal()
-        holding_jump = Signal()
+        holding_mark = Signal()     # a marked point waits for its pulses
+        waiting = Signal()          # a point is held for a time: a jump's, or a mark's end
+        held_end = Signal()         # the marked point held ends a mark segment
         pulses = Signal(8)          # early PRR edges since the held point was handed on
-        frames = Signal(16)         # frame strobes since then
+        waited = Signal(17)         # µs of whole frames the wait has lasted by the next strobe
         pulses_now = Signal(8)
         m.d.comb += pulses_now.eq(pulses + (self.pulse_ahead & (pulses != 0xFF)))
         need = Signal(8)
         m.d.comb += need.eq(self.pulses_per_point | (self.pulses_per_point == 0))
-        delay = Signal(16)
-        m.d.comb += delay.eq(self.jump_delay | (self.jump_delay == 0))
+        # What the current wait lasts, in µs: a jump's, or (delays) a mark end's.
+        wait_us = Signal(16)
+        m.d.comb += wait_us.eq(self.jump_delay)
 
         with m.If(self.points.ready):
             m.d.sync += self.points.valid.eq(0)
@@ -179,7 +212,29 @@ class VectorSequencer(wiring.Component):
             with m.If(taken):
                 m.d.sync += self.direction.eq(slot_direction)
         m.d.comb += self.busy.eq(self.commands.valid | ~fetching | slot_valid | holding_mark |
-                                 holding_jump)
+                                 waiting)
+
+        # A held mark end goes on to a polygon wait (another mark next) or a mark-delay wait
+        # (a jump next); neither for a 0 delay or a 0 corner hold.
+        to_polygon = Signal()
+        to_mark_delay = Signal()
+        if self.delays:
+            WAIT_JUMP, WAIT_MARK, WAIT_POLYGON = range(3)
+            wait_kind = Signal(2)
+            # A scaled corner's hold comes with its mark, in frames, worked out by the host
+            # (which knows the angle): no multiplier here.
+            polygon_us = Mux(self.polygon_scaled, corner_frames * self.frame_us, self.polygon_delay)
+            with m.Switch(wait_kind):
+                with m.Case(WAIT_MARK):
+                    m.d.comb += wait_us.eq(self.mark_delay)
+                with m.Case(WAIT_POLYGON):
+                    m.d.comb += wait_us.eq(polygon_us)
+            at_end = holding_mark & held_end & slot_valid
+            m.d.comb += [
+                to_polygon.eq(at_end & slot_mark & Mux(self.polygon_scaled, corner_frames != 0,
+                                                       self.polygon_delay != 0)),
+                to_mark_delay.eq(at_end & ~slot_mark & (self.mark_delay != 0)),
+            ]
 
         m.d.sync += pulses.eq(pulses_now)
         with m.If(self.frame_strobe):
@@ -188,9 +243,16 @@ class VectorSequencer(wiring.Component):
             # short and a pulse is coming now.
             enough = (pulses >= need) | (self.pulse_ahead & (pulses >= need - 1))
             done = (~holding_mark | enough) & \
-                   (~holding_jump | (frames + 1 >= delay))
+                   (~waiting | (waited >= wait_us))
             with m.If(~self.run):
-                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
+            with m.Elif(done & (to_polygon | to_mark_delay)):
+                # The mirrors catch up with the end point: the laser stays on into a corner,
+                # goes off before a jump.
+                m.d.sync += [waiting.eq(1), holding_mark.eq(0), waited.eq(self.frame_us),
+                             self.laser.eq(to_polygon)]
+                if self.delays:
+                    m.d.sync += wait_kind.eq(Mux(to_polygon, WAIT_POLYGON, WAIT_MARK))
             with m.Elif(done & slot_valid):
                 m.d.comb += taken.eq(1)
                 m.d.sync += [
@@ -200,18 +262,21 @@ class VectorSequencer(wiring.Component):
                     self.points.payload.y.eq(Cat(slot_y[:15], ~slot_y[15])),
                     self.laser.eq(slot_mark),
                     holding_mark.eq(slot_mark),
-                    holding_jump.eq(~slot_mark),
+                    held_end.eq(slot_end),
+                    waiting.eq(~slot_mark),
                     pulses.eq(0),
-                    frames.eq(0),
+                    waited.eq(self.frame_us),
                 ]
+                if self.delays:
+                    m.d.sync += wait_kind.eq(WAIT_JUMP)
             with m.Elif(done):
                 # Nothing to go on with: hold here with the laser off.
                 queue_empty = fetching & ~self.commands.valid
                 m.d.comb += [self.underrun.eq(holding_mark & queue_empty),
                              self.stall.eq(holding_mark & ~queue_empty)]
-                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), holding_jump.eq(0)]
+                m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
             with m.Else():
-                m.d.sync += frames.eq(frames + (frames != 0xFFFF))
+                m.d.sync += waited.eq(waited + Mux(waited[-1], 0, self.frame_us))
         return m
 
 
@@ -227,7 +292,5 @@ class DirectedVectorSequencer(VectorSequencer):
 
     Working the direction out makes a segment's set-up 166 clocks rather than 140.
     """
-
-    direction: Out(Direction, init={"ux": 1 << DIRECTION_BITS})
 
     with_direction = True
