@@ -166,6 +166,36 @@ def test_a_board_without_the_mode_is_refused():
     assert ("arm", 1) not in board.log
 
 
+def test_a_board_without_the_delays_marks_without_them_and_says_so(capsys):
+    """The default bitstream has no delays: their registers are unknown addresses there (a read
+    gets no answer). The job is sent without them, with one line saying so, and no corner
+    holds ride in vec_op (the board's vec_op takes 0 and 1 only)."""
+    from galvoscan.gateware.host.regmap import DELAY_REGISTERS
+    board = FakeBoard()
+
+    def read(name, read=board.read):
+        if name in DELAY_REGISTERS:
+            raise ClientError("no answer from the board")
+        return read(name)
+    board.read = read
+    square = [("jump", 30000, 30000), ("mark", 31000, 30000), ("mark", 31000, 31000),
+              ("jump", 30000, 30000)]
+    delays = {"laser_on_delay": 100, "laser_off_delay": 50, "mark_delay": 100,
+              "polygon_delay": 100, "polygon_scaled": 1}
+    report = JobStreamer(board, poll_s=0).run_vector(square, {"pitch": 60, **delays},
+                                                     timeout_s=5)
+    assert report.segments == 4
+    written = {name for name, _ in board.log}
+    assert not written & set(DELAY_REGISTERS) and "pitch" in written
+    assert [v for n, v in board.log if n == "vec_op"] == [0, 1, 1, 0]
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no laser or scanner delays" in err
+    # A board with them gets them.
+    board = FakeBoard()
+    JobStreamer(board, poll_s=0).run_vector(square, {"pitch": 60, **delays}, timeout_s=5)
+    assert set(DELAY_REGISTERS) <= {name for name, _ in board.log}
+
+
 @pytest.mark.slow
 def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
     """A real KeyboardInterrupt while the laser emits: the streamer's first frame after it is

@@ -16,6 +16,7 @@ caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected`
 (``errors``) is counted and reported, and :class:`StreamReport` says how many.
 """
 
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -164,10 +165,23 @@ class JobStreamer:
     # --- running -------------------------------------------------------------------------------
 
     def setup(self, registers):
-        """Write ``{name: value}`` (checked against the map before the first is sent)."""
-        from ..client import encode_write
+        """Write ``{name: value}`` (checked against the map before the first is sent); returns
+        what was written (a board without the delays is not sent them)."""
+        from ..client import ClientError, encode_write
+        from ..gateware.host.regmap import DELAY_REGISTERS
         for name, value in registers.items():
             encode_write(name, value)
+        delays = [name for name in registers if name in DELAY_REGISTERS]
+        if delays:
+            # The default bitstream has no delays (galvoscan build --delays builds them): a
+            # board without them marks without them, and the user is told so.
+            try:
+                self.board.read(delays[0])
+            except ClientError:             # the address is unknown: no answer but a refusal
+                registers = {name: value for name, value in registers.items()
+                             if name not in DELAY_REGISTERS}
+                print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
+                      "was built without --delays): marking without them", file=sys.stderr)
         for name, value in registers.items():
             self.board.write(name, value)
         if "mode" in registers and self.board.read("mode") != registers["mode"]:
@@ -182,6 +196,7 @@ class JobStreamer:
             if shape != registers["wob_shape"]:
                 raise JobAborted("the board has no wobble stage: its bitstream was built "
                                  "without it (galvoscan build --wobble)")
+        return registers
 
     def wait_ready(self, timeout_s):
         """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""
@@ -286,9 +301,9 @@ class JobStreamer:
             segments.append(("jump", *segments[-1][1:]))
 
         def body():
-            self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
-            corners = corner_frames(segments, registers["polygon_delay"]) \
-                if registers.get("polygon_scaled") else None
+            written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
+            corners = corner_frames(segments, written["polygon_delay"]) \
+                if written.get("polygon_scaled") else None
             sent = self.stream(segments, timeout_s=timeout_s, corners=corners,
                                start=lambda: self._start(
                 armed=armed, ready_timeout_s=ready_timeout_s))
