@@ -157,7 +157,7 @@ class GalvoScanTop(wiring.Component):
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
                  vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
-                 spiral_interpolation=True, vector_delays=True):
+                 spiral_interpolation=True, vector_delays=False):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):

@@ -24,7 +24,7 @@ PRR_100HZ = 200
 
 def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None, pulses=1,
         pitch=60, extra_s=0.6e-3):
-    board = SimBoard(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+    board = SimBoard(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, vector_delays=True,
                      settings=ScanSettings(mode="vector", run=False))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     for name, value in (("laser_prr", PRR_100HZ), ("pulses_per_point", pulses),
@@ -174,7 +174,8 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     """Raw frames past the client: each out-of-range value is refused, counted, and changes
     nothing; the signed laser-on delay reads back negative."""
     from galvoscan.gateware.host.regmap import BY_NAME, encode_frame
-    board = SimBoard(clk_freq=CLK, settings=ScanSettings(mode="vector", run=False))
+    board = SimBoard(clk_freq=CLK, settings=ScanSettings(mode="vector", run=False),
+                     vector_delays=True)
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19
