@@ -166,22 +166,10 @@ class JobStreamer:
 
     def setup(self, registers):
         """Write ``{name: value}`` (checked against the map before the first is sent); returns
-        what was written (a board without the delays is not sent them)."""
-        from ..client import ClientError, encode_write
-        from ..gateware.host.regmap import DELAY_REGISTERS
+        them."""
+        from ..client import encode_write
         for name, value in registers.items():
             encode_write(name, value)
-        delays = [name for name in registers if name in DELAY_REGISTERS]
-        if delays:
-            # The default bitstream has no delays (galvoscan build --delays builds them): a
-            # board without them marks without them, and the user is told so.
-            try:
-                self.board.read(delays[0])
-            except ClientError:             # the address is unknown: no answer but a refusal
-                registers = {name: value for name, value in registers.items()
-                             if name not in DELAY_REGISTERS}
-                print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
-                      "was built without --delays): marking without them", file=sys.stderr)
         for name, value in registers.items():
             self.board.write(name, value)
         if "mode" in registers and self.board.read("mode") != registers["mode"]:
@@ -287,6 +275,25 @@ class JobStreamer:
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
 
+    def _without_missing_delays(self, registers):
+        """``registers`` less the RTC delays if the board has none (the default bitstream:
+        ``galvoscan build --delays`` builds them), with one line saying so. Asked before the
+        job's counts are taken: the question is a read of an unknown address, which the board
+        refuses and counts."""
+        from ..client import ClientError
+        from ..gateware.host.regmap import DELAY_REGISTERS
+        delays = [name for name in registers if name in DELAY_REGISTERS]
+        if not delays:
+            return registers
+        try:
+            self.board.read(delays[0])
+        except ClientError:                 # the address is unknown: no answer but a refusal
+            print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
+                  "was built without --delays): marking without them", file=sys.stderr)
+            return {name: value for name, value in registers.items()
+                    if name not in DELAY_REGISTERS}
+        return registers
+
     def run_vector(self, segments, registers, *, ready_timeout_s=5.0, timeout_s=60.0,
                    armed=True):
         """A whole vector job: checks, parameters, arm, stream, wait, disarm, report.
@@ -299,6 +306,8 @@ class JobStreamer:
             # End on a jump (to where the last mark ends: no move): the board counts a mark
             # that finds the queue empty as an underrun, and a job's end is none.
             segments.append(("jump", *segments[-1][1:]))
+
+        registers = self._without_missing_delays(registers)
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
