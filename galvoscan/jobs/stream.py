@@ -176,12 +176,7 @@ class JobStreamer:
             raise JobAborted(f"the board has no {Mode(registers['mode']).label} mode: its "
                              f"bitstream was built without it (galvoscan build --modes)")
         if "wob_shape" in registers:
-            from ..client import ClientError
-            try:
-                shape = self.board.read("wob_shape")
-            except ClientError:             # the address is unknown: no answer but a refusal
-                shape = None
-            if shape != registers["wob_shape"]:
+            if self._read_if_built("wob_shape") != registers["wob_shape"]:
                 raise JobAborted("the board has no wobble stage: its bitstream was built "
                                  "without it (galvoscan build --wobble)")
         return registers
@@ -275,19 +270,23 @@ class JobStreamer:
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
 
+    def _read_if_built(self, name):
+        """The board's ``name``, or None if its bitstream was built without that register (a
+        read of an unknown address gets no answer, only a refusal the board counts)."""
+        from ..client import ClientError
+        try:
+            return self.board.read(name)
+        except ClientError:
+            return None
+
     def _without_missing_delays(self, registers):
         """``registers`` less the RTC delays if the board has none (the default bitstream:
         ``galvoscan build --delays`` builds them), with one line saying so. Asked before the
         job's counts are taken: the question is a read of an unknown address, which the board
         refuses and counts."""
-        from ..client import ClientError
         from ..gateware.host.regmap import DELAY_REGISTERS
         delays = [name for name in registers if name in DELAY_REGISTERS]
-        if not delays:
-            return registers
-        try:
-            self.board.read(delays[0])
-        except ClientError:                 # the address is unknown: no answer but a refusal
+        if delays and self._read_if_built(delays[0]) is None:
             print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
                   "was built without --delays): marking without them", file=sys.stderr)
             return {name: value for name, value in registers.items()
