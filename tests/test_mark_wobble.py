@@ -12,7 +12,6 @@ from hypothesis import given, settings, strategies as st
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.client import ClientError
 from galvoscan.jobs.plan import PlanError
 from galvoscan.jobs.profile import ProfileError, default_profile, parse_profile, profile_text
 from galvoscan.jobs.stream import JobAborted, JobStreamer
@@ -141,17 +140,12 @@ def test_random_wobble_values_plan_or_are_one_line(tmp_path_factory, option, val
 
 
 def test_a_board_without_the_stage_is_refused_before_arming():
-    board = FakeBoard()
-
-    def read(name, read=board.read):
-        if name.startswith("wob_"):
-            raise ClientError("no answer")             # an unknown address: refused
-        return read(name)
-    board.read = read
     regs = wobble_registers(WobbleSettings(50, 50, 1000), default_profile())
+    board = FakeBoard(missing=[name for name in regs if name.startswith("wob_")])
     with pytest.raises(JobAborted, match="no wobble stage"):
         JobStreamer(board, poll_s=0).run_vector(job(10), {"pitch": 60, **regs})
     assert ("arm", 1) not in board.log
+    assert board.unanswered == []       # found out without waiting for an answer
 
 
 def test_a_wobbled_job_leaves_the_wobble_off():

@@ -18,9 +18,11 @@ from sim_board import QUICK_SIM_BOARD
 
 class FakeBoard:
     """Registers in a dict, a queue that drains by ``drain`` segments per read of fifo_free,
-    and a script of status flags; every write is logged."""
+    and a script of status flags; every write is logged. Registers in ``missing`` are not in
+    its bitstream: a write of one is refused and counted in ``errors`` (not logged), a read of
+    one goes unanswered (logged in ``unanswered``: the host would wait out its timeout)."""
 
-    def __init__(self, *, drain=64, flags=(), fail_after=None, depth=QUEUE_DEPTH):
+    def __init__(self, *, drain=64, flags=(), fail_after=None, depth=QUEUE_DEPTH, missing=()):
         self.values = {r.name: r.reset for r in BY_NAME.values()}
         self.depth = depth
         self.queue = 0
@@ -28,6 +30,8 @@ class FakeBoard:
         self.flags = set(flags)
         self.log = []
         self.fail_after = fail_after
+        self.missing = set(missing)
+        self.unanswered = []
 
     def _status(self):
         if self.values["run"]:
@@ -40,6 +44,9 @@ class FakeBoard:
     def write(self, name, value):
         if self.fail_after is not None and len(self.log) >= self.fail_after:
             raise ClientError("no answer from the board")
+        if name in self.missing:
+            self.values["errors"] = min(self.values["errors"] + 1, 0xFFFF)
+            return
         self.log.append((name, value))
         if name == "vec_op":
             assert self.queue < self.depth, "written into a full queue"
@@ -48,6 +55,9 @@ class FakeBoard:
             self.values[name] = value
 
     def read(self, name):
+        if name in self.missing:
+            self.unanswered.append(name)
+            raise ClientError("no answer from the board")
         if name == "status":
             return self._status()
         if name == "fifo_free":
@@ -171,13 +181,7 @@ def test_a_board_without_the_delays_marks_without_them_and_says_so(capsys):
     gets no answer). The job is sent without them, with one line saying so, and no corner
     holds ride in vec_op (the board's vec_op takes 0 and 1 only)."""
     from galvoscan.gateware.host.regmap import DELAY_REGISTERS
-    board = FakeBoard()
-
-    def read(name, read=board.read):
-        if name in DELAY_REGISTERS:
-            raise ClientError("no answer from the board")
-        return read(name)
-    board.read = read
+    board = FakeBoard(missing=DELAY_REGISTERS)
     square = [("jump", 30000, 30000), ("mark", 31000, 30000), ("mark", 31000, 31000),
               ("jump", 30000, 30000)]
     delays = {"laser_on_delay": 100, "laser_off_delay": 50, "mark_delay": 100,
@@ -190,10 +194,25 @@ def test_a_board_without_the_delays_marks_without_them_and_says_so(capsys):
     assert [v for n, v in board.log if n == "vec_op"] == [0, 1, 1, 0]
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no laser or scanner delays" in err
+    # Found out without waiting for an answer that does not come.
+    assert board.unanswered == []
+    # The refused write is not the job's: its error count is untouched.
+    assert report.counters["errors"] == 0
     # A board with them gets them.
     board = FakeBoard()
     JobStreamer(board, poll_s=0).run_vector(square, {"pitch": 60, **delays}, timeout_s=5)
     assert set(DELAY_REGISTERS) <= {name for name, _ in board.log}
+
+
+def test_a_board_whose_error_count_has_stopped_is_asked_by_a_read():
+    """At 65535 ``errors`` counts no more refusals: the question falls back on a read."""
+    from galvoscan.gateware.host.regmap import DELAY_REGISTERS
+    board = FakeBoard(missing=DELAY_REGISTERS)
+    board.values["errors"] = 0xFFFF
+    JobStreamer(board, poll_s=0).run_vector([("jump", 0, 0), ("mark", 10, 0)],
+                                            {"pitch": 60, "mark_delay": 100}, timeout_s=5)
+    assert board.unanswered == ["mark_delay"]
+    assert "mark_delay" not in {name for name, _ in board.log}
 
 
 @pytest.mark.slow

@@ -208,5 +208,5 @@ def test_the_delays_need_frames_of_whole_microseconds():
     count the delays in µs; without them it builds."""
     from galvoscan.gateware.top import GalvoScanTop
     with pytest.raises(ValueError, match="whole number of MHz and frames of whole µs"):
-        GalvoScanTop(clk_freq=6e6, bit_rate=1.5e6, baud=500_000)
+        GalvoScanTop(clk_freq=6e6, bit_rate=1.5e6, baud=500_000, vector_delays=True)
     GalvoScanTop(clk_freq=6e6, bit_rate=1.5e6, baud=500_000, vector_delays=False)

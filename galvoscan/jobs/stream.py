@@ -35,6 +35,8 @@ DEFAULT_BATCH = 128
 #: The board's counters a job reports, read before and after.
 COUNTERS = ("vec_underruns", "vec_stalls", "vec_rejected", "errors")
 _COUNTER_TOP = 0xFFFF
+# Where ``errors`` stops counting (a 16-bit count that does not wrap).
+_ERRORS_TOP = (1 << BY_NAME["errors"].width) - 1
 
 
 class JobAborted(Exception):
@@ -176,7 +178,7 @@ class JobStreamer:
             raise JobAborted(f"the board has no {Mode(registers['mode']).label} mode: its "
                              f"bitstream was built without it (galvoscan build --modes)")
         if "wob_shape" in registers:
-            if self._read_if_built("wob_shape") != registers["wob_shape"]:
+            if not self._written_if_built("wob_shape", registers["wob_shape"]):
                 raise JobAborted("the board has no wobble stage: its bitstream was built "
                                  "without it (galvoscan build --wobble)")
         return registers
@@ -270,23 +272,31 @@ class JobStreamer:
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
 
-    def _read_if_built(self, name):
-        """The board's ``name``, or None if its bitstream was built without that register (a
-        read of an unknown address gets no answer, only a refusal the board counts)."""
-        from ..client import ClientError
-        try:
-            return self.board.read(name)
-        except ClientError:
-            return None
+    def _written_if_built(self, name, value):
+        """Write ``name = value`` (in the register's range); False if the board's bitstream was
+        built without that register. Asked by counting: the board refuses a write to an
+        unknown address and counts it in ``errors``, at once, where a read of one goes
+        unanswered and would cost the link's whole answer timeout."""
+        errors = self.board.read("errors")
+        if errors == _ERRORS_TOP:
+            # The count has stopped: it cannot tell. A read can (refused: no answer).
+            from ..client import ClientError
+            self.board.write(name, value)
+            try:
+                self.board.read(name)
+                return True
+            except ClientError:
+                return False
+        self.board.write(name, value)
+        return self.board.read("errors") == errors
 
     def _without_missing_delays(self, registers):
         """``registers`` less the RTC delays if the board has none (the default bitstream:
         ``galvoscan build --delays`` builds them), with one line saying so. Asked before the
-        job's counts are taken: the question is a read of an unknown address, which the board
-        refuses and counts."""
+        job's counts are taken: a refused write counts in ``errors``."""
         from ..gateware.host.regmap import DELAY_REGISTERS
         delays = [name for name in registers if name in DELAY_REGISTERS]
-        if delays and self._read_if_built(delays[0]) is None:
+        if delays and not self._written_if_built(delays[0], registers[delays[0]]):
             print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
                   "was built without --delays): marking without them", file=sys.stderr)
             return {name: value for name, value in registers.items()
