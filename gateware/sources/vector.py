@@ -196,8 +196,16 @@ class VectorSequencer(wiring.Component):
         waited = Signal(17)         # µs of whole frames the wait has lasted by the next strobe
         pulses_now = Signal(8)
         m.d.comb += pulses_now.eq(pulses + (self.pulse_ahead & (pulses != 0xFF)))
-        need = Signal(8)
-        m.d.comb += need.eq(self.pulses_per_point | (self.pulses_per_point == 0))
+        # The pulses a point needs, from a flip-flop: a new pulses_per_point counts from the
+        # clock after it is written.
+        need = Signal(8, init=1)
+        m.d.sync += need.eq(self.pulses_per_point | (self.pulses_per_point == 0))
+        # `pulses >= need` and `pulses >= need - 1`, worked out a clock ahead from the count's
+        # next value, so that the frame strobe's decision (into the point handed on) waits on
+        # no comparator: that was the full build's longest path.
+        reached = Signal()
+        short = Signal(init=1)
+        m.d.sync += [reached.eq(pulses_now >= need), short.eq(pulses_now >= need - 1)]
         # What the current wait lasts, in µs: a jump's, or (delays) a mark end's.
         wait_us = Signal(16)
         m.d.comb += wait_us.eq(self.jump_delay)
@@ -237,13 +245,18 @@ class VectorSequencer(wiring.Component):
             ]
 
         m.d.sync += pulses.eq(pulses_now)
+        # `waited >= wait_us` from a flip-flop too: `waited` changes only on frame strobes,
+        # and the wait's length only with the registers or on a strobe, a frame or more before
+        # the next strobe asks.
+        waited_enough = Signal()
+        m.d.sync += waited_enough.eq(waited >= wait_us)
         with m.If(self.frame_strobe):
             # pulses_now >= need, with the late-arriving pulse_ahead kept off the adder and the
             # comparator (a long path otherwise): the count so far reaches it, or falls one
             # short and a pulse is coming now.
-            enough = (pulses >= need) | (self.pulse_ahead & (pulses >= need - 1))
+            enough = reached | (self.pulse_ahead & short)
             done = (~holding_mark | enough) & \
-                   (~waiting | (waited >= wait_us))
+                   (~waiting | waited_enough)
             with m.If(~self.run):
                 m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]
             with m.Elif(done & (to_polygon | to_mark_delay)):
@@ -265,6 +278,8 @@ class VectorSequencer(wiring.Component):
                     held_end.eq(slot_end),
                     waiting.eq(~slot_mark),
                     pulses.eq(0),
+                    reached.eq(0),                  # 0 >= need (need is at least 1)
+                    short.eq(need == 1),            # 0 >= need - 1
                     waited.eq(self.frame_us),
                 ]
                 if self.delays:
