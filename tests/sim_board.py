@@ -377,6 +377,14 @@ class SimSPITransport:
         return self.transfer(FTDISPITransport.FETCH)
 
 
+#: The smallest system top that runs vector jobs: no other mode, no correction stage. Vector
+#: mode's board tests (points on the wires, pulses on the DB25 pins) run on it at half the
+#: simulation cost of the default build, whose spiral, raster and correction sit idle or pass
+#: points through in vector mode; the default build's vector path is run by the job, mark and
+#: link tests.
+VECTOR_ONLY = {"modes": ("vector",), "correction": None}
+
+
 #: What the tests' ``--sim`` boards differ in from the command line's (the iCEBreaker's 12 MHz,
 #: the 5 ms MO lead): 8 MHz, the slowest clock that carries the link's 1 Mbaud (8 clocks a
 #: bit) and XY2-100 (4 clocks a bit), so a third fewer clocks to simulate for the same frames,

@@ -14,7 +14,7 @@ from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
-from sim_board import SimBoard, SimSPITransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
 from vector_model import PARK, dda, job_model, merge
 
 
@@ -31,7 +31,7 @@ def test_model_follows_001():
 
 def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
     board = SimBoard.powered_up(clk_freq=clk_freq, record_laser=True, mo_lead=0.2e-3,
-                     vector_queue_depth=vector_queue_depth,
+                                vector_queue_depth=vector_queue_depth, **VECTOR_ONLY,
                      settings=ScanSettings(mode="vector", run=False, **settings))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     return board, client

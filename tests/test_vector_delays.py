@@ -11,7 +11,7 @@ import pytest
 from galvoscan.client import ClientError, HostClient, encode_write
 from galvoscan.gateware.top import ScanSettings
 
-from sim_board import SimBoard, SimSPITransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
 
@@ -24,8 +24,9 @@ PRR_100HZ = 200
 
 def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None, pulses=1,
         pitch=60, extra_s=0.6e-3):
-    board = SimBoard(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, vector_delays=True,
-                     settings=ScanSettings(mode="vector", run=False))
+    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+                                vector_delays=True, **VECTOR_ONLY,
+                                settings=ScanSettings(mode="vector", run=False))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     for name, value in (("laser_prr", PRR_100HZ), ("pulses_per_point", pulses),
                         ("pitch", pitch), ("jump_delay", jump), ("laser_on_delay", on),

@@ -10,7 +10,7 @@ nothing else: not which frame a point reaches the head, not a pulse, not a jump.
 
 import math
 
-from hypothesis import HealthCheck, Phase, given, settings, strategies as st
+from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
 from galvoscan.client import ClientError, HostClient
@@ -19,7 +19,7 @@ from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMP
 from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
-from sim_board import SimBoard, SimSPITransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
 from test_vector import pulses_per_frame, queue
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
@@ -29,8 +29,8 @@ CLK = 4e6
 
 
 def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60):
-    board = SimBoard(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
-                     settings=ScanSettings(mode="vector", run=False))
+    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
+                                **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     for name, value in (("wob_shape", shape), ("wob_along", along), ("wob_across", across),
                         ("wob_freq", hz), ("laser_prr", prr_100hz),
@@ -59,32 +59,41 @@ def marked_per_frame(board, count):
 
 def check(job, *, along, across, hz, pitch=60, pulses=1, prr_100hz=600):
     """Both runs of a job; the wobbled frames against the model."""
+    # (One board, reset between the runs: what the plain run shows is taken before the next.)
     plain, plain_client = run(job, shape=0, along=along, across=across, hz=hz, pitch=pitch,
                               pulses=pulses, prr_100hz=prr_100hz)
+    base = pulses_per_frame(plain)
+    frames = [f for f, _ in base]
+    marked = marked_per_frame(plain, len(frames))
+    assert plain_client.read("errors") == 0
     wobbled, client = run(job, shape=1, along=along, across=across, hz=hz, pitch=pitch,
                           pulses=pulses, prr_100hz=prr_100hz)
-    base = pulses_per_frame(plain)
     # The line alone is the vector model's.
     assert merge(base) == merge([(PARK, 0)] + job_model(job, pitch, pulses))
     # The pacer is untouched: every pulse falls in the same frame.
     assert [n for _, n in pulses_per_frame(wobbled)] == [n for _, n in base]
-    frames = [f for f, _ in base]
-    marked = marked_per_frame(plain, len(frames))
     assert marked_per_frame(wobbled, len(frames)) == marked
     expected = wobbled_frames(frames, marked, marked_points(job, pitch), along=along,
                               across=across, hz=hz)
     got = [f for _, f in wobbled.xy2_frames()][:len(frames)]
-    # The table's 1024 steps a turn, the direction's 10 bits, the products' rounding and the
-    # phase step's rounding.
+    # The table's 1024 steps a turn, the direction's 10 bits and the products' rounding; and
+    # the phase's drift, which grows with the frames since the mark began: the frequency is
+    # right to 10 ppm (the phase step rounded to the 24-bit phase loses under 2^-24 turn a
+    # frame more), so after n frames at f Hz the phase is off by up to
+    # n · (f / frame rate · 10^-5 + 2^-24) turns (35 units at 25 kHz after 700 frames).
+    since = 0
     for k, ((gx, gy), (ex, ey), on) in enumerate(zip(got, expected, marked)):
         ex, ey = min(max(ex, 0), 65535), min(max(ey, 0), 65535)
         if not on:
             assert (gx, gy) == (ex, ey), k                     # jumps and holds as they were
+            since = 0
         else:
-            tolerance = 3 + (along + across) * (math.pi / 1024 + 2 ** -10 + 2e-4)
+            drift = 2 * math.pi * since * (hz / 100_000 * 1e-5 + 2 ** -24)
+            since += 1
+            tolerance = 3 + (along + across) * (math.pi / 1024 + 2 ** -10 + drift)
             assert abs(gx - ex) <= tolerance and abs(gy - ey) <= tolerance, \
                 (k, (gx, gy), (ex, ey))
-    assert client.read("errors") == plain_client.read("errors") == 0
+    assert client.read("errors") == 0
     return frames, got, marked, client
 
 
@@ -110,6 +119,10 @@ def test_ellipse_follows_each_line_and_nothing_else_moves():
                 min_size=1, max_size=4),
        st.integers(0, WOBBLE_MAX_AMPLITUDE), st.integers(0, WOBBLE_MAX_AMPLITUDE),
        st.integers(1, WOBBLE_MAX_HZ), st.sampled_from([1, 2]))
+# Found by hypothesis: near the top amplitude and frequency, 700 frames into a mark, the phase's
+# 10 ppm drift is the largest error (26 units).
+@example(job=[("mark", 20133, 20095), ("mark", 20263, 20008)], along=4092, across=1155,
+         hz=24999, pulses=1)
 def test_random_jobs_amplitudes_and_frequencies_match_the_model(job, along, across, hz, pulses):
     check(job + [("jump", 32768, 32768)], along=along, across=across, hz=hz, pulses=pulses,
           prr_100hz=500)
