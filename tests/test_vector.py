@@ -32,7 +32,7 @@ def test_model_follows_001():
 def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
     board = SimBoard.powered_up(clk_freq=clk_freq, record_laser=True, mo_lead=0.2e-3,
                                 vector_queue_depth=vector_queue_depth, **VECTOR_ONLY,
-                     settings=ScanSettings(mode="vector", run=False, **settings))
+                                settings=ScanSettings(mode="vector", run=False, **settings))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     return board, client
 
