@@ -272,7 +272,7 @@ class CorrectionLinkSpec(Elaboratable):
                        "helper: a waiting write is held, and made when its point is done"),
                 Assert(~(stage.write_pending & stage._busy) | (waited <= stage._step),
                        "helper: a waiting write started after its point"),
-                Assert(~stage._busy | (stage._step <= 13), "helper: a point takes 14 steps"),
+                Assert(~stage._busy | (stage._step <= 14), "helper: a point takes 15 steps"),
             ]
 
         changed = Signal()

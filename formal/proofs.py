@@ -195,11 +195,11 @@ def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correct
     Proved on a 5 × 5 table (the RAM's size does not enter the properties). Helper invariants
     tie a point's age to its step and a waiting write to the point it waits for, so a short
     induction is enough (each step unrolls the multiplier once more); the covers need a write
-    and a point, about 20 clocks.
+    and a point, about 21 clocks.
 
     The broken stages' bounded checks offer every point at (0, 0) (``points_at_origin``, a
     restriction of the free inputs, so their counterexamples hold with free points). A write
-    lost or made late shows when the point it waited for is done, 15 clocks in at the
+    lost or made late shows when the point it waited for is done, 16 clocks in at the
     earliest; 20 leaves room, and such faults' checks may skip (``bmc_skip``) the clocks
     before it.
     """
@@ -207,7 +207,7 @@ def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correct
     return Proof(
         name=name,
         description="correction: no table write while a point is made; a requested write "
-                    "is made within 15 clocks; a presented point holds until taken",
+                    "is made within 16 clocks; a presented point holds until taken",
         harness=lambda: CorrectionSpec(make_stage(), helpers=helpers),
         depth=4, cover_depth=24, bmc_depth=20, bmc_skip=bmc_skip,
         bmc_harness=lambda: CorrectionSpec(make_stage(), helpers=helpers,
@@ -232,7 +232,7 @@ def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting
         name=name,
         description="correction writes through both links: a table write stores what the "
                     "registers held when its cor_write frame was accepted; one waits at a "
-                    "time, and is made within 16 clocks",
+                    "time, and is made within 17 clocks",
         harness=harness,
         depth=4, cover_depth=24, bmc_depth=20,
         bmc_harness=lambda: harness(points_at_origin=True))

@@ -66,6 +66,6 @@ CORRECTION_FAULTS = {
                   "a table write stores the node and offsets asked for"),
 }
 
-#: Faults about a write that waits for a point: a point is made in 14 clocks, so none shows
-#: before clock 15, and their bounded checks skip the first 13 (which only cost solver time).
+#: Faults about a write that waits for a point: a point is made in 15 clocks, so none shows
+#: before clock 16, and their bounded checks skip the first 13 (which only cost solver time).
 WAITING_FAULTS = {WritesLateValues, LosesWrites}

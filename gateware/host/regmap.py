@@ -333,7 +333,7 @@ def _all_registers(table_points, correction_nodes):
                  "stores (cor_dx, cor_dy) at node cor_node, both at once and between two points, so "
                  "no point is made from a half-written node; the values are those of the moment "
                  "of the write. Refused (counted in errors) while the last write still waits for "
-                 "a point to finish (at most 15 clocks)", width=1, refusable=True),
+                 "a point to finish (at most 16 clocks)", width=1, refusable=True),
         Register("cor_nodes", 0x45, "ro", 0, 0, 0, "nodes",
                  "correction table nodes per axis in this build (5, 9, 17, 33 or 65)",
                  width=_width(max(TABLE_SIZES))),
