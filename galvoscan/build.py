@@ -84,7 +84,8 @@ class TimingError(BuildError):
     def __init__(self, report):
         self.report = report
         super().__init__(f"timing not met: {report.fmax_mhz:.1f} MHz < {report.clock_mhz:g} MHz "
-                         f"({report.board}, {report.luts} of {report.luts_available} cells)")
+                         f"({report.board}, {report.luts} of {report.luts_available} cells, "
+                         f"{report.brams} of {report.brams_available} block RAMs)")
 
 
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,

@@ -32,7 +32,6 @@ LONGEST_FIRST = {
     "tests/test_bench.py::test_bench_quick": 45,
     "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 40,
     "tests/test_spiral.py::test_interpolation_over_random_tables_ranges_and_dwells": 40,
-    "tests/test_cli.py::test_build_with_the_spiral_only_a_512_point_table_and_no_correction": 40,
     "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 33,
     "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 31,
 }
