@@ -5,12 +5,18 @@ import math
 import time
 
 import pytest
+from amaranth.hdl import Elaboratable, Module, Mux, Signal
 from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import connect
+from amaranth.sim import Simulator
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 from amaranth.lib.wiring import In, Out
 
 from galvoscan.analysis.patterns import spiral_frames as analysis_spiral_frames
-from galvoscan.gateware.points import OffsetPoint
+from galvoscan.gateware.field.scale import ScaleOffset
+from galvoscan.gateware.phy.xy2_100 import XY2Transmitter
+from galvoscan.gateware.points import FIELD_CENTRE, FieldPoint, OffsetPoint
+from galvoscan.gateware.sources.spiral_interp import DIVIDE_CLOCKS
 from galvoscan.gateware.sources.spiral import PARK_FRAMES, SpiralSequencer
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
@@ -76,10 +82,94 @@ def test_top_rejects_bad_clock():
         GalvoScanTop(clk_freq=13e6)
 
 
-def replay(table, settings, points, *, clocks_per_bit=2, **top_kwargs):
-    """Frames decoded from the system top's wires, enough for ``points`` spiral points."""
+class SpiralPath(Elaboratable):
+    """The spiral's path through the system top, wired as :class:`GalvoScanTop` wires it in a
+    build with only spiral mode and no correction stage (``modes=("spiral",),
+    correction=None``): the sequencer's points into the buffered scale stage, its positions
+    into the PHY, the PHY's frame strobe back to the sequencer, and the register values the
+    top starts with (``settings.register_resets()``) held on their inputs. What the top adds
+    around it (host link, register file, status, the source select, which in spiral mode
+    passes the spiral's stream and ``run`` through unchanged) does nothing until a host
+    writes.
+
+    With ``frame_clocks`` None, the real :class:`XY2Transmitter` at ``clk_freq``: the XY2-100
+    wires. With ``frame_clocks`` a number, no PHY: a frame strobe every ``frame_clocks``
+    clocks (the first on the first clock, as the PHY's) into the sequencer and as the scale
+    stage's ``ready``, and :attr:`latched` the position the PHY would send in that frame, taken
+    by the PHY's own rule (the point offered at the strobe, else the last one again)."""
+
+    def __init__(self, table, settings, *, clk_freq=4e6, frame_clocks=None):
+        self.table, self.settings = table, settings
+        self.clk_freq, self.frame_clocks = clk_freq, frame_clocks
+        self.xy2_clk, self.xy2_sync, self.xy2_x, self.xy2_y = (Signal(name=name) for name in (
+            "xy2_clk", "xy2_sync", "xy2_x", "xy2_y"))
+        self.latched = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        #: High on the clock after each strobe: when :attr:`latched` is that frame's position.
+        self.frame_shown = Signal()
+
+    def elaborate(self, platform):
+        m = Module()
+        resets = self.settings.register_resets()
+        m.submodules.spiral = spiral = SpiralSequencer(self.table, interpolation=True)
+        m.submodules.scale = scale = ScaleOffset(buffered=True)
+        for name in ("dwell", "x_first", "x_last", "y_first", "y_last", "run"):
+            m.d.comb += getattr(spiral, name).eq(resets[name])
+        m.d.comb += spiral.interpolate.eq(resets["spiral_interp"])
+        for name in ("amp_x", "amp_y", "center_x", "center_y"):
+            m.d.comb += getattr(scale, name).eq(resets[name])
+        connect(m, spiral.points, scale.offsets)
+        if self.frame_clocks is None:
+            m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq)
+            connect(m, scale.positions, phy.position)
+            m.d.comb += spiral.frame_strobe.eq(phy.frame_strobe)
+            for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
+                m.d.comb += getattr(self, name).eq(getattr(phy, name))
+        else:
+            tick = Signal(range(self.frame_clocks), init=self.frame_clocks - 1)
+            strobe = tick == self.frame_clocks - 1
+            m.d.sync += tick.eq(Mux(strobe, 0, tick + 1))
+            m.d.comb += [spiral.frame_strobe.eq(strobe), scale.positions.ready.eq(strobe)]
+            with m.If(strobe & scale.positions.valid):
+                m.d.sync += self.latched.eq(scale.positions.payload)
+            m.d.sync += self.frame_shown.eq(strobe)
+        return m
+
+
+#: Clocks a frame in :func:`replay_frames`: the fewest that give the model's frames (a point's
+#: way to the next is divided in DIVIDE_CLOCKS clocks after the ROMs are read, and the next
+#: point is due at the next strobe; at 20 the interpolated frames come out wrong, at 21 they
+#: are right). The PHY's frames are at least 40 clocks (2 a bit), so no real build is faster.
+FRAME_CLOCKS = DIVIDE_CLOCKS + 5
+
+
+def replay_frames(table, settings, points, *, frame_clocks=FRAME_CLOCKS):
+    """The positions the PHY takes for its frames from power-up, enough for ``points`` spiral
+    points, with a frame every ``frame_clocks`` clocks (:class:`SpiralPath`)."""
+    path = SpiralPath(table, settings, frame_clocks=frame_clocks)
+    sim = Simulator(path)
+    sim.add_clock(1e-6)
+    frames, total = [], PARK_FRAMES + points * settings.dwell
+
+    async def phy_latch(ctx):
+        async for _, x, y in ctx.posedge(path.frame_shown).sample(path.latched.x, path.latched.y):
+            frames.append((x, y))
+            if len(frames) == total:
+                return
+
+    sim.add_testbench(phy_latch)
+    sim.run()
+    return frames
+
+
+def replay(table, settings, points, *, clocks_per_bit=2, path_only=False, **top_kwargs):
+    """Frames decoded from the system top's wires, enough for ``points`` spiral points; with
+    ``path_only``, from the wires of :class:`SpiralPath` (the spiral-only top's scan path)."""
     clk_freq = clocks_per_bit * 2e6
-    top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings, **top_kwargs)
+    if path_only:
+        assert not top_kwargs
+        top = SpiralPath(table, settings, clk_freq=clk_freq)
+    else:
+        top = GalvoScanTop(clk_freq=clk_freq, table=table, settings=settings, **top_kwargs)
     samples = record_falling_edges(top, clk_freq, frames=PARK_FRAMES + points * settings.dwell)
     return frames_from_samples(samples)
 
@@ -94,20 +184,29 @@ def expected(table, settings, points):
 @pytest.mark.slow
 def test_full_pattern_replays_point_for_point():
     """All lcm(128, 126) = 8064 points of the precessing spiral, 3 frames (30 µs) each, linear
-    interpolation between them (the reset), read off the XY2-100 wires, equal the model frame
-    for frame. (Points held without interpolation: test_held_points and others.)
+    interpolation between them (the reset), as the PHY takes them for its frames, equal the
+    model frame for frame. (Points held without interpolation: test_held_points and others.)
 
-    Replayed on the smallest system top that carries the spiral's frames to the wires (no
-    other mode, no correction stage, no laser controller): in spiral mode those sit idle or
-    pass the points through, and half the logic simulates in half the time. The default
-    build's path is replayed by test_dwell and the others here, 150 to 400 points each."""
+    Replayed on the spiral's own path through the system top (:class:`SpiralPath`: sequencer,
+    scale stage, the PHY's latch rule and frame strobe), wired as the spiral-only top wires it,
+    at a frame every :data:`FRAME_CLOCKS` (21) clocks instead of the PHY's 40 at least. The
+    frames are the same: the sequencer and the scale stage see nothing of a frame but its
+    strobe, and each finishes its work on a point well within 21 clocks (20 is too few: then the
+    frames differ from the model, see FRAME_CLOCKS); the rest of the top sits idle in spiral
+    mode until a host writes. The PHY's encoding of those positions on the wires, and the same
+    frames from the default build's wires, are checked by the wire-level replays here
+    (test_dwell, test_held_points and the others, 60 to 400 points each, at 2 and 6 clocks a
+    bit), and the first 60 points of this pattern (182 frames) are replayed both ways below."""
     table, settings = SpiralTable(), ScanSettings()
     assert settings.spiral_interp == 1
     points = math.lcm(128, 126)
     assert points == 8064
     start = time.monotonic()
-    frames = replay(table, settings, points, modes=("spiral",), correction=None, laser=False)
+    frames = replay_frames(table, settings, points)
     print(f"full replay: {len(frames)} frames in {time.monotonic() - start:.1f} s")
+    # The strobed path gives the wires' frames: its first ones are those of the XY2-100 wires
+    # of the spiral-only top.
+    assert frames[:3 * 60 + PARK_FRAMES] == replay(table, settings, 60, path_only=True)
     assert frames == expected(table, settings, points)
     # The scan analysis' numpy model of the same pattern (galvoscan.analysis) is what the
     # gateware emits, so its dose figures speak of the real output.
@@ -129,7 +228,9 @@ def test_held_points():
     """Interpolation off: each point is held for its dwell and the mirror jumps, as before
     interpolation was built; the full pattern's first points are those of the linear replay."""
     table, settings = SpiralTable(), ScanSettings(spiral_interp=0)
-    frames = replay(table, settings, 400)
+    # (On the spiral-only top's scan path, SpiralPath; test_dwell replays held points on the
+    # default build's wires.)
+    frames = replay(table, settings, 400, path_only=True)
     assert frames == expected(table, settings, 400)
     assert all(frames[i] == frames[i + 1] == frames[i + 2] for i in range(2, len(frames), 3))
     linear = expected(table, ScanSettings(), 400)
@@ -166,7 +267,8 @@ def test_a_build_without_interpolation_holds_points_and_has_no_register():
 @given(st.data())
 def test_interpolation_over_random_tables_ranges_and_dwells(data):
     """Random tables, address ranges (a wrap from the last address to the first is a long way
-    back), gains and dwells (1 … 9, and a long one): the wires equal the model."""
+    back), gains and dwells (1 … 9, and a long one): the wires equal the model. (On the
+    spiral-only top's scan path, :class:`SpiralPath`, without the host link around it.)"""
     points = data.draw(st.sampled_from([8, 16, 32]), label="table points")
     table = SpiralTable(points=points, sampling=data.draw(st.sampled_from(["gaussian", "uniform"])),
                         sigma=data.draw(st.sampled_from([0.3, 1.0, 2.0, 50.0])))
@@ -181,7 +283,7 @@ def test_interpolation_over_random_tables_ranges_and_dwells(data):
                         amp_x=data.draw(st.integers(0, 65535)),
                         amp_y=data.draw(st.sampled_from([32768, 65535, 1000])),
                         center_x=data.draw(st.integers(0, 65535)), center_y=32768)
-    assert replay(table, scan, count, modes=("spiral",), correction=None) == \
+    assert replay(table, scan, count, path_only=True) == \
         expected(table, scan, count)
 
 
