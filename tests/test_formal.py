@@ -102,6 +102,11 @@ def test_broken_laser_controller_fails_the_proof(fault, tmp_path):
     else:
         make = partial(TamperedLaser, fault, **LASER_PROOF_PARAMETERS)
     proof = laser_safety_proof(make_controller=make, helpers=False, name=f"broken_{fault}")
+    if fault == "short_lead":
+        # Emission a clock early needs arming and the whole (short) lead first: searched from
+        # clock 0, no clock before 13 has a counterexample, and 13 has; those before are not
+        # searched again (each a solver call that cannot fail).
+        proof = replace(proof, bmc_skip=13)
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(LASER_FAULTS[fault]) & failed_properties(bmc), \
