@@ -43,9 +43,10 @@ SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="2mm" height="2mm" viewBo
 </svg>
 """
 HATCH_MM = 0.125
-# The board the SVG and DXF jobs run on: vector mode alone, without the correction stage (which
-# passes points through unchanged in vector mode with its identity table), at about half the
-# simulation cost of the default build.
+# The board the SVG, DXF and Ctrl-C jobs run on: vector mode alone, without the correction stage
+# (which passes points through unchanged in vector mode with its identity table): the job's CPU
+# 15-20 % less than on the default build, whose vector path the wobble mark, clean, job and link
+# tests run.
 VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
 # The simulated board's answers, in host seconds: a batch of 128 segments is 15 ms of the
 # board's time, a minute of a busy machine's (the command line's 60 s is for a machine to
