@@ -14,7 +14,8 @@ import pytest
 
 from galvoscan.cli import main
 
-from sim_board import quick_sim_board
+from galvoscan.gateware.settings import ScanSettings
+from sim_board import VECTOR_ONLY, quick_sim_board
 
 
 SPEED_MM_S = 2000.0
@@ -42,6 +43,11 @@ SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="2mm" height="2mm" viewBo
 </svg>
 """
 HATCH_MM = 0.125
+# The board the SVG, DXF and Ctrl-C jobs run on: vector mode alone, without the correction stage
+# (which passes points through unchanged in vector mode with its identity table): the job's CPU
+# 15-20 % less than on the default build, whose vector path the wobble mark, clean, job and link
+# tests run.
+VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
 # The simulated board's answers, in host seconds: a batch of 128 segments is 15 ms of the
 # board's time, a minute of a busy machine's (the command line's 60 s is for a machine to
 # itself).
@@ -101,7 +107,7 @@ def svg_result(tmp_path_factory):
     import io
     out = io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()), \
-            quick_sim_board():
+            quick_sim_board(**VECTOR_BOARD):
         assert main(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr", str(PRR_KHZ),
                      "--hatch", str(HATCH_MM), "--machine", str(machine), "--sim", *SIM_TIMEOUT,
                      "--json"]) == 0
@@ -179,7 +185,7 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
     dxf_drawing(path, zigzag)
     machine = tmp_path / "machine.toml"
     machine.write_text(PROFILE)
-    with quick_sim_board(vector_queue_depth=SHORT_QUEUE) as board_class:
+    with quick_sim_board(vector_queue_depth=SHORT_QUEUE, **VECTOR_BOARD) as board_class:
         result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr",
                            str(PRR_KHZ), "--machine", str(machine), "--sim", *SIM_TIMEOUT,
                            "--json"], capsys)
@@ -265,8 +271,8 @@ def test_units_and_placement_in_the_plan(tmp_path, capsys):
     assert "X 10.00 … 35.40 mm, Y 5.00 … 5.00 mm" in out
 
 
-# `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead, a
-# 16-segment queue, so the job starts after 16 segments, not 512), and a line on stdout at the
+# `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead, vector
+# mode alone, as VECTOR_BOARD, a 16-segment queue, so the job starts after 16 segments, not 512), and a line on stdout at the
 # first laser pulse: the sign that the job is mid-way with the laser on.
 CTRL_C_CHILD = """
 import runpy, signal, sys, threading, time
@@ -274,14 +280,17 @@ import runpy, signal, sys, threading, time
 # this process, ignore SIGINT; Python then leaves it ignored).
 signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path.insert(0, sys.argv.pop(1))
-from sim_board import quick_sim_board
+from galvoscan.gateware.settings import ScanSettings
+from sim_board import VECTOR_ONLY, quick_sim_board
 
 def watch(built):
     while not (built and built[0].pulses):
         time.sleep(0.02)
     print("galvoscan-test: emitting", flush=True)
 
-with quick_sim_board(vector_queue_depth=16) as board_class:
+from galvoscan.gateware.settings import ScanSettings
+with quick_sim_board(vector_queue_depth=16, modes=("vector",), correction=None,
+                     settings=ScanSettings(mode="vector", run=False)) as board_class:
     threading.Thread(target=watch, args=(board_class.built,), daemon=True).start()
     sys.argv[0] = "galvoscan"
     runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
