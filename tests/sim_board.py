@@ -380,8 +380,8 @@ class SimSPITransport:
 #: The smallest system top that runs vector jobs: no other mode, no correction stage. Vector
 #: mode's board tests (points on the wires, pulses on the DB25 pins) run on it at half the
 #: simulation cost of the default build, whose spiral, raster and correction sit idle or pass
-#: points through in vector mode; the default build's vector path is run by the wobble mark, clean, job and
-#: link tests.
+#: points through in vector mode; the default build's vector path is run by the wobble mark,
+#: clean, job and link tests.
 VECTOR_ONLY = {"modes": ("vector",), "correction": None}
 
 
