@@ -213,9 +213,12 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     """Raw frames past the client: each out-of-range value is refused, counted, and changes
     nothing; the signed laser-on delay reads back negative."""
     from galvoscan.gateware.host.regmap import BY_NAME, encode_frame
-    board = SimBoard(clk_freq=CLK, settings=ScanSettings(mode="vector", run=False),
-                     vector_delays=True)
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    # The jobs' build (the same registers, half the design of the default build's to
+    # simulate), fresh from power-up, over the jobs' link.
+    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+                                vector_delays=True, **VECTOR_ONLY,
+                                settings=ScanSettings(mode="vector", run=False))
+    client = HostClient(SimUARTTransport(board, pause_chars=0, queue_writes=True))
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19
     bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 1024),
