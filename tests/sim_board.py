@@ -310,14 +310,18 @@ class SimUARTTransport:
     """Frames as bytes on ``uart_rx``; answers read off ``uart_tx``. A pause of more than three
     character times follows every frame, as a careful host leaves."""
 
-    def __init__(self, board, *, pause_chars=4):
+    def __init__(self, board, *, pause_chars=4, queue_writes=False):
         self.board = board
         self.pause = pause_chars * 10 * board.bit_time
+        # queue_writes: a write only queues its bytes (as the real UARTTransport's returns once
+        # the OS has them); they go out, back to back, as the simulation runs: at the next
+        # query or flush(), or whenever the test runs the board.
+        self.queue_writes = queue_writes
 
     def queue(self, data, *, pause=True):
         """Add bytes to what the host sends, with or without the pause that ends a frame."""
         self.board.uart_to_board.extend(data)
-        if pause:
+        if pause and self.pause > 0:
             self.board.uart_to_board.append(("pause", self.pause))
 
     def flush(self):
@@ -331,7 +335,10 @@ class SimUARTTransport:
         self.flush()
 
     def write_frame(self, frame):
-        self.send_bytes(frame)
+        if self.queue_writes:
+            self.queue(frame)
+        else:
+            self.send_bytes(frame)
 
     def query(self, frame):
         received = len(self.board.uart_from_board)

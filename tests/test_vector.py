@@ -14,7 +14,7 @@ from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
 from vector_model import PARK, dda, job_model, merge
 
 
@@ -30,17 +30,23 @@ def test_model_follows_001():
 # --- running a job on the simulated board -------------------------------------------------------
 
 def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
-    board = SimBoard.powered_up(clk_freq=clk_freq, record_laser=True, mo_lead=0.2e-3,
-                                vector_queue_depth=vector_queue_depth, **VECTOR_ONLY,
+    # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
+    board = SimBoard.powered_up(clk_freq=clk_freq, baud=round(clk_freq / 8), record_laser=True,
+                                mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
+                                **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False, **settings))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     return board, client
 
 
-def queue(client, job):
-    for op, x, y in job:
-        client.write("vec_x", x)
-        client.write("vec_y", y)
+def queue(client, job, *, x=None, y=None):
+    """The job's segments; ``x``, ``y``: what vec_x and vec_y hold now, not written again."""
+    for op, x_to, y_to in job:
+        if x_to != x:
+            client.write("vec_x", x_to)
+        if y_to != y:
+            client.write("vec_y", y_to)
+        x, y = x_to, y_to
         client.write("vec_op", 0 if op == "jump" else 1)
 
 
@@ -70,19 +76,39 @@ def runs_on_the_wires(board):
 NO_DELAYS = {}
 
 
-def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e6):
-    board, client = start_board(clk_freq)
-    client.write("laser_prr", prr_100hz)
-    client.write("pulses_per_point", pulses)
-    client.write("pitch", pitch)
-    client.write("jump_delay", 50)
-    for name, value in NO_DELAYS.items():
-        client.write(name, value)
-    client.write("laser_power", 200)
-    queue(client, job)
+def job_link(board):
+    """The real client over the UART at 8 clocks a bit, its writes back to back as a host's
+    serial port sends them (320 clocks a write; SPI at its 12 clocks an SCK takes 420)."""
+    link = SimUARTTransport(board, pause_chars=0, queue_writes=True)
+    return link, HostClient(link)
+
+
+def set_up_job(board, job, registers, *, always=()):
+    """Over :func:`job_link`: ``registers`` (``(name, value)`` pairs; those at their reset
+    value, on this board fresh from power-up, are left alone unless named in ``always``), the
+    laser armed, the job queued meanwhile, and run once the MO lead (0.2 ms) has passed since
+    arming; returns the client."""
+    link, client = job_link(board)
+    regmap = board.top.regmap
+    for name, value in registers:
+        if value != regmap[name].reset or name in always:
+            client.write(name, value)
     client.write("arm", 1)
-    board.run_for(0.3e-3)                        # MO lead
+    link.flush()
+    armed = board.now
+    queue(client, job, x=regmap["vec_x"].reset, y=regmap["vec_y"].reset)
+    link.flush()
+    board.run_for(armed + 0.3e-3 - board.now)                # MO lead
     client.write("run", 1)
+    link.flush()
+    return client
+
+
+def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e6):
+    board, _ = start_board(clk_freq)
+    client = set_up_job(board, job, [("laser_prr", prr_100hz), ("pulses_per_point", pulses),
+                                     ("pitch", pitch), ("jump_delay", 50),
+                                     *NO_DELAYS.items(), ("laser_power", 200)])
     expected = job_model(job, pitch, pulses)
     if seconds:
         board.run_for(seconds)
@@ -94,7 +120,7 @@ def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e
     want = merge([(PARK, 0)] + expected)
     deadline = board.now + frames_needed * 12e-6 + 1e-3
     while board.now < deadline and runs_on_the_wires(board) != want:
-        board.run_for(0.25e-3)
+        board.run_for(0.1e-3)
     board.run_for(0.5e-3)
     return board, client, expected
 

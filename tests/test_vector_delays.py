@@ -11,7 +11,7 @@ import pytest
 from galvoscan.client import ClientError, HostClient, encode_write
 from galvoscan.gateware.top import ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
 
@@ -27,26 +27,54 @@ def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None
     board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
                                 vector_delays=True, **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False))
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    # The real client over the UART at 8 clocks a bit, the frames back to back as a host's
+    # serial port sends them: 320 clocks a write (SPI at its 12 clocks an SCK: 420).
+    link = SimUARTTransport(board, pause_chars=0, queue_writes=True)
+    client = HostClient(link)
+    regmap = board.top.regmap
     for name, value in (("laser_prr", PRR_100HZ), ("pulses_per_point", pulses),
                         ("pitch", pitch), ("jump_delay", jump), ("laser_on_delay", on),
                         ("laser_off_delay", off), ("mark_delay", mark),
                         ("polygon_delay", polygon), ("polygon_scaled", scaled),
                         ("laser_power", 200)):
-        client.write(name, value)
+        if value != regmap[name].reset:         # (the board is fresh from power-up)
+            client.write(name, value)
+    # Armed before the segments go in, so the MO lead runs while they do.
+    client.write("arm", 1)
+    link.flush()
+    armed = board.now
+    x_now, y_now = regmap["vec_x"].reset, regmap["vec_y"].reset
     for index, (op, x, y) in enumerate(job):
-        client.write("vec_x", x)
-        client.write("vec_y", y)
+        if x != x_now:
+            client.write("vec_x", x)
+        if y != y_now:
+            client.write("vec_y", y)
+        x_now, y_now = x, y
         factor = 0 if factors is None else factors[index]
         client.write("vec_op", 0 if op == "jump" else 1 | factor << 1)
-    client.write("arm", 1)
-    board.run_for(0.3e-3)
+    link.flush()
+    board.run_for(armed + 0.3e-3 - board.now)   # MO lead
     client.write("run", 1)
+    link.flush()
+    # Until the job's last segment, the jump to the park position, is on the wires (every job
+    # here marks away from it first), then for the longest the model can still put an edge on
+    # the modulation pin after it (the jump's hold and the larger laser delay), and 0.3 ms
+    # (30 frames) more in which nothing else may happen: compare() checks every frame and edge
+    # from power-up to the end of the recording (which the reads below extend by 0.3 ms).
     points = sum(1 + abs(x - 20000) // pitch for _, x, _ in job)
-    board.run_for(points * pulses * 60e-6 + (len(job) + 2) * 1e-3 * 0.4 + extra_s)
+    board.run_until(lambda: parked_again(board),
+                    timeout=points * pulses * 60e-6 + (len(job) + 2) * 1e-3 * 0.4 + extra_s)
+    board.run_for((jump + max(on, off, 0)) * 1e-6 + 0.3e-3)
     assert client.read("vec_stalls") == 0
     assert client.read("errors") == 0
     return board
+
+
+def parked_again(board):
+    """Whether a frame on the wires has left the park position and a later one is back."""
+    positions = [f for _, f in board.xy2_frames()]
+    away = next((i for i, p in enumerate(positions) if p != PARK), None)
+    return away is not None and PARK in positions[away:]
 
 
 def observed(board):
@@ -185,9 +213,12 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     """Raw frames past the client: each out-of-range value is refused, counted, and changes
     nothing; the signed laser-on delay reads back negative."""
     from galvoscan.gateware.host.regmap import BY_NAME, encode_frame
-    board = SimBoard(clk_freq=CLK, settings=ScanSettings(mode="vector", run=False),
-                     vector_delays=True)
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    # The jobs' build (the same registers, half the design of the default build's to
+    # simulate), fresh from power-up, over the jobs' link.
+    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+                                vector_delays=True, **VECTOR_ONLY,
+                                settings=ScanSettings(mode="vector", run=False))
+    client = HostClient(SimUARTTransport(board, pause_chars=0, queue_writes=True))
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19
     bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 1024),

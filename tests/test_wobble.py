@@ -19,8 +19,8 @@ from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMP
 from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
-from test_vector import pulses_per_frame, queue
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
+from test_vector import pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
 
@@ -28,25 +28,34 @@ from wobble_model import marked_points, wobbled_frames
 CLK = 4e6
 
 
-def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60):
+def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60, seconds=None):
+    """The job run with the wobble's registers as given; for ``seconds`` from the run
+    command, or (None) until the vector model's points and pulses are all on the wires, then
+    0.3 ms (30 frames) more in which nothing else may happen. Returns the board, the client and
+    the seconds run."""
     board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
                                 **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    for name, value in (("wob_shape", shape), ("wob_along", along), ("wob_across", across),
-                        ("wob_freq", hz), ("laser_prr", prr_100hz),
-                        # A jump held 40 µs: longer than the next segment's set-up (140
-                        # clocks, 35 µs at 4 MHz), so the mark after it never stalls.
-                        ("pulses_per_point", pulses), ("pitch", pitch), ("jump_delay", 40),
-                        ("laser_power", 200)):
-        client.write(name, value)
-    queue(client, job)
-    client.write("arm", 1)
-    board.run_for(0.3e-3)                                   # MO lead
-    client.write("run", 1)
+    # Both runs of a job write the same registers, wob_shape included, so that their traffic,
+    # and so their timing, is the same.
+    client = set_up_job(board, job, [
+        ("wob_shape", shape), ("wob_along", along), ("wob_across", across), ("wob_freq", hz),
+        ("laser_prr", prr_100hz),
+        # A jump held 40 µs: longer than the next segment's set-up (140 clocks, 35 µs at
+        # 4 MHz), so the mark after it never stalls.
+        ("pulses_per_point", pulses), ("pitch", pitch), ("jump_delay", 40),
+        ("laser_power", 200)], always=("wob_shape",))
+    started = board.now
     expected = job_model(job, pitch, pulses)
     frames_needed = sum(max(1, n) for _, n in expected) * 1000 / prr_100hz + 30
-    board.run_for(frames_needed * 10e-6 * 1.3 + 0.3e-3)
-    return board, client
+    if seconds is None:
+        want = merge([(PARK, 0)] + expected)
+        deadline = started + frames_needed * 10e-6 * 1.3 + 0.3e-3
+        while board.now < deadline and merge(pulses_per_frame(board)) != want:
+            board.run_for(0.1e-3)
+        board.run_for(0.3e-3)
+    else:
+        board.run_for(started + seconds - board.now)
+    return board, client, board.now - started
 
 
 def marked_per_frame(board, count):
@@ -62,14 +71,15 @@ def marked_per_frame(board, count):
 def check(job, *, along, across, hz, pitch=60, pulses=1, prr_100hz=600):
     """Both runs of a job; the wobbled frames against the model."""
     # (One board, reset between the runs: what the plain run shows is taken before the next.)
-    plain, plain_client = run(job, shape=0, along=along, across=across, hz=hz, pitch=pitch,
-                              pulses=pulses, prr_100hz=prr_100hz)
+    plain, plain_client, seconds = run(job, shape=0, along=along, across=across, hz=hz,
+                                       pitch=pitch, pulses=pulses, prr_100hz=prr_100hz)
     base = pulses_per_frame(plain)
     frames = [f for f, _ in base]
     marked = marked_per_frame(plain, len(frames))
     assert plain_client.read("errors") == 0
-    wobbled, client = run(job, shape=1, along=along, across=across, hz=hz, pitch=pitch,
-                          pulses=pulses, prr_100hz=prr_100hz)
+    # As long as the plain run, from the same start: the same frames.
+    wobbled, client, _ = run(job, shape=1, along=along, across=across, hz=hz, pitch=pitch,
+                             pulses=pulses, prr_100hz=prr_100hz, seconds=seconds)
     # The line alone is the vector model's.
     assert merge(base) == merge([(PARK, 0)] + job_model(job, pitch, pulses))
     # The pacer is untouched: every pulse falls in the same frame.
@@ -139,8 +149,12 @@ def test_random_jobs_amplitudes_and_frequencies_match_the_model(job, along, acro
 
 @pytest.fixture(scope="module")
 def wobble_board():
-    board = SimBoard(clk_freq=CLK, wobble=True, settings=ScanSettings(mode="vector", run=False))
-    return board, HostClient(SimSPITransport(board, clocks_per_sck=12))
+    # The jobs' build (the same registers, half the design of the default build's to simulate;
+    # fresh from power-up), over the UART at 8 clocks a bit: a read is 8 characters, 640
+    # clocks, where SPI at its 12 clocks an SCK takes two 420-clock frames.
+    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
+                                **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
+    return board, HostClient(SimUARTTransport(board, pause_chars=0, queue_writes=True))
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow,
