@@ -101,7 +101,7 @@ def _versions():
 
 
 #: The README's test command, as ``bench --suite`` runs it in a checkout.
-SUITE_COMMAND = ["-m", "pytest", "-W", "error", "-n", "auto", "--dist", "load", "-q",
+SUITE_COMMAND = ["-m", "pytest", "-W", "error", "-n", "auto", "--dist", "loadgroup", "-q",
                  "-p", "no:cacheprovider"]
 
 

@@ -17,23 +17,23 @@ def collect_garbage():
     gc.freeze()
 
 
-#: The suite's longest tests, in core-seconds as `--durations` measured them: started first,
-#: so that `-n auto --dist load` (which hands tests out in this order, as workers get free)
+#: The suite's longest tests, in seconds as `--durations` measured them: started first, so
+#: that `-n auto --dist loadgroup` (which hands tests out in this order, as workers get free)
 #: gives each worker its share of the long ones and the two finish together. Only an order:
 #: a name missing here runs after these, as collected.
 LONGEST_FIRST = {
-    "tests/test_cli.py::test_build_icebreaker": 280,
-    "tests/test_cli.py::test_build_xy2_200_on_the_pll": 260,
-    "tests/test_spiral.py::test_full_pattern_replays_point_for_point": 160,
-    "tests/test_vector_delays.py::test_random_jobs_and_delays_match_the_model": 150,
-    "tests/test_host_fuzz.py::test_spi_garbage": 70,
-    "tests/test_wobble.py::test_random_jobs_amplitudes_and_frequencies_match_the_model": 55,
-    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 50,
-    "tests/test_bench.py::test_bench_quick": 45,
-    "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 40,
-    "tests/test_spiral.py::test_interpolation_over_random_tables_ranges_and_dwells": 40,
-    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 33,
-    "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 31,
+    "tests/test_cli.py::test_build_icebreaker": 295,
+    "tests/test_cli.py::test_build_xy2_200_on_the_pll": 165,
+    "tests/test_host_fuzz.py::test_spi_garbage": 75,
+    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 45,   # (with its fixture's run)
+    "tests/test_wobble.py::test_random_jobs_amplitudes_and_frequencies_match_the_model": 44,
+    "tests/test_bench.py::test_bench_quick": 43,
+    "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 40,
+    "tests/test_spiral.py::test_full_pattern_replays_point_for_point": 36,
+    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 34,
+    "tests/test_host_fuzz.py::test_uart_garbage": 31,
+    "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 30,
+    "tests/test_host_link.py::test_every_register_resets_and_reads_back[spi]": 26,
 }
 
 

@@ -114,7 +114,9 @@ def svg_result(tmp_path_factory):
     return json.loads(out.getvalue().strip().splitlines()[-1])
 
 
+# (One worker runs both, so the drawing is marked once: --dist loadgroup.)
 @pytest.mark.slow
+@pytest.mark.xdist_group("svg_job")
 def test_svg_marks_lie_on_the_drawing(svg_result):
     marks = svg_result["marks"]
     assert len(marks) > 100
@@ -139,7 +141,9 @@ def test_svg_marks_lie_on_the_drawing(svg_result):
     assert np.sum(np.round(gaps) == 1) >= len(gaps) - 2
 
 
+# (One worker runs both, so the drawing is marked once: --dist loadgroup.)
 @pytest.mark.slow
+@pytest.mark.xdist_group("svg_job")
 def test_svg_corners_hit_speed_and_counters(svg_result):
     marks = np.array(svg_result["marks"])
     for corner in OUTER + HOLE:
