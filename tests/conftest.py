@@ -25,7 +25,8 @@ LONGEST_FIRST = {
     "tests/test_cli.py::test_build_icebreaker": 295,
     "tests/test_cli.py::test_build_xy2_200_on_the_pll": 165,
     "tests/test_host_fuzz.py::test_spi_garbage": 75,
-    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 45,   # (with its fixture's run)
+    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 45,   # (with the marking)
+    "tests/test_mark.py::test_svg_corners_hit_speed_and_counters": 44,
     "tests/test_wobble.py::test_random_jobs_amplitudes_and_frequencies_match_the_model": 44,
     "tests/test_bench.py::test_bench_quick": 43,
     "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 40,
@@ -38,4 +39,5 @@ LONGEST_FIRST = {
 
 
 def pytest_collection_modifyitems(items):
-    items.sort(key=lambda item: -LONGEST_FIRST.get(item.nodeid, 0))    # (a stable sort)
+    # (A stable sort; "@group" is what --dist loadgroup adds to an xdist_group's test ids.)
+    items.sort(key=lambda item: -LONGEST_FIRST.get(item.nodeid.split("@")[0], 0))

@@ -96,7 +96,10 @@ def outline_distance(p):
                abs(math.hypot(p[0] - cx, p[1] - cy) - r))
 
 
-@pytest.fixture(scope="module")
+# Session-wide, so that the drawing is marked once however the worker interleaves the two
+# tests with other modules' (a module's fixture is torn down whenever another module's test
+# comes between); the tests share one worker by their xdist_group.
+@pytest.fixture(scope="session")
 def svg_result(tmp_path_factory):
     folder = tmp_path_factory.mktemp("svg")
     path = folder / "shape.svg"
@@ -114,7 +117,6 @@ def svg_result(tmp_path_factory):
     return json.loads(out.getvalue().strip().splitlines()[-1])
 
 
-# (One worker runs both, so the drawing is marked once: --dist loadgroup.)
 @pytest.mark.slow
 @pytest.mark.xdist_group("svg_job")
 def test_svg_marks_lie_on_the_drawing(svg_result):
@@ -141,7 +143,6 @@ def test_svg_marks_lie_on_the_drawing(svg_result):
     assert np.sum(np.round(gaps) == 1) >= len(gaps) - 2
 
 
-# (One worker runs both, so the drawing is marked once: --dist loadgroup.)
 @pytest.mark.slow
 @pytest.mark.xdist_group("svg_job")
 def test_svg_corners_hit_speed_and_counters(svg_result):
