@@ -39,15 +39,17 @@ def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settin
     return board, client
 
 
-def queue(client, job, *, x=None, y=None):
-    """The job's segments; ``x``, ``y``: what vec_x and vec_y hold now, not written again."""
-    for op, x_to, y_to in job:
+def queue(client, job, *, x=None, y=None, factors=None):
+    """The job's segments; ``x``, ``y``: what vec_x and vec_y hold now, not written again;
+    ``factors``: each mark's polygon_scaled factor (vec_op bits 1 up; RTC delay builds)."""
+    for index, (op, x_to, y_to) in enumerate(job):
         if x_to != x:
             client.write("vec_x", x_to)
         if y_to != y:
             client.write("vec_y", y_to)
         x, y = x_to, y_to
-        client.write("vec_op", 0 if op == "jump" else 1)
+        factor = 0 if factors is None else factors[index]
+        client.write("vec_op", 0 if op == "jump" else 1 | factor << 1)
 
 
 def pulses_per_frame(board):
@@ -83,7 +85,7 @@ def job_link(board):
     return link, HostClient(link)
 
 
-def set_up_job(board, job, registers, *, always=()):
+def set_up_job(board, job, registers, *, always=(), factors=None):
     """Over :func:`job_link`: ``registers`` (``(name, value)`` pairs; those at their reset
     value, on this board fresh from power-up, are left alone unless named in ``always``), the
     laser armed, the job queued meanwhile, and run once the MO lead (0.2 ms) has passed since
@@ -96,7 +98,7 @@ def set_up_job(board, job, registers, *, always=()):
     client.write("arm", 1)
     link.flush()
     armed = board.now
-    queue(client, job, x=regmap["vec_x"].reset, y=regmap["vec_y"].reset)
+    queue(client, job, x=regmap["vec_x"].reset, y=regmap["vec_y"].reset, factors=factors)
     link.flush()
     board.run_for(armed + 0.3e-3 - board.now)                # MO lead
     client.write("run", 1)

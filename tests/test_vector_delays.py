@@ -11,7 +11,8 @@ import pytest
 from galvoscan.client import ClientError, HostClient, encode_write
 from galvoscan.gateware.top import ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from test_vector import job_link, set_up_job
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
 
@@ -27,35 +28,11 @@ def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None
     board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
                                 vector_delays=True, **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False))
-    # The real client over the UART at 8 clocks a bit, the frames back to back as a host's
-    # serial port sends them: 320 clocks a write (SPI at its 12 clocks an SCK: 420).
-    link = SimUARTTransport(board, pause_chars=0, queue_writes=True)
-    client = HostClient(link)
-    regmap = board.top.regmap
-    for name, value in (("laser_prr", PRR_100HZ), ("pulses_per_point", pulses),
-                        ("pitch", pitch), ("jump_delay", jump), ("laser_on_delay", on),
-                        ("laser_off_delay", off), ("mark_delay", mark),
-                        ("polygon_delay", polygon), ("polygon_scaled", scaled),
-                        ("laser_power", 200)):
-        if value != regmap[name].reset:         # (the board is fresh from power-up)
-            client.write(name, value)
-    # Armed before the segments go in, so the MO lead runs while they do.
-    client.write("arm", 1)
-    link.flush()
-    armed = board.now
-    x_now, y_now = regmap["vec_x"].reset, regmap["vec_y"].reset
-    for index, (op, x, y) in enumerate(job):
-        if x != x_now:
-            client.write("vec_x", x)
-        if y != y_now:
-            client.write("vec_y", y)
-        x_now, y_now = x, y
-        factor = 0 if factors is None else factors[index]
-        client.write("vec_op", 0 if op == "jump" else 1 | factor << 1)
-    link.flush()
-    board.run_for(armed + 0.3e-3 - board.now)   # MO lead
-    client.write("run", 1)
-    link.flush()
+    client = set_up_job(board, job, [
+        ("laser_prr", PRR_100HZ), ("pulses_per_point", pulses), ("pitch", pitch),
+        ("jump_delay", jump), ("laser_on_delay", on), ("laser_off_delay", off),
+        ("mark_delay", mark), ("polygon_delay", polygon), ("polygon_scaled", scaled),
+        ("laser_power", 200)], factors=factors)
     # Until the job's last segment, the jump to the park position, is on the wires (every job
     # here marks away from it first), then for the longest the model can still put an edge on
     # the modulation pin after it (the jump's hold and the larger laser delay), and 0.3 ms
@@ -218,7 +195,7 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
                                 vector_delays=True, **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False))
-    client = HostClient(SimUARTTransport(board, pause_chars=0, queue_writes=True))
+    client = job_link(board)[1]
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19
     bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 1024),

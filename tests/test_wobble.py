@@ -19,8 +19,8 @@ from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMP
 from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
-from test_vector import pulses_per_frame, set_up_job
+from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from test_vector import job_link, pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
 
@@ -154,7 +154,7 @@ def wobble_board():
     # clocks, where SPI at its 12 clocks an SCK takes two 420-clock frames.
     board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
                                 **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
-    return board, HostClient(SimUARTTransport(board, pause_chars=0, queue_writes=True))
+    return board, job_link(board)[1]
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow,
