@@ -130,11 +130,6 @@ class LineDDA(wiring.Component):
         acc_y = Signal(17 + F)
         kp2 = Signal(36)           # (k·p)²
         odd = Signal(37)           # (2k + 1)·p²
-        # Whether ((k + 1)·p)² < D², from the clock before: ``kp2`` and ``odd`` never change
-        # on the clock before NEXT (STEP, or the end of the set-up), so NEXT decides from a
-        # flip-flop, not through two carry chains into some 170 flip-flops' enables.
-        another = Signal()
-        m.d.sync += another.eq(kp2 + odd < d2)
 
         # Square-root step: bring down two bits, try (root << 2) | 1. Division step: bring
         # down a zero, try the root. Both subtract from the same remainder.
@@ -254,9 +249,10 @@ class LineDDA(wiring.Component):
                             m.next = "UNIT_LOAD"
             with m.State("NEXT"):
                 # Is there a point k·p < L before the end?
-                with m.If(another):
+                next_kp2 = kp2 + odd
+                with m.If(next_kp2 < d2):
                     m.d.sync += [
-                        kp2.eq(kp2 + odd),
+                        kp2.eq(next_kp2),
                         odd.eq(odd + (p2 << 1)),
                         # acc ± step as one adder: add the complement and one to subtract.
                         acc_x.eq(acc_x + Cat(step_x ^ negative_x.replicate(len(step_x)),
