@@ -130,22 +130,12 @@ class RegisterFile(wiring.Component):
         # is asked on the next clock, when the write is done.
         in_range = Signal()
         address, write_data = self._write_address, self._write_data
-        # Which of the registers that can refuse a write in range (a queue when it is full, a
-        # refusable strobe when its block is not ready) the access is to, decoded here too:
-        # the write's outcome on the next clock is then a few flip-flops and the blocks'
-        # readiness, not the address decoded again (that decode, into the decoder's count of
-        # refused writes, was the system's slowest path).
-        refusing = [reg for reg in self.regmap
-                    if reg.access == "queue" or (reg.access == "strobe" and reg.refusable)]
-        addressed = {reg.name: Signal(name=f"{reg.name}_addressed") for reg in refusing}
         m.d.sync += [address.eq(bus.address), write_data.eq(bus.write_data),
-                     in_range.eq(0), *(flag.eq(0) for flag in addressed.values())]
+                     in_range.eq(0)]
         with m.Switch(bus.address):
             for reg in self.regmap:
                 with m.Case(reg.address):
                     m.d.comb += bus.read_ok.eq(1)
-                    if reg.name in addressed:
-                        m.d.sync += addressed[reg.name].eq(1)
                     if reg.access == "strobe":
                         m.d.sync += in_range.eq(bus.write_data <= reg.high)
                     elif reg.access in ("rw", "queue"):
@@ -157,21 +147,6 @@ class RegisterFile(wiring.Component):
                         m.d.sync += in_range.eq(ok)
 
         # --- writes: on the clock after -------------------------------------------------------
-        # Done if in range and, for a register that can refuse, its block takes it now.
-        write_ok = in_range
-        for reg in refusing:
-            ready = getattr(self, f"{reg.name}_ready")
-            if reg.access == "strobe":
-                ready = ready | (write_data == 0)       # a write of 0 does nothing: never refused
-            write_ok &= ~addressed[reg.name] | ready
-        m.d.comb += bus.write_ok.eq(write_ok)
-        for reg in refusing:
-            if reg.access == "queue":
-                # A full queue refuses the write: nothing is lost silently.
-                given = bus.write_en & in_range & addressed[reg.name]
-                ready = getattr(self, f"{reg.name}_ready")
-                m.d.comb += [getattr(self, f"{reg.name}_push").eq(given & ready),
-                             getattr(self, f"{reg.name}_refused").eq(given & ~ready)]
         # Written since the last reset, one bit per register that reads back what it holds.
         written = Signal(len(held))
         for reg in self.regmap:
@@ -187,11 +162,20 @@ class RegisterFile(wiring.Component):
                         ok = in_range
                         if reg.refusable:
                             ok &= getattr(self, f"{reg.name}_ready") | (write_data == 0)
+                        m.d.comb += bus.write_ok.eq(ok)
                         m.d.sync += value.eq(bus.write_en & ok & (write_data == 1))
                     elif reg.access in ("rw", "queue"):
                         ok = in_range
                         if reg.access == "queue":
-                            ok &= getattr(self, f"{reg.name}_ready")
+                            # A full queue refuses the write: nothing is lost silently.
+                            ready = getattr(self, f"{reg.name}_ready")
+                            ok &= ready
+                            m.d.comb += [
+                                getattr(self, f"{reg.name}_push").eq(bus.write_en & ok),
+                                getattr(self, f"{reg.name}_refused").eq(
+                                    bus.write_en & in_range & ~ready),
+                            ]
+                        m.d.comb += bus.write_ok.eq(ok)
                         with m.If(bus.write_en & ok):
                             m.d.sync += written[held.index(reg)].eq(1)
                             if reg.access == "rw":
