@@ -13,7 +13,7 @@ import pytest
 from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
-from galvoscan.gateware.top import GalvoScanTop
+from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
 from wires import frames_from_samples
 
@@ -390,6 +390,10 @@ class SimSPITransport:
 #: points through in vector mode; the default build's vector path is run by the wobble mark,
 #: clean, job and link tests.
 VECTOR_ONLY = {"modes": ("vector",), "correction": None}
+
+#: :data:`VECTOR_ONLY` starting in vector mode, stopped: the board the command line's jobs
+#: (``mark``, the job streamer) run on in the tests.
+VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
 
 
 #: What the tests' ``--sim`` boards differ in from the command line's (the iCEBreaker's 12 MHz,

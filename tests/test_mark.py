@@ -14,8 +14,7 @@ import pytest
 
 from galvoscan.cli import main
 
-from galvoscan.gateware.settings import ScanSettings
-from sim_board import VECTOR_ONLY, quick_sim_board
+from sim_board import VECTOR_BOARD, quick_sim_board
 
 
 SPEED_MM_S = 2000.0
@@ -43,11 +42,10 @@ SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="2mm" height="2mm" viewBo
 </svg>
 """
 HATCH_MM = 0.125
-# The board the SVG, DXF and Ctrl-C jobs run on: vector mode alone, without the correction stage
-# (which passes points through unchanged in vector mode with its identity table): the job's CPU
-# 15-20 % less than on the default build, whose vector path the wobble mark, clean, job and link
-# tests run.
-VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
+# The SVG, DXF and Ctrl-C jobs run on VECTOR_BOARD: vector mode alone, without the correction
+# stage (which passes points through unchanged in vector mode with its identity table): the
+# job's CPU 15-20 % less than on the default build, whose vector path the wobble mark, clean,
+# job and link tests run.
 # The simulated board's answers, in host seconds: a batch of 128 segments is 15 ms of the
 # board's time, a minute of a busy machine's (the command line's 60 s is for a machine to
 # itself).
@@ -276,26 +274,23 @@ def test_units_and_placement_in_the_plan(tmp_path, capsys):
     assert "X 10.00 … 35.40 mm, Y 5.00 … 5.00 mm" in out
 
 
-# `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead, vector
-# mode alone, as VECTOR_BOARD, a 16-segment queue, so the job starts after 16 segments, not 512), and a line on stdout at the
-# first laser pulse: the sign that the job is mid-way with the laser on.
+# `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead,
+# VECTOR_BOARD, a 16-segment queue, so the job starts after 16 segments, not 512), and a line
+# on stdout at the first laser pulse: the sign that the job is mid-way with the laser on.
 CTRL_C_CHILD = """
 import runpy, signal, sys, threading, time
 # Ctrl-C as from a terminal (a shell that starts the tests in the background has them, and so
 # this process, ignore SIGINT; Python then leaves it ignored).
 signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path.insert(0, sys.argv.pop(1))
-from galvoscan.gateware.settings import ScanSettings
-from sim_board import VECTOR_ONLY, quick_sim_board
+from sim_board import VECTOR_BOARD, quick_sim_board
 
 def watch(built):
     while not (built and built[0].pulses):
         time.sleep(0.02)
     print("galvoscan-test: emitting", flush=True)
 
-from galvoscan.gateware.settings import ScanSettings
-with quick_sim_board(vector_queue_depth=16, modes=("vector",), correction=None,
-                     settings=ScanSettings(mode="vector", run=False)) as board_class:
+with quick_sim_board(vector_queue_depth=16, **VECTOR_BOARD) as board_class:
     threading.Thread(target=watch, args=(board_class.built,), daemon=True).start()
     sys.argv[0] = "galvoscan"
     runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)

@@ -13,15 +13,10 @@ from galvoscan.client import ClientError, HostClient, SerialTransport
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
 
-from galvoscan.gateware.settings import ScanSettings
-
-from sim_board import QUICK_SIM_BOARD, VECTOR_ONLY
-
-
-#: The simulated boards here run vector jobs alone: vector mode only, no correction stage (the
-#: job's CPU 15-20 % less than on the default build, whose vector path the wobble mark, clean,
-#: job and link tests run).
-VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
+# The simulated boards here run vector jobs alone (VECTOR_BOARD: vector mode only, no
+# correction stage; the job's CPU 15-20 % less than on the default build, whose vector path the
+# wobble mark, clean, job and link tests run).
+from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
 
 
 class FakeBoard:

@@ -11,7 +11,7 @@ import pytest
 from galvoscan.client import ClientError, HostClient, encode_write
 from galvoscan.gateware.top import ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
 from test_vector import job_link, set_up_job
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
@@ -23,11 +23,16 @@ CLOCKS_PER_US = 4
 PRR_100HZ = 200
 
 
+def jobs_board():
+    """The jobs' build, fresh from power-up: vector mode alone with the RTC delays (the same
+    registers, half the design of the default build's to simulate)."""
+    return SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+                               vector_delays=True, **VECTOR_BOARD)
+
+
 def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None, pulses=1,
         pitch=60, extra_s=0.6e-3):
-    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
-                                vector_delays=True, **VECTOR_ONLY,
-                                settings=ScanSettings(mode="vector", run=False))
+    board = jobs_board()
     client = set_up_job(board, job, [
         ("laser_prr", PRR_100HZ), ("pulses_per_point", pulses), ("pitch", pitch),
         ("jump_delay", jump), ("laser_on_delay", on), ("laser_off_delay", off),
@@ -190,11 +195,8 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     """Raw frames past the client: each out-of-range value is refused, counted, and changes
     nothing; the signed laser-on delay reads back negative."""
     from galvoscan.gateware.host.regmap import BY_NAME, encode_frame
-    # The jobs' build (the same registers, half the design of the default build's to
-    # simulate), fresh from power-up, over the jobs' link.
-    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
-                                vector_delays=True, **VECTOR_ONLY,
-                                settings=ScanSettings(mode="vector", run=False))
+    # The jobs' build, over the jobs' link.
+    board = jobs_board()
     client = job_link(board)[1]
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19

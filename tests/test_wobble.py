@@ -19,7 +19,7 @@ from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMP
 from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport
+from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
 from test_vector import job_link, pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
@@ -28,13 +28,19 @@ from wobble_model import marked_points, wobbled_frames
 CLK = 4e6
 
 
+def jobs_board():
+    """The jobs' build, fresh from power-up: vector mode alone with the wobble stage (the same
+    registers, half the design of the default build's to simulate)."""
+    return SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
+                               **VECTOR_BOARD)
+
+
 def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60, seconds=None):
     """The job run with the wobble's registers as given; for ``seconds`` from the run
     command, or (None) until the vector model's points and pulses are all on the wires, then
     0.3 ms (30 frames) more in which nothing else may happen. Returns the board, the client and
     the seconds run."""
-    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
-                                **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
+    board = jobs_board()
     # Both runs of a job write the same registers, wob_shape included, so that their traffic,
     # and so their timing, is the same.
     client = set_up_job(board, job, [
@@ -149,11 +155,9 @@ def test_random_jobs_amplitudes_and_frequencies_match_the_model(job, along, acro
 
 @pytest.fixture(scope="module")
 def wobble_board():
-    # The jobs' build (the same registers, half the design of the default build's to simulate;
-    # fresh from power-up), over the UART at 8 clocks a bit: a read is 8 characters, 640
-    # clocks, where SPI at its 12 clocks an SCK takes two 420-clock frames.
-    board = SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
-                                **VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False))
+    # The jobs' build over the UART at 8 clocks a bit: a read is 8 characters, 640 clocks,
+    # where SPI at its 12 clocks an SCK takes two 420-clock frames.
+    board = jobs_board()
     return board, job_link(board)[1]
 
 
