@@ -2,8 +2,11 @@
 
 from dataclasses import asdict, dataclass
 import json
+import os
 from pathlib import Path
+import shlex
 import subprocess
+import sys
 import time
 
 from .gateware.clocking import DEFAULT_BAUD
@@ -53,6 +56,7 @@ class BuildReport:
     bit_rate_mhz: float = 2.0   # XY2 bit rate (2: XY2-100, 4: XY2-200)
     baud: int = DEFAULT_BAUD    # host serial port rate
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
+    placer: str = "heap"        # nextpnr's placer that placed it: "static" or "heap"
 
     @property
     def meets_timing(self):
@@ -154,8 +158,18 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json "
                                        f"--timing-allow-fail" +
                                        (f" --freq {clock / 1e6:g}" if clock else ""))
+    env = tool_env()
+    (build_dir / f"{name}.tim.placer").unlink(missing_ok=True)     # a former build's
+    if os.name == "posix":
+        # nextpnr through galvoscan.placer: the electrostatic placer, HeAP if it does not settle.
+        build_dir.mkdir(parents=True, exist_ok=True)
+        wrapper = build_dir / "nextpnr-ice40.sh"
+        wrapper.write_text(f"#!/bin/sh\nexec {shlex.quote(sys.executable)} -m galvoscan.placer "
+                           f"\"$@\"\n")
+        wrapper.chmod(0o755)
+        env["NEXTPNR_ICE40"] = str(wrapper.resolve())
     try:
-        products = plan.execute_local(str(build_dir), env=tool_env())
+        products = plan.execute_local(str(build_dir), env=env)
     except subprocess.CalledProcessError as error:
         raise BuildError(f"the {board} build failed in {error.cmd[0] if error.cmd else 'a tool'}"
                          f" (exit {error.returncode}); see the logs in {build_dir}") from None
@@ -170,12 +184,14 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     luts, luts_available = _used(utilisation, "ICESTORM_LC")
     brams, brams_available = _used(utilisation, "ICESTORM_RAM")
     dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
+    placed_by = build_dir / f"{name}.tim.placer"
+    placer = placed_by.read_text().strip() if placed_by.is_file() else "heap"
     result = BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
                        modes=modes, correction_nodes=correction.n if correction else 0,
-                       bit_rate_mhz=bit_rate / 1e6, baud=baud)
+                       bit_rate_mhz=bit_rate / 1e6, baud=baud, placer=placer)
     if not result.meets_timing:
         # A bitstream that misses timing is never written where a user would flash it.
         bitstream.unlink(missing_ok=True)

