@@ -22,19 +22,20 @@ def collect_garbage():
 #: gives each worker its share of the long ones and the two finish together. Only an order:
 #: a name missing here runs after these, as collected.
 LONGEST_FIRST = {
-    "tests/test_cli.py::test_build_icebreaker": 295,
-    "tests/test_cli.py::test_build_xy2_200_on_the_pll": 165,
-    "tests/test_host_fuzz.py::test_spi_garbage": 75,
-    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 45,   # (with the marking)
-    "tests/test_mark.py::test_svg_corners_hit_speed_and_counters": 44,
+    "tests/test_cli.py::test_build_icebreaker": 127,
+    "tests/test_cli.py::test_build_xy2_200_on_the_pll": 126,
+    "tests/test_host_fuzz.py::test_spi_garbage": 67,
+    "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 49,
+    "tests/test_bench.py::test_bench_quick": 46,
     "tests/test_wobble.py::test_random_jobs_amplitudes_and_frequencies_match_the_model": 44,
-    "tests/test_bench.py::test_bench_quick": 43,
-    "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 40,
-    "tests/test_spiral.py::test_full_pattern_replays_point_for_point": 36,
-    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 34,
-    "tests/test_host_fuzz.py::test_uart_garbage": 31,
-    "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 30,
-    "tests/test_host_link.py::test_every_register_resets_and_reads_back[spi]": 26,
+    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 38,   # (with the marking)
+    "tests/test_mark.py::test_svg_corners_hit_speed_and_counters": 38,
+    "tests/test_host_fuzz.py::test_uart_garbage": 37,
+    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 35,
+    "tests/test_spiral.py::test_full_pattern_replays_point_for_point": 35,
+    "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 32,
+    "tests/test_host_link.py::test_every_register_resets_and_reads_back[spi]": 29,
+    "tests/test_host_link.py::test_every_register_resets_and_reads_back[uart]": 24,
 }
 
 
