@@ -64,7 +64,8 @@ def _build(label):
                    "brams": report.brams, "dsps": report.dsps, "fmax_mhz": report.fmax_mhz,
                    "clock_mhz": report.clock_mhz, "meets_timing": report.meets_timing,
                    "modes": list(report.modes), "correction_nodes": report.correction_nodes,
-                   "bit_rate_mhz": report.bit_rate_mhz, "build_s": report.seconds}
+                   "bit_rate_mhz": report.bit_rate_mhz, "build_s": report.seconds,
+                   "placer": report.placer}
 
 
 def _blocks():
@@ -212,7 +213,9 @@ def table(result):
                      f"{board['bit_rate_mhz']:g} Mbit/s)",
                      f"{board['luts']} / {board['luts_available']} cells, {board['brams']} RAMs, "
                      f"{board['dsps']} DSPs, Fmax {board['fmax_mhz']:.1f} MHz "
-                     f"({'met' if board['meets_timing'] else 'NOT met'}), {board['build_s']:.0f} s"))
+                     f"({'met' if board['meets_timing'] else 'NOT met'}), "
+                     # (Records from before the placer was: HeAP placed them all.)
+                     f"{board.get('placer', 'heap')} placer, {board['build_s']:.0f} s"))
     blocks = result.get("blocks", {})
     if blocks:
         largest = list(blocks.items())[:8]

@@ -52,7 +52,7 @@ def test_table_shows_seeds_proofs_and_suite():
         "xy2_200": {"frames_per_s": 200000, "idle_clocks": 0},
         "link": {f"{n}_{k}": 1.0 for n in ("spi", "uart")
                  for k in ("frames_per_s", "latency_us", "latency_max_us")},
-        "boards": {"icebreaker": {**board, "fmax_mhz": 25.0},
+        "boards": {"icebreaker": {**board, "fmax_mhz": 25.0, "placer": "static"},
                    "icebreaker_seed2": {**board, "fmax_mhz": 24.2},
                    "icebreaker_seed3": {**board, "fmax_mhz": 26.0}},
         "proofs": {"a": {"prove": {"status": "PASS", "seconds": 10.0}},
@@ -64,6 +64,8 @@ def test_table_shows_seeds_proofs_and_suite():
     }
     text = table(result)
     assert "| default build, lowest Fmax of 3 placer seeds | 24.2 MHz |" in text
+    assert "Fmax 25.0 MHz (met), static placer, 200 s |" in text
+    assert "Fmax 24.2 MHz (met), heap placer, 200 s |" in text
     assert "| every proof and cover, one after another | 35 s |" in text
     assert "| test suite (the README's test command, on every core) | 10.0 min, 800 passed, " \
            "2 skipped |" in text
