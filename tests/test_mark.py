@@ -115,6 +115,15 @@ def svg_result(tmp_path_factory):
     return json.loads(out.getvalue().strip().splitlines()[-1])
 
 
+@pytest.mark.xdist_group("svg_job")
+def test_the_svg_tests_share_a_worker(request):
+    """Under ``--dist loadgroup`` the group is in the test's id, which is what sends the group
+    to one worker (and the marking above is done once): a pytest that drops it (9.2 with
+    pytest-xdist 3.8) would split them silently."""
+    if getattr(request.config.option, "loadgroup", False):
+        assert request.node.nodeid.endswith("@svg_job")
+
+
 @pytest.mark.slow
 @pytest.mark.xdist_group("svg_job")
 def test_svg_marks_lie_on_the_drawing(svg_result):
