@@ -141,6 +141,10 @@ def test_ellipse_follows_each_line_and_nothing_else_moves():
 # mark, the phase's 10 ppm drift is the largest error (26 units, 700 frames in).
 @example(job=[("mark", 24000, 20133), ("mark", 20263, 20008)], along=4092, across=1155,
          hz=24999, pulses=3)
+# Found by hypothesis: the steep mark's last DDA point rounds onto its end, so the end is
+# marked twice in a row, one run of frames on the wires.
+@example(job=[("mark", 20158, 20073), ("jump", 20271, 20296), ("mark", 20285, 20056),
+              ("mark", 20111, 20044)], along=3500, across=719, hz=5835, pulses=4)
 def test_random_jobs_amplitudes_and_frequencies_match_the_model(job, along, across, hz, pulses):
     """Random short jobs from a jump near them. Three or four pulses a point at 50 kHz hold
     every point at least 40 µs, longer than the next segment's 35 µs set-up at this clock:

@@ -12,7 +12,9 @@ def marked_points(job, pitch):
     """The marked points of a job in marking order, each with the unit vector of the line it
     lies on: a line's points and end point get the line's own direction when the line is longer
     than the pitch; a mark's first point (the laser was off) and a line no longer than the
-    pitch keep that of the last longer line (+X before any)."""
+    pitch keep that of the last longer line (+X before any). A point that repeats the one
+    before it while the laser stays on (a DDA point that rounds onto the line's end) is one
+    run of frames on the wires, so one point here."""
     position, pen_down, direction, out = PARK, False, (1.0, 0.0), []
     for op, x, y in job:
         if op == "jump":
@@ -25,7 +27,9 @@ def marked_points(job, pitch):
             length = math.hypot(dx, dy)
             if length > pitch:
                 direction = (dx / length, dy / length)
-            out += [(p, direction) for p in dda(position, (x, y), pitch)]
+            for point in dda(position, (x, y), pitch):
+                if point != out[-1][0]:
+                    out.append((point, direction))
         position = (x, y)
     return out
 
