@@ -4,6 +4,7 @@ DrawingError and nothing else. The DXF reader's geometry is in test_dxf.py."""
 
 import math
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -203,6 +204,60 @@ def test_absurd_size_and_non_finite(tmp_path):
     refused(tmp_path / "big.dxf", "check the drawing's units")
     (tmp_path / "inf.svg").write_text(svg('<line x1="0" y1="0" x2="1e400" y2="5"/>'))
     refused(tmp_path / "inf.svg", "not finite")
+
+
+def _huge_curves(folder):
+    """Curves far beyond any field, each alone in a drawing: without a count of their chords
+    before they are made, each of these took gigabytes (a pytest worker grew to 24 GB)."""
+    cases = {
+        "cubic.svg": svg('<path d="M0 0 C 9e14 9e14 -9e14 9e14 1 0"/>'),
+        "quadratic.svg": svg('<path d="M0 0 Q 9e14 9e14 1 0"/>'),
+        "arc.svg": svg('<path d="M0 0 A 9e14 9e14 0 1 1 1e14 0"/>'),
+    }
+    for name, text in cases.items():
+        (folder / name).write_text(text)
+    huge = 9e14
+    for name, add in {
+        "circle.dxf": lambda msp: msp.add_circle((0, 0), huge),
+        "arc.dxf": lambda msp: msp.add_arc((0, 0), huge, 0, 270),
+        "ellipse.dxf": lambda msp: msp.add_ellipse((0, 0), major_axis=(huge, 0), ratio=0.5),
+        "spline.dxf": lambda msp: msp.add_spline([(0, 0), (huge, huge), (-huge, huge), (1, 0)]),
+        "bulge.dxf": lambda msp: msp.add_lwpolyline([(0, 0, 0, 0, 1e6), (1, 0)],
+                                                    format="xyseb"),
+    }.items():
+        doc, msp = new_dxf()
+        add(msp)
+        doc.saveas(folder / name)
+    return [folder / name for name in [*cases, "circle.dxf", "arc.dxf", "ellipse.dxf",
+                                       "spline.dxf", "bulge.dxf"]]
+
+
+# Loads each drawing named in argv with the memory capped at a gigabyte, and prints what it
+# says: a regression fails in the cap, not by the OOM killer.
+_CAPPED_LOADS = """
+import resource, sys
+resource.setrlimit(resource.RLIMIT_AS, (2 ** 30, 2 ** 30))
+from galvoscan.jobs.drawing import DrawingError, load_drawing
+for path in sys.argv[1:]:
+    try:
+        load_drawing(path)
+        print(path, "loaded")
+    except DrawingError as error:
+        print(error)
+"""
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="caps the loads' memory with setrlimit")
+def test_huge_curves_are_refused_before_they_are_flattened(tmp_path):
+    import subprocess
+    paths = _huge_curves(tmp_path)
+    run = subprocess.run([sys.executable, "-c", _CAPPED_LOADS, *map(str, paths)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    lines = run.stdout.splitlines()
+    assert len(lines) == len(paths)
+    for path, line in zip(paths, lines):
+        assert line.startswith(f"{path}: ") and "check the drawing's units" in line, line
 
 
 def test_damaged_dxf_value_is_refused_with_what_ezdxf_found(tmp_path):

@@ -29,6 +29,11 @@ MAX_EXTENT_MM = 10_000.0
 #: Below this, two consecutive points are one (float noise of transforms and flattening).
 SAME_POINT_MM = 1e-9
 MM_PER_PX = 25.4 / 96                       # svgelements gives px at 96 ppi
+#: Chords one curve may be flattened into. A curve that fits in :data:`MAX_EXTENT_MM` needs far
+#: fewer (a circle 10 m across at 0.01 mm: some 1,600); more means coordinates far beyond any
+#: lens field (a unit mistake, a damaged file), refused before the points are made: a Bézier
+#: with a control point at 9e14 would have taken 240 million points, gigabytes.
+MAX_CHORDS = 1_000_000
 
 
 class DrawingError(ValueError):
@@ -161,6 +166,22 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm):
     return drawing
 
 
+def _chords(n):
+    """``n``, the chords a curve is about to be flattened into, if it is not too many."""
+    if not n <= MAX_CHORDS:                 # (nan too)
+        raise DrawingError(f"a curve that would take more than {MAX_CHORDS:,} chords: "
+                           f"coordinates far beyond any field (check the drawing's units)")
+    return n
+
+
+def _round_chords(radius, sweep, tolerance):
+    """Chords within ``tolerance`` on an arc of ``radius`` turning ``sweep`` radians: a chord
+    turning ``2 acos(1 - tolerance / radius)`` (written with asin, which stays above 0 where
+    ``1 - tolerance / radius`` rounds to 1)."""
+    step = 4 * math.asin(math.sqrt(tolerance / radius / 2)) if tolerance < radius else math.pi
+    return _chords(max(1, math.ceil(abs(sweep) / step - 1e-9)))
+
+
 # --- SVG ------------------------------------------------------------------------------------
 
 def _arc_points(arc, tolerance_px):
@@ -188,8 +209,7 @@ def _arc_points(arc, tolerance_px):
     sweep = arc.sweep * (1.0 if np.linalg.det(uv) > 0 else -1.0)
     misses = [np.hypot(*(at(np.array([t0 + s]))[0] - end)) for s in (sweep, -sweep)]
     sweep = -sweep if misses[0] > misses[1] + 1e-9 * major else sweep
-    step = 2 * math.acos(1 - tolerance_px / major) if tolerance_px < major else math.pi
-    n = max(1, math.ceil(abs(sweep) / step - 1e-9))
+    n = _round_chords(major, sweep, tolerance_px)
     points = at(t0 + sweep * np.arange(1, n + 1) / n)
     points[-1] = end
     return list(points)
@@ -201,7 +221,7 @@ def _bezier_points(segment, tolerance_px):
     p = np.array([np.array(q, dtype=float) for q in segment])
     degree = len(p) - 1
     second = np.max(np.hypot(*(p[:-2] - 2 * p[1:-1] + p[2:]).T)) * degree * (degree - 1)
-    n = max(1, math.ceil(math.sqrt(second / (8 * tolerance_px))))
+    n = _chords(max(1, math.ceil(math.sqrt(second / (8 * tolerance_px)))))
     return list(np.asarray(segment.npoint(np.arange(1, n + 1) / n), dtype=float))
 
 

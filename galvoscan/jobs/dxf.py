@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from .drawing import DrawingError, _counted, _one_line
+from .drawing import DrawingError, _chords, _counted, _one_line, _round_chords
 
 
 __all__ = []                                # nothing public: load_drawing reads DXF files
@@ -57,6 +57,7 @@ def _spline_points(spline, tolerance):
         done_t.append(t1[good]), done_p.append(p1[good])
         if good.all():
             break
+        _chords(sum(map(len, done_t)) + 2 * np.count_nonzero(~good))
         bad = ~good
         tm = (t0[bad] + t1[bad]) / 2
         pm = _xy(spline.points(tm))
@@ -72,12 +73,20 @@ def _polyline_points(entity, tolerance):
                       else entity.points_in_wcs()))
     chained = [_xy([first])]
     for piece in entity.virtual_entities():
-        points = (_xy([piece.dxf.start, piece.dxf.end]) if piece.dxftype() == "LINE"
-                  else _xy(piece.flattening(tolerance)))
+        if piece.dxftype() == "LINE":
+            points = _xy([piece.dxf.start, piece.dxf.end])
+        else:
+            _round_chords(piece.dxf.radius, math.radians(_span_degrees(piece)), tolerance)
+            points = _xy(piece.flattening(tolerance))
         end = chained[-1][-1]
         chained.append(points[::-1] if np.hypot(*(points[-1] - end)) <
                        np.hypot(*(points[0] - end)) else points)
     return np.concatenate(chained)
+
+
+def _span_degrees(arc):
+    """The degrees an ARC entity turns through (0: a whole circle)."""
+    return (arc.dxf.end_angle - arc.dxf.start_angle) % 360
 
 
 def _entity_points(entity, tolerance, skipped):
@@ -85,13 +94,17 @@ def _entity_points(entity, tolerance, skipped):
     kind = entity.dxftype()
     if kind == "LINE":
         return _xy([entity.dxf.start, entity.dxf.end]), False
+    # (Each curve's chords counted before ezdxf makes them: see MAX_CHORDS.)
     if kind == "CIRCLE":
+        _round_chords(entity.dxf.radius, math.tau, tolerance)
         return _xy(entity.flattening(tolerance)), True
     if kind == "ARC":
-        span = (entity.dxf.end_angle - entity.dxf.start_angle) % 360
+        span = _span_degrees(entity)
+        _round_chords(entity.dxf.radius, math.radians(span or 360), tolerance)
         return _xy(entity.flattening(tolerance)), span == 0
     if kind == "ELLIPSE":
         span = (entity.dxf.end_param - entity.dxf.start_param) % math.tau
+        _round_chords(math.hypot(*entity.dxf.major_axis), span or math.tau, tolerance)
         return _xy(entity.flattening(tolerance)), min(span, math.tau - span) < 1e-9
     if kind == "SPLINE":
         return _spline_points(entity.construction_tool(), tolerance), bool(entity.closed)
