@@ -190,11 +190,15 @@ def test_unreadable_file(tmp_path):
 
 def test_nothing_to_mark(tmp_path):
     (tmp_path / "blank.svg").write_text(svg('<text x="0" y="0">only text</text>'))
-    refused(tmp_path / "blank.svg", "no lines or curves to mark")
+    # What was left out is said: it may be why nothing is left.
+    refused(tmp_path / "blank.svg",
+            "no lines or curves to mark (left out: 1 text element (convert text to paths))")
     doc, msp = new_dxf()
     msp.add_text("only text")
     doc.saveas(tmp_path / "blank.dxf")
-    refused(tmp_path / "blank.dxf", "no lines or curves to mark")
+    refused(tmp_path / "blank.dxf", "no lines or curves to mark (left out: 1 text entity")
+    (tmp_path / "nothing.svg").write_text(svg(""))
+    assert refused(tmp_path / "nothing.svg").endswith("no lines or curves to mark")
 
 
 def test_absurd_size_and_non_finite(tmp_path):

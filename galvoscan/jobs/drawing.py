@@ -157,7 +157,9 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm):
         closed.append(bool(is_closed and len(points) > 2))
     skipped = list(skipped) + _counted({"zero-length path": degenerate})
     if not paths:
-        raise DrawingError(f"{path}: no lines or curves to mark")
+        # (What was left out may be why: say it, so the reason is not lost.)
+        why = f" (left out: {'; '.join(skipped)})" if skipped else ""
+        raise DrawingError(f"{path}: no lines or curves to mark{why}")
     drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes))
     xmin, ymin, xmax, ymax = drawing.bounds()
     if max(xmax - xmin, ymax - ymin) > MAX_EXTENT_MM:
