@@ -57,8 +57,8 @@ def _spline_points(spline, tolerance):
         done_t.append(t1[good]), done_p.append(p1[good])
         if good.all():
             break
-        _chords(sum(map(len, done_t)) + 2 * np.count_nonzero(~good))
         bad = ~good
+        _chords(sum(map(len, done_t)) + 2 * np.count_nonzero(bad))
         tm = (t0[bad] + t1[bad]) / 2
         pm = _xy(spline.points(tm))
         t0, t1 = np.concatenate([t0[bad], tm]), np.concatenate([tm, t1[bad]])
