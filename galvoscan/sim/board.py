@@ -16,22 +16,21 @@ import threading
 import time
 from collections import deque
 
-from amaranth.sim import Simulator
-
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
-from .link import Timed
-from .xy2_receiver import XY2Receiver, frame_of_each_pulse
+from .board_engine import LASER_PINS, PythonEngine
+from .xy2_receiver import frame_of_each_pulse
 
 
-__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SIM_TIMEOUT_S"]
+__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SIM_TIMEOUT_S", "BACKENDS",
+           "LASER_PINS"]
 
 
 #: Answer timeout a host should give the simulated board, in seconds of the host's clock.
 SIM_TIMEOUT_S = 60.0
 
-# The laser pins recorded at every change, in this order.
-LASER_PINS = ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch", "laser_guide")
+#: The simulated board's backends: ``auto`` is the compiled one where it can be built.
+BACKENDS = ("auto", "compiled", "python")
 
 
 class SimulatedBoard:
@@ -41,13 +40,23 @@ class SimulatedBoard:
     ----------
     clk_freq : float
         System clock (12 MHz, the iCEBreaker's).
-    baud : int
-        The UART's rate (the bitstream's default, 1 Mbaud).
+    baud : int or None
+        The UART's rate (the bitstream's default, 1 Mbaud; None: the top's default for the
+        clock).
+    backend : str
+        ``"python"``: Amaranth's simulator (the reference); ``"compiled"``: the top compiled to
+        native code (:mod:`galvoscan.compiled`, built once per design and cached), some
+        hundreds of times faster; ``"auto"``: the compiled one where it can be built, else the
+        Python one, with a line to ``say`` saying why. Both give the same records.
+    say : callable, optional
+        Told in a line each when the compiled model is being built, or why it is not used.
     top_kwargs
         More :class:`~galvoscan.gateware.top.GalvoScanTop` parameters (``mo_lead`` …).
 
     Attributes
     ----------
+    backend : str
+        The backend that runs it (``"python"`` or ``"compiled"``).
     frames : list of (int, int, int)
         ``(cycle, x, y)``: the clock on which each XY2-100 frame was complete, and its position.
     pulses : list of int
@@ -58,15 +67,15 @@ class SimulatedBoard:
         ``(cycle, byte)``: every byte the host sent, and the clock its stop bit ended.
     """
 
-    def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, **top_kwargs):
+    def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python", say=None,
+                 **top_kwargs):
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         self.clk_freq = clk_freq
-        self.baud = baud
         self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
-        self._timed = Timed(self.top)
-        self.sim = Simulator(self._timed)
-        self.sim.add_clock(1 / clk_freq)
+        self.baud = self.top.baud
         self.now = 0.0
-        self.to_board = deque()         # bytes the host sent, not yet on uart_rx
+        self.to_board = deque()         # bytes the host sent, not yet on uart_rx (append only)
         self.from_board = deque()       # bytes off uart_tx, not yet given to the host
         self.framing_errors = 0
         self.bytes_in = []              # (cycle its stop bit ended, byte) of every byte in
@@ -76,82 +85,26 @@ class SimulatedBoard:
         self.laser_changes = []
         self.interlock_closed = True
         self.alarms_clear = True
-        self._receiver = XY2Receiver()
-        for process in (self._uart_in, self._uart_out, self._scan_head, self._sync_edges,
-                        self._laser, self._machine):
-            self.sim.add_testbench(process, background=True)
-        # A process, not a testbench: the pins are logic, and may change more than once
-        # while the design settles after a clock edge; a process sees every change.
-        self.sim.add_process(self._laser_pins)
+        self.engine = self._engine(backend, say or (lambda line: None))
+        self.backend = self.engine.name
         self.run_for(1 / clk_freq)      # start the processes in this thread
+
+    def _engine(self, backend, say):
+        if backend == "python":
+            return PythonEngine(self)
+        from ..compiled import CompileError, CompiledEngine
+        try:
+            return CompiledEngine(self, say=say)
+        except CompileError as error:
+            if backend == "compiled":
+                raise
+            say(f"the compiled simulator is not available ({error}); using Amaranth's "
+                f"simulator, some 300 times slower")
+            return PythonEngine(self)
 
     @property
     def bit_time(self):
         return 1 / self.baud
-
-    # --- the processes -----------------------------------------------------------------------
-
-    async def _uart_in(self, ctx):
-        """The host's transmitter: each byte 8N1 on uart_rx, back to back."""
-        rx = self.top.uart_rx
-        ctx.set(rx, 1)
-        while True:
-            if not self.to_board:
-                await ctx.delay(self.bit_time)
-                continue
-            byte = self.to_board.popleft()
-            for level in (0, *((byte >> i) & 1 for i in range(8)), 1):
-                ctx.set(rx, level)
-                await ctx.delay(self.bit_time)
-            self.bytes_in.append((ctx.get(self._timed.cycles), byte))
-
-    async def _uart_out(self, ctx):
-        """The host's receiver: a start bit's falling edge, then each bit in its middle."""
-        tx = self.top.uart_tx
-        while True:
-            await ctx.negedge(tx)
-            await ctx.delay(1.5 * self.bit_time)
-            value = 0
-            for i in range(8):
-                value |= ctx.get(tx) << i
-                await ctx.delay(self.bit_time)
-            if ctx.get(tx):
-                self.from_board.append(value)
-            else:
-                self.framing_errors += 1
-
-    async def _scan_head(self, ctx):
-        top = self.top
-        async for _, sync, x, y, cycles in ctx.negedge(top.xy2_clk).sample(
-                top.xy2_sync, top.xy2_x, top.xy2_y, self._timed.cycles):
-            frame = self._receiver.sample(sync, x, y)
-            if frame is not None:
-                self.frames.append((cycles, frame.x, frame.y))
-
-    async def _sync_edges(self, ctx):
-        async for _, cycles in ctx.posedge(self.top.xy2_sync).sample(self._timed.cycles):
-            self.sync_rises.append(cycles)
-
-    async def _laser(self, ctx):
-        top = self.top
-        async for _, am, cycles in ctx.posedge(top.laser_prr).sample(top.laser_am,
-                                                                      self._timed.cycles):
-            if am:
-                self.pulses.append(cycles)
-
-    async def _laser_pins(self, ctx):
-        pins = [getattr(self.top, name) for name in LASER_PINS]
-        async for *values, cycles in ctx.changed(*pins).sample(self._timed.cycles):
-            self.laser_changes.append((cycles, tuple(values)))
-
-    async def _machine(self, ctx):
-        # The interlock loop and the laser's alarm outputs, as the machine has them.
-        alarm = getattr(self.top, "laser_alarm", None)
-        while True:
-            ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
-            if alarm is not None:
-                ctx.set(alarm, 0 if self.alarms_clear else 2 ** len(alarm) - 1)
-            await ctx.delay(10e-6)
 
     # --- driving it ----------------------------------------------------------------------------
 
@@ -159,7 +112,24 @@ class SimulatedBoard:
         """Advance the board by ``seconds`` of its own time."""
         if seconds > 0:
             self.now += seconds
-            self.sim.run_until(self.now)
+            self.engine.run_until(self.now)
+
+    def speed(self, seconds=0.2e-3):
+        """How fast it runs, as a fraction of real time: measured by running ``seconds`` of
+        its own time (idle, as it is before a host's first frame)."""
+        started = time.perf_counter()
+        self.run_for(seconds)
+        return seconds / max(time.perf_counter() - started, 1e-9)
+
+    def answer_timeout_s(self):
+        """The answer timeout a host should give it, in seconds of the host's clock: 20 ms
+        of the board's own time (a frame and its answer take well under 1 ms) at the speed
+        measured now, and 5 s at least, for a host busy with other work."""
+        return min(600.0, max(5.0, 20e-3 / self.speed()))
+
+    def close(self):
+        """Free the backend's model (the compiled one's memory)."""
+        self.engine.close()
 
     def busy(self):
         """Bytes still to go in or out."""

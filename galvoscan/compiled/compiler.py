@@ -1,0 +1,106 @@
+"""The C++ compiler the compiled backend builds with: the system's where there is one, else Zig's
+``zig c++`` from the ``ziglang`` wheel (a galvoscan dependency), so that a machine with nothing
+but Python still gets it.
+
+A system compiler is a program of the system's, found on PATH (``$CXX`` first, then ``g++``,
+``c++``, ``clang++``); ``ziglang`` is found beside the running interpreter, as a module of its
+environment, never on PATH.
+"""
+
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+
+
+__all__ = ["Compiler", "CompilerError", "find_compiler"]
+
+
+class CompilerError(RuntimeError):
+    """No C++ compiler could be found or run."""
+
+
+@dataclass(frozen=True)
+class Compiler:
+    """A C++ compiler: the command that runs it, and what it says it is.
+
+    ``identity`` (its ``--version`` line) is part of a compiled model's cache key: a model
+    built by another compiler is never taken for this one's.
+    """
+    command: tuple
+    identity: str
+    #: True for ``zig c++``, whose first run builds its libc++ (minutes, once).
+    zig: bool = False
+
+    @property
+    def name(self):
+        return "zig c++" if self.zig else os.path.basename(self.command[0])
+
+
+def _identity(command):
+    try:
+        run = subprocess.run([*command, "--version"], capture_output=True, text=True,
+                             timeout=60, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if run.returncode != 0:
+        return None
+    lines = (run.stdout or run.stderr).strip().splitlines()
+    return lines[0] if lines else None
+
+
+def _system_compilers():
+    names = []
+    if os.environ.get("CXX"):
+        names.append(os.environ["CXX"])
+    names += ["g++", "c++", "clang++"]
+    for name in names:
+        path = shutil.which(name)
+        if path:
+            yield path
+
+
+def _zig():
+    if importlib.util.find_spec("ziglang") is None:
+        return None
+    command = (sys.executable, "-m", "ziglang", "c++")
+    run = None
+    try:
+        run = subprocess.run([sys.executable, "-m", "ziglang", "version"], capture_output=True,
+                             text=True, timeout=120, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if run.returncode != 0 or not run.stdout.strip():
+        return None
+    return Compiler(command, f"zig {run.stdout.strip()}", zig=True)
+
+
+def find_compiler(prefer=None):
+    """The compiler to build with.
+
+    Parameters
+    ----------
+    prefer : str, optional
+        ``"system"`` or ``"zig"``: that kind only. Default: the system's, else zig.
+
+    Raises
+    ------
+    CompilerError
+        With the reason in one line.
+    """
+    if prefer not in (None, "system", "zig"):
+        raise ValueError(f"prefer must be 'system' or 'zig', not {prefer!r}")
+    if prefer in (None, "system"):
+        for path in _system_compilers():
+            identity = _identity((path,))
+            if identity:
+                return Compiler((path,), identity)
+        if prefer == "system":
+            raise CompilerError("no C++ compiler on PATH (g++, c++, clang++ or $CXX)")
+    compiler = _zig()
+    if compiler is None:
+        raise CompilerError("no C++ compiler: none on PATH (g++, c++, clang++) and the "
+                            "ziglang package is not installed beside this Python")
+    return compiler

