@@ -26,7 +26,7 @@ import platform as host_platform
 import tempfile
 import time
 
-from .bench_sim import link_figures, phy_rate, replay_figures, stream_figures
+from .bench_sim import backend_figures, link_figures, phy_rate, replay_figures, stream_figures
 
 
 __all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures", "stream_figures", "table",
@@ -162,6 +162,9 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, progress=Non
         result["link"] = link_figures(frames=24 if replay else 4)
         result["link"]["stream"] = stream_figures(segments=600) if replay else \
             stream_figures(segments=100, clk_freq=8e6)
+        step("simulator backends")
+        result["backends"] = backend_figures(python_s=5e-3 if replay else 1e-3,
+                                             compiled_s=0.5 if replay else 0.05)
         if replay:
             step("full spiral replay")
             result["simulator"] = replay_figures()
@@ -203,6 +206,16 @@ def table(result):
         rows.append((f"vector segments/s streamed end to end, UART {stream['baud']:,} baud "
                      f"(batches and fifo_free reads)",
                      f"{stream['segments_per_s']:,.0f} ({stream['errors']} errors)"))
+    if "backends" in result:
+        backends = result["backends"]
+        rows.append(("simulated board, default top (12 MHz), compiled backend",
+                     f"{backends['compiled_clocks_per_s']:,.0f} system clocks/s "
+                     f"({backends['real_time_fraction']:.3f} of real time), "
+                     f"{backends['ratio']:,.0f}× the Python backend"))
+        rows.append(("simulated board, default top (12 MHz), Python backend (Amaranth)",
+                     f"{backends['python_clocks_per_s']:,.0f} system clocks/s"))
+        rows.append(("full 8064-point spiral off the wires, compiled backend",
+                     f"{backends['compiled_replay_s']:.1f} s"))
     if "simulator" in result:
         sim = result["simulator"]
         rows.append(("simulator speed (system top, spiral)",

@@ -14,7 +14,8 @@ from pathlib import Path
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
-           "add_link_options", "open_transport", "open_link"]
+           "add_link_options", "open_transport", "open_link", "add_backend_option",
+           "simulated_board"]
 
 
 class CLIError(SystemExit):
@@ -268,3 +269,31 @@ def open_link(args):
     """The transport the link options name, opened; one line if it cannot be."""
     return open_transport(port=args.port, spi=args.spi, baud=args.baud, timeout=args.timeout,
                           sck=args.sck)
+
+
+# --- the simulated board ---------------------------------------------------------------------------
+
+def add_backend_option(parser):
+    """``--backend``: which simulator runs the simulated board."""
+    from ..sim.board import BACKENDS
+    parser.add_argument("--backend", choices=BACKENDS, default="auto",
+                        help="the simulator: compiled (the design as native code, built once "
+                             "per design and cached; some 200x faster), python (Amaranth's, "
+                             "the reference) or auto, the compiled one where a C++ compiler "
+                             "can build it (default: %(default)s)")
+
+
+def simulated_board(args, **kwargs):
+    """The :class:`~galvoscan.sim.board.SimulatedBoard` ``--backend`` asks for (a compile's
+    progress and a fallback's reason on stderr); one line if the compiled one cannot be had."""
+    import sys
+    from ..compiled import CompileError
+    from ..sim.board import SimulatedBoard
+
+    def say(line):
+        print(f"galvoscan: {line}", file=sys.stderr, flush=True)
+    try:
+        return SimulatedBoard(backend=getattr(args, "backend", "auto"), say=say, **kwargs)
+    except CompileError as error:
+        fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
+             f"Amaranth's)")

@@ -3,22 +3,26 @@
 import sys
 import time
 
-from .args import baud
+from .args import add_backend_option, baud, simulated_board
 
 
 __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
-    from ..sim.board import SIM_TIMEOUT_S, PTYServer, SimulatedBoard
-    board = SimulatedBoard(baud=args.baud)
+    from ..sim.board import PTYServer
+    board = simulated_board(args, baud=args.baud)
+    speed = board.speed()
+    timeout = board.answer_timeout_s()
     server = PTYServer(board)
-    print(f"simulated board (12 MHz, {args.baud:,} baud) on {server.port}", flush=True)
+    print(f"simulated board (12 MHz, {args.baud:,} baud, {board.backend} backend) on "
+          f"{server.port}", flush=True)
+    print(f"  it runs at {_fraction(speed)} of real time: give clients --timeout "
+          f"{timeout:.0f} or more; Ctrl-C stops it", flush=True)
     print(f"  e.g. galvoscan read status --port {server.port} --baud {args.baud} "
-          f"--timeout {SIM_TIMEOUT_S:g}", flush=True)
-    print("  it runs about 1000x slower than a real board: give clients a long --timeout; "
-          "Ctrl-C stops it", flush=True)
+          f"--timeout {timeout:.0f}", flush=True)
     started = time.monotonic()
+    board_started = board.now
     try:
         server.serve_forever()
     except KeyboardInterrupt:
@@ -29,10 +33,16 @@ def _cmd_board(args):
         print(f"galvoscan: error: the simulated board stopped: {server.error}",
               file=sys.stderr)
         return 1
-    print(f"stopped after {board.now * 1e3:.1f} ms of board time "
-          f"({time.monotonic() - started:.0f} s): {len(board.frames)} XY2-100 frames, "
-          f"{len(board.pulses)} laser pulses")
+    wall = time.monotonic() - started
+    print(f"stopped after {board.now * 1e3:.1f} ms of board time in {wall:.0f} s "
+          f"({_fraction((board.now - board_started) / max(wall, 1e-9))} of real time): "
+          f"{len(board.frames)} XY2-100 frames, {len(board.pulses)} laser pulses")
     return 0
+
+
+def _fraction(speed):
+    """A speed as a person reads it: 1/12 of real time, or 1/2400."""
+    return "real time" if speed >= 1 else f"1/{1 / speed:,.0f}"
 
 
 def add_parsers(commands):
@@ -46,4 +56,5 @@ def add_parsers(commands):
                        help="simulate the board (the only kind this command serves)")
     board.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                        help="the simulated bitstream's serial rate (default: %(default)s)")
+    add_backend_option(board)
     board.set_defaults(run=_cmd_board)

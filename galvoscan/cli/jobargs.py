@@ -5,7 +5,7 @@ import argparse
 import contextlib
 import sys
 
-from .args import baud, fail, number_in, open_transport
+from .args import add_backend_option, baud, fail, number_in, open_transport, simulated_board
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -54,12 +54,14 @@ def add_job_link_options(parser):
     where.add_argument("--port", help="serial port of the board (default: the profile's)")
     where.add_argument("--spi", metavar="URL", help="pyftdi URL of an FTDI SPI adapter")
     where.add_argument("--sim", action="store_true",
-                       help="run on the simulated board (about 1000x slower than a real one)")
+                       help="run on the simulated board (see --backend for its speed)")
     link.add_argument("--baud", type=baud, default=None,
                       help="serial rate of the bitstream (default: the profile's)")
     link.add_argument("--timeout", type=number_in("timeout", 0.01, 600), default=None,
                       metavar="S", help="seconds to wait for an answer (default: the "
-                                        "profile's; 60 with --sim)")
+                                        "profile's; with --sim, from the simulator's "
+                                        "measured speed)")
+    add_backend_option(link)
 
 
 def has_link(args, profile):
@@ -73,12 +75,12 @@ def board_link(args, profile, *, wobble=False):
     from ..client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
-        from ..sim.board import SIM_TIMEOUT_S, PTYServer, SimulatedBoard
-        board = SimulatedBoard(baud=baud_rate, **({"wobble": True} if wobble else {}))
+        from ..sim.board import PTYServer
+        board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
+        timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
         try:
-            with SerialTransport(server.port, baud=baud_rate,
-                                 timeout=args.timeout or SIM_TIMEOUT_S) as transport:
+            with SerialTransport(server.port, baud=baud_rate, timeout=timeout) as transport:
                 yield HostClient(transport), board
         finally:
             server.stop()

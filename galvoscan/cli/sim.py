@@ -5,8 +5,9 @@ import json
 import sys
 import time
 
-from .args import (INTERPOLATIONS, add_table_options, fail, image_file, int_in, number_in,
-                   output_file, read_text, register_int, settings_from, table_from)
+from .args import (INTERPOLATIONS, add_backend_option, add_table_options, fail, image_file,
+                   int_in, number_in, output_file, read_text, register_int, settings_from,
+                   table_from)
 
 
 __all__ = ["add_parsers"]
@@ -77,7 +78,8 @@ def _sim_vector(args):
         try:
             result = replay_job(job, correction=correction, prr_hz=args.prr,
                                 pulses_per_point=args.pulses_per_point, pitch=args.pitch,
-                                jump_delay=args.jump_delay, vcd=args.vcd, progress=bar.update)
+                                jump_delay=args.jump_delay, vcd=args.vcd, progress=bar.update,
+                                backend=_backend(args), say=_say)
         except ValueError as error:
             fail(error)
     seconds = time.monotonic() - start
@@ -126,6 +128,19 @@ def _sim_vector(args):
     return 0 if counts in ([args.pulses_per_point], []) else 1
 
 
+def _backend(args):
+    """``--backend``; a waveform (``--vcd``) is written by the Python one only."""
+    if args.vcd:
+        if args.backend == "compiled":
+            fail("--vcd needs --backend python (the compiled backend writes no waveform)")
+        return "python"
+    return args.backend
+
+
+def _say(line):
+    print(f"galvoscan: {line}", file=sys.stderr, flush=True)
+
+
 def _sim_spiral(args):
     from tqdm import tqdm
     from ..gateware.sources.spiral import PARK_FRAMES
@@ -145,7 +160,8 @@ def _sim_spiral(args):
     with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
               file=sys.stderr) as bar:
         received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
-                                 progress=bar.update, correction=correction)
+                                 progress=bar.update, correction=correction,
+                                 backend=_backend(args), say=_say)
     seconds = time.monotonic() - start
     cycles = frames * 20 * SIM_CLOCKS_PER_BIT
 
@@ -196,11 +212,20 @@ def _cmd_sim(args):
         for name in vector_only:
             if getattr(args, name) is None and name != "points_csv":
                 setattr(args, name, VECTOR_DEFAULTS.get(name) or BY_NAME[name].reset)
-        return _sim_vector(args)
+        return _compiled_or_one_line(_sim_vector, args)
     given = [name for name in vector_only if getattr(args, name) is not None]
     if given:
         fail(f"--{given[0].replace('_', '-')} is for --mode vector")
-    return _sim_spiral(args)
+    return _compiled_or_one_line(_sim_spiral, args)
+
+
+def _compiled_or_one_line(command, args):
+    from ..compiled import CompileError
+    try:
+        return command(args)
+    except CompileError as error:
+        fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
+             f"Amaranth's)")
 
 
 def add_parsers(commands):
@@ -244,6 +269,7 @@ def add_parsers(commands):
     sim.add_argument("--png", type=image_file, metavar="FILE",
                      help="plot the path (.png, .svg, .pdf, …)")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
+    add_backend_option(sim)
     vector = sim.add_argument_group("vector mode")
     vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
     prr = BY_NAME["laser_prr"]       # in 100 Hz steps

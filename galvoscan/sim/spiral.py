@@ -24,7 +24,7 @@ SIM_CLOCKS_PER_BIT = 2
 
 
 def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=None,
-                  progress=None, correction="identity"):
+                  progress=None, correction="identity", backend="python", say=None):
     """Simulate the system top and return the first ``frames`` frames read off the wires.
 
     Parameters
@@ -38,6 +38,10 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         Write a waveform of the whole run.
     progress : callable, optional
         Called with the number of new frames as they arrive (for a progress bar).
+    backend : str
+        ``"python"`` (Amaranth's simulator) or ``"compiled"``/``"auto"``: the simulated board's
+        (:class:`~galvoscan.sim.board.SimulatedBoard`), which writes no waveform; ``say``
+        is told about its compile.
 
     Returns
     -------
@@ -46,6 +50,12 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
     clk_freq = SIM_CLOCKS_PER_BIT * bit_rate
+    if backend != "python":
+        if vcd:
+            raise ValueError("a waveform (vcd) needs the Python backend")
+        return _replay_on_board(frames=frames, clk_freq=clk_freq, progress=progress,
+                                backend=backend, say=say, bit_rate=bit_rate, table=table,
+                                settings=settings, modes=("spiral",), correction=correction)
     # The spiral alone: the other modes, idle, change none of its frames (the tests replay
     # the full build too), and leaving them out makes the simulation half again as fast.
     top = GalvoScanTop(clk_freq=clk_freq, bit_rate=bit_rate, table=table, settings=settings,
@@ -71,6 +81,25 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     with sim.write_vcd(vcd) if vcd else contextlib.nullcontext():
         sim.run()
     return received
+
+
+def _replay_on_board(*, frames, clk_freq, progress, backend, say, **top_kwargs):
+    """The first ``frames`` frames off the simulated board's wires (the compiled backend)."""
+    from .board import SimulatedBoard
+    from .xy2_receiver import XY2Frame
+    board = SimulatedBoard(clk_freq=clk_freq, baud=None, backend=backend, say=say,
+                           **top_kwargs)
+    try:
+        frame_time = 20 * SIM_CLOCKS_PER_BIT / clk_freq * 2
+        while len(board.frames) < frames:
+            seen = len(board.frames)
+            # Some 1000 frames a step: one call into the model each.
+            board.run_for(min(1000, frames - seen + 1) * frame_time)
+            if progress is not None and len(board.frames) > seen:
+                progress(min(len(board.frames), frames) - seen)
+        return [XY2Frame(x, y) for _, x, y in board.frames[:frames]]
+    finally:
+        board.close()
 
 
 def write_csv(path, frames):

@@ -53,11 +53,15 @@ class JobResult:
 
 
 def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=500,
-               clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity", vcd=None):
+               clk_freq=12e6, mo_lead=5e-3, progress=None, correction="identity", vcd=None,
+               backend="python", say=None):
     """Simulate ``job`` (a list of ``(op, x, y)``) and return a :class:`JobResult`.
 
     ``vcd``, a path, writes a waveform of the whole run; ``progress`` is called with the
-    number of new frames as they reach the head.
+    number of new frames as they reach the head. ``backend`` ``"compiled"`` or ``"auto"``
+    runs it on the simulated board instead (:class:`~galvoscan.sim.board.SimulatedBoard`),
+    streamed over its UART by the host's job streamer in the board's own time (``say`` is told
+    about the compile); it writes no waveform.
     """
     prr = round(prr_hz / 100)
     if not BY_NAME["laser_prr"].low <= prr <= BY_NAME["laser_prr"].high:
@@ -68,6 +72,16 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=500
         if not isinstance(value, int) or not reg.low <= value <= reg.high:
             raise ValueError(f"{name} must be an integer from {reg.low} to {reg.high}, "
                              f"not {value!r}")
+    registers = {"laser_prr": prr, "pulses_per_point": pulses_per_point, "pitch": pitch,
+                 "jump_delay": jump_delay, "laser_power": 128,
+                 # The longest watchdog: the simulated host is slow, not silent.
+                 "watchdog": BY_NAME["watchdog"].high}
+    if backend != "python":
+        if vcd:
+            raise ValueError("a waveform (vcd) needs the Python backend")
+        return _replay_on_board(job, registers, clk_freq=clk_freq, mo_lead=mo_lead,
+                                correction=correction, progress=progress, backend=backend,
+                                say=say)
     top = GalvoScanTop(clk_freq=clk_freq, settings=ScanSettings(mode="vector", run=False),
                        mo_lead=mo_lead, correction=correction)
     timed = Timed(top)
@@ -158,3 +172,34 @@ def replay_job(job, *, prr_hz=60e3, pulses_per_point=1, pitch=60, jump_delay=500
     for k, _ in frame_of_each_pulse(sync_rises, pulses, len(frame_ends)):
         counts[k] += 1
     return JobResult([(x, y, n) for (_, x, y), n in zip(frame_ends, counts)], clk_freq)
+
+
+def _replay_on_board(job, registers, *, clk_freq, mo_lead, correction, progress, backend,
+                     say):
+    from ..client import HostClient
+    from ..jobs.stream import JobStreamer
+    from .board import SimTransport, SimulatedBoard
+    board = SimulatedBoard(clk_freq=clk_freq, backend=backend, say=say, mo_lead=mo_lead,
+                           settings=ScanSettings(mode="vector", run=False),
+                           correction=correction)
+    try:
+        client = HostClient(SimTransport(board))
+        streamer = JobStreamer(client, poll_s=0)
+        if progress is not None:
+            seen = [0]
+
+            def frames_so_far(_done):
+                progress(len(board.frames) - seen[0])
+                seen[0] = len(board.frames)
+            streamer.progress = frames_so_far
+        report = streamer.run_vector(list(job), registers, timeout_s=1e9)
+        board.run_for(50e-6)                     # the last frames reach the head
+        if report.counters.get("errors") or report.counters.get("vec_rejected"):
+            raise RuntimeError(f"the board refused {report.counters.get('errors')} frames "
+                               f"({report.counters.get('vec_rejected')} segments)")
+        counts = [0] * len(board.frames)
+        for k, _ in frame_of_each_pulse(board.sync_rises, board.pulses, len(board.frames)):
+            counts[k] += 1
+        return JobResult([(x, y, n) for (_, x, y), n in zip(board.frames, counts)], clk_freq)
+    finally:
+        board.close()
