@@ -124,7 +124,9 @@ class RegisterModel:
             if entry.name in REFUSABLE and data == 1:
                 return queue_ready
             return data <= entry.high
-        ok = entry.low <= data <= entry.high
+        # (A signed register's bounds are signed: the frame's data is its two's complement.)
+        value = data - 0x10000 if entry.low < 0 and data & 0x8000 else data
+        ok = entry.low <= value <= entry.high
         if entry.name == "mode":
             ok = ok and data in self.modes
         if entry.access == "queue":
