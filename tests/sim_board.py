@@ -7,32 +7,13 @@ simulated pins.
 
 import contextlib
 import math
-from collections import deque
 
 import pytest
-from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
-from amaranth.sim import Simulator
 
-from galvoscan.gateware.top import GalvoScanTop, ScanSettings
+from galvoscan.gateware.top import ScanSettings
+from galvoscan.sim.board import PIN_FIELDS, SimulatedBoard
 
 from wires import frames_from_samples
-
-
-class Counted(Elaboratable):
-    """A design with its clock domain made here, so the clock is a signal to read, and a count
-    of its rising edges."""
-
-    def __init__(self, top):
-        self.top = top
-        self.sync = ClockDomain("sync")
-        self.cycles = Signal(48)
-
-    def elaborate(self, platform):
-        m = Module()
-        m.domains.sync = self.sync
-        m.submodules.top = self.top
-        m.d.sync += self.cycles.eq(self.cycles + 1)
-        return m
 
 
 def _arguments_key(value):
@@ -50,53 +31,38 @@ def _arguments_key(value):
 
 
 class SimBoard:
+    """The tests' board: galvoscan's :class:`~galvoscan.sim.board.SimulatedBoard` on the
+    ``backend`` asked for (Amaranth's by default; the long simulations, the fuzz and the
+    random jobs, ask for the compiled one, which tests/test_compiled.py holds to the same
+    records), with the tests' own view of it: the XY2-100 wires'
+    samples decoded by the tests' reader (:func:`wires.frames_from_samples`), the pins made
+    into one entry a clock, and the host's UART and SPI transports below."""
+
     def __init__(self, *, clk_freq=4e6, baud=500_000, interlock_closed=True, alarms_clear=True,
-                 record_laser=False, **top_kwargs):
-        self.top = top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
+                 record_laser=False, backend="python", **top_kwargs):
+        self.board = SimulatedBoard(clk_freq=clk_freq, baud=baud, backend=backend,
+                                    record_samples=True, record_pins=record_laser,
+                                    machine_period_s=1e-6, interlock_closed=interlock_closed,
+                                    alarms_clear=alarms_clear, **top_kwargs)
+        self.top = self.board.top
         self.clk_freq = clk_freq
         self.bit_time = 1 / baud
-        # Recording the laser counts the clocks beside the design.
-        self._counted = Counted(top) if record_laser else None
-        self.sim = Simulator(self._counted or top)
-        self.sim.add_clock(1 / clk_freq)
         self._record_laser = record_laser
-        self._initially = (interlock_closed, alarms_clear)
-
-        self.sim.add_testbench(self._scan_head, background=True)
-        self.sim.add_testbench(self._uart_host_tx, background=True)
-        self.sim.add_testbench(self._uart_host_rx, background=True)
-        self.sim.add_testbench(self._spi_host, background=True)
-        self.sim.add_testbench(self._interlock, background=True)
-        if record_laser == "every clock":
-            # Sampled on every clock, as the tests' own check of the recording by changes.
-            self.sim.add_testbench(self._laser_recorder_every_clock, background=True)
-        elif record_laser:
-            self.sim.add_testbench(self._pins_at_power_up)
-            self.sim.add_process(self._laser_recorder)
         self._power_up()
+
+    @property
+    def backend(self):
+        return self.board.backend
 
     def _power_up(self):
         """What the host and the recorders know at power-up, then the first clock."""
-        self.now = 0.0
         self.xy2_samples = []           # (sync, x, y) at each falling xy2_clk edge
         self.parity_times = []          # when each frame's last bit was sampled
-        self.uart_to_board = deque()    # bytes, or ("pause", seconds), or ("bad_stop", byte)
-        self.uart_from_board = []       # bytes received on uart_tx
-        self.uart_framing_errors = 0
-        self.spi_queue = deque()        # (bits, results list)
-        self.interlock_closed, self.alarms_clear = self._initially
-        # The recorded pins (laser_pins' and xy2_sync) as (clock, values) each time they change,
-        # made into one entry a clock by `laser_pins` and `sync_pins`.
-        self._pin_changes = []
+        self._samples_seen = 0
         self._by_clock = ([], [])
         self._changes_seen = 0
-        if self._record_laser == "every clock":
-            self._every_clock = ([], [])
-        elif self._record_laser:
-            self._pin_changes.append(None)      # power-up's, filled in at once
-        # Start the processes now, in this thread (a simulator never run leaves its testbench
-        # coroutines un-awaited, which Python reports at garbage collection).
-        self.run_for(1 / self.clk_freq)
+        # The machine's inputs reach the pins from the first instant.
+        self.run_for(0)
 
     _built = {}
 
@@ -111,51 +77,79 @@ class SimBoard:
         if board is None:
             board = cls._built[key] = cls(**kwargs)
         else:
-            board.sim.reset()
+            board.board.reset()
             board._power_up()
         return board
 
-    # --- processes ---------------------------------------------------------------------------
+    # --- what the host sets and sees -------------------------------------------------------------
 
-    async def _scan_head(self, ctx):
-        top = self.top
-        async for _, sync, x, y in ctx.negedge(top.xy2_clk).sample(
-                top.xy2_sync, top.xy2_x, top.xy2_y):
+    @property
+    def now(self):
+        return self.board.now
+
+    @property
+    def interlock_closed(self):
+        return self.board.interlock_closed
+
+    @interlock_closed.setter
+    def interlock_closed(self, closed):
+        self.board.interlock_closed = closed
+
+    @property
+    def alarms_clear(self):
+        return self.board.alarms_clear
+
+    @alarms_clear.setter
+    def alarms_clear(self, clear):
+        self.board.alarms_clear = clear
+
+    @property
+    def uart_to_board(self):
+        """Bytes, or ("pause", seconds), or ("bad_stop", byte), not yet on uart_rx."""
+        return self.board.to_board
+
+    @property
+    def uart_from_board(self):
+        """Bytes received on uart_tx."""
+        return list(self.board.from_board)
+
+    @property
+    def uart_framing_errors(self):
+        return self.board.framing_errors
+
+    @property
+    def spi_queue(self):
+        """(bits, results list, half period, phase) of each SPI transfer not yet started."""
+        return self.board.spi_queue
+
+    # --- driving the simulation ------------------------------------------------------------------
+
+    def run_for(self, seconds):
+        if seconds > 0:
+            self.board.run_for(seconds)
+        # The end of the run_for() step in which each frame ended.
+        for _, sync, x, y in self.board.xy2_samples[self._samples_seen:]:
             self.xy2_samples.append((sync, x, y))
             if not sync:
-                # The end of the run_for() step in which the frame ended.
                 self.parity_times.append(self.now)
+        self._samples_seen = len(self.board.xy2_samples)
 
-    def _recorded_pins(self):
-        top = self.top
-        return [top.laser_mo, top.laser_am, top.laser_prr, top.interlock_open,
-                top.laser_latch, top.laser_power, top.laser_enable,
-                top.laser_alarm if hasattr(top, "laser_alarm") else C(0, 1), top.laser_guide,
-                top.xy2_sync]
+    def run_until(self, condition, *, timeout, step=50e-6):
+        waited = 0.0
+        while not condition():
+            if waited > timeout:
+                raise TimeoutError(f"simulated {timeout * 1e3:.1f} ms without an answer")
+            self.run_for(step)
+            waited += step
 
-    async def _pins_at_power_up(self, ctx):
-        self._pin_changes[0] = (0, tuple(ctx.get(pin) for pin in self._recorded_pins()))
+    # --- the pins ------------------------------------------------------------------------------
 
-    async def _laser_recorder(self, ctx):
-        # Clock k's entry is the pins once the design has settled after the k-th rising clock
-        # edge (entry 0: at power-up, as _pins_at_power_up finds them). A process sees every
-        # change, the last of a clock's the settled one: a change with clk high is on a rising
-        # edge, that edge's clock; one with clk low (the host's interlock and alarm pins
-        # change between edges) is first seen on the next edge.
-        pins = self._recorded_pins()
-        signals = [pin for pin in pins if isinstance(pin, Signal)]   # (no alarm: a constant)
-        async for sampled in ctx.changed(*signals).sample(*pins, self._counted.cycles,
-                                                          self._counted.sync.clk):
-            *values, clock, clk = sampled[len(signals):]
-            self._pin_changes.append((clock + (not clk), tuple(values)))
+    LASER_PIN_NAMES = ("laser_mo", "laser_am", "laser_prr", "interlock_open", "laser_latch",
+                       "laser_power", "laser_enable", "laser_alarm", "laser_guide")
 
-    async def _laser_recorder_every_clock(self, ctx):
-        pins = self._recorded_pins()
-        while True:
-            values = tuple(ctx.get(pin) for pin in pins)
-            self._every_clock[0].append(values[:-1])
-            self._every_clock[1].append(values[-1])
-            await ctx.tick()
+    @staticmethod
+    def _unpack(packed):
+        return tuple((packed >> first) & ((1 << width) - 1) for _, first, width in PIN_FIELDS)
 
     def _clocks_so_far(self):
         """Rising clock edges simulated (the first at half a period, then one a period);
@@ -167,7 +161,9 @@ class SimBoard:
     def _pins_on_every_clock(self):
         """Bring :attr:`laser_pins` and :attr:`sync_pins` up to now from the changes."""
         laser, sync = self._by_clock
-        for clock, values in self._pin_changes[self._changes_seen:]:
+        changes = self.board.pin_changes
+        for clock, packed in changes[self._changes_seen:]:
+            values = self._unpack(packed)
             if clock < len(laser):              # (a clock already filled in: from it on)
                 laser[clock:] = [values[:-1]] * (len(laser) - clock)
                 sync[clock:] = [values[-1]] * (len(sync) - clock)
@@ -177,7 +173,7 @@ class SimBoard:
                     sync.extend([sync[-1]] * (clock - len(sync)))
                 laser.append(values[:-1])
                 sync.append(values[-1])
-        self._changes_seen = len(self._pin_changes)
+        self._changes_seen = len(changes)
         if laser:
             missing = self._clocks_so_far() + 1 - len(laser)
             laser.extend([laser[-1]] * missing)
@@ -188,109 +184,17 @@ class SimBoard:
     def laser_pins(self):
         """(laser_mo, laser_am, laser_prr, interlock_open, laser_latch, laser_power,
         laser_enable, laser_alarm, laser_guide) on every clock, if recorded."""
-        if hasattr(self, "_every_clock"):
-            return self._every_clock[0]
+        if self._record_laser == "every clock":
+            return [self._unpack(packed)[:-1] for packed in self.board.pins_every_clock]
         return self._pins_on_every_clock()[0]
 
     @property
     def sync_pins(self):
         """xy2_sync on every clock, if the laser is recorded (frame k's position is in force
         from sync's (k+1)-th rising edge: the end of that frame)."""
-        if hasattr(self, "_every_clock"):
-            return self._every_clock[1]
+        if self._record_laser == "every clock":
+            return [self._unpack(packed)[-1] for packed in self.board.pins_every_clock]
         return self._pins_on_every_clock()[1]
-
-    async def _interlock(self, ctx):
-        # The interlock loop and the laser's alarm outputs; a test opens or closes the loop by
-        # setting `interlock_closed`, raises every alarm by clearing `alarms_clear`.
-        # (Each setting settles the design: only a change is set.)
-        alarm = getattr(self.top, "laser_alarm", None)
-        pins = None
-        while True:
-            now = (self.interlock_closed, self.alarms_clear)
-            if now != pins:
-                ctx.set(self.top.interlock_open, 0 if self.interlock_closed else 1)
-                if alarm is not None:
-                    ctx.set(alarm, 0 if self.alarms_clear else 2 ** len(alarm) - 1)
-                pins = now
-            await ctx.delay(1e-6)
-
-    async def _uart_host_tx(self, ctx):
-        ctx.set(self.top.uart_rx, 1)
-        while True:
-            if not self.uart_to_board:
-                await ctx.delay(self.bit_time)
-                continue
-            item = self.uart_to_board.popleft()
-            stop = 1
-            if isinstance(item, tuple):
-                kind, value = item
-                if kind == "pause":
-                    await ctx.delay(value)
-                    continue
-                assert kind == "bad_stop"
-                item, stop = value, 0
-            for level in [0, *((item >> i) & 1 for i in range(8)), stop]:
-                ctx.set(self.top.uart_rx, level)
-                await ctx.delay(self.bit_time)
-            ctx.set(self.top.uart_rx, 1)
-            if not stop:
-                await ctx.delay(self.bit_time)   # let the line idle after a break
-
-    async def _uart_host_rx(self, ctx):
-        while True:
-            await ctx.negedge(self.top.uart_tx)
-            await ctx.delay(self.bit_time * 1.5)
-            value = 0
-            for i in range(8):
-                value |= ctx.get(self.top.uart_tx) << i
-                await ctx.delay(self.bit_time)
-            if ctx.get(self.top.uart_tx):
-                self.uart_from_board.append(value)
-            else:
-                self.uart_framing_errors += 1
-
-    async def _spi_host(self, ctx):
-        top = self.top
-        ctx.set(top.spi_cs_n, 1)
-        while True:
-            if not self.spi_queue:
-                await ctx.delay(5e-6)
-                continue
-            bits, results, half_period, phase = self.spi_queue.popleft()
-            if phase:
-                await ctx.delay(phase)      # the host's clock is not the board's
-            ctx.set(top.spi_cs_n, 0)
-            for bit in bits:
-                ctx.set(top.spi_copi, bit)
-                await ctx.delay(half_period)
-                ctx.set(top.spi_sck, 1)
-                results.append(ctx.get(top.spi_cipo))
-                await ctx.delay(half_period)
-                ctx.set(top.spi_sck, 0)
-            await ctx.delay(half_period)
-            ctx.set(top.spi_cs_n, 1)
-            await ctx.delay(4 * half_period)
-            results.append("done")
-
-    # --- driving the simulation ------------------------------------------------------------------
-
-    def run_for(self, seconds):
-        if seconds <= 0:
-            return
-        self.now += seconds
-        self.sim.run_until(self.now)
-
-    def run_until(self, condition, *, timeout, step=50e-6):
-        waited = 0.0
-        while not condition():
-            if waited > timeout:
-                raise TimeoutError(f"simulated {timeout * 1e3:.1f} ms without an answer")
-            self.run_for(step)
-            waited += step
-
-    LASER_PIN_NAMES = ("laser_mo", "laser_am", "laser_prr", "interlock_open", "laser_latch",
-                       "laser_power", "laser_enable", "laser_alarm", "laser_guide")
 
     def top_pin(self, name):
         """A laser pin's value on the last clock recorded (``record_laser=True``)."""

@@ -19,7 +19,7 @@ from galvoscan.compiled import CompileError, Compiler, compiled_model
 from galvoscan.compiled import model as model_module
 from galvoscan.gateware.host.regmap import Mode
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
-from galvoscan.sim.board import SimTransport, SimulatedBoard
+from galvoscan.sim.board import SimSPITransport, SimTransport, SimulatedBoard
 from galvoscan.sim.spiral import replay_spiral
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
@@ -136,6 +136,52 @@ def test_a_vector_job_with_delays_and_wobble_is_the_same_on_both_backends():
     assert reports[0] == reports[1]
     assert compiled.pulses and len({(x, y) for _, x, y in compiled.frames}) > 20
     assert_same_records(compiled, python)
+
+
+@pytest.mark.slow
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(FRAMES, st.lists(st.tuples(st.booleans(), st.booleans()), min_size=1, max_size=3))
+def test_random_spi_frames_with_the_machine_toggling(frames, machine):
+    """Frames of any kind, cut or not, clocked into the SPI target, the answers clocked out."""
+    compiled, python = both(**QUICK_SIM_BOARD, **VECTOR_BOARD)
+    answers = []
+    for board in (compiled, python):
+        link = SimSPITransport(board)
+        got = []
+        for k, frame in enumerate(frames):
+            interlock, alarms = machine[k % len(machine)]
+            board.interlock_closed, board.alarms_clear = interlock, alarms
+            got.append(link.transfer(frame))
+        board.run_for(50e-6)
+        answers.append(got)
+    assert answers[0] == answers[1]
+    assert_same_records(compiled, python)
+
+
+@pytest.mark.slow
+def test_a_job_stopped_by_ctrl_c_is_the_same_on_both_backends():
+    """Ctrl-C while the streamer feeds the queue: it disarms, and both boards stop alike."""
+    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.sim.board import LASER_PINS
+    job = [("jump", 30000, 30000)] + [("mark", 30000 + 300 * (k % 2), 30000 + 40 * k)
+                                      for k in range(40)]
+    compiled, python = both(**QUICK_SIM_BOARD, **VECTOR_BOARD, vector_queue_depth=16)
+    for board in (compiled, python):
+        sent = [0]
+
+        def interrupt(count):
+            sent[0] += count
+            if sent[0] >= 20:
+                raise KeyboardInterrupt
+        streamer = JobStreamer(HostClient(SimTransport(board)), poll_s=0, progress=interrupt)
+        with pytest.raises(KeyboardInterrupt):
+            streamer.run_vector(job, {"pitch": 60, "laser_prr": 500, "laser_power": 50,
+                                      "jump_delay": 10}, timeout_s=1e9)
+        board.run_for(200e-6)
+    assert_same_records(compiled, python)
+    assert compiled.pulses, "the job had started marking"
+    last = compiled.laser_changes[-1][1]
+    assert not last[LASER_PINS.index("laser_enable")] and not last[LASER_PINS.index("laser_mo")]
 
 
 SQUARE = """<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10">
@@ -274,3 +320,28 @@ def test_an_unwritable_cache_is_one_line(monkeypatch, tmp_path):
     monkeypatch.setenv("GALVOSCAN_CACHE_DIR", str(blocker / "cache"))
     with pytest.raises(CompileError, match="cache .* cannot be used"):
         compiled_model(GalvoScanTop(clk_freq=8e6, laser_alarms=1, **VECTOR_BOARD))
+
+
+def test_a_model_that_crashes_ends_the_command_with_one_line(tmp_path):
+    """A compiled model that fails (a bad memory access) ends its process with one line on
+    stderr and a non-zero exit: no core dump, no traceback, and so no pseudo-terminal left
+    open behind it."""
+    import signal
+    import subprocess
+    import sys
+    child = tmp_path / "child.py"
+    child.write_text(
+        "import sys\n"
+        "sys.path.insert(0, 'tests')\n"
+        "from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD\n"
+        "from galvoscan.sim.board import PTYServer, SimulatedBoard\n"
+        "board = SimulatedBoard(backend='compiled', **QUICK_SIM_BOARD, **VECTOR_BOARD)\n"
+        "server = PTYServer(board).start()\n"
+        "print(server.port, flush=True)\n"
+        "board.engine.crash()\n")
+    run = subprocess.run([sys.executable, str(child)], capture_output=True, text=True,
+                         timeout=300, cwd=str(__import__("pathlib").Path(__file__).parent.parent))
+    assert run.returncode == 128 + signal.SIGSEGV
+    assert run.stderr.strip().splitlines() == [
+        "galvoscan: error: the compiled simulated board crashed (run it with --backend "
+        "python, and report it)"]

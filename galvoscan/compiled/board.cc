@@ -12,11 +12,17 @@
 //
 // The design is the header and source Yosys' write_cxxrtl makes of the top (TOP_HEADER); the
 // ports that differ between builds come in as macros (GS_ALARM_BITS: the laser alarm inputs).
+//
+// Besides the records every board keeps, a board can record (flags at gs_board_new) the
+// scan head's raw samples and the pins on every clock, for the tests' own decoders; and its
+// host can clock SPI frames into the SPI target as the UART's bytes go in.
 
 #include <cstdint>
 #include <cstdio>
+#include <csignal>
 #include <cstring>
 #include <deque>
+#include <unistd.h>
 #include <new>
 #include <vector>
 
@@ -31,6 +37,25 @@ enum Outcome : int { RAN = 0, PROTOCOL_ERROR = 1 };
 
 // The recorded laser pins, one bit each in this order (galvoscan.sim.board.LASER_PINS).
 enum LaserPin { ENABLE, MO, AM, PRR, LATCH, GUIDE };
+
+// The records (gs_board_take).
+enum Record { FRAMES, SYNC_RISES, PULSES, LASER_CHANGES, BYTES_IN, BYTES_OUT, XY2_SAMPLES,
+              PIN_CHANGES, SPI_RESULTS, RECORDS };
+
+// Flags of gs_board_new.
+enum Flag { RECORD_SAMPLES = 1, RECORD_PINS = 2 };
+
+// What the host's transmitter queue holds besides bytes: a byte with a bad stop bit
+// (BAD_STOP | byte), and pauses (the negated pause in fs).
+const int64_t BAD_STOP = 0x100;
+
+// The SPI host's results: a CIPO bit, or the end of a transfer.
+const int64_t SPI_DONE = 2;
+
+struct SPITransfer {
+    std::vector<uint8_t> bits;
+    int64_t half_fs, phase_fs;
+};
 
 struct XY2Receiver {
     // The scan head's decoder (galvoscan/sim/xy2_receiver.py): bits sampled on each falling
@@ -101,23 +126,27 @@ struct XY2Receiver {
 
 struct Board {
     design_t top;
+    int flags = 0;
 
     // Timing, in femtoseconds (from Python, rounded as Amaranth rounds its delays).
     int64_t half_fs;            // half a clock period
     int64_t bit_fs;             // one UART bit
     int64_t bit_and_half_fs;    // a bit and a half: the first data bit's middle
     int64_t machine_fs;         // how often the interlock and alarm pins are set
+    int64_t spi_idle_fs;        // how often an idle SPI host looks for a transfer
 
+    int64_t now = 0;
     int64_t next_toggle;        // the clock's next edge
     bool clk = false;
     int64_t cycles = 0;         // rising edges so far (the Python board's Timed.cycles)
+    bool power_up_seen = false;
 
     // The host's transmitter: a byte 8N1 on uart_rx, back to back, woken every bit.
-    std::deque<uint8_t> to_board;
-    int64_t bytes_started = 0;
+    std::deque<int64_t> to_board;
+    int64_t items_started = 0;
     int64_t tx_wake = 0;
     int tx_level_index = -1;    // -1: idle; 0 start bit, 1..8 data, 9 stop; 10: byte done
-    uint8_t tx_byte = 0;
+    int64_t tx_item = 0;
 
     // The host's receiver: a start bit's falling edge, then each bit in its middle.
     bool rx_sampling = false;
@@ -126,6 +155,13 @@ struct Board {
     unsigned rx_value = 0;
     int64_t framing_errors = 0;
 
+    // The SPI host: mode 0, a transfer's bits with SCK at its own rate, cs_n high after.
+    std::deque<SPITransfer> spi_queue;
+    int64_t transfers_started = 0;
+    int64_t spi_wake = 0;
+    int spi_step = -1;          // -1 idle; else the step of the transfer (see spi_host)
+    SPITransfer spi;
+
     // The machine: interlock loop and laser alarms, set every machine_fs from t = 0.
     int64_t machine_wake = 0;
     bool interlock_closed = true, alarms_clear = true;
@@ -133,17 +169,13 @@ struct Board {
     // Pins as last seen, for their edges.
     bool last_tx = true, last_xy2_clk = false, last_sync = false, last_prr = false;
     uint32_t last_laser = 0;
+    int64_t last_pins = -1;
 
     XY2Receiver receiver;
     char message[256] = {0};
 
-    // The records, taken by Python in batches.
-    std::vector<int64_t> frames;        // cycle, x, y
-    std::vector<int64_t> sync_rises;    // cycle
-    std::vector<int64_t> pulses;        // cycle
-    std::vector<int64_t> laser_changes; // cycle, pins (LaserPin bits)
-    std::vector<int64_t> bytes_in;      // cycle, byte
-    std::vector<int64_t> bytes_out;     // byte
+    // The records, taken by Python in batches (Record order).
+    std::vector<int64_t> records[RECORDS];
 
     uint32_t laser_pins() const {
         return (uint32_t(top.p_laser__enable.get<bool>()) << ENABLE) |
@@ -154,6 +186,24 @@ struct Board {
                (uint32_t(top.p_laser__guide.get<bool>()) << GUIDE);
     }
 
+    // The tests' pins (tests/sim_board.py): mo, am, prr, interlock_open, latch, power[8],
+    // enable, alarm[GS_ALARM_BITS], guide, xy2_sync, from bit 0 up.
+    int64_t all_pins() const {
+        int64_t pins = int64_t(top.p_laser__mo.get<bool>()) |
+                       int64_t(top.p_laser__am.get<bool>()) << 1 |
+                       int64_t(top.p_laser__prr.get<bool>()) << 2 |
+                       int64_t(top.p_interlock__open.get<bool>()) << 3 |
+                       int64_t(top.p_laser__latch.get<bool>()) << 4 |
+                       int64_t(top.p_laser__power.get<uint32_t>()) << 5 |
+                       int64_t(top.p_laser__enable.get<bool>()) << 13;
+#if GS_ALARM_BITS > 0
+        pins |= int64_t(top.p_laser__alarm.get<uint32_t>()) << 14;
+#endif
+        pins |= int64_t(top.p_laser__guide.get<bool>()) << 18 |
+                int64_t(top.p_xy2__sync.get<bool>()) << 19;
+        return pins;
+    }
+
     // Evaluate until nothing changes. (CXXRTL's step() stops after the commit that follows
     // a converged eval, so the outputs it leaves are those from before a clock edge's commit;
     // the eval after that commit brings them up to the new state.)
@@ -161,6 +211,15 @@ struct Board {
         do
             top.eval();
         while (top.commit());
+    }
+
+    void record_pins() {
+        int64_t pins = all_pins();
+        if (pins != last_pins) {
+            records[PIN_CHANGES].push_back(cycles);
+            records[PIN_CHANGES].push_back(pins);
+            last_pins = pins;
+        }
     }
 
     // After the design has settled: the edges and changes the Python board's triggers see.
@@ -178,35 +237,38 @@ struct Board {
         bool sync = top.p_xy2__sync.get<bool>();
         bool ok = true;
         if (last_xy2_clk && !xy2_clk) {
-            int32_t x = 0, y = 0;
-            int got = receiver.sample(sync, top.p_xy2__x.get<bool>(), top.p_xy2__y.get<bool>(),
-                                      x, y, message, sizeof message);
+            bool x = top.p_xy2__x.get<bool>(), y = top.p_xy2__y.get<bool>();
+            if (flags & RECORD_SAMPLES) {
+                records[XY2_SAMPLES].push_back(cycles);
+                records[XY2_SAMPLES].push_back(int64_t(sync) | int64_t(x) << 1 |
+                                               int64_t(y) << 2);
+            }
+            int32_t frame_x = 0, frame_y = 0;
+            int got = receiver.sample(sync, x, y, frame_x, frame_y, message, sizeof message);
             if (got < 0)
                 ok = false;
             else if (got > 0) {
-                frames.push_back(cycles);
-                frames.push_back(x);
-                frames.push_back(y);
+                records[FRAMES].push_back(cycles);
+                records[FRAMES].push_back(frame_x);
+                records[FRAMES].push_back(frame_y);
             }
         }
         last_xy2_clk = xy2_clk;
         if (sync && !last_sync)
-            sync_rises.push_back(cycles);
+            records[SYNC_RISES].push_back(cycles);
         last_sync = sync;
         bool prr = top.p_laser__prr.get<bool>();
         if (prr && !last_prr && top.p_laser__am.get<bool>())
-            pulses.push_back(cycles);
+            records[PULSES].push_back(cycles);
         last_prr = prr;
         uint32_t laser = laser_pins();
         if (laser != last_laser) {
-            laser_changes.push_back(cycles);
-            laser_changes.push_back(laser);
+            records[LASER_CHANGES].push_back(cycles);
+            records[LASER_CHANGES].push_back(laser);
             last_laser = laser;
         }
         return ok;
     }
-
-    int64_t now = 0;
 
     void set_machine_pins() {
         top.p_interlock__open.set<bool>(!interlock_closed);
@@ -218,23 +280,38 @@ struct Board {
     void host_transmitter() {
         if (tx_level_index >= 0) {
             tx_level_index++;
+            bool bad_stop = tx_item & BAD_STOP;
             if (tx_level_index == 10) {         // the stop bit's time is over
-                bytes_in.push_back(cycles);
-                bytes_in.push_back(tx_byte);
+                top.p_uart__rx.set<bool>(true);
                 tx_level_index = -1;
+                if (bad_stop) {                 // the line idles a bit after a break
+                    tx_wake += bit_fs;
+                    return;
+                }
+                records[BYTES_IN].push_back(cycles);
+                records[BYTES_IN].push_back(tx_item & 0xFF);
             } else {
-                bool level = tx_level_index <= 8 ? (tx_byte >> (tx_level_index - 1)) & 1
-                                                 : true;
+                bool level = tx_level_index <= 8 ? (tx_item >> (tx_level_index - 1)) & 1
+                                                 : !bad_stop;
                 top.p_uart__rx.set<bool>(level);
+                tx_wake += bit_fs;
+                return;
             }
         }
-        if (tx_level_index < 0 && !to_board.empty()) {
-            tx_byte = to_board.front();
-            to_board.pop_front();
-            bytes_started++;
-            tx_level_index = 0;
-            top.p_uart__rx.set<bool>(false);
+        // Idle: the next item, if there is one.
+        if (to_board.empty()) {
+            tx_wake += bit_fs;
+            return;
         }
+        tx_item = to_board.front();
+        to_board.pop_front();
+        items_started++;
+        if (tx_item < 0) {                      // a pause
+            tx_wake += -tx_item;
+            return;
+        }
+        tx_level_index = 0;
+        top.p_uart__rx.set<bool>(false);
         tx_wake += bit_fs;
     }
 
@@ -247,10 +324,60 @@ struct Board {
             return;
         }
         if (tx)
-            bytes_out.push_back(rx_value);
+            records[BYTES_OUT].push_back(rx_value);
         else
             framing_errors++;
         rx_sampling = false;
+    }
+
+    // The steps of a transfer (tests/sim_board.py's SPI host): after the phase, cs_n low;
+    // for each bit, COPI set, half a period, SCK high and CIPO sampled, half a period, SCK
+    // low; half a period; cs_n high; four half periods; done.
+    void spi_host() {
+        if (spi_step < 0) {
+            if (spi_queue.empty()) {
+                spi_wake += spi_idle_fs;
+                return;
+            }
+            spi = std::move(spi_queue.front());
+            spi_queue.pop_front();
+            transfers_started++;
+            spi_step = 0;
+            if (spi.phase_fs) {
+                spi_wake += spi.phase_fs;
+                return;
+            }
+        }
+        int n = int(spi.bits.size());
+        // Step 2i: cs_n low (i = 0) or SCK low, and COPI set to bit i; step 2i + 1: SCK high
+        // and CIPO sampled; half a period after each. Step 2n + 1: cs_n high, four half
+        // periods; step 2n + 2: done, and the next transfer at once.
+        if (spi_step <= 2 * n) {
+            if (spi_step % 2 == 0) {
+                if (spi_step == 0)
+                    top.p_spi__cs__n.set<bool>(false);
+                else
+                    top.p_spi__sck.set<bool>(false);
+                if (spi_step / 2 < n)
+                    top.p_spi__copi.set<bool>(spi.bits[spi_step / 2]);
+            } else {
+                top.p_spi__sck.set<bool>(true);
+                settle();
+                records[SPI_RESULTS].push_back(top.p_spi__cipo.get<bool>());
+            }
+            spi_step++;
+            spi_wake += spi.half_fs;
+            return;
+        }
+        if (spi_step == 2 * n + 1) {
+            top.p_spi__cs__n.set<bool>(true);
+            spi_step++;
+            spi_wake += 4 * spi.half_fs;
+            return;
+        }
+        records[SPI_RESULTS].push_back(SPI_DONE);
+        spi_step = -1;
+        spi_host();
     }
 
     // Run every event before `deadline`; leave those on it for the next run.
@@ -259,6 +386,7 @@ struct Board {
             int64_t t = next_toggle;
             if (tx_wake < t) t = tx_wake;
             if (rx_sampling && rx_wake < t) t = rx_wake;
+            if (spi_wake < t) t = spi_wake;
             if (machine_wake < t) t = machine_wake;
             if (t >= deadline)
                 break;
@@ -272,6 +400,8 @@ struct Board {
                     cycles++;
                     if (!watch_pins())
                         return PROTOCOL_ERROR;
+                    if (flags & RECORD_PINS)
+                        record_pins();
                 } else {
                     // Nothing in the design acts on the falling edge: only note it, so the
                     // next rising one is seen as an edge.
@@ -280,22 +410,32 @@ struct Board {
             }
             // Then the host's and the machine's processes woken at this instant, in the order
             // the Python board added them: each input it sets settles the design at once.
-            bool changed = false;
+            bool woken = false;
             if (tx_wake == t) {
                 host_transmitter();
-                changed = true;
+                woken = true;
             }
             if (rx_sampling && rx_wake == t)
                 host_receiver();
+            while (spi_wake == t) {
+                spi_host();
+                woken = true;
+            }
             if (machine_wake == t) {
                 set_machine_pins();
                 machine_wake += machine_fs;
-                changed = true;
+                woken = true;
             }
-            if (changed) {
+            if (woken) {
                 settle();
                 if (!watch_pins())
                     return PROTOCOL_ERROR;
+            }
+            if (!power_up_seen) {
+                // The pins as the design is at power-up, its inputs set (the tests' entry 0).
+                power_up_seen = true;
+                if (flags & RECORD_PINS)
+                    record_pins();
             }
         }
         now = deadline;
@@ -303,21 +443,39 @@ struct Board {
     }
 };
 
+// A model that crashes ends the process with one line, not a core dump: the pseudo-terminal
+// of a simulated board closes with it, and the host sees its link fail.
+void crashed(int signal) {
+    static const char line[] = "galvoscan: error: the compiled simulated board crashed "
+                               "(run it with --backend python, and report it)\n";
+    ssize_t written = write(2, line, sizeof line - 1);
+    (void)written;
+    _exit(128 + signal);
+}
+
 }  // namespace
 
 extern "C" {
 
 // timing: the clock's first edge, half a clock, a UART bit, a bit and a half, the machine's
-// period (all fs).
-void *gs_board_new(const int64_t *timing) {
+// period, the idle SPI host's (all fs); flags: Flag bits.
+void *gs_board_new(const int64_t *timing, int flags) {
+    static bool handlers = false;
+    if (!handlers) {
+        for (int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL})
+            std::signal(signal, crashed);
+        handlers = true;
+    }
     Board *board = new (std::nothrow) Board();
     if (board == nullptr)
         return nullptr;
+    board->flags = flags;
     board->next_toggle = timing[0];
     board->half_fs = timing[1];
     board->bit_fs = timing[2];
     board->bit_and_half_fs = timing[3];
     board->machine_fs = timing[4];
+    board->spi_idle_fs = timing[5];
     // The ports' initial values (Amaranth's port inits are not in the netlist): the host's
     // UART idles high, the SPI link is deselected, the interlock and alarm pins as the
     // machine has them from the first instant.
@@ -325,22 +483,35 @@ void *gs_board_new(const int64_t *timing) {
     board->top.p_spi__cs__n.set<bool>(true);
     board->top.p_spi__sck.set<bool>(false);
     board->top.p_spi__copi.set<bool>(false);
+    board->top.p_interlock__open.set<bool>(true);
+#if GS_ALARM_BITS > 0
+    board->top.p_laser__alarm.set<uint32_t>((1u << GS_ALARM_BITS) - 1);
+#endif
     board->top.p_rst.set<bool>(false);
     board->top.p_clk.set<bool>(false);
     board->settle();
     board->last_tx = board->top.p_uart__tx.get<bool>();
     board->last_laser = board->laser_pins();
     // The Python board's recorder sees the pins once as the design first settles.
-    board->laser_changes.push_back(0);
-    board->laser_changes.push_back(board->last_laser);
+    board->records[LASER_CHANGES].push_back(0);
+    board->records[LASER_CHANGES].push_back(board->last_laser);
     return board;
 }
 
 void gs_board_free(void *board) { delete static_cast<Board *>(board); }
 
-void gs_board_send(void *handle, const uint8_t *data, int64_t size) {
+// Items for the host's UART transmitter: bytes, BAD_STOP | byte, or -pause_fs.
+void gs_board_send(void *handle, const int64_t *items, int64_t size) {
     Board *board = static_cast<Board *>(handle);
-    board->to_board.insert(board->to_board.end(), data, data + size);
+    board->to_board.insert(board->to_board.end(), items, items + size);
+}
+
+// One SPI transfer: `size` bits (0 or 1 each), SCK's half period and the phase (fs).
+void gs_board_spi(void *handle, const uint8_t *bits, int64_t size, int64_t half_fs,
+                  int64_t phase_fs) {
+    Board *board = static_cast<Board *>(handle);
+    board->spi_queue.push_back(SPITransfer{std::vector<uint8_t>(bits, bits + size), half_fs,
+                                           phase_fs});
 }
 
 void gs_board_machine(void *handle, int interlock_closed, int alarms_clear) {
@@ -355,28 +526,27 @@ int gs_board_run_until(void *handle, int64_t deadline_fs) {
 
 const char *gs_board_message(void *handle) { return static_cast<Board *>(handle)->message; }
 
-// 0 bytes started, 1 framing errors, 2 rising clock edges, 3 the board's time (fs).
+// 0 UART items started, 1 framing errors, 2 rising clock edges, 3 the board's time (fs),
+// 4 SPI transfers started.
 int64_t gs_board_counter(void *handle, int which) {
     Board *board = static_cast<Board *>(handle);
     switch (which) {
-    case 0: return board->bytes_started;
+    case 0: return board->items_started;
     case 1: return board->framing_errors;
     case 2: return board->cycles;
     case 3: return board->now;
+    case 4: return board->transfers_started;
     }
     return -1;
 }
 
-// Record `which` (0 frames, 1 sync rises, 2 pulses, 3 laser changes, 4 bytes in, 5 bytes
-// out): copy up to `capacity` values into `out`, drop them from the board, return how many.
+// Record `which` (Record): copy up to `capacity` values into `out`, drop them from the
+// board, return how many.
 int64_t gs_board_take(void *handle, int which, int64_t *out, int64_t capacity) {
     Board *board = static_cast<Board *>(handle);
-    std::vector<int64_t> *records[] = {&board->frames, &board->sync_rises, &board->pulses,
-                                       &board->laser_changes, &board->bytes_in,
-                                       &board->bytes_out};
-    if (which < 0 || which > 5)
+    if (which < 0 || which >= RECORDS)
         return -1;
-    std::vector<int64_t> &record = *records[which];
+    std::vector<int64_t> &record = board->records[which];
     int64_t n = int64_t(record.size()) < capacity ? int64_t(record.size()) : capacity;
     if (n > 0) {
         std::memcpy(out, record.data(), size_t(n) * sizeof(int64_t));
@@ -385,14 +555,7 @@ int64_t gs_board_take(void *handle, int which, int64_t *out, int64_t capacity) {
     return n;
 }
 
-int64_t gs_board_pending(void *handle, int which) {
-    Board *board = static_cast<Board *>(handle);
-    std::vector<int64_t> *records[] = {&board->frames, &board->sync_rises, &board->pulses,
-                                       &board->laser_changes, &board->bytes_in,
-                                       &board->bytes_out};
-    if (which < 0 || which > 5)
-        return -1;
-    return int64_t(records[which]->size());
-}
+// For the tests of the crash handler only: a model that fails as a broken one would.
+void gs_board_crash(void *) { std::raise(SIGSEGV); }
 
 }  // extern "C"

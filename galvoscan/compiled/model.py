@@ -86,15 +86,16 @@ class CompiledModel:
         i64, p = ctypes.c_int64, ctypes.c_void_p
         signatures = {
             "gs_model_key": (ctypes.c_char_p, []),
-            "gs_board_new": (p, [ctypes.POINTER(i64)]),
+            "gs_board_new": (p, [ctypes.POINTER(i64), ctypes.c_int]),
             "gs_board_free": (None, [p]),
-            "gs_board_send": (None, [p, ctypes.c_char_p, i64]),
+            "gs_board_send": (None, [p, ctypes.POINTER(i64), i64]),
+            "gs_board_spi": (None, [p, ctypes.c_char_p, i64, i64, i64]),
+            "gs_board_crash": (None, [p]),
             "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
             "gs_board_run_until": (ctypes.c_int, [p, i64]),
             "gs_board_message": (ctypes.c_char_p, [p]),
             "gs_board_counter": (i64, [p, ctypes.c_int]),
             "gs_board_take": (i64, [p, ctypes.c_int, ctypes.POINTER(i64), i64]),
-            "gs_board_pending": (i64, [p, ctypes.c_int]),
         }
         for name, (restype, argtypes) in signatures.items():
             try:

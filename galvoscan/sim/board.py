@@ -18,12 +18,13 @@ from collections import deque
 
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
-from .board_engine import LASER_PINS, PythonEngine
+from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
 from .xy2_receiver import frame_of_each_pulse
 
 
-__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SIM_TIMEOUT_S", "BACKENDS",
-           "LASER_PINS"]
+__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport", "SIM_TIMEOUT_S",
+           "BACKENDS",
+           "LASER_PINS", "PIN_FIELDS"]
 
 
 #: Answer timeout a host should give the simulated board, in seconds of the host's clock.
@@ -50,6 +51,18 @@ class SimulatedBoard:
         Python one, with a line to ``say`` saying why. Both give the same records.
     say : callable, optional
         Told in a line each when the compiled model is being built, or why it is not used.
+    record_samples : bool
+        Record the scan head's raw samples (:attr:`xy2_samples`), for a decoder of one's own.
+    record_pins : bool or str
+        Record the pins of :data:`PIN_FIELDS` at their changes (:attr:`pin_changes`), or
+        ``"every clock"`` (:attr:`pins_every_clock`; the Python backend only).
+    machine_period_s : float
+        How often the interlock and alarm pins are set from :attr:`interlock_closed` and
+        :attr:`alarms_clear` (10 µs).
+    interlock_closed, alarms_clear : bool
+        The machine's inputs at power-up (and after :meth:`reset`).
+    vcd : path, optional
+        Write a waveform of the whole run, until :meth:`close` (the Python backend).
     top_kwargs
         More :class:`~galvoscan.gateware.top.GalvoScanTop` parameters (``mo_lead`` …).
 
@@ -65,42 +78,75 @@ class SimulatedBoard:
         ``(cycle, pins)`` each time a laser pin changed (pins in :data:`LASER_PINS` order).
     bytes_in : list of (int, int)
         ``(cycle, byte)``: every byte the host sent, and the clock its stop bit ended.
+    xy2_samples : list of (int, int, int, int)
+        ``(cycle, sync, x, y)`` at each falling ``xy2_clk`` edge (``record_samples``).
+    pin_changes : list of (int, int)
+        ``(clock, pins)``: the pins of :data:`PIN_FIELDS`, packed, as they are once the
+        design has settled after that rising clock edge (clock 0: at power-up), at least
+        whenever they changed; of several entries for one clock the last holds
+        (``record_pins``).
+    to_board : deque
+        What the host sends on the UART: bytes, ``("pause", seconds)`` and
+        ``("bad_stop", byte)`` (appended to only).
+    spi_queue : deque
+        SPI transfers to clock in: ``(bits, results, half_period_s, phase_s)``; ``results``
+        gets CIPO's bit as SCK rises for each bit, then ``"done"`` (appended to only).
     """
 
     def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python", say=None,
-                 **top_kwargs):
+                 record_samples=False, record_pins=False, machine_period_s=MACHINE_PERIOD_S,
+                 interlock_closed=True, alarms_clear=True, vcd=None, **top_kwargs):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         self.clk_freq = clk_freq
         self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
         self.baud = self.top.baud
+        self.machine_period_s = machine_period_s
+        self._machine_at_power_up = (interlock_closed, alarms_clear)
+        self._power_up_records()
+        if vcd and backend == "compiled":
+            raise ValueError("a waveform (vcd) needs the Python backend")
+        records = dict(record_samples=record_samples, record_pins=record_pins)
+        self.engine = (PythonEngine(self, vcd=vcd, **records) if vcd else
+                       self._engine(backend, say or (lambda line: None), **records))
+        self.backend = self.engine.name
+        self.run_for(1 / clk_freq)      # start the processes in this thread
+
+    def _power_up_records(self):
         self.now = 0.0
-        self.to_board = deque()         # bytes the host sent, not yet on uart_rx (append only)
+        self.to_board = deque()         # what the host sends, not yet on uart_rx
         self.from_board = deque()       # bytes off uart_tx, not yet given to the host
+        self.spi_queue = deque()        # SPI transfers not yet started
         self.framing_errors = 0
         self.bytes_in = []              # (cycle its stop bit ended, byte) of every byte in
         self.frames = []
         self.sync_rises = []
         self.pulses = []
         self.laser_changes = []
-        self.interlock_closed = True
-        self.alarms_clear = True
-        self.engine = self._engine(backend, say or (lambda line: None))
-        self.backend = self.engine.name
-        self.run_for(1 / clk_freq)      # start the processes in this thread
+        self.xy2_samples = []
+        self.pin_changes = []
+        self.pins_every_clock = []
+        self.interlock_closed, self.alarms_clear = self._machine_at_power_up
 
-    def _engine(self, backend, say):
-        if backend == "python":
-            return PythonEngine(self)
+    def _engine(self, backend, say, **records):
+        if backend == "python" or records.get("record_pins") == "every clock":
+            return PythonEngine(self, **records)
         from ..compiled import CompileError, CompiledEngine
         try:
-            return CompiledEngine(self, say=say)
+            return CompiledEngine(self, say=say, **records)
         except CompileError as error:
             if backend == "compiled":
                 raise
             say(f"the compiled simulator is not available ({error}); using Amaranth's "
-                f"simulator, some 300 times slower")
-            return PythonEngine(self)
+                f"simulator, some 200 times slower")
+            return PythonEngine(self, **records)
+
+    def reset(self):
+        """Back to power-up (the same design, every record empty, the machine's inputs as
+        at power-up), far quicker than building the board again."""
+        self._power_up_records()
+        self.engine.reset()
+        self.run_for(1 / self.clk_freq)
 
     @property
     def bit_time(self):
@@ -261,3 +307,36 @@ class SimTransport:
         answer = bytes(list(board.from_board)[:4])
         board.from_board.clear()
         return answer
+
+
+class SimSPITransport:
+    """Frames into a :class:`SimulatedBoard`'s SPI target, in the board's own time, as a host
+    at the link's top speed sends them (SCK = clock / 12, mode 0); the answer to a read is
+    clocked out during the next frame, a read of ``errors`` (as ``FTDISPITransport``)."""
+
+    def __init__(self, board, *, clocks_per_sck=12):
+        self.board = board
+        self.half_period = clocks_per_sck / board.clk_freq / 2
+
+    def transfer(self, frame):
+        board = self.board
+        bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
+        results = []
+        board.spi_queue.append((bits, results, self.half_period, 0))
+        # The transfer's own time (two half periods a bit, one more, four with cs_n high),
+        # then a look every half period, so the next transfer follows at once.
+        board.run_for((2 * len(bits) + 5) * self.half_period + 1 / board.clk_freq)
+        while not results or results[-1] != "done":
+            board.run_for(self.half_period)
+        value = 0
+        for bit in results[:-1]:
+            value = (value << 1) | bit
+        return value.to_bytes(len(frame), "big")
+
+    def write_frame(self, frame):
+        self.transfer(frame)
+
+    def query(self, frame):
+        from ..client import FTDISPITransport
+        self.transfer(frame)
+        return self.transfer(FTDISPITransport.FETCH)

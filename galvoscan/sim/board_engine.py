@@ -2,19 +2,21 @@
 driven and recorded by Amaranth processes (the reference the compiled backend is checked
 against, :mod:`galvoscan.compiled`).
 
-An engine moves a :class:`~.board.SimulatedBoard` on to a time of its own: it takes the bytes
-the host queued on ``board.to_board`` as their start bits begin, and appends to the board's
-records what the pins did. Every process here wakes at fixed instants (a UART bit, 10 µs for
-the machine's pins) or on a pin's edge, so that the compiled board can wake at the same ones.
+An engine moves a :class:`~.board.SimulatedBoard` on to a time of its own: it takes what the
+host queued (``board.to_board``, ``board.spi_queue``) as it goes onto the pins, and appends to
+the board's records what the pins did. Every process here wakes at fixed instants (a UART
+bit, an SPI half period, the machine's period, 5 µs for an idle SPI host) or on a pin's
+edge, so that the compiled board can wake at the same ones.
 """
 
+from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
-from .link import Timed
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["PythonEngine", "LASER_PINS", "MACHINE_PERIOD_S"]
+__all__ = ["PythonEngine", "LASER_PINS", "MACHINE_PERIOD_S", "SPI_IDLE_S", "PIN_FIELDS",
+           "pack_pins"]
 
 
 # The laser pins recorded at every change, in this order.
@@ -23,45 +25,119 @@ LASER_PINS = ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch"
 #: How often the machine's interlock and alarm pins are set from the board's attributes.
 MACHINE_PERIOD_S = 10e-6
 
+#: How often an idle SPI host looks for a transfer to send.
+SPI_IDLE_S = 5e-6
+
+#: The pins ``record_pins`` records, as ``(name, first bit, width)`` of the packed value
+#: (``laser_alarm`` 0 wide on a build without alarms).
+PIN_FIELDS = (("laser_mo", 0, 1), ("laser_am", 1, 1), ("laser_prr", 2, 1),
+              ("interlock_open", 3, 1), ("laser_latch", 4, 1), ("laser_power", 5, 8),
+              ("laser_enable", 13, 1), ("laser_alarm", 14, 4), ("laser_guide", 18, 1),
+              ("xy2_sync", 19, 1))
+
+
+def pack_pins(values):
+    """The values of :data:`PIN_FIELDS`' pins, in that order, as one packed number."""
+    packed = 0
+    for (_, first, _width), value in zip(PIN_FIELDS, values):
+        packed |= value << first
+    return packed
+
+
+class _Clocked(Elaboratable):
+    """The top with its clock domain made here, so the clock is a signal to read, and a count
+    of its rising edges."""
+
+    def __init__(self, top):
+        self.top = top
+        self.sync = ClockDomain("sync")
+        self.cycles = Signal(48)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.domains.sync = self.sync
+        m.submodules.top = self.top
+        m.d.sync += self.cycles.eq(self.cycles + 1)
+        return m
+
 
 class PythonEngine:
-    """Amaranth's simulator of ``board.top``."""
+    """Amaranth's simulator of ``board.top``.
+
+    ``record_pins`` ``"every clock"`` samples the pins on every clock instead of at their
+    changes (the tests' check of the recording by changes; this backend only)."""
 
     name = "python"
 
-    def __init__(self, board):
+    def __init__(self, board, *, record_samples=False, record_pins=False, vcd=None):
         self.board = board
-        top = board.top
-        self._timed = Timed(top)
-        self.sim = Simulator(self._timed)
+        self._clocked = _Clocked(board.top)
+        self.sim = Simulator(self._clocked)
         self.sim.add_clock(1 / board.clk_freq)
+        self._record_samples = record_samples
+        self._record_pins = record_pins
+        self._add_processes()
+        self._vcd = None
+        if vcd:
+            self._vcd = self.sim.write_vcd(vcd)
+            self._vcd.__enter__()
+
+    def _add_processes(self):
         self._receiver = XY2Receiver()
-        for process in (self._uart_in, self._uart_out, self._scan_head, self._sync_edges,
-                        self._laser, self._machine):
+        for process in (self._uart_in, self._uart_out, self._spi_host, self._scan_head,
+                        self._sync_edges, self._laser, self._machine):
             self.sim.add_testbench(process, background=True)
         # A process, not a testbench: the pins are logic, and may change more than once
         # while the design settles after a clock edge; a process sees every change.
         self.sim.add_process(self._laser_pins)
+        if self._record_pins == "every clock":
+            self.sim.add_testbench(self._pins_every_clock, background=True)
+        elif self._record_pins:
+            self.sim.add_testbench(self._pins_at_power_up)
+            self.sim.add_process(self._pin_changes)
 
     def run_until(self, seconds):
         self.sim.run_until(seconds)
 
+    def reset(self):
+        """Back to power-up: every signal and memory to its initial value, every process
+        started again (a millisecond, where building the simulator is half a second)."""
+        self.sim.reset()
+        self._receiver = XY2Receiver()
+
     def close(self):
-        pass
+        if self._vcd is not None:
+            vcd, self._vcd = self._vcd, None
+            vcd.__exit__(None, None, None)
+
+    # --- the host --------------------------------------------------------------------------------
 
     async def _uart_in(self, ctx):
-        """The host's transmitter: each byte 8N1 on uart_rx, back to back."""
+        """The host's transmitter: each byte 8N1 on uart_rx, back to back; a ``("pause", s)``
+        item idles the line, a ``("bad_stop", byte)`` one sends the byte with its stop bit low
+        and lets the line idle a bit after."""
         board, rx = self.board, self.board.top.uart_rx
         ctx.set(rx, 1)
         while True:
             if not board.to_board:
                 await ctx.delay(board.bit_time)
                 continue
-            byte = board.to_board.popleft()
-            for level in (0, *((byte >> i) & 1 for i in range(8)), 1):
+            item = board.to_board.popleft()
+            stop = 1
+            if isinstance(item, tuple):
+                kind, value = item
+                if kind == "pause":
+                    await ctx.delay(value)
+                    continue
+                item, stop = value, 0
+            for level in (0, *((item >> i) & 1 for i in range(8)), stop):
                 ctx.set(rx, level)
                 await ctx.delay(board.bit_time)
-            board.bytes_in.append((ctx.get(self._timed.cycles), byte))
+            ctx.set(rx, 1)
+            if not stop:
+                await ctx.delay(board.bit_time)
+                continue
+            board.bytes_in.append((ctx.get(self._clocked.cycles), item))
 
     async def _uart_out(self, ctx):
         """The host's receiver: a start bit's falling edge, then each bit in its middle."""
@@ -78,29 +154,30 @@ class PythonEngine:
             else:
                 board.framing_errors += 1
 
-    async def _scan_head(self, ctx):
-        top = self.board.top
-        async for _, sync, x, y, cycles in ctx.negedge(top.xy2_clk).sample(
-                top.xy2_sync, top.xy2_x, top.xy2_y, self._timed.cycles):
-            frame = self._receiver.sample(sync, x, y)
-            if frame is not None:
-                self.board.frames.append((cycles, frame.x, frame.y))
-
-    async def _sync_edges(self, ctx):
-        async for _, cycles in ctx.posedge(self.board.top.xy2_sync).sample(self._timed.cycles):
-            self.board.sync_rises.append(cycles)
-
-    async def _laser(self, ctx):
-        top = self.board.top
-        async for _, am, cycles in ctx.posedge(top.laser_prr).sample(top.laser_am,
-                                                                      self._timed.cycles):
-            if am:
-                self.board.pulses.append(cycles)
-
-    async def _laser_pins(self, ctx):
-        pins = [getattr(self.board.top, name) for name in LASER_PINS]
-        async for *values, cycles in ctx.changed(*pins).sample(self._timed.cycles):
-            self.board.laser_changes.append((cycles, tuple(values)))
+    async def _spi_host(self, ctx):
+        """The SPI host: mode 0, each transfer's bits at its own SCK rate, CIPO sampled as SCK
+        rises, then cs_n high for four half periods; ``"done"`` ends its results."""
+        board, top = self.board, self.board.top
+        ctx.set(top.spi_cs_n, 1)
+        while True:
+            if not board.spi_queue:
+                await ctx.delay(SPI_IDLE_S)
+                continue
+            bits, results, half_period, phase = board.spi_queue.popleft()
+            if phase:
+                await ctx.delay(phase)      # the host's clock is not the board's
+            ctx.set(top.spi_cs_n, 0)
+            for bit in bits:
+                ctx.set(top.spi_copi, bit)
+                await ctx.delay(half_period)
+                ctx.set(top.spi_sck, 1)
+                results.append(ctx.get(top.spi_cipo))
+                await ctx.delay(half_period)
+                ctx.set(top.spi_sck, 0)
+            await ctx.delay(half_period)
+            ctx.set(top.spi_cs_n, 1)
+            await ctx.delay(4 * half_period)
+            results.append("done")
 
     async def _machine(self, ctx):
         # The interlock loop and the laser's alarm outputs, as the machine has them.
@@ -110,4 +187,60 @@ class PythonEngine:
             ctx.set(board.top.interlock_open, 0 if board.interlock_closed else 1)
             if alarm is not None:
                 ctx.set(alarm, 0 if board.alarms_clear else 2 ** len(alarm) - 1)
-            await ctx.delay(MACHINE_PERIOD_S)
+            await ctx.delay(board.machine_period_s)
+
+    # --- the scan head and the laser ---------------------------------------------------------------
+
+    async def _scan_head(self, ctx):
+        board, top = self.board, self.board.top
+        async for _, sync, x, y, cycles in ctx.negedge(top.xy2_clk).sample(
+                top.xy2_sync, top.xy2_x, top.xy2_y, self._clocked.cycles):
+            if self._record_samples:
+                board.xy2_samples.append((cycles, sync, x, y))
+            frame = self._receiver.sample(sync, x, y)
+            if frame is not None:
+                board.frames.append((cycles, frame.x, frame.y))
+
+    async def _sync_edges(self, ctx):
+        async for _, cycles in ctx.posedge(self.board.top.xy2_sync).sample(
+                self._clocked.cycles):
+            self.board.sync_rises.append(cycles)
+
+    async def _laser(self, ctx):
+        top = self.board.top
+        async for _, am, cycles in ctx.posedge(top.laser_prr).sample(top.laser_am,
+                                                                      self._clocked.cycles):
+            if am:
+                self.board.pulses.append(cycles)
+
+    async def _laser_pins(self, ctx):
+        pins = [getattr(self.board.top, name) for name in LASER_PINS]
+        async for *values, cycles in ctx.changed(*pins).sample(self._clocked.cycles):
+            self.board.laser_changes.append((cycles, tuple(values)))
+
+    def _pins(self):
+        top = self.board.top
+        return [getattr(top, name) if hasattr(top, name) else C(0, 1)
+                for name, _first, _width in PIN_FIELDS]
+
+    async def _pins_at_power_up(self, ctx):
+        self.board.pin_changes.append((0, pack_pins([ctx.get(pin) for pin in self._pins()])))
+
+    async def _pin_changes(self, ctx):
+        # Clock k's entry is the pins once the design has settled after the k-th rising clock
+        # edge (entry 0: at power-up, as _pins_at_power_up finds them). A process sees every
+        # change, the last of a clock's the settled one: a change with clk high is on a rising
+        # edge, that edge's clock; one with clk low (the host's interlock and alarm pins
+        # change between edges) is first seen on the next edge.
+        pins = self._pins()
+        signals = [pin for pin in pins if isinstance(pin, Signal)]
+        async for sampled in ctx.changed(*signals).sample(*pins, self._clocked.cycles,
+                                                          self._clocked.sync.clk):
+            *values, clock, clk = sampled[len(signals):]
+            self.board.pin_changes.append((clock + (not clk), pack_pins(values)))
+
+    async def _pins_every_clock(self, ctx):
+        pins = self._pins()
+        while True:
+            self.board.pins_every_clock.append(pack_pins([ctx.get(pin) for pin in pins]))
+            await ctx.tick()
