@@ -13,7 +13,7 @@ from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 # The simulated board is the default build (128-point spiral table, 17 x 17 correction table,
 # every mode and the laser, none of the build options): its own map bounds what it takes, not
 # the host's wider view (a read of a register it was not built with is refused, unanswered).
-BUILD_MAP = SimBoard.powered_up().top.regmap
+BUILD_MAP = SimBoard.powered_up(backend="compiled").top.regmap
 REGISTERS = list(BUILD_MAP)
 BY_ADDRESS = BUILD_MAP.by_address
 # Writable registers that read back what was written (a queue register reads its last write).
@@ -148,14 +148,14 @@ def check_board(link, model, replies, regs=RW):
             assert (answer[1] << 8) | answer[2] == value
 
 
-fuzz_settings = settings(max_examples=20, deadline=None,
+fuzz_settings = settings(max_examples=60, deadline=None,
                          suppress_health_check=[HealthCheck.too_slow])
 
 
 @fuzz_settings
 @given(st.lists(st.tuples(pieces, st.booleans()), min_size=1, max_size=8), valid_write, others)
 def test_uart_garbage(stream, then, also):
-    board = SimBoard.powered_up()
+    board = SimBoard.powered_up(backend="compiled")
     link = SimUARTTransport(board)
     model = CommandModel()
 
@@ -199,7 +199,7 @@ spi_transactions = st.one_of(
 @fuzz_settings
 @given(st.lists(spi_transactions, min_size=1, max_size=8), valid_write, others)
 def test_spi_garbage(transactions, then, also):
-    board = SimBoard.powered_up()
+    board = SimBoard.powered_up(backend="compiled")
     link = SimSPITransport(board)
     model = CommandModel()
     pending_reply = None

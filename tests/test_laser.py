@@ -313,12 +313,13 @@ laser_writes = st.sampled_from([encode_write("arm", 1), encode_write("arm", 0),
 garbage = st.binary(min_size=1, max_size=6)
 
 
-@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=24, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(st.one_of(laser_writes, garbage), st.booleans(), st.booleans(),
                           st.integers(0, 400)), min_size=3, max_size=12))
 def test_fuzzed_commands_never_emit_unsafely(steps):
     lead = 100e-6
-    board = SimBoard.powered_up(mo_lead=lead, record_laser=True, **SPIRAL_ONLY)
+    board = SimBoard.powered_up(backend="compiled", mo_lead=lead, record_laser=True,
+                                **SPIRAL_ONLY)
     link = SimUARTTransport(board)
     link.send_bytes(encode_write("arm", 1))     # start armed, so emission is within reach
     for data, toggle_interlock, toggle_alarms, wait_us in steps:

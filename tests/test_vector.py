@@ -31,7 +31,8 @@ def test_model_follows_001():
 
 def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
     # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
-    board = SimBoard.powered_up(clk_freq=clk_freq, baud=round(clk_freq / 8), record_laser=True,
+    board = SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
+                                baud=round(clk_freq / 8), record_laser=True,
                                 mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
                                 **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False, **settings))
@@ -236,7 +237,7 @@ segment = st.tuples(st.sampled_from(["jump", "mark", "mark"]), coordinate, coord
 
 
 # Each example simulates a few milliseconds of the whole board: few examples, no shrinking.
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+@settings(max_examples=24, deadline=None, suppress_health_check=[HealthCheck.too_slow],
           phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(st.lists(segment, min_size=1, max_size=5), st.sampled_from([1, 2]),
        st.sampled_from([45, 60, 150]), st.tuples(coordinate, coordinate))

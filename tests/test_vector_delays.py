@@ -26,7 +26,8 @@ PRR_100HZ = 200
 def jobs_board():
     """The jobs' build, fresh from power-up: vector mode alone with the RTC delays (the same
     registers, half the design of the default build's to simulate)."""
-    return SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3,
+    return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
+                               mo_lead=0.2e-3,
                                vector_delays=True, **VECTOR_BOARD)
 
 
@@ -144,7 +145,7 @@ segment = st.tuples(st.sampled_from(["jump", "mark", "mark"]), coordinate, coord
 
 
 # Each example simulates a few milliseconds of the whole board: few examples, no shrinking.
-@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+@settings(max_examples=16, deadline=None, suppress_health_check=[HealthCheck.too_slow],
           phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(st.lists(segment, min_size=1, max_size=4),
        st.integers(-19, 250), st.integers(0, 250), st.integers(0, 120), st.integers(0, 120),

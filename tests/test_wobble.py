@@ -31,7 +31,8 @@ CLK = 4e6
 def jobs_board():
     """The jobs' build, fresh from power-up: vector mode alone with the wobble stage (the same
     registers, half the design of the default build's to simulate)."""
-    return SimBoard.powered_up(clk_freq=CLK, record_laser=True, mo_lead=0.2e-3, wobble=True,
+    return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
+                               mo_lead=0.2e-3, wobble=True,
                                **VECTOR_BOARD)
 
 
@@ -130,7 +131,7 @@ def test_ellipse_follows_each_line_and_nothing_else_moves():
 
 
 # Each example simulates two runs of the whole board: few examples, no shrinking.
-@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow],
           phases=[Phase.explicit, Phase.reuse, Phase.generate])
 @given(st.lists(st.tuples(st.sampled_from(["jump", "mark", "mark"]),
                           st.integers(20000, 20300), st.integers(20000, 20300)),
