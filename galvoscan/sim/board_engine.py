@@ -77,6 +77,7 @@ class PythonEngine:
         self._record_samples = record_samples
         self._record_pins = record_pins
         self._add_processes()
+        self._reserve_power_up()
         self._vcd = None
         if vcd:
             self._vcd = self.sim.write_vcd(vcd)
@@ -104,6 +105,13 @@ class PythonEngine:
         started again (a millisecond, where building the simulator is half a second)."""
         self.sim.reset()
         self._receiver = XY2Receiver()
+        self._reserve_power_up()
+
+    def _reserve_power_up(self):
+        # The power-up entry comes first, though the process that records the changes may see
+        # one at t = 0 before the testbench that reads the pins at power-up has run.
+        if self._record_pins and self._record_pins != "every clock":
+            self.board.pin_changes.append(None)
 
     def close(self):
         if self._vcd is not None:
@@ -224,7 +232,7 @@ class PythonEngine:
                 for name, _first, _width in PIN_FIELDS]
 
     async def _pins_at_power_up(self, ctx):
-        self.board.pin_changes.append((0, pack_pins([ctx.get(pin) for pin in self._pins()])))
+        self.board.pin_changes[0] = (0, pack_pins([ctx.get(pin) for pin in self._pins()]))
 
     async def _pin_changes(self, ctx):
         # Clock k's entry is the pins once the design has settled after the k-th rising clock
