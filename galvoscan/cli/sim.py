@@ -74,15 +74,17 @@ def _sim_vector(args):
     from tqdm import tqdm
     from ..sim import plot_job, replay_job
     start = time.monotonic()
+    started = [None]        # when the first frame came (a compile may come before)
     with tqdm(unit="frame", desc="simulating", disable=None, file=sys.stderr) as bar:
         try:
             result = replay_job(job, correction=correction, prr_hz=args.prr,
                                 pulses_per_point=args.pulses_per_point, pitch=args.pitch,
-                                jump_delay=args.jump_delay, vcd=args.vcd, progress=bar.update,
+                                jump_delay=args.jump_delay, vcd=args.vcd,
+                                progress=_timed(bar.update, started),
                                 backend=_backend(args), say=_say)
         except ValueError as error:
             fail(error)
-    seconds = time.monotonic() - start
+    seconds = time.monotonic() - (started[0] or start)
     marked = result.marked()
     counts = sorted({p[2] for p in marked})
     mm_per_unit = args.lens_field / 65536
@@ -137,6 +139,16 @@ def _backend(args):
     return args.backend
 
 
+def _timed(progress, started):
+    """``progress``, noting in ``started`` when it is first called: the simulation's time is
+    counted from there, not from before a compiled model was built."""
+    def call(frames):
+        if started[0] is None:
+            started[0] = time.monotonic()
+        progress(frames)
+    return call
+
+
 def _say(line):
     print(f"galvoscan: {line}", file=sys.stderr, flush=True)
 
@@ -157,12 +169,14 @@ def _sim_spiral(args):
     # for `dwell` frames.
     frames = PARK_FRAMES + args.points * settings.dwell
     start = time.monotonic()
+    started = [None]        # when the first frame came (a compile may come before)
     with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
               file=sys.stderr) as bar:
         received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
-                                 progress=bar.update, correction=correction,
+                                 progress=_timed(bar.update, started),
+                                 correction=correction,
                                  backend=_backend(args), say=_say)
-    seconds = time.monotonic() - start
+    seconds = time.monotonic() - (started[0] or start)
     cycles = frames * 20 * SIM_CLOCKS_PER_BIT
 
     if args.csv:
