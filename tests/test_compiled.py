@@ -299,9 +299,8 @@ def test_a_foreign_or_damaged_cached_model_is_never_used(monkeypatch, tmp_path):
     other_top = GalvoScanTop(clk_freq=4e6, **small)
     other = compiled_model(other_top)
     top = GalvoScanTop(clk_freq=4e6, baud=250_000, **small)
-    key = model_module._key(model_module.design_rtlil(top), model_module._board_source(),
-                            model_module._yosys_version(), model_module.find_compiler(),
-                            model_module._alarm_bits(top))
+    key = model_module._key(model_module.top_design(top), model_module._board_source(),
+                            model_module._yosys_version(), model_module.find_compiler())
     assert key != other.key
     (tmp_path / key).mkdir()
     (tmp_path / key / "model.so").write_bytes(other.path.read_bytes())

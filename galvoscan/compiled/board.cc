@@ -10,8 +10,10 @@
 // what falls on it for the next run (Simulator.run_until). Python calls in once per run, never
 // once per clock, and takes the records in batches.
 //
-// The design is the header and source Yosys' write_cxxrtl makes of the top (TOP_HEADER); the
-// ports that differ between builds come in as macros (GS_ALARM_BITS: the laser alarm inputs).
+// The design is the header and source Yosys' write_cxxrtl makes of the top (TOP_HEADER); its
+// ports' names, and what differs between builds (GS_ALARM_BITS: the laser alarm inputs),
+// come in as macros (ports.h), so that another design with these pins (a build's netlist)
+// can stand in it.
 //
 // Besides the records every board keeps, a board can record (flags at gs_board_new) the
 // scan head's raw samples and the pins on every clock, for the tests' own decoders; and its
@@ -27,6 +29,9 @@
 #include <vector>
 
 #include TOP_HEADER
+// The design's port names (GS_PORT_xy2_clk …, GS_PREV_CLK) and GS_ALARM_BITS, written for
+// each design by galvoscan/compiled/model.py.
+#include "ports.h"
 
 namespace {
 
@@ -178,29 +183,29 @@ struct Board {
     std::vector<int64_t> records[RECORDS];
 
     uint32_t laser_pins() const {
-        return (uint32_t(top.p_laser__enable.get<bool>()) << ENABLE) |
-               (uint32_t(top.p_laser__mo.get<bool>()) << MO) |
-               (uint32_t(top.p_laser__am.get<bool>()) << AM) |
-               (uint32_t(top.p_laser__prr.get<bool>()) << PRR) |
-               (uint32_t(top.p_laser__latch.get<bool>()) << LATCH) |
-               (uint32_t(top.p_laser__guide.get<bool>()) << GUIDE);
+        return (uint32_t(top.GS_PORT_laser_enable.get<bool>()) << ENABLE) |
+               (uint32_t(top.GS_PORT_laser_mo.get<bool>()) << MO) |
+               (uint32_t(top.GS_PORT_laser_am.get<bool>()) << AM) |
+               (uint32_t(top.GS_PORT_laser_prr.get<bool>()) << PRR) |
+               (uint32_t(top.GS_PORT_laser_latch.get<bool>()) << LATCH) |
+               (uint32_t(top.GS_PORT_laser_guide.get<bool>()) << GUIDE);
     }
 
     // The tests' pins (tests/sim_board.py): mo, am, prr, interlock_open, latch, power[8],
     // enable, alarm[GS_ALARM_BITS], guide, xy2_sync, from bit 0 up.
     int64_t all_pins() const {
-        int64_t pins = int64_t(top.p_laser__mo.get<bool>()) |
-                       int64_t(top.p_laser__am.get<bool>()) << 1 |
-                       int64_t(top.p_laser__prr.get<bool>()) << 2 |
-                       int64_t(top.p_interlock__open.get<bool>()) << 3 |
-                       int64_t(top.p_laser__latch.get<bool>()) << 4 |
-                       int64_t(top.p_laser__power.get<uint32_t>()) << 5 |
-                       int64_t(top.p_laser__enable.get<bool>()) << 13;
+        int64_t pins = int64_t(top.GS_PORT_laser_mo.get<bool>()) |
+                       int64_t(top.GS_PORT_laser_am.get<bool>()) << 1 |
+                       int64_t(top.GS_PORT_laser_prr.get<bool>()) << 2 |
+                       int64_t(top.GS_PORT_interlock_open.get<bool>()) << 3 |
+                       int64_t(top.GS_PORT_laser_latch.get<bool>()) << 4 |
+                       int64_t(top.GS_PORT_laser_power.get<uint32_t>()) << 5 |
+                       int64_t(top.GS_PORT_laser_enable.get<bool>()) << 13;
 #if GS_ALARM_BITS > 0
-        pins |= int64_t(top.p_laser__alarm.get<uint32_t>()) << 14;
+        pins |= int64_t(top.GS_PORT_laser_alarm.get<uint32_t>()) << 14;
 #endif
-        pins |= int64_t(top.p_laser__guide.get<bool>()) << 18 |
-                int64_t(top.p_xy2__sync.get<bool>()) << 19;
+        pins |= int64_t(top.GS_PORT_laser_guide.get<bool>()) << 18 |
+                int64_t(top.GS_PORT_xy2_sync.get<bool>()) << 19;
         return pins;
     }
 
@@ -225,7 +230,7 @@ struct Board {
     // After the design has settled: the edges and changes the Python board's triggers see.
     // Returns false on a protocol error.
     bool watch_pins() {
-        bool tx = top.p_uart__tx.get<bool>();
+        bool tx = top.GS_PORT_uart_tx.get<bool>();
         if (last_tx && !tx && !rx_sampling) {
             rx_sampling = true;
             rx_bit = 0;
@@ -233,11 +238,11 @@ struct Board {
             rx_wake = now + bit_and_half_fs;
         }
         last_tx = tx;
-        bool xy2_clk = top.p_xy2__clk.get<bool>();
-        bool sync = top.p_xy2__sync.get<bool>();
+        bool xy2_clk = top.GS_PORT_xy2_clk.get<bool>();
+        bool sync = top.GS_PORT_xy2_sync.get<bool>();
         bool ok = true;
         if (last_xy2_clk && !xy2_clk) {
-            bool x = top.p_xy2__x.get<bool>(), y = top.p_xy2__y.get<bool>();
+            bool x = top.GS_PORT_xy2_x.get<bool>(), y = top.GS_PORT_xy2_y.get<bool>();
             if (flags & RECORD_SAMPLES) {
                 records[XY2_SAMPLES].push_back(cycles);
                 records[XY2_SAMPLES].push_back(int64_t(sync) | int64_t(x) << 1 |
@@ -257,8 +262,8 @@ struct Board {
         if (sync && !last_sync)
             records[SYNC_RISES].push_back(cycles);
         last_sync = sync;
-        bool prr = top.p_laser__prr.get<bool>();
-        if (prr && !last_prr && top.p_laser__am.get<bool>())
+        bool prr = top.GS_PORT_laser_prr.get<bool>();
+        if (prr && !last_prr && top.GS_PORT_laser_am.get<bool>())
             records[PULSES].push_back(cycles);
         last_prr = prr;
         uint32_t laser = laser_pins();
@@ -271,9 +276,9 @@ struct Board {
     }
 
     void set_machine_pins() {
-        top.p_interlock__open.set<bool>(!interlock_closed);
+        top.GS_PORT_interlock_open.set<bool>(!interlock_closed);
 #if GS_ALARM_BITS > 0
-        top.p_laser__alarm.set<uint32_t>(alarms_clear ? 0u : (1u << GS_ALARM_BITS) - 1);
+        top.GS_PORT_laser_alarm.set<uint32_t>(alarms_clear ? 0u : (1u << GS_ALARM_BITS) - 1);
 #endif
     }
 
@@ -282,7 +287,7 @@ struct Board {
             tx_level_index++;
             bool bad_stop = tx_item & BAD_STOP;
             if (tx_level_index == 10) {         // the stop bit's time is over
-                top.p_uart__rx.set<bool>(true);
+                top.GS_PORT_uart_rx.set<bool>(true);
                 tx_level_index = -1;
                 if (bad_stop) {                 // the line idles a bit after a break
                     tx_wake += bit_fs;
@@ -293,7 +298,7 @@ struct Board {
             } else {
                 bool level = tx_level_index <= 8 ? (tx_item >> (tx_level_index - 1)) & 1
                                                  : !bad_stop;
-                top.p_uart__rx.set<bool>(level);
+                top.GS_PORT_uart_rx.set<bool>(level);
                 tx_wake += bit_fs;
                 return;
             }
@@ -311,12 +316,12 @@ struct Board {
             return;
         }
         tx_level_index = 0;
-        top.p_uart__rx.set<bool>(false);
+        top.GS_PORT_uart_rx.set<bool>(false);
         tx_wake += bit_fs;
     }
 
     void host_receiver() {
-        bool tx = top.p_uart__tx.get<bool>();
+        bool tx = top.GS_PORT_uart_tx.get<bool>();
         if (rx_bit < 8) {
             rx_value |= unsigned(tx) << rx_bit;
             rx_bit++;
@@ -355,22 +360,22 @@ struct Board {
         if (spi_step <= 2 * n) {
             if (spi_step % 2 == 0) {
                 if (spi_step == 0)
-                    top.p_spi__cs__n.set<bool>(false);
+                    top.GS_PORT_spi_cs_n.set<bool>(false);
                 else
-                    top.p_spi__sck.set<bool>(false);
+                    top.GS_PORT_spi_sck.set<bool>(false);
                 if (spi_step / 2 < n)
-                    top.p_spi__copi.set<bool>(spi.bits[spi_step / 2]);
+                    top.GS_PORT_spi_copi.set<bool>(spi.bits[spi_step / 2]);
             } else {
-                top.p_spi__sck.set<bool>(true);
+                top.GS_PORT_spi_sck.set<bool>(true);
                 settle();
-                records[SPI_RESULTS].push_back(top.p_spi__cipo.get<bool>());
+                records[SPI_RESULTS].push_back(top.GS_PORT_spi_cipo.get<bool>());
             }
             spi_step++;
             spi_wake += spi.half_fs;
             return;
         }
         if (spi_step == 2 * n + 1) {
-            top.p_spi__cs__n.set<bool>(true);
+            top.GS_PORT_spi_cs_n.set<bool>(true);
             spi_step++;
             spi_wake += 4 * spi.half_fs;
             return;
@@ -393,7 +398,7 @@ struct Board {
             now = t;
             if (next_toggle == t) {
                 clk = !clk;
-                top.p_clk.set<bool>(clk);
+                top.GS_PORT_clk.set<bool>(clk);
                 next_toggle += half_fs;
                 if (clk) {
                     settle();
@@ -405,7 +410,7 @@ struct Board {
                 } else {
                     // Nothing in the design acts on the falling edge: only note it, so the
                     // next rising one is seen as an edge.
-                    top.prev_p_clk = top.p_clk;
+                    top.GS_PREV_CLK = top.GS_PORT_clk;
                 }
             }
             // Then the host's and the machine's processes woken at this instant, in the order
@@ -479,18 +484,20 @@ void *gs_board_new(const int64_t *timing, int flags) {
     // The ports' initial values (Amaranth's port inits are not in the netlist): the host's
     // UART idles high, the SPI link is deselected, the interlock and alarm pins as the
     // machine has them from the first instant.
-    board->top.p_uart__rx.set<bool>(true);
-    board->top.p_spi__cs__n.set<bool>(true);
-    board->top.p_spi__sck.set<bool>(false);
-    board->top.p_spi__copi.set<bool>(false);
-    board->top.p_interlock__open.set<bool>(true);
+    board->top.GS_PORT_uart_rx.set<bool>(true);
+    board->top.GS_PORT_spi_cs_n.set<bool>(true);
+    board->top.GS_PORT_spi_sck.set<bool>(false);
+    board->top.GS_PORT_spi_copi.set<bool>(false);
+    board->top.GS_PORT_interlock_open.set<bool>(true);
 #if GS_ALARM_BITS > 0
-    board->top.p_laser__alarm.set<uint32_t>((1u << GS_ALARM_BITS) - 1);
+    board->top.GS_PORT_laser_alarm.set<uint32_t>((1u << GS_ALARM_BITS) - 1);
 #endif
-    board->top.p_rst.set<bool>(false);
-    board->top.p_clk.set<bool>(false);
+#ifdef GS_PORT_rst
+    board->top.GS_PORT_rst.set<bool>(false);
+#endif
+    board->top.GS_PORT_clk.set<bool>(false);
     board->settle();
-    board->last_tx = board->top.p_uart__tx.get<bool>();
+    board->last_tx = board->top.GS_PORT_uart_tx.get<bool>();
     board->last_laser = board->laser_pins();
     // The Python board's recorder sees the pins once as the design first settles.
     board->records[LASER_CHANGES].push_back(0);

