@@ -194,9 +194,16 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                        dsps_available=dsps_available, seconds=round(seconds, 1),
                        modes=modes, correction_nodes=correction.n if correction else 0,
                        bit_rate_mhz=bit_rate / 1e6, baud=baud, placer=placer)
+    # The build's record beside its netlist (its clock, baud and options): what a simulation
+    # of the netlist needs to know of it.
+    record = {**result.as_dict(), "interpolation": bool(interpolation), "delays": bool(delays),
+              "wobble": bool(wobble)}
+    (build_dir / f"{name}.build.json").write_text(json.dumps(record, indent=1))
     if not result.meets_timing:
-        # A bitstream that misses timing is never written where a user would flash it.
+        # A bitstream that misses timing is never written where a user would flash it, nor
+        # the placed and routed design it would be packed from.
         bitstream.unlink(missing_ok=True)
+        (build_dir / f"{name}.asc").unlink(missing_ok=True)
         if require_timing:
             raise TimingError(result)
         return result

@@ -52,3 +52,24 @@ LONGEST_FIRST = {
 def pytest_collection_modifyitems(items):
     # (A stable sort; "@group" is what --dist loadgroup adds to an xdist_group's test ids.)
     items.sort(key=lambda item: -LONGEST_FIRST.get(item.nodeid.split("@")[0], 0))
+
+
+@pytest.fixture(scope="session")
+def icebreaker_build(tmp_path_factory):
+    """The default iCEBreaker bitstream (every mode, correction), started with a model lens
+    table, built once for the tests that look at it (each of them in the xdist group
+    ``icebreaker_build``, so that one worker builds it): ``(folder, report, table file)``."""
+    import contextlib
+    import io
+    import json
+    from galvoscan.cli import main
+    folder = tmp_path_factory.mktemp("icebreaker")
+    table = folder / "lens.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["correct", "model", "--field", "110", "--focal", "160",
+                     "-o", str(table)]) == 0
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(["build", "--board", "icebreaker", "--build-dir", str(folder),
+                     "--correction", str(table), "--json"])
+    return folder, code, json.loads(out.getvalue()), table

@@ -125,15 +125,11 @@ SPIRAL_RAMS, QUEUE_RAMS, REPLY_RAMS, REGISTER_RAMS, CORRECTION_RAMS = \
 
 
 @pytest.mark.toolchain
-def test_build_icebreaker(tmp_path, capsys):
+@pytest.mark.xdist_group("icebreaker_build")
+def test_build_icebreaker(icebreaker_build):
     """The default bitstream (every mode, correction), started with a model table: it fits
     in 95 % of the UP5K's cells and would meet 24 MHz (XY2-200's clock) on its 12 MHz one."""
-    table = tmp_path / "lens.json"
-    assert main(["correct", "model", "--field", "110", "--focal", "160", "-o", str(table)]) == 0
-    capsys.readouterr()
-    code, out, _ = run(capsys, "build", "--board", "icebreaker", "--build-dir",
-                       str(tmp_path), "--correction", str(table), "--json")
-    report = json.loads(out)
+    folder, code, report, _ = icebreaker_build
     print(report)
     assert code == 0
     assert Path(report["bitstream"]).stat().st_size > 100_000   # a whole UP5K image
@@ -142,6 +138,9 @@ def test_build_icebreaker(tmp_path, capsys):
     assert report["brams"] == (SPIRAL_RAMS + QUEUE_RAMS + REPLY_RAMS + REGISTER_RAMS +
                                CORRECTION_RAMS)
     assert 0 < report["luts"] <= 0.95 * report["luts_available"]
+    # The build's record beside its netlist, for simulating it.
+    record = json.loads((folder / "galvoscan_icebreaker.build.json").read_text())
+    assert record["clock_mhz"] == 12 and record["baud"] == report["baud"]
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -287,7 +286,7 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
     """The smallest options together (one mode, a bigger spiral table, no correction stage),
     asked for 120 MHz: far beyond any of the design's paths (about 27 MHz for the spiral
     alone), so nextpnr finishes with an Fmax below the clock: one line, no traceback, no .bin
-    to flash. The line's figures are the build's: it would meet the board's 12 MHz, and its
+    to flash and no .asc. The line's figures are the build's: it would meet the board's 12 MHz, and its
     RAMs are the options' (one build for both checks: each costs half a minute)."""
     with pytest.raises(SystemExit) as exit:
         main(["build", "--modes", "spiral", "--table-points", "512", "--no-correction",
@@ -302,7 +301,10 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
     # 512 × 16-bit ROMs take two blocks each; no vector queue, no correction table.
     assert rams == 2 * SPIRAL_RAMS + REPLY_RAMS + REGISTER_RAMS
     assert cells < 0.5 * 5280
-    assert not list(tmp_path.glob("*.bin"))
+    # Nothing to flash, nor the routed design to pack one from; the record says why.
+    assert not list(tmp_path.glob("*.bin")) and not list(tmp_path.glob("*.asc"))
+    record = json.loads((tmp_path / "galvoscan_icebreaker.build.json").read_text())
+    assert not record["meets_timing"] and record["clock_mhz"] == 120
 
 
 def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
