@@ -218,6 +218,27 @@ struct Board {
         while (top.commit());
     }
 
+    // A rising edge's new state is looked at lazily: the eval that the next edge needs anyway
+    // computes the outputs of that state before it commits the next one, so a clock costs
+    // one eval, not two. Whatever reads the pins between edges (a host's sample, an input it
+    // sets, the end of a run) catches up first.
+    bool stale = false;         // a committed edge whose outputs are not yet evaluated
+    int64_t edge_time = 0;      // when the last rising edge came
+
+    bool look_at_edge() {
+        if (flags & RECORD_PINS)
+            record_pins();
+        return watch_pins(edge_time);
+    }
+
+    bool catch_up() {
+        if (!stale)
+            return true;
+        settle();
+        stale = false;
+        return look_at_edge();
+    }
+
     void record_pins() {
         int64_t pins = all_pins();
         if (pins != last_pins) {
@@ -227,15 +248,15 @@ struct Board {
         }
     }
 
-    // After the design has settled: the edges and changes the Python board's triggers see.
-    // Returns false on a protocol error.
-    bool watch_pins() {
+    // After the design has settled: the edges and changes the Python board's triggers see,
+    // in the state the design reached at `at`. Returns false on a protocol error.
+    bool watch_pins(int64_t at) {
         bool tx = top.GS_PORT_uart_tx.get<bool>();
         if (last_tx && !tx && !rx_sampling) {
             rx_sampling = true;
             rx_bit = 0;
             rx_value = 0;
-            rx_wake = now + bit_and_half_fs;
+            rx_wake = at + bit_and_half_fs;
         }
         last_tx = tx;
         bool xy2_clk = top.GS_PORT_xy2_clk.get<bool>();
@@ -401,12 +422,19 @@ struct Board {
                 top.GS_PORT_clk.set<bool>(clk);
                 next_toggle += half_fs;
                 if (clk) {
-                    settle();
+                    bool converged = top.eval();
+                    if (stale) {
+                        // The outputs this eval computed are the last edge's state's.
+                        stale = false;
+                        if (!converged)
+                            settle();
+                        if (!look_at_edge())
+                            return PROTOCOL_ERROR;
+                    }
+                    top.commit();
                     cycles++;
-                    if (!watch_pins())
-                        return PROTOCOL_ERROR;
-                    if (flags & RECORD_PINS)
-                        record_pins();
+                    stale = true;
+                    edge_time = t;
                 } else {
                     // Nothing in the design acts on the falling edge: only note it, so the
                     // next rising one is seen as an edge.
@@ -416,6 +444,10 @@ struct Board {
             // Then the host's and the machine's processes woken at this instant, in the order
             // the Python board added them: each input it sets settles the design at once.
             bool woken = false;
+            bool reads = tx_wake == t || (rx_sampling && rx_wake == t) || spi_wake == t ||
+                         machine_wake == t || !power_up_seen;
+            if (reads && !catch_up())
+                return PROTOCOL_ERROR;
             if (tx_wake == t) {
                 host_transmitter();
                 woken = true;
@@ -433,7 +465,7 @@ struct Board {
             }
             if (woken) {
                 settle();
-                if (!watch_pins())
+                if (!watch_pins(t))
                     return PROTOCOL_ERROR;
             }
             if (!power_up_seen) {
@@ -443,6 +475,9 @@ struct Board {
                     record_pins();
             }
         }
+        // The last edge's state, so that the records are complete to the deadline.
+        if (!catch_up())
+            return PROTOCOL_ERROR;
         now = deadline;
         return RAN;
     }
