@@ -118,9 +118,15 @@ class SerialTransport:
         self._serial.reset_input_buffer()
         self.write_frame(frame)
         answer = self._serial.read(4)
+        if not answer:
+            raise ClientError(f"no answer from the board within {self._serial.timeout} s: "
+                              f"check the port and the baud rate, or give a slow board (a "
+                              f"simulated one: the --timeout it printed) a longer --timeout")
         if len(answer) != 4:
-            raise ClientError(f"no answer from the board ({len(answer)} of 4 bytes within "
-                              f"{self._serial.timeout} s): check the port and the baud rate")
+            raise ClientError(f"only {len(answer)} of an answer's 4 bytes within "
+                              f"{self._serial.timeout} s: the board answers slower than "
+                              f"--timeout allows (a simulated one: give the --timeout it "
+                              f"printed), or the baud rate is not the bitstream's")
         return answer
 
     def close(self):

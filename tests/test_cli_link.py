@@ -80,3 +80,31 @@ def test_send_refuses_bad_values_before_sending(bridge):
         main(["read", "speed", *link])
     assert bridge.board.uart_to_board == type(bridge.board.uart_to_board)()
     assert not bridge.board.uart_from_board
+
+
+def test_a_board_that_answers_late_or_not_at_all_is_told_apart():
+    """No byte back: the port, the baud rate, or a slow board's --timeout. Part of an answer:
+    the board is slower than --timeout (a simulated one), or the baud rate is wrong."""
+    from galvoscan.client import ClientError, SerialTransport, encode_read
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    try:
+        with SerialTransport(os.ttyname(slave), baud=115200, timeout=0.05) as link:
+            with pytest.raises(ClientError, match=r"no answer from the board within 0.05 s: "
+                                                  r"check the port .* longer --timeout"):
+                link.query(encode_read("status"))
+            assert len(os.read(master, 16)) == 4        # (that query's frame)
+
+            def half_an_answer():
+                select.select([master], [], [], 1)
+                os.read(master, 4)
+                os.write(master, b"\x00\x01")
+            thread = threading.Thread(target=half_an_answer)
+            thread.start()
+            with pytest.raises(ClientError, match=r"only 2 of an answer's 4 bytes within "
+                                                  r"0.05 s: the board answers slower"):
+                link.query(encode_read("status"))
+            thread.join()
+    finally:
+        os.close(master)
+        os.close(slave)
