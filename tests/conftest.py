@@ -33,6 +33,7 @@ def collect_garbage():
 #: a name missing here runs after these, as collected.
 LONGEST_FIRST = {
     "tests/test_cli.py::test_build_icebreaker": 127,
+    "tests/test_netlist.py::test_the_default_builds_netlist_behaves_as_its_design": 127,
     "tests/test_cli.py::test_build_xy2_200_on_the_pll": 126,
     "tests/test_host_fuzz.py::test_spi_garbage": 67,
     "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 49,

@@ -295,5 +295,7 @@ def simulated_board(args, **kwargs):
     try:
         return SimulatedBoard(backend=getattr(args, "backend", "auto"), say=say, **kwargs)
     except CompileError as error:
+        if kwargs.get("netlist"):
+            fail(f"the netlist cannot be simulated: {error}")
         fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
              f"Amaranth's)")

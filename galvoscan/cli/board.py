@@ -3,7 +3,7 @@
 import sys
 import time
 
-from .args import add_backend_option, baud, simulated_board
+from .args import add_backend_option, baud, fail, simulated_board
 
 
 __all__ = ["add_parsers"]
@@ -11,15 +11,23 @@ __all__ = ["add_parsers"]
 
 def _cmd_board(args):
     from ..sim.board import PTYServer
-    board = simulated_board(args, baud=args.baud)
+    if args.netlist:
+        if args.backend == "python":
+            fail("--netlist runs on the compiled backend (Amaranth simulates designs, not "
+                 "netlists)")
+        board = simulated_board(args, netlist=args.netlist)
+    else:
+        board = simulated_board(args, baud=args.baud)
     speed = board.speed()
     timeout = board.answer_timeout_s()
     server = PTYServer(board)
-    print(f"simulated board (12 MHz, {args.baud:,} baud, {board.backend} backend) on "
+    what = f"the netlist in {args.netlist}, gate by gate" if args.netlist else \
+        f"{board.backend} backend"
+    print(f"simulated board ({board.clk_freq / 1e6:g} MHz, {board.baud:,} baud, {what}) on "
           f"{server.port}", flush=True)
     print(f"  it runs at {_fraction(speed)} of real time: give clients --timeout "
           f"{timeout:.0f} or more; Ctrl-C stops it", flush=True)
-    print(f"  e.g. galvoscan read status --port {server.port} --baud {args.baud} "
+    print(f"  e.g. galvoscan read status --port {server.port} --baud {board.baud} "
           f"--timeout {timeout:.0f}", flush=True)
     started = time.monotonic()
     board_started = board.now
@@ -57,4 +65,8 @@ def add_parsers(commands):
     board.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                        help="the simulated bitstream's serial rate (default: %(default)s)")
     add_backend_option(board)
+    board.add_argument("--netlist", metavar="BUILD_DIR",
+                       help="serve the synthesized netlist of the build in BUILD_DIR (what "
+                            "galvoscan build left there), gate by gate: the bitstream's own "
+                            "logic, at the build's clock and baud")
     board.set_defaults(run=_cmd_board)

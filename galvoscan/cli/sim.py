@@ -139,6 +139,28 @@ def _backend(args):
     return args.backend
 
 
+def _netlist_settings(args):
+    """``(settings, clocks per XY2 bit)`` of the build whose netlist ``--netlist`` names: its
+    register resets (the default ones: ``galvoscan build`` takes none) and its spiral's
+    interpolator, built or not; options that would change the design are refused."""
+    from ..compiled import CompileError
+    from ..compiled.netlist import build_record
+    from ..gateware.settings import ScanSettings
+    for option in ("dwell", "interp", "correction", "vcd"):
+        if getattr(args, option) is not None:
+            fail(f"--{option} is the build's with --netlist (the netlist is simulated as it "
+                 f"was built)")
+    if args.backend == "python":
+        fail("--netlist runs on the compiled backend (Amaranth simulates designs, not netlists)")
+    try:
+        record = build_record(args.netlist) or {}
+    except CompileError as error:
+        fail(error)
+    settings = ScanSettings(spiral_interp=1 if record.get("interpolation") else 0)
+    clock = float(record.get("clock_mhz", 12)) * 1e6
+    return settings, round(clock / (float(record.get("bit_rate_mhz", 2)) * 1e6))
+
+
 def _timed(progress, started):
     """``progress``, noting in ``started`` when it is first called: the simulation's time is
     counted from there, not from before a compiled model was built."""
@@ -165,6 +187,9 @@ def _sim_spiral(args):
     table = table_from(args)
     settings = settings_from(args, table)
     correction = _correction(args)
+    clocks_per_bit = SIM_CLOCKS_PER_BIT
+    if args.netlist:
+        settings, clocks_per_bit = _netlist_settings(args)
     # The first frames after power-up park the mirrors at the centre; then each point is held
     # for `dwell` frames.
     frames = PARK_FRAMES + args.points * settings.dwell
@@ -175,9 +200,9 @@ def _sim_spiral(args):
         received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
                                  progress=_timed(bar.update, started),
                                  correction=correction,
-                                 backend=_backend(args), say=_say)
+                                 backend=_backend(args), say=_say, netlist=args.netlist)
     seconds = time.monotonic() - (started[0] or start)
-    cycles = frames * 20 * SIM_CLOCKS_PER_BIT
+    cycles = frames * 20 * clocks_per_bit
 
     if args.csv:
         write_csv(args.csv, received)
@@ -219,6 +244,9 @@ def _cmd_sim(args):
     from ..gateware.host.regmap import BY_NAME
     vector_only = ("prr", "pulses_per_point", "pitch", "jump_delay", "lens_field", "points_csv")
     if args.mode == "vector":
+        if args.netlist:
+            fail("--netlist replays the spiral (the build's default mode); a vector job runs on "
+                 "a netlist through galvoscan board --sim --netlist")
         if args.interp is not None:
             fail("--interp is for the spiral")
         if not args.job:
@@ -238,6 +266,8 @@ def _compiled_or_one_line(command, args):
     try:
         return command(args)
     except CompileError as error:
+        if args.netlist:
+            fail(f"the netlist cannot be simulated: {error}")
         fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
              f"Amaranth's)")
 
@@ -284,6 +314,10 @@ def add_parsers(commands):
                      help="plot the path (.png, .svg, .pdf, …)")
     sim.add_argument("--json", action="store_true", help="print the summary as JSON")
     add_backend_option(sim)
+    sim.add_argument("--netlist", metavar="BUILD_DIR",
+                     help="simulate the synthesized netlist of the build in BUILD_DIR (what "
+                          "galvoscan build left there), gate by gate with the iCE40 cell "
+                          "models: the bitstream's own logic (the spiral; compiled backend)")
     vector = sim.add_argument_group("vector mode")
     vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
     prr = BY_NAME["laser_prr"]       # in 100 Hz steps

@@ -29,8 +29,8 @@
 #include <vector>
 
 #include TOP_HEADER
-// The design's port names (GS_PORT_xy2_clk …, GS_PREV_CLK) and GS_ALARM_BITS, written for
-// each design by galvoscan/compiled/model.py.
+// The design's port names (GS_PORT_xy2_clk …, GS_PREV_CLK), GS_ALARM_BITS and
+// GS_SETTLE_FALLING, written for each design by galvoscan/compiled/model.py.
 #include "ports.h"
 
 namespace {
@@ -421,6 +421,17 @@ struct Board {
                 clk = !clk;
                 top.GS_PORT_clk.set<bool>(clk);
                 next_toggle += half_fs;
+#if GS_SETTLE_FALLING
+                // (A netlist's clock reaches its flip-flops through its input cell, a net of
+                // its own: each edge is evaluated until the design settles, and looked at.)
+                settle();
+                if (clk) {
+                    cycles++;
+                    edge_time = t;
+                    if (!look_at_edge())
+                        return PROTOCOL_ERROR;
+                }
+#else
                 if (clk) {
                     bool converged = top.eval();
                     if (stale) {
@@ -440,6 +451,7 @@ struct Board {
                     // next rising one is seen as an edge.
                     top.GS_PREV_CLK = top.GS_PORT_clk;
                 }
+#endif
             }
             // Then the host's and the machine's processes woken at this instant, in the order
             // the Python board added them: each input it sets settles the design at once.

@@ -86,6 +86,12 @@ class Design:
         the design's port for it.
     alarm_bits : int
         Width of the laser alarm input (0: none).
+    settle_falling : bool
+        Evaluate the design at the clock's falling edge too, and at each edge until it settles
+        (a netlist, whose clock reaches its flip-flops through its input cell).
+    optimise : bool
+        Compile with -O2 (False: -O0, for a netlist whose C++ an optimising compile takes
+        minutes over).
     description : str
         What it is, for the line that says it is being compiled.
     """
@@ -93,18 +99,25 @@ class Design:
     script: str
     ports: dict
     alarm_bits: int = 0
+    settle_falling: bool = False
+    optimise: bool = True
     description: str = field(default="this design", compare=False)
 
     def ports_header(self):
         lines = [f"#define GS_PORT_{role} {cxxrtl_name(port)}"
                  for role, port in sorted(self.ports.items())]
         lines += [f"#define GS_PREV_CLK prev_{cxxrtl_name(self.ports['clk'])}",
-                  f"#define GS_ALARM_BITS {self.alarm_bits}"]
+                  f"#define GS_ALARM_BITS {self.alarm_bits}",
+                  f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
     def key_parts(self):
         return [*(f"{name}\0{text}" for name, text in sorted(self.files.items())),
-                self.script, self.ports_header()]
+                self.script, self.ports_header(), " ".join(self.cxx_flags())]
+
+    def cxx_flags(self):
+        return CXX_FLAGS if self.optimise else tuple("-O0" if flag == "-O2" else flag
+                                                     for flag in CXX_FLAGS)
 
 
 def top_design(top):
@@ -203,7 +216,7 @@ def _build(workdir, design, board, key, compiler):
     runtime = _cxxrtl_runtime()
     (workdir / "key.cc").write_text(
         f'extern "C" const char *gs_model_key() {{ return "{key}"; }}\n')
-    command = [*compiler.command, *CXX_FLAGS, f"-I{runtime}", "-I.",
+    command = [*compiler.command, *design.cxx_flags(), f"-I{runtime}", "-I.",
                '-DTOP_HEADER="top.h"', "board.cc", "top.cc", "key.cc", "-o", "model.so"]
     _run(command, cwd=workdir, what=f"the C++ compiler ({compiler.name})")
     return workdir / "model.so"

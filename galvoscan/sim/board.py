@@ -63,6 +63,10 @@ class SimulatedBoard:
         The machine's inputs at power-up (and after :meth:`reset`).
     vcd : path, optional
         Write a waveform of the whole run, until :meth:`close` (the Python backend).
+    netlist : path, optional
+        A build's folder: simulate its synthesized netlist, gate by gate, instead of a top
+        built here (the compiled backend; the clock and baud are the build's).
+        :attr:`top` is then None.
     top_kwargs
         More :class:`~galvoscan.gateware.top.GalvoScanTop` parameters (``mo_lead`` …).
 
@@ -95,9 +99,15 @@ class SimulatedBoard:
 
     def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python", say=None,
                  record_samples=False, record_pins=False, machine_period_s=MACHINE_PERIOD_S,
-                 interlock_closed=True, alarms_clear=True, vcd=None, **top_kwargs):
+                 interlock_closed=True, alarms_clear=True, vcd=None, netlist=None,
+                 **top_kwargs):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+        if netlist is not None:
+            self._netlist_board(netlist, backend, say, record_samples=record_samples,
+                                record_pins=record_pins, machine_period_s=machine_period_s,
+                                machine=(interlock_closed, alarms_clear), extra=top_kwargs)
+            return
         self.clk_freq = clk_freq
         self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
         self.baud = self.top.baud
@@ -111,6 +121,24 @@ class SimulatedBoard:
                        self._engine(backend, say or (lambda line: None), **records))
         self.backend = self.engine.name
         self.run_for(1 / clk_freq)      # start the processes in this thread
+
+    def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
+                       **records):
+        from ..compiled import CompiledEngine, compiled_model
+        from ..compiled.netlist import build_record, netlist_design
+        if backend == "python" or extra or records.get("record_pins") == "every clock":
+            raise ValueError("a netlist runs on the compiled backend alone, as it was built")
+        record = build_record(netlist) or {}
+        self.clk_freq = float(record.get("clock_mhz", 12)) * 1e6
+        self.baud = int(record.get("baud", DEFAULT_BAUD))
+        self.top = None
+        self.machine_period_s = machine_period_s
+        self._machine_at_power_up = machine
+        self._power_up_records()
+        model = compiled_model(netlist_design(netlist), say=say)
+        self.engine = CompiledEngine(self, model=model, **records)
+        self.backend = self.engine.name
+        self.run_for(1 / self.clk_freq)
 
     def _power_up_records(self):
         self.now = 0.0

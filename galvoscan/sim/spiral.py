@@ -24,7 +24,8 @@ SIM_CLOCKS_PER_BIT = 2
 
 
 def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=None,
-                  progress=None, correction="identity", backend="python", say=None):
+                  progress=None, correction="identity", backend="python", say=None,
+                  netlist=None):
     """Simulate the system top and return the first ``frames`` frames read off the wires.
 
     Parameters
@@ -42,6 +43,9 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         ``"python"`` (Amaranth's simulator) or ``"compiled"``/``"auto"``: the simulated board's
         (:class:`~galvoscan.sim.board.SimulatedBoard`), which writes no waveform; ``say``
         is told about its compile.
+    netlist : path, optional
+        A build's folder: the frames off the wires of its synthesized netlist, gate by gate
+        (the compiled backend; ``table``, ``settings`` and ``correction`` are the build's).
 
     Returns
     -------
@@ -50,6 +54,9 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
     clk_freq = SIM_CLOCKS_PER_BIT * bit_rate
+    if netlist is not None:
+        return _replay_on_board(frames=frames, clk_freq=None, progress=progress,
+                                backend="compiled", say=say, netlist=netlist)
     if backend != "python":
         if vcd:
             raise ValueError("a waveform (vcd) needs the Python backend")
@@ -87,10 +94,13 @@ def _replay_on_board(*, frames, clk_freq, progress, backend, say, **top_kwargs):
     """The first ``frames`` frames off the simulated board's wires (the compiled backend)."""
     from .board import SimulatedBoard
     from .xy2_receiver import XY2Frame
-    board = SimulatedBoard(clk_freq=clk_freq, baud=None, backend=backend, say=say,
-                           **top_kwargs)
+    if top_kwargs.get("netlist"):
+        board = SimulatedBoard(backend=backend, say=say, **top_kwargs)
+    else:
+        board = SimulatedBoard(clk_freq=clk_freq, baud=None, backend=backend, say=say,
+                               **top_kwargs)
     try:
-        frame_time = 20 * SIM_CLOCKS_PER_BIT / clk_freq * 2
+        frame_time = 20e-6                      # two XY2-100 frames
         while len(board.frames) < frames:
             seen = len(board.frames)
             # Some 1000 frames a step: one call into the model each.
