@@ -83,7 +83,7 @@ def add_parsers(commands):
     clean = commands.add_parser(
         "clean", help="clean a rectangle with the spiral or the raster, in mm",
         description="Clean a rectangle: the spiral (or raster) fill sized to it, the speed in "
-                    "mm/s, the laser in %% and kHz, for a number of passes, a time or a dose. "
+                    "mm/s, the laser in % and kHz, for a number of passes, a time or a dose. "
                     "Prints the time and dose first; with a board, arms, runs and disarms "
                     "(Ctrl-C disarms first).")
     clean.add_argument("--area", type=field_mm, required=True, metavar="WxH",

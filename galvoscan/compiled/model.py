@@ -176,7 +176,7 @@ class CompiledModel:
             function.restype, function.argtypes = restype, argtypes
         if lib.gs_model_key().decode() != key:
             raise CompileError(f"the compiled model {path} was built from another design or "
-                               f"other tools; remove it")
+                               f"other tools")
         self.lib = lib
 
 

@@ -58,11 +58,21 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         return _replay_on_board(frames=frames, clk_freq=None, progress=progress,
                                 backend="compiled", say=say, netlist=netlist)
     if backend != "python":
+        from ..compiled import CompileError
         if vcd:
             raise ValueError("a waveform (vcd) needs the Python backend")
-        return _replay_on_board(frames=frames, clk_freq=clk_freq, progress=progress,
-                                backend=backend, say=say, bit_rate=bit_rate, table=table,
-                                settings=settings, modes=("spiral",), correction=correction)
+        try:
+            return _replay_on_board(frames=frames, clk_freq=clk_freq, progress=progress,
+                                    backend="compiled", say=say, bit_rate=bit_rate,
+                                    table=table, settings=settings, modes=("spiral",),
+                                    correction=correction)
+        except CompileError as error:
+            if backend == "compiled":
+                raise
+            # (auto: the lean replay below, not the whole board on Amaranth's simulator.)
+            (say or (lambda line: None))(
+                f"the compiled simulator is not available ({error}); using Amaranth's "
+                f"simulator, some 200 times slower")
     # The spiral alone: the other modes, idle, change none of its frames (the tests replay
     # the full build too), and leaving them out makes the simulation half again as fast.
     top = GalvoScanTop(clk_freq=clk_freq, bit_rate=bit_rate, table=table, settings=settings,
@@ -100,6 +110,8 @@ def _replay_on_board(*, frames, clk_freq, progress, backend, say, **top_kwargs):
         board = SimulatedBoard(clk_freq=clk_freq, baud=None, backend=backend, say=say,
                                **top_kwargs)
     try:
+        if progress is not None:
+            progress(0)                         # (the model is built: the run starts here)
         frame_time = 20e-6                      # two XY2-100 frames
         while len(board.frames) < frames:
             seen = len(board.frames)
