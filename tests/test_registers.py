@@ -6,7 +6,7 @@ table typed out here, not made from the map's code."""
 
 import pytest
 from amaranth.sim import Simulator
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from galvoscan.gateware.host.registers import RegisterFile
 from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, STATUS_BITS,
@@ -112,6 +112,7 @@ class RegisterModel:
 
     def __init__(self, entries, *, modes=(0, 1, 2)):
         self.by_address = {e.address: e for e in entries.values()}
+        self.by_name = dict(entries)
         self.modes = set(modes)
         self.held = {e.name: e.reset for e in entries.values() if e.access in ("rw", "queue")}
         self.inputs = {e.name: 0 for e in entries.values() if e.access == "ro"}
@@ -215,7 +216,10 @@ def run(regfile, model, accesses, *, inputs=None):
                 assert ctx.get(getattr(regfile, name)) == (name in pulsed), name
             for name, value in model.held.items():
                 if name not in queues:
-                    assert ctx.get(getattr(regfile, name)) == value, name
+                    # (The register holds its low `width` bits: a signed one's two's
+                    # complement, -1 = 65535 in the frame, 2047 in 11 bits.)
+                    width = model.by_name[name].width
+                    assert ctx.get(getattr(regfile, name)) == value & ((1 << width) - 1), name
             previous = access
 
     sim = Simulator(regfile)
@@ -386,6 +390,9 @@ def accesses(draw):
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(accesses(), min_size=1, max_size=60),
        st.integers(0, 2 ** 9 - 1), st.integers(0, 65535))
+# (A signed register written -1, then read back: hypothesis found the model wrong twice here.)
+@example(steps=[(0, 0, False, False), (42, 65535, True, False), (42, 0, False, False)],
+         status=0, errors=0)
 def test_random_accesses_follow_the_model(steps, status, errors):
     run(RegisterFile(register_map()), RegisterModel(table()), steps,
         inputs={"status": status, "errors": errors, "fifo_free": 512})
