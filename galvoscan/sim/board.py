@@ -22,13 +22,10 @@ from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
 from .xy2_receiver import frame_of_each_pulse
 
 
-__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport", "SIM_TIMEOUT_S",
+__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport",
            "BACKENDS",
            "LASER_PINS", "PIN_FIELDS"]
 
-
-#: Answer timeout a host should give the simulated board, in seconds of the host's clock.
-SIM_TIMEOUT_S = 60.0
 
 #: The simulated board's backends: ``auto`` is the compiled one where it can be built.
 BACKENDS = ("auto", "compiled", "python")
