@@ -222,9 +222,21 @@ class PythonEngine:
                 self.board.pulses.append(cycles)
 
     async def _laser_pins(self, ctx):
+        # The pins once the design has settled at an instant, as the compiled board and a
+        # scope see them: the laser's inputs pass through synchronizers, so nothing the host
+        # or the machine sets moves a laser pin at the instant it is set, and changes seen at
+        # one instant are the deltas of one settle (a pin whose logic is one delta shorter
+        # than another's is not a state the pins are ever in).
         pins = [getattr(self.board.top, name) for name in LASER_PINS]
+        changes, engine = self.board.laser_changes, self.sim._engine
+        last_instant = None
         async for *values, cycles in ctx.changed(*pins).sample(self._clocked.cycles):
-            self.board.laser_changes.append((cycles, tuple(values)))
+            values = tuple(values)
+            if engine.now == last_instant and changes:
+                changes.pop()
+            last_instant = engine.now
+            if not changes or changes[-1][1] != values:
+                changes.append((cycles, values))
 
     def _pins(self):
         top = self.board.top
