@@ -139,7 +139,7 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
 
 # --- simulator -----------------------------------------------------------------------------------
 
-def stream_figures(*, segments=600, baud=None, clk_freq=12e6):
+def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", **top_kwargs):
     """Vector segments a second streamed end to end: ``JobStreamer`` (batches, reads of
     ``fifo_free``) through the UART pins of the simulated board at the default baud, one-point
     marks that the board takes faster than the link brings them (so each one finds the queue
@@ -152,7 +152,8 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6):
     from .gateware.clocking import DEFAULT_BAUD
     from .jobs.stream import JobStreamer
     from .sim.board import SimTransport, SimulatedBoard
-    board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD)
+    board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD, backend=backend,
+                           **top_kwargs)
     client = HostClient(SimTransport(board))
     streamer = JobStreamer(client, poll_s=0)
     streamer.setup({"run": 1, "mode": 2, "pitch": 1000, "pulses_per_point": 1,
@@ -163,19 +164,24 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6):
     seconds = board.now - start
     return {"segments_per_s": segments / seconds, "baud": board.baud,
             "segments": segments, "clock_mhz": clk_freq / 1e6,
-            "underruns": client.read("vec_underruns"), "errors": client.read("errors")}
+            "underruns": client.read("vec_underruns"), "errors": client.read("errors"),
+            "backend": board.backend}
 
 
-def replay_figures(points=8064):
-    """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``)."""
+def replay_figures(points=8064, backend="python"):
+    """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``),
+    on ``backend`` (its own path on Amaranth's, the simulated board on the compiled one)."""
     from .gateware.sources.spiral import PARK_FRAMES
     from .sim import SIM_CLOCKS_PER_BIT, replay_spiral
     frames = PARK_FRAMES + 3 * points
     start = time.monotonic()
-    replay_spiral(frames=frames)
+    said = []
+    replay_spiral(frames=frames, backend=backend, say=said.append)
     seconds = time.monotonic() - start
     cycles = frames * 20 * SIM_CLOCKS_PER_BIT
-    return {"replay_points": points, "replay_s": seconds, "sim_cycles_per_s": cycles / seconds}
+    fell_back = any("not available" in line for line in said)
+    return {"replay_points": points, "replay_s": seconds, "sim_cycles_per_s": cycles / seconds,
+            "backend": "python" if backend == "python" or fell_back else "compiled"}
 
 
 # --- builds and proofs (in worker processes) ------------------------------------------------------

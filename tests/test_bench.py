@@ -2,11 +2,14 @@
 
 import json
 
+import pytest
+
 from galvoscan.cli import main
 
 
-def test_bench_quick(capsys):
-    assert main(["bench", "--quick", "--json"]) == 0
+@pytest.mark.parametrize("backend", ["python", "compiled"])
+def test_bench_quick(capsys, backend):
+    assert main(["bench", "--quick", "--json", "--backend", backend]) == 0
     result = json.loads(capsys.readouterr().out)
     # XY2-100: 20 bits at 2 Mbit/s, back to back; XY2-200 twice that.
     assert result["frames_per_s"] == 100_000 and result["idle_clocks"] == 0
@@ -27,6 +30,10 @@ def test_bench_quick(capsys):
     # under 8 333 a second, and at least 5 000 (what 1 mm segments at 5 m/s need).
     stream = link["stream"]
     assert stream["baud"] == 1_000_000 and stream["errors"] == 0
+    assert stream["backend"] == backend
+    # Both backends, measured in the same run.
+    backends = result["backends"]
+    assert backends["compiled_clocks_per_s"] > backends["python_clocks_per_s"] > 0
     assert 5000 <= 0.97 * 1_000_000 / 10 / 12 <= stream["segments_per_s"] < 1_000_000 / 10 / 12
     assert "boards" in result and result["boards"] == {}
 

@@ -273,14 +273,14 @@ def open_link(args):
 
 # --- the simulated board ---------------------------------------------------------------------------
 
-def add_backend_option(parser):
+def add_backend_option(parser, *, default="auto", what="the simulator"):
     """``--backend``: which simulator runs the simulated board."""
     from ..sim.board import BACKENDS
-    parser.add_argument("--backend", choices=BACKENDS, default="auto",
-                        help="the simulator: compiled (the design as native code, built once "
-                             "per design and cached; some 200x faster), python (Amaranth's, "
-                             "the reference) or auto, the compiled one where a C++ compiler "
-                             "can build it (default: %(default)s)")
+    parser.add_argument("--backend", choices=BACKENDS, default=default,
+                        help=f"{what}: compiled (the design as native code, built once "
+                             f"per design and cached; some 300x faster), python (Amaranth's, "
+                             f"the reference) or auto, the compiled one where a C++ compiler "
+                             f"can build it (default: %(default)s)")
 
 
 def simulated_board(args, **kwargs):

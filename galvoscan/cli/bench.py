@@ -4,7 +4,7 @@ import json
 from pathlib import Path
 import sys
 
-from .args import fail, output_file, read_text
+from .args import add_backend_option, fail, output_file, read_text
 
 
 __all__ = ["add_parsers"]
@@ -28,7 +28,7 @@ def _cmd_bench(args):
     if args.suite is not None and not (Path(args.suite) / "tests").is_dir():
         fail(f"--suite {args.suite}: not a galvoscan checkout (it has no tests folder)")
     result = run_bench(builds=full, proofs=full, replay=full, suite=args.suite,
-                       progress=progress)
+                       backend=args.backend, progress=progress)
     if args.record:
         Path(args.record).write_text(json.dumps(result, indent=2) + "\n")
     if args.readme:
@@ -65,4 +65,7 @@ def add_parsers(commands):
                             "README's test command, after everything else)")
     bench.add_argument("--readme", metavar="FILE",
                        help="rewrite the benchmark section of this README with the figures")
+    add_backend_option(bench, default="python",
+                       what="the simulator of the host-link stream and the full-spiral replay "
+                            "(the backends' own row measures both, in the same run)")
     bench.set_defaults(run=_cmd_bench)
