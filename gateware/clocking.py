@@ -9,8 +9,9 @@ before anything is built.
 
 from typing import NamedTuple
 
+from .limits import FRAME_US
 from .host.uart import uart_divisor
-from .phy.xy2_100 import clocks_per_bit
+from .phy.xy2_100 import FRAME_BITS, clocks_per_bit
 
 
 __all__ = ["ClockPlan", "check_clocks", "XY2_100_BIT_RATE", "DEFAULT_BAUD", "FTDI_BAUDS",
@@ -19,6 +20,7 @@ __all__ = ["ClockPlan", "check_clocks", "XY2_100_BIT_RATE", "DEFAULT_BAUD", "FTD
 
 #: The XY2-100 bit rate: 2 Mbit/s, a 10 µs frame.
 XY2_100_BIT_RATE = 2_000_000
+assert FRAME_BITS * 1_000_000 == FRAME_US * XY2_100_BIT_RATE
 #: The host serial port's default rate (8N1). 1 Mbaud carries 25 000 frames/s, 8 300 vector
 #: segments/s: enough to keep the queue fed with 1 mm segments at several m/s (115 200 baud
 #: carries 960). The boards' FT2232H makes it exactly (3 MHz / 3), and a 12 MHz clock divides

@@ -20,7 +20,8 @@ from .field.correction_table import CorrectionTable
 from .field.scale import ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
-from .host.regmap import DEFAULT_CORRECTION_NODES, Mode, register_map
+from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
+                          register_map)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
@@ -32,8 +33,8 @@ from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
 from .sources.laser_delays import LaserDelays
-from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VectorCommand,
-                             VectorSequencer)
+from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VecOpWord,
+                             VectorCommand, VectorSequencer, pack)
 from .sources.wobble import Wobble
 
 
@@ -44,8 +45,6 @@ __all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
 #: Names of the scan modes, in the order of their ``mode`` register values (:class:`Mode`).
 MODES = tuple(mode.label for mode in Mode)
 
-#: Segments the vector queue holds (block RAM).
-VECTOR_QUEUE_DEPTH = 512
 
 # The correction stage finishes a point within the shortest possible frame (two clocks per
 # bit), so a point taken at a frame boundary is always ready for the next one.
@@ -237,7 +236,11 @@ class GalvoScanTop(wiring.Component):
             correction_nodes=None if correction is None else correction.n,
             modes=modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            resets=self.settings.register_resets())
+            resets=self.settings.register_resets(),
+            fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
+                                                 in self.capabilities().items()}),
+                   "vec_depth": self.vector_queue_depth if "vector" in self.modes else 0,
+                   **({} if correction is None else {"cor_nodes": correction.n})})
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
             "spi_sck": In(1), "spi_cs_n": In(1, init=1), "spi_copi": In(1), "spi_cipo": Out(1),
@@ -250,6 +253,16 @@ class GalvoScanTop(wiring.Component):
         if self.laser_alarms:
             members["laser_alarm"] = In(self.laser_alarms, init=2 ** self.laser_alarms - 1)
         super().__init__(members)
+
+    def capabilities(self):
+        """What this build holds, as the ``caps`` register reports it (a dict of the
+        :data:`~.host.fields.Capabilities` flags)."""
+        return {"spiral": "spiral" in self.modes, "raster": "raster" in self.modes,
+                "vector": "vector" in self.modes, "laser": self.laser,
+                "correction": self.correction is not None, "wobble": self.wobble,
+                "delays": self.vector_delays,
+                "interpolation": "spiral" in self.modes and self.spiral_interpolation,
+                "uart": "uart" in self.links, "spi": "spi" in self.links}
 
     def elaborate(self, platform):
         m = Module()
@@ -380,7 +393,6 @@ class GalvoScanTop(wiring.Component):
                 # A write asked for now, or one still waiting for a point: refuse the next
                 # (the stage keeps one write's values).
                 regs.cor_write_ready.eq(~regs.cor_write & ~correction.write_pending),
-                regs.cor_nodes.eq(self.correction.n),
                 status.flags.clipped.eq(clipped | correction.clipped),
             ]
 
@@ -403,9 +415,13 @@ class GalvoScanTop(wiring.Component):
                                                       depth=self.vector_queue_depth)
         command = Signal(layout)
         if self.vector_delays:
-            m.d.comb += command.corner_frames.eq(regs.vec_op[1:8])
+            word = VecOpWord(regs.vec_op)
+            m.d.comb += command.corner_frames.eq(word.corner_frames)
+            op = word.op
+        else:           # (vec_op is the op alone)
+            op = regs.vec_op[0]
         m.d.comb += [
-            command.op.eq(regs.vec_op[0]),
+            command.op.eq(op),
             command.x.eq(regs.vec_x),
             command.y.eq(regs.vec_y),
             queue.w_stream.payload.eq(command),

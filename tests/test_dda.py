@@ -5,6 +5,8 @@
 
 import random
 
+import pytest
+
 from amaranth.hdl import Value
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
@@ -123,3 +125,31 @@ def test_random_lines():
                  st.integers(0, 65535), st.integers(200, 65535)))
 def test_any_line(line):
     check([line])
+
+
+@pytest.mark.parametrize("direction", [False, True])
+def test_set_up_takes_the_clocks_the_planner_counts_on(direction):
+    """From the clock a segment is taken to its first point: what the host's planner divides
+    the board's clock by (SETUP_CLOCKS, DIRECTED_SETUP_CLOCKS), counted here on the core."""
+    from galvoscan.gateware.sources.dda import DIRECTED_SETUP_CLOCKS, SETUP_CLOCKS
+    dut = LineDDA(direction=direction)
+    counted = []
+
+    async def testbench(ctx):
+        ctx.set(dut.pitch, 60)
+        ctx.set(dut.points.ready, 1)
+        ctx.set(dut.segment.payload, {"x0": 1000, "y0": 2000, "x1": 41000, "y1": 33000})
+        ctx.set(dut.segment.valid, 1)
+        await ctx.tick().until(dut.segment.ready)
+        ctx.set(dut.segment.valid, 0)
+        clocks = 1          # the clock that took the segment is the set-up's first
+        while not ctx.get(dut.points.valid):
+            await ctx.tick()
+            clocks += 1
+        counted.append(clocks)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    assert counted == [DIRECTED_SETUP_CLOCKS if direction else SETUP_CLOCKS]

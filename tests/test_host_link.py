@@ -6,6 +6,7 @@ from galvoscan.client import ClientError, HostClient, encode_read, encode_write
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS, encode_frame
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
+from galvoscan.gateware.top import ScanSettings
 
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 from spiral_model import spiral_frames
@@ -186,4 +187,24 @@ def test_uart_rates(clk_freq, baud):
     client = HostClient(SimUARTTransport(board))
     client.write("dwell", 0x4321)
     assert client.read("dwell") == 0x4321
+    assert client.read("errors") == 0
+
+
+@pytest.mark.parametrize("build, caps, depth", [
+    # bit 0 spiral, 1 raster, 2 vector, 3 laser, 4 correction, 5 wobble, 6 delays,
+    # 7 interpolation, 8 uart, 9 spi (the register's description), worked out by hand.
+    ({}, 0b11_1001_1111, 512),
+    (dict(modes=("vector",), correction=None, wobble=True, vector_delays=True,
+          vector_queue_depth=16, links=("uart",), settings=ScanSettings(mode="vector")),
+     0b01_0110_1100, 16),
+    (dict(modes=("spiral",), laser=False, correction=None, spiral_interpolation=False,
+          links=("uart",)), 0b01_0000_0001, 0),
+])
+def test_the_bitstream_says_what_it_holds(build, caps, depth):
+    """``caps`` and ``vec_depth`` read over the UART pins of builds that differ: what each
+    holds, asked without a refused write (``errors`` stays 0)."""
+    board = SimBoard(**build)
+    client = HostClient(SimUARTTransport(board))
+    assert client.read("caps") == caps
+    assert client.read("vec_depth") == depth
     assert client.read("errors") == 0

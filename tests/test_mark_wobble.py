@@ -145,7 +145,9 @@ def test_a_board_without_the_stage_is_refused_before_arming():
     with pytest.raises(JobAborted, match="no wobble stage"):
         JobStreamer(board, poll_s=0).run_vector(job(10), {"pitch": 60, **regs})
     assert ("arm", 1) not in board.log
-    assert board.unanswered == []       # found out without waiting for an answer
+    # Found out without waiting for an answer, nor a write the board refuses and counts.
+    assert board.unanswered == [] and board.values["errors"] == 0
+    assert board.log == [("arm", 0), ("run", 0), ("guide", 0)]
 
 
 def test_a_wobbled_job_leaves_the_wobble_off():

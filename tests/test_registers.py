@@ -18,6 +18,8 @@ from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, 
 DEFAULT_BUILD = [
     ("status", 0x00, "ro", 0, 0, 0, 13),
     ("errors", 0x01, "ro", 0, 0, 0, 16),
+    ("caps", 0x0e, "ro", 0, 0, 0, 10),
+    ("vec_depth", 0x0f, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
     ("dwell", 0x04, "rw", 3, 1, 65535, 16),
@@ -32,7 +34,7 @@ DEFAULT_BUILD = [
     ("spiral_interp", 0x0d, "rw", 1, 0, 1, 1),
     ("vec_x", 0x20, "rw", 32768, 0, 65535, 16),
     ("vec_y", 0x21, "rw", 32768, 0, 65535, 16),
-    ("vec_op", 0x22, "queue", 0, 0, 255, 8),
+    ("vec_op", 0x22, "queue", 0, 0, 1, 1),
     ("fifo_free", 0x23, "ro", 0, 0, 0, 16),
     ("pitch", 0x24, "rw", 60, 1, 65535, 16),
     ("pulses_per_point", 0x25, "rw", 1, 1, 255, 8),
@@ -40,11 +42,6 @@ DEFAULT_BUILD = [
     ("vec_rejected", 0x27, "ro", 0, 0, 0, 16),
     ("vec_underruns", 0x28, "ro", 0, 0, 0, 16),
     ("vec_stalls", 0x29, "ro", 0, 0, 0, 16),
-    ("laser_on_delay", 0x2a, "rw", 100, -19, 1023, 11),      # two's complement
-    ("laser_off_delay", 0x2b, "rw", 50, 0, 1023, 10),
-    ("mark_delay", 0x2c, "rw", 100, 0, 4095, 12),
-    ("polygon_delay", 0x2d, "rw", 0, 0, 4095, 12),
-    ("polygon_scaled", 0x2e, "rw", 0, 0, 1, 1),
     ("ras_x", 0x30, "rw", 28768, 0, 65535, 16),
     ("ras_y", 0x31, "rw", 28768, 0, 65535, 16),
     ("ras_w", 0x32, "rw", 8000, 0, 65535, 16),
@@ -68,6 +65,23 @@ DEFAULT_BUILD = [
     ("guide", 0x16, "rw", 0, 0, 1, 1),
 ]
 
+#: A build with vector mode's RTC delays (``vector_delays=True``): their registers, and
+#: ``vec_op`` carrying a corner hold in bits 7:1. Most tests here run on it, for its signed
+#: register.
+DELAY_ROWS = [
+    ("laser_on_delay", 0x2a, "rw", 100, -19, 1023, 11),      # two's complement
+    ("laser_off_delay", 0x2b, "rw", 50, 0, 1023, 10),
+    ("mark_delay", 0x2c, "rw", 100, 0, 4095, 12),
+    ("polygon_delay", 0x2d, "rw", 0, 0, 4095, 12),
+    ("polygon_scaled", 0x2e, "rw", 0, 0, 1, 1),
+]
+_AFTER_STALLS = [row[0] for row in DEFAULT_BUILD].index("vec_stalls") + 1
+DELAYS_BUILD = [("vec_op", 0x22, "queue", 0, 0, 255, 8) if row[0] == "vec_op" else row
+                for row in DEFAULT_BUILD[:_AFTER_STALLS]] + DELAY_ROWS + \
+    DEFAULT_BUILD[_AFTER_STALLS:]
+#: The map of that build.
+DELAYS = dict(vector_delays=True)
+
 #: Strobes a busy block refuses (the ready flag of the accesses below stands for its room).
 REFUSABLE = {"cor_write"}
 
@@ -88,9 +102,10 @@ class Entry:
 
 
 def table(*, without=(), changes=None):
-    """The typed-out table, less some registers, with some fields changed."""
+    """The typed-out table of the build with the delays, less some registers, with some
+    fields changed."""
     entries = {}
-    for row in DEFAULT_BUILD:
+    for row in DELAYS_BUILD:
         if row[0] not in without:
             entries[row[0]] = Entry(*row)
     for name, fields in (changes or {}).items():
@@ -229,9 +244,10 @@ def run(regfile, model, accesses, *, inputs=None):
 
 
 def test_the_typed_table_is_the_default_build():
-    regmap = register_map()
-    assert [(r.name, r.address, r.access, r.reset, r.low, r.high, r.width) for r in regmap] == \
-        DEFAULT_BUILD
+    for regmap, rows in ((register_map(), DEFAULT_BUILD),
+                         (register_map(**DELAYS), DELAYS_BUILD)):
+        assert [(r.name, r.address, r.access, r.reset, r.low, r.high, r.width)
+                for r in regmap] == rows
 
 
 def test_status_layout_is_the_status_register():
@@ -269,8 +285,9 @@ def test_each_access_kind():
         # unknown addresses
         (0x0d, 0, True, True), (0x7f, 0, False, True), (0x46, 1, True, True),
     ]
-    run(RegisterFile(register_map()), model, accesses,
-        inputs={"status": 0x1a5, "errors": 12345, "cor_nodes": 17, "pulses": 65535})
+    model.inputs["cor_nodes"] = 17
+    run(RegisterFile(register_map(fixed={"cor_nodes": 17}, **DELAYS)), model, accesses,
+        inputs={"status": 0x1a5, "errors": 12345, "pulses": 65535})
 
 
 def test_each_access_kind_read_through_a_multiplexer():
@@ -280,8 +297,25 @@ def test_each_access_kind_read_through_a_multiplexer():
                 (0x00, 5, True, True), (0x44, 1, True, True), (0x44, 0, False, True),
                 (0x22, 1, True, True), (0x22, 0, False, True), (0x0a, 0, False, True),
                 (0x7f, 0, False, True)]
-    run(RegisterFile(register_map(), reads_from_ram=False), model, accesses,
-        inputs={"status": 0x1a5, "errors": 12345, "cor_nodes": 17})
+    model.inputs["cor_nodes"] = 17
+    run(RegisterFile(register_map(fixed={"cor_nodes": 17}, **DELAYS), reads_from_ram=False),
+        model, accesses, inputs={"status": 0x1a5, "errors": 12345})
+
+
+@pytest.mark.parametrize("reads_from_ram", [True, False])
+def test_fixed_registers_read_the_builds_values_and_refuse_writes(reads_from_ram):
+    """``caps`` and ``vec_depth``: what the build gave its map, read back (from the reset RAM,
+    or the multiplexer), and read-only."""
+    regmap = register_map(fixed={"caps": 0x2A5, "vec_depth": 48}, **DELAYS)
+    model = RegisterModel(table())
+    model.inputs.update(caps=0x2A5, vec_depth=48)
+    accesses = [(0x0e, 0, False, True), (0x0f, 0, False, True), (0x0e, 1, True, True),
+                (0x0f, 7, True, True), (0x0e, 0, False, True), (0x0f, 0, False, True)]
+    run(RegisterFile(regmap, reads_from_ram=reads_from_ram), model, accesses)
+    with pytest.raises(ValueError, match="does not fit its 10 bits"):
+        register_map(fixed={"caps": 1 << 10})
+    with pytest.raises(ValueError, match="not a register fixed by the build"):
+        register_map(fixed={"errors": 1})
 
 
 def test_strobe_is_one_clock_per_write():
@@ -289,7 +323,7 @@ def test_strobe_is_one_clock_per_write():
     # Two writes of 1 in a row: two one-clock pulses, back to back; then it falls.
     accesses = [(0x44, 1, True, True), (0x44, 1, True, True), (0x00, 0, False, True),
                 (0x44, 1, True, True), (0x04, 9, True, True)]
-    run(RegisterFile(register_map()), model, accesses)
+    run(RegisterFile(register_map(**DELAYS)), model, accesses)
 
 
 def test_left_out_registers_are_unknown():
@@ -313,7 +347,7 @@ def test_a_build_without_interpolation_leaves_its_register_out():
 
 @pytest.mark.parametrize("points", [8, 512, 4096])
 def test_table_size_sets_the_address_registers(points):
-    regmap = register_map(table_points=points)
+    regmap = register_map(table_points=points, **DELAYS)
     last = points - 1
     for name, reset in (("x_first", 0), ("x_last", last), ("y_first", 1), ("y_last", last - 1)):
         reg = regmap[name]
@@ -369,7 +403,7 @@ def test_register_file_takes_a_map():
     assert isinstance(RegisterFile().regmap, RegisterMap)
 
 
-ADDRESSES = [address for _, address, *_ in DEFAULT_BUILD]
+ADDRESSES = [address for _, address, *_ in DELAYS_BUILD]
 
 
 @st.composite
@@ -394,5 +428,5 @@ def accesses(draw):
 @example(steps=[(0, 0, False, False), (42, 65535, True, False), (42, 0, False, False)],
          status=0, errors=0)
 def test_random_accesses_follow_the_model(steps, status, errors):
-    run(RegisterFile(register_map()), RegisterModel(table()), steps,
+    run(RegisterFile(register_map(**DELAYS)), RegisterModel(table()), steps,
         inputs={"status": status, "errors": errors, "fifo_free": 512})

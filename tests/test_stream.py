@@ -19,14 +19,24 @@ from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
 
 
+#: The ``caps`` register's bits as its description gives them (bit 0 spiral … bit 9 spi).
+CAPS_BITS = {"spiral": 0, "raster": 1, "vector": 2, "laser": 3, "correction": 4, "wobble": 5,
+             "delays": 6, "interpolation": 7, "uart": 8, "spi": 9}
+#: The registers whose absence a ``caps`` bit reports.
+CAPS_REGISTERS = {"wobble": "wob_shape", "delays": "mark_delay", "vector": "vec_op"}
+
+
 class FakeBoard:
     """Registers in a dict, a queue that drains by ``drain`` segments per read of fifo_free,
     and a script of status flags; every write is logged. Registers in ``missing`` are not in
     its bitstream: a write of one is refused and counted in ``errors`` (not logged), a read of
-    one goes unanswered (logged in ``unanswered``: the host would wait out its timeout)."""
+    one goes unanswered (logged in ``unanswered``: the host would wait out its timeout), and
+    ``caps`` says so (``missing`` with "caps": a bitstream from before that register)."""
 
     def __init__(self, *, drain=64, flags=(), fail_after=None, depth=QUEUE_DEPTH, missing=()):
         self.values = {r.name: r.reset for r in BY_NAME.values()}
+        self.values["caps"] = sum(1 << bit for name, bit in CAPS_BITS.items()
+                                  if CAPS_REGISTERS.get(name) not in missing)
         self.depth = depth
         self.queue = 0
         self.drain = drain
@@ -172,10 +182,19 @@ def test_a_board_not_ready_is_refused_before_anything_is_written(flags, words):
 
 
 def test_a_board_without_the_mode_is_refused():
-    board = FakeBoard()
-    board.read = lambda name, read=board.read: 0 if name == "mode" else read(name)
+    board = FakeBoard(missing=["vec_op"])
     with pytest.raises(JobAborted, match="no vector mode"):
         JobStreamer(board, poll_s=0).run_vector(job(10), {})
+    # Nothing written but the disarm every job ends with, and nothing refused.
+    assert board.log == [("arm", 0), ("run", 0), ("guide", 0)]
+    assert board.values["errors"] == 0
+
+
+def test_a_bitstream_without_the_capability_register_is_one_line():
+    board = FakeBoard(missing=["caps"])
+    with pytest.raises(JobAborted, match="build and flash it again") as stop:
+        JobStreamer(board, poll_s=0).run_vector(job(10), {"pitch": 60})
+    assert "\n" not in str(stop.value)
     assert ("arm", 1) not in board.log
 
 
@@ -197,25 +216,14 @@ def test_a_board_without_the_delays_marks_without_them_and_says_so(capsys):
     assert [v for n, v in board.log if n == "vec_op"] == [0, 1, 1, 0]
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no laser or scanner delays" in err
-    # Found out without waiting for an answer that does not come.
+    # Found out without waiting for an answer that does not come, nor a write refused: the
+    # board's own error count is untouched.
     assert board.unanswered == []
-    # The refused write is not the job's: its error count is untouched.
-    assert report.counters["errors"] == 0
+    assert report.counters["errors"] == 0 and board.values["errors"] == 0
     # A board with them gets them.
     board = FakeBoard()
     JobStreamer(board, poll_s=0).run_vector(square, {"pitch": 60, **delays}, timeout_s=5)
     assert set(DELAY_REGISTERS) <= {name for name, _ in board.log}
-
-
-def test_a_board_whose_error_count_has_stopped_is_asked_by_a_read():
-    """At 65535 ``errors`` counts no more refusals: the question falls back on a read."""
-    from galvoscan.gateware.host.regmap import DELAY_REGISTERS
-    board = FakeBoard(missing=DELAY_REGISTERS)
-    board.values["errors"] = 0xFFFF
-    JobStreamer(board, poll_s=0).run_vector([("jump", 0, 0), ("mark", 10, 0)],
-                                            {"pitch": 60, "mark_delay": 100}, timeout_s=5)
-    assert board.unanswered == ["mark_delay"]
-    assert "mark_delay" not in {name for name, _ in board.log}
 
 
 @pytest.mark.slow

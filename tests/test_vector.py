@@ -11,7 +11,8 @@ from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
 from galvoscan.client import ClientError, HostClient
-from galvoscan.gateware.host.regmap import STATUS_BITS
+from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
+from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord, pack
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
 from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
@@ -50,7 +51,8 @@ def queue(client, job, *, x=None, y=None, factors=None):
             client.write("vec_y", y_to)
         x, y = x_to, y_to
         factor = 0 if factors is None else factors[index]
-        client.write("vec_op", 0 if op == "jump" else 1 | factor << 1)
+        client.write("vec_op", pack(VecOpWord, op=VectorOp[op.upper()],
+                                    corner_frames=0 if op == "jump" else factor))
 
 
 def pulses_per_frame(board):
@@ -283,3 +285,18 @@ def test_top_rejects_bad_mode_sets(kwargs, message):
     from galvoscan.gateware.top import GalvoScanTop
     with pytest.raises(ValueError, match=message):
         GalvoScanTop(clk_freq=4e6, **kwargs)
+
+
+def test_the_words_the_host_packs_are_the_registers_documented_bits():
+    """``vec_op`` as its description gives it (bit 0 the op, 1 = mark; bits 7:1 the corner
+    hold), and a queued segment's word, from numbers written out here."""
+    assert pack(VecOpWord, op=VectorOp.JUMP) == 0
+    assert pack(VecOpWord, op=VectorOp.MARK) == 1
+    assert pack(VecOpWord, op=VectorOp.MARK, corner_frames=5) == 0b1011
+    assert pack(VecOpWord, op=VectorOp.MARK, corner_frames=127) == 255
+    # op in bit 0, x in bits 16:1, y in 32:17, the corner hold in 39:33.
+    assert pack(DelayedVectorCommand, op=VectorOp.MARK, x=0x1234, y=0xABCD, corner_frames=3) \
+        == 1 | 0x1234 << 1 | 0xABCD << 17 | 3 << 33
+    for bad in (128, -1, True, 1.0):
+        with pytest.raises(ValueError, match="does not fit"):
+            pack(VecOpWord, op=VectorOp.MARK, corner_frames=bad)

@@ -17,7 +17,8 @@ def register_table(registers=None):
              "|---|---|---|---|---|---|---|"]
     for r in REGISTERS if registers is None else registers:
         span = f"{r.low}…{r.high}" if r.access in ("rw", "queue") else "—"
-        lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {r.reset} | {span} | "
+        reset = "the build's" if r.fixed else r.reset
+        lines.append(f"| 0x{r.address:02X} | `{r.name}` | {r.access} | {reset} | {span} | "
                      f"{r.unit} | {r.description} |")
     return "\n".join(lines)
 

@@ -12,6 +12,7 @@ import math
 import sys
 from pathlib import Path
 
+from ..gateware.limits import WOBBLE_MAX_HZ
 from .args import fail, image_file, int_in, number_in
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
@@ -267,7 +268,7 @@ def add_parsers(commands):
                              "--wobble-along; 0: no wobble")
     wobble.add_argument("--wobble-along", type=number_in("wobble-along", 0, 10_000),
                         metavar="UM", help="amplitude along the line, µm (an ellipse)")
-    wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, 25_000), metavar="HZ",
+    wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, WOBBLE_MAX_HZ), metavar="HZ",
                         help="turns of the figure a second (default: the profile's, 1000)")
     place = mark.add_argument_group("placement")
     place.add_argument("--origin", choices=["centre", "center", "lower-left"],

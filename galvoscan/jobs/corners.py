@@ -9,13 +9,10 @@ each corner's hold in whole 10 µs frames with the mark that leaves it, in ``vec
 
 import math
 
-from ..gateware.host.regmap import CORNER_FRAMES_MAX
+from ..gateware.host.regmap import CORNER_FRAMES_MAX, FRAME_US
 
 
 __all__ = ["corner_frames", "FRAME_US"]
-
-#: An XY2-100 frame.
-FRAME_US = 10
 
 
 def corner_frames(segments, polygon_delay_us, *, start=(32768, 32768)):

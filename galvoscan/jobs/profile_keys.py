@@ -21,7 +21,7 @@ import difflib
 import math
 import re
 
-from ..gateware.host.regmap import BY_NAME, WOBBLE_MAX_HZ
+from ..gateware.host.regmap import BY_NAME, FRAME_US, WOBBLE_MAX_HZ
 
 
 # --- what the registers fix ------------------------------------------------------------------
@@ -33,8 +33,6 @@ _JUMP = BY_NAME["jump_delay"]
 #: Steps of ``laser_prr`` per kHz (its unit is 100 Hz).
 _PRR_STEPS_PER_KHZ = 10
 assert _PRR.unit == "100 Hz", "laser_prr's unit changed: update _PRR_STEPS_PER_KHZ"
-#: An XY2-100 frame, 10 µs: the scanner delays' resolution.
-FRAME_US = 10
 assert _JUMP.unit == "µs", "jump_delay's unit changed: update the profile"
 #: ``[galvo]`` keys that go to a delay register as they are, in µs: key → register.
 DELAY_KEYS = {"laser_on_delay_us": "laser_on_delay", "laser_off_delay_us": "laser_off_delay",

@@ -20,7 +20,9 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ..gateware.host.regmap import BY_NAME, Mode, Status, VectorOp
+from ..gateware.host.regmap import (BY_NAME, VECTOR_QUEUE_DEPTH, Capabilities, Mode, Status,
+                                    VectorOp)
+from ..gateware.sources.vector import VecOpWord, pack
 from .corners import corner_frames
 
 
@@ -29,14 +31,12 @@ __all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
-QUEUE_DEPTH = 512
+QUEUE_DEPTH = VECTOR_QUEUE_DEPTH
 #: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
 DEFAULT_BATCH = 128
 #: The board's counters a job reports, read before and after.
 COUNTERS = ("vec_underruns", "vec_stalls", "vec_rejected", "errors")
 _COUNTER_TOP = 0xFFFF
-# Where ``errors`` stops counting (a 16-bit count that does not wrap).
-_ERRORS_TOP = (1 << BY_NAME["errors"].width) - 1
 
 
 class JobAborted(Exception):
@@ -108,6 +108,7 @@ class JobStreamer:
         self.poll_s = poll_s
         self.progress = progress
         self._pulses_seen = None
+        self._capabilities = None
         self.pulses = 0
         #: Segments the board's queue holds, read by :meth:`check_ready` (None before).
         self.queue_depth = None
@@ -135,6 +136,19 @@ class JobStreamer:
         if self._pulses_seen is not None:
             self.pulses += (now - self._pulses_seen) & _COUNTER_TOP
         self._pulses_seen = now
+
+    def capabilities(self):
+        """What the board's bitstream holds (its ``caps`` register, read once): asked, not
+        tried, so that ``errors`` counts only the board's real refusals."""
+        if self._capabilities is None:
+            from ..client import ClientError
+            try:
+                self._capabilities = Capabilities.from_bits(self.board.read("caps"))
+            except ClientError as error:
+                raise JobAborted(f"the board does not say what its bitstream holds ({error}): "
+                                 f"a bitstream built before galvoscan had the caps register; "
+                                 f"build and flash it again") from None
+        return self._capabilities
 
     def counters(self):
         return {name: self.board.read(name) for name in COUNTERS}
@@ -172,15 +186,19 @@ class JobStreamer:
         from ..client import encode_write
         for name, value in registers.items():
             encode_write(name, value)
+        caps = self.capabilities()
+        if "mode" in registers:
+            mode = Mode(registers["mode"])
+            if not getattr(caps, mode.label):
+                raise JobAborted(f"the board has no {mode.label} mode: its bitstream was "
+                                 f"built without it (galvoscan build --modes)")
+        if registers.get("wob_shape") and not caps.wobble:
+            raise JobAborted("the board has no wobble stage: its bitstream was built "
+                             "without it (galvoscan build --wobble)")
         for name, value in registers.items():
+            if name == "wob_shape" and not caps.wobble:
+                continue            # (off, on a board that has no wobble to turn off)
             self.board.write(name, value)
-        if "mode" in registers and self.board.read("mode") != registers["mode"]:
-            raise JobAborted(f"the board has no {Mode(registers['mode']).label} mode: its "
-                             f"bitstream was built without it (galvoscan build --modes)")
-        if "wob_shape" in registers:
-            if not self._written_if_built("wob_shape", registers["wob_shape"]):
-                raise JobAborted("the board has no wobble stage: its bitstream was built "
-                                 "without it (galvoscan build --wobble)")
         return registers
 
     def wait_ready(self, timeout_s):
@@ -231,7 +249,8 @@ class JobStreamer:
                                         corners[sent:sent + count]):
                 self.board.write("vec_x", x)
                 self.board.write("vec_y", y)
-                self.board.write("vec_op", VectorOp[op.upper()].value | hold << 1)
+                self.board.write("vec_op", pack(VecOpWord, op=VectorOp[op.upper()],
+                                                corner_frames=hold))
             sent += count
             free -= count
             # A read: the board has taken all of the batch before it answers.
@@ -272,30 +291,12 @@ class JobStreamer:
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
 
-    def _written_if_built(self, name, value):
-        """Write ``name = value`` (in the register's range); False if the board's bitstream was
-        built without that register. Asked by counting: the board refuses a write to an
-        unknown address and counts it in ``errors``, at once, where a read of one goes
-        unanswered and would cost the link's whole answer timeout."""
-        from ..client import ClientError
-        errors = self.board.read("errors")
-        self.board.write(name, value)
-        if errors < _ERRORS_TOP:
-            return self.board.read("errors") == errors
-        # The count has stopped: it cannot tell. A read can (refused: no answer).
-        try:
-            self.board.read(name)
-            return True
-        except ClientError:
-            return False
-
     def _without_missing_delays(self, registers):
         """``registers`` less the RTC delays if the board has none (the default bitstream:
-        ``galvoscan build --delays`` builds them), with one line saying so. Asked before the
-        job's counts are taken: a refused write counts in ``errors``."""
+        ``galvoscan build --delays`` builds them), with one line saying so."""
         from ..gateware.host.regmap import DELAY_REGISTERS
         delays = [name for name in registers if name in DELAY_REGISTERS]
-        if delays and not self._written_if_built(delays[0], registers[delays[0]]):
+        if delays and not self.capabilities().delays:
             print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
                   "was built without --delays): marking without them", file=sys.stderr)
             return {name: value for name, value in registers.items()

@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..gateware.host.regmap import BY_NAME
+from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
+from ..gateware.sources.dda import SETUP_CLOCKS
 from ..gateware.points import FIELD_CENTRE
 from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, hatch,
                    jump_mark_lengths, order_paths, place, to_galvo)
@@ -18,8 +19,8 @@ __all__ = ["JobSettings", "VectorJob", "plan_vector_job", "segments_from_paths",
            "link_segments_per_s"]
 
 #: Points a second (PRR / pulses per point) the vector mode steps without stalling at the joint
-#: between two marks: the next segment's set-up (140 clocks at 12 MHz) must fit in a point.
-_STALL_FREE_POINTS_HZ = 12e6 / 140
+#: between two marks: the next segment's set-up must fit in a point (at the board's clock).
+_STALL_FREE_POINTS_HZ = DEFAULT_CLOCK_HZ / SETUP_CLOCKS
 
 #: Frames a segment takes on the link (vec_x, vec_y, vec_op), bytes a frame, bits a byte (8N1).
 _FRAMES_PER_SEGMENT, _BYTES_PER_FRAME, _BITS_PER_BYTE = 3, 4, 10
@@ -153,7 +154,8 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
     if prr_hz / pitch.pulses_per_point > _STALL_FREE_POINTS_HZ:
         joints = sum(1 for a, b in zip(segments, segments[1:]) if a[0] == b[0] == "mark")
         notes.append(f"a point every {pitch.pulses_per_point / prr_hz * 1e6:.0f} µs is faster "
-                     f"than the board sets up a segment (140 clocks at 12 MHz): expect up to "
+                     f"than the board sets up a segment ({SETUP_CLOCKS} clocks at "
+                     f"{DEFAULT_CLOCK_HZ / 1e6:g} MHz): expect up to "
                      f"{joints} stalls, a 10 µs pause with the laser off at each joint between "
                      f"two marks (a lower PRR, or more pulses per point, avoids them)")
     marks = np.concatenate(paths_mm)

@@ -1,33 +1,12 @@
 """What the registers' values mean: the scan modes, vector operations and wobble shapes as
-enums, the ``status`` bits as a layout, and the limits the map's ranges come from (part of
-the register map, :mod:`.regmap`, which re-exports all of it)."""
+enums and the ``status`` bits as a layout (part of the register map, :mod:`.regmap`, which
+re-exports them with the limits of :mod:`..limits`). Imports nothing of the project's: the
+datapath cores take their enums from here without the map."""
 
 from amaranth.lib import data, enum
 
-from ..sources.spiral_table import DEFAULT_POINTS
 
-
-__all__ = ["WORD_MAX", "LASER_ON_LEAD_US", "LASER_DELAY_MAX_US", "SCANNER_DELAY_MAX_US", "CORNER_FRAMES_MAX",
-           "DEFAULT_TABLE_POINTS", "DEFAULT_CORRECTION_NODES", "Mode", "VectorOp",
-           "WobbleShape", "WOBBLE_MAX_AMPLITUDE", "WOBBLE_MAX_HZ", "Status", "STATUS_BITS"]
-
-
-#: Largest value a frame's data field carries.
-WORD_MAX = 0xFFFF
-#: The vector sequencer decides a frame's laser two 10 µs frames before that frame's point
-#: reaches the head: how far ahead a negative ``laser_on_delay`` can reach, plus one µs.
-LASER_ON_LEAD_US = 20
-#: Largest laser-on and laser-off delays, in µs.
-LASER_DELAY_MAX_US = 1023
-#: Largest mark and polygon delays, in µs.
-SCANNER_DELAY_MAX_US = 4095
-#: Largest scaled corner hold a mark carries (``vec_op`` bits 7:1), in frames.
-CORNER_FRAMES_MAX = 127
-
-#: Samples per axis of the default spiral table (the paper's 128).
-DEFAULT_TABLE_POINTS = DEFAULT_POINTS
-#: Nodes per axis of the default (identity) correction table.
-DEFAULT_CORRECTION_NODES = 17
+__all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities"]
 
 
 class Mode(enum.Enum, shape=2):
@@ -74,14 +53,6 @@ class WobbleShape(enum.Enum, shape=1):
         return self.name.lower()
 
 
-#: Largest wobble amplitude, galvo units (≈ 6.9 mm on a 110 mm field): the figure's products
-#: stay within 12 bits.
-WOBBLE_MAX_AMPLITUDE = 4095
-#: Highest wobble frequency, Hz: a quarter of the XY2-100 frame rate, so a turn of the figure
-#: has at least four points.
-WOBBLE_MAX_HZ = 25_000
-
-
 #: Bits of the ``status`` register, bit 0 first.
 Status = data.StructLayout({
     "running": 1,           # the selected scan mode is running
@@ -101,3 +72,19 @@ Status = data.StructLayout({
 
 #: Bit number of each :data:`Status` flag, for host code that tests bits of a value read.
 STATUS_BITS = {name: field.offset for name, field in Status}
+
+
+#: Bits of the ``caps`` register, bit 0 first: what this bitstream holds, so that the host
+#: asks instead of trying writes the board would refuse (and count in ``errors``).
+Capabilities = data.StructLayout({
+    "spiral": 1,            # the spiral mode
+    "raster": 1,            # the raster mode
+    "vector": 1,            # the vector mode
+    "laser": 1,             # the laser controller
+    "correction": 1,        # the correction stage (its table's nodes: cor_nodes)
+    "wobble": 1,            # the wobble stage on vector points
+    "delays": 1,            # vector mode's laser and scanner delays
+    "interpolation": 1,     # the spiral's interpolator
+    "uart": 1,              # the UART link
+    "spi": 1,               # the SPI link
+})

@@ -9,8 +9,9 @@ from amaranth.hdl import Shape
 from ..field.correction_table import TABLE_SIZES
 from ..field.scale import AMP_ONE
 from ..points import FIELD_CENTRE, FIELD_MAX
-from .fields import (LASER_DELAY_MAX_US, LASER_ON_LEAD_US, Mode, SCANNER_DELAY_MAX_US, Status,
-                     WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX, WobbleShape)
+from ..limits import (LASER_DELAY_MAX_US, LASER_ON_LEAD_US, SCANNER_DELAY_MAX_US,
+                      WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX)
+from .fields import Capabilities, Mode, Status, WobbleShape
 
 
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
@@ -35,6 +36,10 @@ class Register:
     #: The value is two's complement: ``low`` and ``high`` are signed, the frame carries the
     #: value modulo 65536 and the register holds its low ``width`` bits.
     signed: bool = False
+    #: A read-only value fixed when the bitstream is built (``reset``, given by the build's
+    #: map): the register file reads it from the block RAM that holds the reset values, with
+    #: no input and no logic of its own (what a bitstream holds: ``caps``, ``vec_depth``).
+    fixed: bool = False
 
     def encode(self, value):
         """The 16-bit frame data of ``value`` (two's complement for a signed register)."""
@@ -75,6 +80,14 @@ def all_registers(table_points, correction_nodes):
                  "rejected command frames since reset (bad check byte, unknown address, write to "
                  "a read-only register, value out of range, cut short, UART framing error); "
                  "stops at 65535"),
+        Register("caps", 0x0E, "ro", 0, 0, 0, "flags",
+                 "what this bitstream holds, a bit each (1: built): " + ", ".join(
+                     f"bit {field.offset} {name}" for name, field in Capabilities) +
+                 "; the host reads it instead of trying writes; fixed when it is built",
+                 width=Capabilities.size, fixed=True),
+        Register("vec_depth", 0x0F, "ro", 0, 0, 0, "segments",
+                 "segments this bitstream's vector queue holds (0: no vector mode); fixed when "
+                 "it is built", fixed=True),
         # --- galvo group ------------------------------------------------------------------------
         Register("mode", 0x02, "rw", Mode.SPIRAL.value, 0, len(Mode) - 1, "enum",
                  "scan mode: 0 = spiral, 1 = raster (line-by-line fill), 2 = vector (queued "
@@ -213,8 +226,8 @@ def all_registers(table_points, correction_nodes):
                  "of the write. Refused (counted in errors) while the last write still waits for "
                  "a point to finish (at most 16 clocks)", width=1, refusable=True),
         Register("cor_nodes", 0x45, "ro", 0, 0, 0, "nodes",
-                 "correction table nodes per axis in this build (5, 9, 17, 33 or 65)",
-                 width=_width(max(TABLE_SIZES))),
+                 "correction table nodes per axis in this build (5, 9, 17, 33 or 65); fixed "
+                 "when it is built", width=_width(max(TABLE_SIZES)), fixed=True),
         # --- laser group ------------------------------------------------------------------------
         Register("arm", 0x10, "rw", 0, 0, 1, "bool",
                  "1 = arm the laser: laser_enable on, latch power, MO on, modulation after the "

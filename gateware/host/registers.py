@@ -1,6 +1,6 @@
 """The register file: state the host writes and reads, built from the register map."""
 
-from amaranth.hdl import Cat, Module, Mux, Signal
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -112,6 +112,8 @@ class RegisterFile(wiring.Component):
                 members[f"{reg.name}_push"] = Out(1)
                 members[f"{reg.name}_ready"] = In(1)
                 members[f"{reg.name}_refused"] = Out(1)
+            elif reg.fixed:
+                pass                # (its value is the map's: no port)
             else:
                 members[reg.name] = In(reg.width)
         super().__init__(members)
@@ -155,7 +157,7 @@ class RegisterFile(wiring.Component):
         with m.Switch(address):
             for reg in self.regmap:
                 with m.Case(reg.address):
-                    value = getattr(self, reg.name)
+                    value = getattr(self, reg.name, None)     # (none: fixed)
                     if reg.access == "strobe":
                         # A write of 1 pulses the output on the next clock (from a flip-flop:
                         # a refusable strobe's readiness may depend on the strobe itself).
@@ -190,6 +192,8 @@ class RegisterFile(wiring.Component):
                 value = getattr(self, reg.name)
                 m.d.comb += value.eq(Mux(getattr(self, f"{reg.name}_push"), write_data, stored))
                 m.d.sync += stored.eq(value)
+            elif reg.fixed:
+                holds[reg.name] = Const(reg.reset, reg.width)
             elif reg.access != "strobe":
                 holds[reg.name] = getattr(self, reg.name)
 
@@ -213,7 +217,7 @@ class RegisterFile(wiring.Component):
             depth = 2 ** len(bus.address)
             m.submodules.copy = copy = Memory(shape=16, depth=depth, init=[0] * depth)
             resets = [0] * depth
-            for reg in held:
+            for reg in held + [reg for reg in self.regmap if reg.fixed]:
                 resets[reg.address] = reg.encode(reg.reset)
             m.submodules.resets = reset_values = Memory(shape=16, depth=depth, init=resets)
             copy_write = copy.write_port()
@@ -232,6 +236,9 @@ class RegisterFile(wiring.Component):
                     if reg in held and self.reads_from_ram:
                         m.d.sync += [from_ram.eq(1),
                                      from_copy.eq(written[held.index(reg)])]
+                    elif reg.fixed and self.reads_from_ram:
+                        # (Never written: its value is the reset RAM's, at no cost in logic.)
+                        m.d.sync += [from_ram.eq(1), from_copy.eq(0)]
                     elif reg.access != "strobe":
                         value = holds[reg.name]
                         m.d.sync += direct.eq(value.as_signed() if reg.signed else value)

@@ -31,11 +31,13 @@ from dataclasses import replace
 from ..field.correction_table import TABLE_SIZES
 from ..sources.spiral_table import MAX_POINTS
 # The map's two parts, re-exported here: what the values mean, and every register.
+from .. import limits
+from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NODES,
+                      DEFAULT_TABLE_POINTS, FRAME_US, LASER_DELAY_MAX_US, LASER_ON_LEAD_US,
+                      SCANNER_DELAY_MAX_US, VECTOR_QUEUE_DEPTH, WOBBLE_MAX_AMPLITUDE,
+                      WOBBLE_MAX_HZ, WORD_MAX)
 from . import fields, register_list
-from .fields import (CORNER_FRAMES_MAX, DEFAULT_CORRECTION_NODES, DEFAULT_TABLE_POINTS,
-                     LASER_DELAY_MAX_US, LASER_ON_LEAD_US, SCANNER_DELAY_MAX_US, STATUS_BITS,
-                     WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX, Mode, Status, VectorOp,
-                     WobbleShape)
+from .fields import STATUS_BITS, Capabilities, Mode, Status, VectorOp, WobbleShape
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, WOBBLE_REGISTERS, Register,
                             all_registers)
@@ -43,7 +45,7 @@ from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION
 
 __all__ = ["CHECK_BYTE", "READ_FLAG", "RegisterMap", "register_map", "MAX_TABLE_POINTS",
            "HOST_MAP", "REGISTERS", "BY_NAME", "BY_ADDRESS", "encode_frame", "decode_frame",
-           "FrameError", *fields.__all__,
+           "FrameError", *fields.__all__, *limits.__all__,
            *(name for name in register_list.__all__ if name != "all_registers")]
 
 
@@ -110,8 +112,9 @@ class RegisterMap:
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
-                 vector_delays=True, resets=None):
-    """The register map of a build.
+                 vector_delays=False, resets=None, fixed=None):
+    """The register map of a build (by default, the default build's: the same defaults as
+    :class:`~galvoscan.gateware.top.GalvoScanTop`).
 
     Parameters
     ----------
@@ -137,6 +140,9 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
         leaves out are skipped: scan settings name every scan register, whatever is built.
+    fixed : dict of str to int, optional
+        The values of the registers fixed when the bitstream is built (``caps``,
+        ``vec_depth``: the system top gives them); each must fit its register's width.
 
     Returns
     -------
@@ -180,6 +186,13 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                 not reg.low <= value <= reg.high:
             raise ValueError(f"reset value {value!r} of {name} is outside {reg.low}…{reg.high}")
         by_name[name] = replace(reg, reset=value)
+    for name, value in (fixed or {}).items():
+        if name not in by_name or not by_name[name].fixed:
+            raise ValueError(f"{name!r} is not a register fixed by the build")
+        if isinstance(value, bool) or not isinstance(value, int) or \
+                not 0 <= value < 1 << by_name[name].width:
+            raise ValueError(f"{name} = {value!r} does not fit its {by_name[name].width} bits")
+        by_name[name] = replace(by_name[name], reset=value)
     if by_name["mode"].reset not in (mode.value for mode in modes):
         raise ValueError(f"the build starts in mode {Mode(by_name['mode'].reset).label}, "
                          f"which it does not have")
@@ -200,7 +213,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, resets={name: default[name].reset
+                        wobble=True, vector_delays=True, resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
 

@@ -33,7 +33,16 @@ from amaranth.lib.wiring import In, Out
 from ..points import FieldPoint
 
 
-__all__ = ["LineDDA", "Segment", "FRACTION_BITS", "DIRECTION_BITS", "Direction"]
+__all__ = ["LineDDA", "Segment", "FRACTION_BITS", "DIRECTION_BITS", "Direction",
+           "SETUP_CLOCKS", "DIRECTED_SETUP_CLOCKS"]
+
+
+#: Clocks a segment's set-up takes (above): its first point is offered on the 140th clock,
+#: counting the one that takes the segment as the first. The host's planner warns when
+#: points come faster than this at the board's clock.
+SETUP_CLOCKS = 140
+#: The same with the line's direction worked out too (``direction=True``).
+DIRECTED_SETUP_CLOCKS = 166
 
 
 #: Fractional bits of the step and of the accumulated positions.

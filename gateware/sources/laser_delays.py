@@ -21,7 +21,7 @@ from amaranth.hdl import Module, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.regmap import LASER_ON_LEAD_US
+from ..limits import LASER_ON_LEAD_US
 
 
 __all__ = ["LaserDelays"]

@@ -4,7 +4,7 @@ from amaranth.hdl import Module
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.regmap import Mode
+from ..host.fields import Mode
 from ..points import OffsetPoint
 
 

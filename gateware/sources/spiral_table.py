@@ -18,13 +18,15 @@ the simulation models and the analysis.
 from statistics import NormalDist
 import math
 
+from ..limits import DEFAULT_TABLE_POINTS
+
 
 __all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE", "DEFAULT_POINTS",
            "MIN_POINTS", "MAX_POINTS"]
 
 #: Samples per sine period: the paper's 128 by default; a multiple of 4 (the quarter-period
 #: symmetry) within these bounds (the ROM address registers are 12 bits at most).
-DEFAULT_POINTS = 128
+DEFAULT_POINTS = DEFAULT_TABLE_POINTS
 MIN_POINTS = 8
 MAX_POINTS = 4096
 
