@@ -285,6 +285,11 @@ def test_a_failing_compile_falls_back_to_python_with_one_line(monkeypatch, tmp_p
     assert len(said) >= 1 and "not available" in said[-1] and "false" in said[-1]
     with pytest.raises(CompileError, match="the C\\+\\+ compiler .*failed"):
         SimulatedBoard(backend="compiled", **QUICK_SIM_BOARD, **VECTOR_BOARD)
+    # A compiler killed (out of memory, say) is named by its signal, not an exit status.
+    killed = Compiler(("sh", "-c", "kill -9 $$", "sh"), "a compiler that is killed")
+    monkeypatch.setattr("galvoscan.compiled.model.find_compiler", lambda: killed)
+    with pytest.raises(CompileError, match=r"failed: stopped by signal 9 \(SIGKILL\)$"):
+        SimulatedBoard(backend="compiled", **QUICK_SIM_BOARD, **VECTOR_BOARD)
 
 
 def test_no_compiler_at_all_is_one_line(monkeypatch):

@@ -386,3 +386,17 @@ def test_the_profiles_lens_table_is_loaded_at_the_boards_size(tmp_path):
     centre = board.writes.index(("cor_node", 4 * 9 + 4))
     assert board.writes[centre + 1:centre + 4] == [("cor_dx", 40), ("cor_dy", 0xFFFF - 6),
                                                    ("cor_write", 1)]
+
+
+@pytest.mark.parametrize("command", [["mark", "DRAWING"], ["clean", "--area", "5x5"]])
+def test_a_backend_without_sim_is_refused_before_anything(tmp_path, command):
+    """--backend picks the simulated board's simulator: on a real board's job it would
+    choose nothing, so it is one line, before any planning or link."""
+    drawing = tmp_path / "square.svg"
+    drawing.write_text(SVG)
+    argv = [str(drawing) if word == "DRAWING" else word for word in command]
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, "--backend", "python", "--port", str(tmp_path / "no-such-port")])
+    message = str(stop.value.code)
+    assert message == "galvoscan: error: --backend python chooses the simulated board's " \
+                      "simulator: it needs --sim"

@@ -15,6 +15,7 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
+           "check_backend_needs_sim",
            "simulated_board"]
 
 
@@ -274,13 +275,21 @@ def open_link(args):
 # --- the simulated board ---------------------------------------------------------------------------
 
 def add_backend_option(parser, *, default="auto", what="the simulator"):
-    """``--backend``: which simulator runs the simulated board."""
+    """``--backend``: which simulator runs the simulated board. ``default=None``: auto, and a
+    command can tell whether it was given (see :func:`check_backend_needs_sim`)."""
     from ..sim.board import BACKENDS
     parser.add_argument("--backend", choices=BACKENDS, default=default,
                         help=f"{what}: compiled (the design as native code, built once "
                              f"per design and cached; some 300x faster), python (Amaranth's, "
                              f"the reference) or auto, the compiled one where a C++ compiler "
-                             f"can build it (default: %(default)s)")
+                             f"can build it (default: {default or 'auto'})")
+
+
+def check_backend_needs_sim(args):
+    """A job's ``--backend`` without ``--sim`` chooses nothing: one line, before any work."""
+    if getattr(args, "backend", None) is not None and not getattr(args, "sim", False):
+        fail(f"--backend {args.backend} chooses the simulated board's simulator: it needs "
+             f"--sim")
 
 
 def simulated_board(args, **kwargs):
@@ -293,7 +302,8 @@ def simulated_board(args, **kwargs):
     def say(line):
         print(f"galvoscan: {line}", file=sys.stderr, flush=True)
     try:
-        return SimulatedBoard(backend=getattr(args, "backend", "auto"), say=say, **kwargs)
+        return SimulatedBoard(backend=getattr(args, "backend", None) or "auto", say=say,
+                              **kwargs)
     except CompileError as error:
         if kwargs.get("netlist"):
             fail(f"the netlist cannot be simulated: {error}")

@@ -6,6 +6,7 @@ import math
 import sys
 
 from .args import fail, field_mm, int_in, number_in
+from .args import check_backend_needs_sim
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
@@ -26,6 +27,7 @@ def _cmd_clean(args):
     from ..jobs.area import plan_area_job
     from ..jobs.plan import PlanError
     from ..jobs.stream import JobStreamer
+    check_backend_needs_sim(args)
     profile = profile_from(args)
     speed, power, prr = job_settings_values(args, profile)
     how = {"passes": args.passes, "duration_s": args.duration, "dose_j_cm2": args.dose}

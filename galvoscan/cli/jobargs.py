@@ -5,7 +5,8 @@ import argparse
 import contextlib
 import sys
 
-from .args import add_backend_option, baud, fail, number_in, open_transport, simulated_board
+from .args import (add_backend_option, baud, check_backend_needs_sim, fail, number_in,
+                   open_transport, simulated_board)
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -61,7 +62,7 @@ def add_job_link_options(parser):
                       metavar="S", help="seconds to wait for an answer (default: the "
                                         "profile's; with --sim, from the simulator's "
                                         "measured speed)")
-    add_backend_option(link)
+    add_backend_option(link, default=None)
 
 
 def has_link(args, profile):

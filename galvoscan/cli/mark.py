@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ..gateware.limits import WOBBLE_MAX_HZ
-from .args import fail, image_file, int_in, number_in
+from .args import check_backend_needs_sim, fail, image_file, int_in, number_in
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
@@ -177,6 +177,7 @@ def _sim_report(board, job, placement, drawing, profile, report):
 
 def _cmd_mark(args):
     from ..jobs.stream import JobStreamer
+    check_backend_needs_sim(args)
     profile = profile_from(args)
     wobble, wobble_regs = _wobble(args, profile)
     job, placement, drawing = _plan(args, profile)

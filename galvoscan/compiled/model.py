@@ -13,6 +13,7 @@ import ctypes
 import fcntl
 import hashlib
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -192,6 +193,13 @@ def _key(design, board, yosys_version, compiler):
     return digest.hexdigest()[:32]
 
 
+def _signal_name(number):
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return "unknown"
+
+
 def _run(command, *, cwd, what, timeout=COMPILE_TIMEOUT_S, env=None):
     try:
         run = subprocess.run(command, cwd=cwd, capture_output=True, text=True,
@@ -203,7 +211,12 @@ def _run(command, *, cwd, what, timeout=COMPILE_TIMEOUT_S, env=None):
     if run.returncode != 0:
         lines = [line for line in (run.stderr + run.stdout).splitlines() if line.strip()]
         errors = [line for line in lines if "error" in line.lower()] or lines
-        detail = errors[0].strip()[:200] if errors else f"exit status {run.returncode}"
+        if errors:
+            detail = errors[0].strip()[:200]
+        elif run.returncode < 0:        # (killed: out of memory, a user's kill)
+            detail = f"stopped by signal {-run.returncode} ({_signal_name(-run.returncode)})"
+        else:
+            detail = f"exit status {run.returncode}"
         raise CompileError(f"{what} failed: {detail}")
 
 
