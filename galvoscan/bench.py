@@ -210,8 +210,10 @@ def table(result):
                                     f"{link[f'{name}_latency_max_us']:.1f} µs max"))
     if "stream" in link:
         stream = link["stream"]
+        # (Records from before the option was: streamed on Amaranth's.)
         rows.append((f"vector segments/s streamed end to end, UART {stream['baud']:,} baud "
-                     f"(batches and fifo_free reads)",
+                     f"(batches and fifo_free reads), {stream.get('backend', 'python')} "
+                     f"backend",
                      f"{stream['segments_per_s']:,.0f} ({stream['errors']} errors)"))
     if "backends" in result:
         backends = result["backends"]

@@ -356,3 +356,15 @@ def test_a_model_that_crashes_ends_the_command_with_one_line(tmp_path):
     assert run.stderr.strip().splitlines() == [
         "galvoscan: error: the compiled simulated board crashed (run it with --backend "
         "python, and report it)"]
+
+
+def test_the_minutes_of_zigs_first_run_are_told_only_before_it(monkeypatch, tmp_path):
+    """zig builds its C++ library on its first run alone (minutes, where a compile after it
+    takes seconds): the compile's line says so only while zig's cache is empty."""
+    from galvoscan.compiled.model import _zig_cache_is_empty
+    monkeypatch.setenv("ZIG_GLOBAL_CACHE_DIR", str(tmp_path / "zig"))
+    assert _zig_cache_is_empty()                    # not there at all
+    (tmp_path / "zig").mkdir()
+    assert _zig_cache_is_empty()                    # there, empty
+    (tmp_path / "zig" / "o").mkdir()
+    assert not _zig_cache_is_empty()

@@ -71,20 +71,17 @@ def _sim_vector(args):
         fail(error)
     correction = _correction(args)
     # The simulator only once every input is known good.
-    from tqdm import tqdm
     from ..sim import plot_job, replay_job
     start = time.monotonic()
-    started = [None]        # when the first frame came (a compile may come before)
-    with tqdm(unit="frame", desc="simulating", disable=None, file=sys.stderr) as bar:
+    with _FrameBar() as bar:
         try:
             result = replay_job(job, correction=correction, prr_hz=args.prr,
                                 pulses_per_point=args.pulses_per_point, pitch=args.pitch,
                                 jump_delay=args.jump_delay, vcd=args.vcd,
-                                progress=_timed(bar.update, started),
-                                backend=_backend(args), say=_say)
+                                progress=bar.update, backend=_backend(args), say=_say)
         except ValueError as error:
             fail(error)
-    seconds = time.monotonic() - (started[0] or start)
+    seconds = time.monotonic() - (bar.started or start)
     marked = result.marked()
     counts = sorted({p[2] for p in marked})
     mm_per_unit = args.lens_field / 65536
@@ -161,14 +158,30 @@ def _netlist_settings(args):
     return settings, round(clock / (float(record.get("bit_rate_mhz", 2)) * 1e6))
 
 
-def _timed(progress, started):
-    """``progress``, noting in ``started`` when it is first called: the simulation's time is
-    counted from there, not from before a compiled model was built."""
-    def call(frames):
-        if started[0] is None:
-            started[0] = time.monotonic()
-        progress(frames)
-    return call
+class _FrameBar:
+    """The progress bar of a simulation, opened at its first frame, so that a compile before
+    it (which says so in its own lines) neither sits under a bar at 0 % nor counts in its
+    rate; ``started`` is when that was, the simulation's time being counted from there."""
+
+    def __init__(self, total=None):
+        self.total = total
+        self.started = None
+        self._bar = None
+
+    def update(self, frames):
+        if self._bar is None:
+            from tqdm import tqdm
+            self.started = time.monotonic()
+            self._bar = tqdm(total=self.total, unit="frame", desc="simulating", disable=None,
+                             file=sys.stderr)
+        self._bar.update(frames)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.close()
 
 
 def _say(line):
@@ -176,7 +189,6 @@ def _say(line):
 
 
 def _sim_spiral(args):
-    from tqdm import tqdm
     from ..gateware.sources.spiral import PARK_FRAMES
     from ..sim import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
 
@@ -194,14 +206,11 @@ def _sim_spiral(args):
     # for `dwell` frames.
     frames = PARK_FRAMES + args.points * settings.dwell
     start = time.monotonic()
-    started = [None]        # when the first frame came (a compile may come before)
-    with tqdm(total=frames, unit="frame", desc="simulating", disable=None,
-              file=sys.stderr) as bar:
+    with _FrameBar(total=frames) as bar:
         received = replay_spiral(frames=frames, table=table, settings=settings, vcd=args.vcd,
-                                 progress=_timed(bar.update, started),
-                                 correction=correction,
+                                 progress=bar.update, correction=correction,
                                  backend=_backend(args), say=_say, netlist=args.netlist)
-    seconds = time.monotonic() - (started[0] or start)
+    seconds = time.monotonic() - (bar.started or start)
     cycles = frames * 20 * clocks_per_bit
 
     if args.csv:

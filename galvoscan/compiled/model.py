@@ -193,6 +193,18 @@ def _key(design, board, yosys_version, compiler):
     return digest.hexdigest()[:32]
 
 
+def _zig_cache_is_empty():
+    """Whether zig has never built anything here (its global cache, where its first run puts
+    the C++ library it builds): the first compile then takes minutes, not seconds."""
+    root = os.environ.get("ZIG_GLOBAL_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "zig")
+    try:
+        with os.scandir(root) as entries:
+            return not any(entries)
+    except OSError:
+        return True
+
+
 def _signal_name(number):
     try:
         return signal.Signals(number).name
@@ -308,8 +320,9 @@ def compiled_model(top, *, compiler=None, say=None):
                     replaced = True
             if not library.is_file():
                 started = time.monotonic()
-                what = ("zig c++; its first run also builds its C++ library, some minutes"
-                        if compiler.zig else compiler.name)
+                what = compiler.name
+                if compiler.zig and _zig_cache_is_empty():
+                    what = "zig c++; its first run builds its C++ library too, some minutes"
                 say(f"compiling the simulated board for {design.description} once ({what}); "
                     f"cached in {folder.parent}")
                 with tempfile.TemporaryDirectory(dir=folder, prefix="build-") as workdir:
