@@ -20,6 +20,7 @@ from .field.correction_table import CorrectionTable
 from .field.scale import ScaleOffset
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
+from .host.fields import pack
 from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
                           register_map)
 from .host.spi_target import SPITarget
@@ -34,7 +35,7 @@ from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
 from .sources.laser_delays import LaserDelays
 from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VecOpWord,
-                             VectorCommand, VectorSequencer, pack)
+                             VectorCommand, VectorSequencer)
 from .sources.wobble import Wobble
 
 

@@ -12,7 +12,8 @@ import pytest
 
 from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
-from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord, pack
+from galvoscan.gateware.host.fields import pack
+from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
 from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport

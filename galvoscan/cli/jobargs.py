@@ -5,8 +5,7 @@ import argparse
 import contextlib
 import sys
 
-from .args import (add_backend_option, baud, check_backend_needs_sim, fail, number_in,
-                   open_transport, simulated_board)
+from .args import add_backend_option, baud, fail, number_in, open_transport, simulated_board
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",

@@ -1,12 +1,15 @@
 """What the registers' values mean: the scan modes, vector operations and wobble shapes as
-enums and the ``status`` bits as a layout (part of the register map, :mod:`.regmap`, which
-re-exports them with the limits of :mod:`..limits`). Imports nothing of the project's: the
-datapath cores take their enums from here without the map."""
+enums, the ``status`` and ``caps`` bits as layouts, and :func:`pack`, the host's side of a
+word read through a layout (part of the register map, :mod:`.regmap`, which re-exports them
+with the limits of :mod:`..limits`). Imports nothing of the project's: the datapath cores
+take their enums from here without the map."""
+
+from enum import Enum
 
 from amaranth.lib import data, enum
 
 
-__all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities"]
+__all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities", "pack"]
 
 
 class Mode(enum.Enum, shape=2):
@@ -88,3 +91,20 @@ Capabilities = data.StructLayout({
     "uart": 1,              # the UART link
     "spi": 1,               # the SPI link
 })
+
+
+def pack(layout, **fields):
+    """The integer whose bits hold ``fields`` where ``layout`` (a flat
+    :class:`~amaranth.lib.data.StructLayout`) puts them: the host's side of a word the
+    gateware reads through that layout (``vec_op``, a queued segment). Fields left out are 0;
+    a value that does not fit its field raises :class:`ValueError`."""
+    word = 0
+    for name, value in fields.items():
+        field = layout[name]
+        if isinstance(value, Enum):
+            value = value.value
+        if isinstance(value, bool) or not isinstance(value, int) or \
+                not 0 <= value < 1 << field.width:
+            raise ValueError(f"{name} = {value!r} does not fit its {field.width} bits")
+        word |= value << field.offset
+    return word

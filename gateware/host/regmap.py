@@ -37,7 +37,7 @@ from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NO
                       SCANNER_DELAY_MAX_US, VECTOR_QUEUE_DEPTH, WOBBLE_MAX_AMPLITUDE,
                       WOBBLE_MAX_HZ, WORD_MAX)
 from . import fields, register_list
-from .fields import STATUS_BITS, Capabilities, Mode, Status, VectorOp, WobbleShape
+from .fields import STATUS_BITS, Capabilities, Mode, Status, VectorOp, WobbleShape, pack
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, WOBBLE_REGISTERS, Register,
                             all_registers)

@@ -28,8 +28,6 @@ The pacer's decision for a frame, :attr:`laser`, applies from the moment that fr
 sent; the system top delays it by two frames to the laser's ``marking`` input.
 """
 
-from enum import Enum
-
 from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
@@ -40,7 +38,7 @@ from .dda import DIRECTION_BITS, Direction, LineDDA
 
 
 __all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand",
-           "DelayedVectorCommand", "VecOpWord", "OP_JUMP", "OP_MARK", "pack"]
+           "DelayedVectorCommand", "VecOpWord", "OP_JUMP", "OP_MARK"]
 
 
 #: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
@@ -54,22 +52,6 @@ DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "cor
 #: The ``vec_op`` register's word: the op, and (builds with the RTC delays) the corner hold.
 VecOpWord = data.StructLayout({"op": VectorOp, "corner_frames": 7})
 
-
-def pack(layout, **fields):
-    """The integer whose bits hold ``fields`` where ``layout`` (a flat
-    :class:`~amaranth.lib.data.StructLayout`) puts them: the host's side of a word the
-    gateware reads through that layout (``vec_op``, a queued segment). Fields left out are 0;
-    a value that does not fit its field raises :class:`ValueError`."""
-    word = 0
-    for name, value in fields.items():
-        field = layout[name]
-        if isinstance(value, Enum):
-            value = value.value
-        if isinstance(value, bool) or not isinstance(value, int) or \
-                not 0 <= value < 1 << field.width:
-            raise ValueError(f"{name} = {value!r} does not fit its {field.width} bits")
-        word |= value << field.offset
-    return word
 
 
 class VectorSequencer(wiring.Component):
