@@ -68,10 +68,17 @@ def installed(tmp_path_factory):
     already) rather than downloaded and installed again: the venv holds exactly what pip
     would put there, nothing of the tests' own packages, so a module the wheel leaves out or a
     dependency it does not declare still fails here."""
+    import shutil
     import zipfile
     where = tmp_path_factory.mktemp("wheel")
+    # Built from a copy of the tree: setuptools works in the source's build/, where other
+    # tests write at the same time (the proofs' and the analyses' files), and a wheel built
+    # there once failed on a dist-info folder that already existed.
+    source = where / "source"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "build", ".hypothesis", "*.egg-info", "__pycache__"))
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
-                    "--wheel-dir", str(where / "dist"), str(ROOT)], check=True)
+                    "--wheel-dir", str(where / "dist"), str(source)], check=True)
     wheel, = (where / "dist").glob("galvoscan-*.whl")
     venv.create(where / "venv", with_pip=False, symlinks=sys.platform != "win32")
     bin_dir = where / "venv" / ("Scripts" if sys.platform == "win32" else "bin")
