@@ -6,10 +6,13 @@ designs: ``clk``, ``rst`` (synchronous, active high), the scan head bus ``xy2_cl
 ``spi_cipo``, ``uart_rx``, ``uart_tx``, and the laser's DB25 signals ``laser_power[7:0]``,
 ``laser_latch``, ``laser_mo``, ``laser_am``, ``laser_prr``, the buffers' ``laser_enable``,
 the guide laser's ``laser_guide``,
-and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``).
+and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``);
+with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``flash_copi``,
+``flash_cipo``, the start inputs ``start_n[1:0]`` and the outputs ``busy``, ``ready`` and
+``player_led``.
 """
 
-from amaranth.hdl import Cat, Module, Signal
+from amaranth.hdl import Cat, Module, Mux, ResetInserter, Signal
 from amaranth.lib import wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
@@ -18,16 +21,20 @@ from .clocking import XY2_100_BIT_RATE, check_clocks, default_baud
 from .field.correction import FieldCorrection
 from .field.correction_table import CorrectionTable
 from .field.scale import ScaleOffset
+from .flash.spi_flash import SPIFlashReader
+from .host.bus_arbiter import BusArbiter
 from .host.command import CommandDecoder
 from .host.registers import RegisterFile
 from .host.fields import pack
 from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
-                          register_map)
+                          PlayerResult, PlayerState, register_map)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
 from .laser.controller import MAX_ALARMS, LaserController
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
+from .player.player import JobPlayer
+from .player.start_input import DEFAULT_DEBOUNCE_MS, StartInput, debounce_ticks
 from .settings import ScanSettings
 from .sources.raster import RasterSequencer
 from .sources.select import SourceSelect
@@ -120,6 +127,12 @@ class GalvoScanTop(wiring.Component):
         Build vector mode's RTC delays (laser-on, laser-off, mark, polygon; README "Laser and
         scanner delays"). Without them their registers are left out and ``vec_op`` takes
         only 0 and 1. They need a clock of a whole number of MHz.
+    player : bool
+        Build the job player (:class:`~.player.player.JobPlayer`), its flash reader and start
+        input: a press of ``start_n`` plays the job image in the flash, with no host. Needs
+        vector mode and the laser.
+    start_debounce_ms : int
+        How long a change of ``start_n`` must last, ms.
 
     Interface attributes
     --------------------
@@ -143,6 +156,15 @@ class GalvoScanTop(wiring.Component):
     laser_alarm : ``In(laser_alarms, init=all ones)``, when ``laser_alarms`` > 0
         The laser's alarm outputs, 1 = alarm (give the pins pull-ups, so an unconnected one
         reads as an alarm).
+    flash_cs_n, flash_clk, flash_copi : ``Out(1)``; flash_cipo : ``In(1)``, with the player
+        The configuration flash, read after configuration.
+    start_n : ``In(2, init=0b11)``, with the player
+        Start inputs (a foot switch, the board's button), 0 = pressed; give them pull-ups.
+    busy, ready : ``Out(1)``, with the player
+        For a PLC: the player is checking or playing its job; armed and past the MO lead (a
+        host's job too).
+    player_led : ``Out(1)``, with the player
+        On while the player is busy; blinking while the last start's image was refused.
 
     Attributes
     ----------
@@ -157,7 +179,8 @@ class GalvoScanTop(wiring.Component):
                  multiplier="dsp", links=("spi", "uart"), laser=True,
                  uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
                  vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
-                 spiral_interpolation=True, vector_delays=False):
+                 spiral_interpolation=True, vector_delays=False, player=False,
+                 start_debounce_ms=DEFAULT_DEBOUNCE_MS):
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -219,6 +242,13 @@ class GalvoScanTop(wiring.Component):
             Wobble.check_frame_rate(bit_rate / FRAME_BITS)
         self.spiral_interpolation = bool(spiral_interpolation) and "spiral" in modes
         self.vector_delays = bool(vector_delays) and "vector" in modes
+        self.player = bool(player)
+        if self.player and not ("vector" in modes and self.laser):
+            raise ValueError("the job player plays vector jobs: it needs vector mode and the "
+                             "laser controller")
+        self.start_debounce_ms = start_debounce_ms
+        if self.player:
+            debounce_ticks(start_debounce_ms, FRAME_BITS * 1e6 / bit_rate)  # (checked now)
         #: µs an XY2 frame lasts (10 at XY2-100), and system clocks per µs.
         self.frame_us = FRAME_BITS * 1e6 / bit_rate
         if self.vector_delays:
@@ -237,7 +267,7 @@ class GalvoScanTop(wiring.Component):
             correction_nodes=None if correction is None else correction.n,
             modes=modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            resets=self.settings.register_resets(),
+            player=self.player, resets=self.settings.register_resets(),
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
                    "vec_depth": self.vector_queue_depth if "vector" in self.modes else 0,
@@ -253,6 +283,11 @@ class GalvoScanTop(wiring.Component):
         }
         if self.laser_alarms:
             members["laser_alarm"] = In(self.laser_alarms, init=2 ** self.laser_alarms - 1)
+        if self.player:
+            members.update({"flash_cs_n": Out(1, init=1), "flash_clk": Out(1),
+                            "flash_copi": Out(1), "flash_cipo": In(1, init=1),
+                            "start_n": In(2, init=0b11), "busy": Out(1), "ready": Out(1),
+                            "player_led": Out(1)})
         super().__init__(members)
 
     def capabilities(self):
@@ -263,7 +298,8 @@ class GalvoScanTop(wiring.Component):
                 "correction": self.correction is not None, "wobble": self.wobble,
                 "delays": self.vector_delays,
                 "interpolation": "spiral" in self.modes and self.spiral_interpolation,
-                "uart": "uart" in self.links, "spi": "spi" in self.links}
+                "uart": "uart" in self.links, "spi": "spi" in self.links,
+                "player": self.player}
 
     def elaborate(self, platform):
         m = Module()
@@ -294,7 +330,15 @@ class GalvoScanTop(wiring.Component):
             connect(m, decoder.uart_replies, uart.replies)
         else:
             m.d.comb += [decoder.uart_replies.ready.eq(1), self.uart_tx.eq(1)]
-        connect(m, decoder.bus, regs.bus)
+        if self.player:
+            # The player writes registers on the clocks without a host frame.
+            m.submodules.arbiter = arbiter = BusArbiter()
+            connect(m, decoder.bus, arbiter.host)
+            connect(m, arbiter.bus, regs.bus)
+            m.d.comb += arbiter.host_given.eq(decoder.spi_frames.valid |
+                                              decoder.uart_frames.valid)
+        else:
+            connect(m, decoder.bus, regs.bus)
 
         # Counters the host reads: those of the vector queue stop at their top, the laser's
         # pulses wrap (the host counts by differences).
@@ -340,8 +384,11 @@ class GalvoScanTop(wiring.Component):
             ]
         if "vector" in self.modes:
             sequencer = DirectedVectorSequencer if self.wobble else VectorSequencer
-            m.submodules.vector = sources[Mode.VECTOR] = vector = sequencer(
-                frame_us=int(self.frame_us), delays=self.vector_delays)
+            vector = sources[Mode.VECTOR] = sequencer(frame_us=int(self.frame_us),
+                                                      delays=self.vector_delays)
+            # vec_flush starts the vector path afresh: queue, sequencer (and the wobble and
+            # the laser delays, below).
+            m.submodules.vector = ResetInserter(regs.vec_flush)(vector)
             names = ("pitch", "pulses_per_point", "jump_delay")
             if self.vector_delays:
                 names += ("mark_delay", "polygon_delay", "polygon_scaled")
@@ -355,8 +402,8 @@ class GalvoScanTop(wiring.Component):
         streams = {mode: source.points for mode, source in sources.items()}
         clipped = scale.clipped
         if self.wobble:
-            m.submodules.wobble = wobble = Wobble(
-                frame_rate=self.bit_rate / FRAME_BITS)
+            wobble = Wobble(frame_rate=self.bit_rate / FRAME_BITS)
+            m.submodules.wobble = ResetInserter(regs.vec_flush)(wobble)
             connect(m, vector.points, wobble.line_points)
             m.d.comb += [
                 wobble.direction.eq(vector.direction),
@@ -403,17 +450,57 @@ class GalvoScanTop(wiring.Component):
         # --- laser --------------------------------------------------------------------------
         # A build without the laser controller (the smallest boards) leaves the laser pins
         # low: nothing can switch a laser on.
+        self._player_alive = Signal()
         if self.laser:
-            self._elaborate_laser(m, decoder, regs, phy, sources, select, status)
+            laser = self._elaborate_laser(m, decoder, regs, phy, sources, select, status)
+        if self.player:
+            self._elaborate_player(m, arbiter, regs, phy, sources[Mode.VECTOR], laser, status)
         return m
+
+    def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):
+        """The job player, its flash reader and start input, and the PLC's lines."""
+        m.submodules.flash = flash = SPIFlashReader(clk_freq=self.clk_freq)
+        m.submodules.start = start = StartInput(inputs=2, debounce_ms=self.start_debounce_ms,
+                                                tick_us=int(self.frame_us))
+        m.submodules.player = player = JobPlayer()
+        m.d.comb += [
+            self.flash_cs_n.eq(flash.cs_n), self.flash_clk.eq(flash.sck),
+            self.flash_copi.eq(flash.copi), flash.cipo.eq(self.flash_cipo),
+            flash.address.eq(player.read_address), flash.start.eq(player.read_start),
+            flash.stop.eq(player.read_stop), player.read_idle.eq(flash.idle),
+            start.start_n.eq(self.start_n), start.tick.eq(phy.frame_strobe),
+            player.start.eq(start.pressed),
+            player.grant.eq(arbiter.grant),
+            player.host_took_over.eq(arbiter.host_took_over),
+            player.queue_ready.eq(self._queue.w_stream.ready),
+            player.queue_empty.eq(self._queue.level == 0),
+            player.vector_busy.eq(vector.busy),
+            player.laser_ready.eq(laser.mo_ready & laser.laser_enable),
+            player.fault.eq(laser.faults.as_value().any()),
+            self._player_alive.eq(player.alive),
+            regs.player.eq(Cat(player.state, player.result, player.refused)),
+            status.flags.player_busy.eq(player.state != PlayerState.IDLE),
+            status.flags.job_refused.eq(Cat(player.result == result for result in PlayerResult
+                                            if result.refused).any()),
+            self.busy.eq(player.state != PlayerState.IDLE),
+            self.ready.eq(laser.mo_ready & laser.laser_enable),
+        ]
+        connect(m, flash.data, player.read_data)
+        connect(m, player.bus, arbiter.player)
+        # The LED: on while busy, blinking (about 3 Hz) after a refused image.
+        blink = Signal(15)
+        with m.If(phy.frame_strobe):
+            m.d.sync += blink.eq(blink + 1)
+        m.d.comb += self.player_led.eq(Mux(status.flags.job_refused, blink[-1],
+                                           status.flags.player_busy))
 
     def _elaborate_vector_queue(self, m, regs, vector, status):
         """The queue between the ``vec_op`` register and the vector sequencer."""
         # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
         # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
         layout = DelayedVectorCommand if self.vector_delays else VectorCommand
-        m.submodules.queue = queue = SyncFIFOBuffered(width=layout.size,
-                                                      depth=self.vector_queue_depth)
+        queue = SyncFIFOBuffered(width=layout.size, depth=self.vector_queue_depth)
+        m.submodules.queue = ResetInserter(regs.vec_flush)(queue)
         command = Signal(layout)
         if self.vector_delays:
             word = VecOpWord(regs.vec_op)
@@ -435,6 +522,7 @@ class GalvoScanTop(wiring.Component):
             status.events.vec_stalls.eq(vector.stall),
         ]
         connect(m, queue.r_stream, vector.commands)
+        self._queue = queue
 
     def _elaborate_laser(self, m, decoder, regs, phy, sources, select, status):
         """The laser controller, its marking signal, pulse counter and status flags."""
@@ -482,8 +570,9 @@ class GalvoScanTop(wiring.Component):
             # Vector mode's laser through its delays instead: the same two frames, moved by
             # laser_on_delay and laser_off_delay.
             vector = sources[Mode.VECTOR]
-            m.submodules.laser_delays = delays = LaserDelays(
-                clocks_per_us=int(self.clk_freq / 1e6), lead_us=2 * int(self.frame_us))
+            delays = LaserDelays(clocks_per_us=int(self.clk_freq / 1e6),
+                                 lead_us=2 * int(self.frame_us))
+            m.submodules.laser_delays = ResetInserter(regs.vec_flush)(delays)
             m.d.comb += [
                 delays.frame_strobe.eq(phy.frame_strobe),
                 delays.run.eq(vector.run),
@@ -498,7 +587,7 @@ class GalvoScanTop(wiring.Component):
             laser.power.eq(regs.laser_power),
             laser.prr.eq(regs.laser_prr),
             laser.watchdog_ms.eq(regs.watchdog),
-            laser.alive.eq(command_seen),
+            laser.alive.eq(command_seen | self._player_alive),
             laser.fault_clear.eq(regs.fault_clear),
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),
@@ -521,3 +610,4 @@ class GalvoScanTop(wiring.Component):
             status.flags.mo_on.eq(laser.laser_mo),
             status.flags.emitting.eq(laser.laser_am),
         ]
+        return laser

@@ -16,9 +16,9 @@ from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, 
 #: The default build's registers (128-point spiral table, 17 × 17 correction nodes, all modes,
 #: the laser): name, address, access, reset, lowest and highest value written, bits held.
 DEFAULT_BUILD = [
-    ("status", 0x00, "ro", 0, 0, 0, 13),
+    ("status", 0x00, "ro", 0, 0, 0, 15),
     ("errors", 0x01, "ro", 0, 0, 0, 16),
-    ("caps", 0x0e, "ro", 0, 0, 0, 10),
+    ("caps", 0x0e, "ro", 0, 0, 0, 11),
     ("vec_depth", 0x0f, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
@@ -42,6 +42,7 @@ DEFAULT_BUILD = [
     ("vec_rejected", 0x27, "ro", 0, 0, 0, 16),
     ("vec_underruns", 0x28, "ro", 0, 0, 0, 16),
     ("vec_stalls", 0x29, "ro", 0, 0, 0, 16),
+    ("vec_flush", 0x2f, "strobe", 0, 0, 1, 1),
     ("ras_x", 0x30, "rw", 28768, 0, 65535, 16),
     ("ras_y", 0x31, "rw", 28768, 0, 65535, 16),
     ("ras_w", 0x32, "rw", 8000, 0, 65535, 16),
@@ -90,7 +91,7 @@ SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
 VECTOR_ONLY = {"vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls", "laser_on_delay",
-               "laser_off_delay", "mark_delay", "polygon_delay", "polygon_scaled"}
+               "laser_off_delay", "mark_delay", "polygon_delay", "polygon_scaled", "vec_flush"}
 LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses", "guide"}
 CORRECTION_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("cor_")}
 
@@ -255,7 +256,8 @@ def test_status_layout_is_the_status_register():
     assert STATUS_BITS == {"running": 0, "clipped": 1, "armed": 2, "fault_interlock": 3,
                            "fault_watchdog": 4, "mo_on": 5, "emitting": 6,
                            "interlock_open": 7, "vector_busy": 8, "fault_alarm": 9,
-                           "alarm": 10, "laser_enable": 11, "laser_ready": 12}
+                           "alarm": 10, "laser_enable": 11, "laser_ready": 12,
+                           "player_busy": 13, "job_refused": 14}
 
 
 def test_mode_register_holds_the_modes():
@@ -312,8 +314,8 @@ def test_fixed_registers_read_the_builds_values_and_refuse_writes(reads_from_ram
     accesses = [(0x0e, 0, False, True), (0x0f, 0, False, True), (0x0e, 1, True, True),
                 (0x0f, 7, True, True), (0x0e, 0, False, True), (0x0f, 0, False, True)]
     run(RegisterFile(regmap, reads_from_ram=reads_from_ram), model, accesses)
-    with pytest.raises(ValueError, match="does not fit its 10 bits"):
-        register_map(fixed={"caps": 1 << 10})
+    with pytest.raises(ValueError, match="does not fit its 11 bits"):
+        register_map(fixed={"caps": 1 << 11})
     with pytest.raises(ValueError, match="not a register fixed by the build"):
         register_map(fixed={"errors": 1})
 

@@ -27,7 +27,6 @@ def read_through(reader, flash, address, count, *, ready=lambda k: True, stop_af
             now = ctx.get(clock_count) / CLK_HZ
             ctx.set(reader.cipo, flash.pins(cs_n, sck, ctx.get(reader.copi), now))
 
-    clock_count_box = []
 
     async def testbench(ctx):
         ctx.set(reader.address, address)

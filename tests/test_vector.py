@@ -301,3 +301,37 @@ def test_the_words_the_host_packs_are_the_registers_documented_bits():
     for bad in (128, -1, True, 1.0):
         with pytest.raises(ValueError, match="does not fit"):
             pack(VecOpWord, op=VectorOp.MARK, corner_frames=bad)
+
+
+def test_vec_flush_empties_the_queue_and_stops_the_mode():
+    """A job left half-queued (a host that died mid-job): vec_flush empties the queue and
+    stops the sequencer where it is; the next job is taken and marks from its start."""
+    from galvoscan.client import HostClient
+    from galvoscan.gateware.host.fields import STATUS_BITS
+    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.sim.board import SimTransport, SimulatedBoard
+    board = SimulatedBoard(clk_freq=4e6, baud=500_000, modes=("vector",), links=("uart",),
+                           settings=ScanSettings(mode="vector", run=False), correction=None,
+                           mo_lead=0.2e-3, vector_queue_depth=8)
+    client = HostClient(SimTransport(board))
+    for x in (30000, 31000, 32000):
+        client.write("vec_x", x)
+        client.write("vec_y", 30000)
+        client.write("vec_op", 1)
+    client.write("run", 1)
+    board.run_for(0.2e-3)
+    assert client.read("fifo_free") < 8
+    client.write("vec_flush", 1)
+    board.run_for(20e-6)
+    assert client.read("fifo_free") == 8
+    status = client.read("status")
+    assert not status >> STATUS_BITS["vector_busy"] & 1     # nothing queued or in hand
+    frames = len(board.frames)
+    board.run_for(0.2e-3)
+    assert {(x, y) for _, x, y in board.frames[frames + 2:]} <= \
+        {(x, y) for _, x, y in board.frames[frames - 1:frames + 2]}     # it stays put
+    client.write("run", 0)
+    report = JobStreamer(client, poll_s=0).run_vector(
+        [("jump", 20000, 20000), ("mark", 20300, 20000)], {"pitch": 100}, timeout_s=1e9)
+    assert report.segments == 3 and report.counters["vec_rejected"] == 0
+    assert (20300, 20000) in {(x, y) for _, x, y in board.frames}

@@ -28,7 +28,7 @@ from .corners import corner_frames
 
 
 __all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
-           "DEFAULT_BATCH"]
+           "DEFAULT_BATCH", "check_segment", "segment_words", "job_segments"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
@@ -73,7 +73,8 @@ class StreamReport:
                        ("vec_underruns", "vec_rejected", "errors"))
 
 
-def _check_segment(op, x, y):
+def check_segment(op, x, y):
+    """Refuse a segment the board would: ``op`` a jump or a mark, ends within the field."""
     if op not in ("jump", "mark"):
         raise ValueError(f"a segment is a jump or a mark, not {op!r}")
     for value in (x, y):
@@ -81,6 +82,22 @@ def _check_segment(op, x, y):
         if isinstance(value, bool) or not isinstance(value, int) or \
                 not reg.low <= value <= reg.high:
             raise ValueError(f"segment end {value!r} is outside {reg.low} … {reg.high}")
+
+
+def segment_words(op, x, y, corner_frames=0):
+    """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
+    streamer writes and a job image holds."""
+    return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
+
+
+def job_segments(segments):
+    """A vector job's segments as the board is sent them: ending on a jump (to where the last
+    mark ends: no move), since the board counts a mark that finds the queue empty as an
+    underrun, and a job's end is none."""
+    segments = list(segments)
+    if segments and segments[-1][0] == "mark":
+        segments.append(("jump", *segments[-1][1:]))
+    return segments
 
 
 class JobStreamer:
@@ -227,7 +244,7 @@ class JobStreamer:
         Returns the number of segments written."""
         segments = list(segments)
         for segment in segments:
-            _check_segment(*segment)
+            check_segment(*segment)
         corners = [0] * len(segments) if corners is None else list(corners)
         # Every place is free (checked by check_ready), else as many as the board says.
         free = self.queue_depth if self.queue_depth is not None else \
@@ -248,10 +265,9 @@ class JobStreamer:
             count = min(free, self.batch, len(segments) - sent)
             for (op, x, y), hold in zip(segments[sent:sent + count],
                                         corners[sent:sent + count]):
-                self.board.write("vec_x", x)
-                self.board.write("vec_y", y)
-                self.board.write("vec_op", pack(VecOpWord, op=VectorOp[op.upper()],
-                                                corner_frames=hold))
+                for name, value in zip(("vec_x", "vec_y", "vec_op"),
+                                       segment_words(op, x, y, hold)):
+                    self.board.write(name, value)
             sent += count
             free -= count
             # A read: the board has taken all of the batch before it answers.
@@ -311,12 +327,7 @@ class JobStreamer:
         ``registers`` are written after ``mode = vector`` and ``run = 0`` (pitch, pulses per
         point, jump delay, power, PRR …). With ``armed`` false the job runs with the laser
         off (framing with the guide laser)."""
-        segments = list(segments)
-        if segments and segments[-1][0] == "mark":
-            # End on a jump (to where the last mark ends: no move): the board counts a mark
-            # that finds the queue empty as an underrun, and a job's end is none.
-            segments.append(("jump", *segments[-1][1:]))
-
+        segments = job_segments(segments)
         registers = self._without_missing_delays(registers)
 
         def body():

@@ -58,6 +58,9 @@ class SimulatedBoard:
         :attr:`alarms_clear` (10 µs).
     interlock_closed, alarms_clear : bool
         The machine's inputs at power-up (and after :meth:`reset`).
+    flash : bytes or :class:`~.spi_flash.SPIFlashModel`, optional
+        The configuration flash of a build with the job player (``player=True``): a job
+        image (put at its offset, the rest erased) or a flash model. None: an erased flash.
     vcd : path, optional
         Write a waveform of the whole run, until :meth:`close` (the Python backend).
     netlist : path, optional
@@ -89,6 +92,8 @@ class SimulatedBoard:
     to_board : deque
         What the host sends on the UART: bytes, ``("pause", seconds)`` and
         ``("bad_stop", byte)`` (appended to only).
+    start_pressed : bool
+        The foot switch on ``start_n``, pressed (set by the host; the machine's period).
     spi_queue : deque
         SPI transfers to clock in: ``(bits, results, half_period_s, phase_s)``; ``results``
         gets CIPO's bit as SCK rises for each bit, then ``"done"`` (appended to only).
@@ -96,7 +101,7 @@ class SimulatedBoard:
 
     def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python", say=None,
                  record_samples=False, record_pins=False, machine_period_s=MACHINE_PERIOD_S,
-                 interlock_closed=True, alarms_clear=True, vcd=None, netlist=None,
+                 interlock_closed=True, alarms_clear=True, flash=None, vcd=None, netlist=None,
                  **top_kwargs):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
@@ -107,6 +112,9 @@ class SimulatedBoard:
             return
         self.clk_freq = clk_freq
         self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
+        self._flash_at_power_up = flash
+        if flash is not None and not self.top.player:
+            raise ValueError("a flash is read by the job player: build it with player=True")
         self.baud = self.top.baud
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = (interlock_closed, alarms_clear)
@@ -152,6 +160,16 @@ class SimulatedBoard:
         self.pin_changes = []
         self.pins_every_clock = []
         self.interlock_closed, self.alarms_clear = self._machine_at_power_up
+        self.start_pressed = False
+        self.flash = None
+        if getattr(self.top, "player", False):
+            from .spi_flash import SPIFlashModel
+            flash = self._flash_at_power_up
+            if isinstance(flash, SPIFlashModel):
+                self.flash = flash
+            else:
+                from ..gateware.player.image_format import JOB_OFFSET
+                self.flash = SPIFlashModel({JOB_OFFSET: flash} if flash else None)
 
     def _engine(self, backend, say, **records):
         if backend == "python" or records.get("record_pins") == "every clock":
@@ -201,6 +219,12 @@ class SimulatedBoard:
     def close(self):
         """Free the backend's model (the compiled one's memory)."""
         self.engine.close()
+
+    def press_start(self, hold_s=30e-3):
+        """Press the foot switch for ``hold_s`` (longer than its debounce), and let go."""
+        self.start_pressed = True
+        self.run_for(hold_s)
+        self.start_pressed = False
 
     def busy(self):
         """Bytes still to go in or out."""

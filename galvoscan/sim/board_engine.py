@@ -88,6 +88,8 @@ class PythonEngine:
         for process in (self._uart_in, self._uart_out, self._spi_host, self._scan_head,
                         self._sync_edges, self._laser, self._machine):
             self.sim.add_testbench(process, background=True)
+        if self.board.flash is not None:
+            self.sim.add_testbench(self._flash, background=True)
         # A process, not a testbench: the pins are logic, and may change more than once
         # while the design settles after a clock edge; a process sees every change.
         self.sim.add_process(self._laser_pins)
@@ -188,14 +190,27 @@ class PythonEngine:
             results.append("done")
 
     async def _machine(self, ctx):
-        # The interlock loop and the laser's alarm outputs, as the machine has them.
+        # The interlock loop and the laser's alarm outputs, as the machine has them, and the
+        # foot switch.
         board = self.board
         alarm = getattr(board.top, "laser_alarm", None)
+        start = getattr(board.top, "start_n", None)
         while True:
             ctx.set(board.top.interlock_open, 0 if board.interlock_closed else 1)
             if alarm is not None:
                 ctx.set(alarm, 0 if board.alarms_clear else 2 ** len(alarm) - 1)
+            if start is not None:
+                ctx.set(start, 0b10 if board.start_pressed else 0b11)
             await ctx.delay(board.machine_period_s)
+
+    async def _flash(self, ctx):
+        # The configuration flash, at each change of its /CS and SCK.
+        board, top = self.board, self.board.top
+        period = 1 / board.clk_freq
+        async for cs_n, sck in ctx.changed(top.flash_cs_n, top.flash_clk):
+            cipo = board.flash.pins(cs_n, sck, ctx.get(top.flash_copi),
+                                    ctx.get(self._clocked.cycles) * period)
+            ctx.set(top.flash_cipo, cipo)
 
     # --- the scan head and the laser ---------------------------------------------------------------
 

@@ -9,7 +9,8 @@ from enum import Enum
 from amaranth.lib import data, enum
 
 
-__all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities", "pack"]
+__all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities",
+           "PlayerState", "PlayerResult", "PlayerStatus", "pack"]
 
 
 class Mode(enum.Enum, shape=2):
@@ -71,6 +72,8 @@ Status = data.StructLayout({
     "alarm": 1,             # a laser alarm input is active now
     "laser_enable": 1,      # the laser buffers are enabled (armed, no fault, closed, no alarm)
     "laser_ready": 1,       # armed and MO has led for the MO lead: marking now emits
+    "player_busy": 1,       # the job player is checking or playing the flash's job
+    "job_refused": 1,       # the player refused the flash's job at the last start
 })
 
 #: Bit number of each :data:`Status` flag, for host code that tests bits of a value read.
@@ -90,6 +93,51 @@ Capabilities = data.StructLayout({
     "interpolation": 1,     # the spiral's interpolator
     "uart": 1,              # the UART link
     "spi": 1,               # the SPI link
+    "player": 1,            # the job player, its flash reader and start input
+})
+
+
+class PlayerState(enum.Enum, shape=2):
+    """What the job player is doing (the ``player`` register's bits 1:0)."""
+    IDLE = 0        #: waiting for a start
+    CHECKING = 1    #: reading the image through, checking it
+    RUNNING = 2     #: playing it (or stopping)
+
+    @property
+    def label(self):
+        return self.name.lower()
+
+
+class PlayerResult(enum.Enum, shape=4):
+    """How the job player's last start ended (the ``player`` register's bits 5:2)."""
+    NONE = 0            #: no start yet, or one under way
+    DONE = 1            #: played through, every repeat
+    NO_IMAGE = 2        #: no image: the magic is missing (an erased flash reads all 0xFF)
+    BAD_VERSION = 3     #: an image of another format version
+    BAD_HEADER = 4      #: the length (odd, too short, past the flash, not whole segments) or repeats (0)
+    BAD_CRC = 5         #: the CRC-32 does not match: a corrupt or truncated image
+    BAD_SETTING = 6     #: a setting addresses a register the player drives itself
+    REFUSED = 7         #: the register file refused a write (a setting or segment out of range)
+    FAULT = 8           #: the laser faulted (interlock, alarm, watchdog) while armed
+    HOST = 9            #: a host wrote arm, run or mode
+
+    @property
+    def label(self):
+        return self.name.lower().replace("_", " ")
+
+    @property
+    def refused(self):
+        """The image was refused in the check, before any write."""
+        return self in (PlayerResult.NO_IMAGE, PlayerResult.BAD_VERSION,
+                        PlayerResult.BAD_HEADER, PlayerResult.BAD_CRC,
+                        PlayerResult.BAD_SETTING)
+
+
+#: Bits of the ``player`` register.
+PlayerStatus = data.StructLayout({
+    "state": PlayerState,
+    "result": PlayerResult,
+    "refused": 8,           # images refused since reset (stops at 255)
 })
 
 

@@ -11,12 +11,12 @@ from ..field.scale import AMP_ONE
 from ..points import FIELD_CENTRE, FIELD_MAX
 from ..limits import (LASER_DELAY_MAX_US, LASER_ON_LEAD_US, SCANNER_DELAY_MAX_US,
                       WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX)
-from .fields import Capabilities, Mode, Status, WobbleShape
+from .fields import Capabilities, Mode, PlayerStatus, Status, WobbleShape
 
 
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
            "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_REGISTERS",
-           "CORRECTION_REGISTERS"]
+           "CORRECTION_REGISTERS", "PLAYER_REGISTERS"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,11 @@ class Register:
     #: map): the register file reads it from the block RAM that holds the reset values, with
     #: no input and no logic of its own (what a bitstream holds: ``caps``, ``vec_depth``).
     fixed: bool = False
+    #: The build options it comes with (all of them): scan modes (``"spiral"``, ``"raster"``,
+    #: ``"vector"``) and stages (``"interpolation"``, ``"delays"``, ``"wobble"``,
+    #: ``"correction"``, ``"laser"``, ``"player"``); a build without one answers its address
+    #: as unknown.
+    needs: tuple = ()
 
     def encode(self, value):
         """The 16-bit frame data of ``value`` (two's complement for a signed register)."""
@@ -74,7 +79,8 @@ def all_registers(table_points, correction_nodes):
                  "open now, bit 8 vector mode busy (segments queued or points still to mark), "
                  "bit 9 alarm fault (latched), bit 10 a laser alarm input active now, bit 11 "
                  "laser_enable (the laser's buffers enabled), bit 12 laser ready (armed and MO "
-                 "on for the MO lead: a job may start)",
+                 "on for the MO lead: a job may start), bit 13 the job player busy, bit 14 the "
+                 "player refused the flash's job at the last start",
                  width=Status.size),
         Register("errors", 0x01, "ro", 0, 0, 0, "frames",
                  "rejected command frames since reset (bad check byte, unknown address, write to "
@@ -96,7 +102,8 @@ def all_registers(table_points, correction_nodes):
                  "1 = sweep; 0 = stop (the mirrors hold the last point; the next start begins the "
                  "spiral or raster again; the vector queue is kept)", width=1),
         Register("dwell", 0x04, "rw", 3, 1, WORD_MAX, "frames (10 µs)",
-                 "frames each spiral point is held; 3 = 30 µs, the paper's figure"),
+                 "frames each spiral point is held; 3 = 30 µs, the paper's figure",
+                 needs=('spiral',)),
         Register("amp_x", 0x05, "rw", AMP_ONE, 0, WORD_MAX, "Q1.15 (32768 = 1.0)",
                  "X amplitude: 32768 makes the table's full swing reach the field edge"),
         Register("amp_y", 0x06, "rw", AMP_ONE, 0, WORD_MAX, "Q1.15 (32768 = 1.0)",
@@ -109,47 +116,62 @@ def all_registers(table_points, correction_nodes):
                  "first X table address walked (inclusive); if above x_last, X holds x_first; "
                  "the four address registers go up to the build's table points - 1 (127 by "
                  "default, `--table-points`)",
-                 width=address_width),
+                 width=address_width,
+                 needs=('spiral',)),
         Register("x_last", 0x0A, "rw", last_address, 0, last_address, "ROM address",
-                 "last X table address walked (inclusive)", width=address_width),
+                 "last X table address walked (inclusive)", width=address_width,
+                 needs=('spiral',)),
         Register("y_first", 0x0B, "rw", 1, 0, last_address, "ROM address",
                  "first Y table address walked (inclusive); the paper's 1…126 against X's 0…127 "
-                 "makes the ellipse precess", width=address_width),
+                 "makes the ellipse precess", width=address_width,
+                 needs=('spiral',)),
         Register("y_last", 0x0C, "rw", last_address - 1, 0, last_address, "ROM address",
-                 "last Y table address walked (inclusive)", width=address_width),
+                 "last Y table address walked (inclusive)", width=address_width,
+                 needs=('spiral',)),
         Register("spiral_interp", 0x0D, "rw", 1, 0, 1, "enum",
                  "between spiral points: 0 = hold each point for dwell frames, then jump; 1 = "
                  "linear, every frame moves part of the way to the next point (same points at "
                  "the same times; dwells over 255 frames are held); see README \"Held points\"",
-                 width=1),
+                 width=1,
+                 needs=('spiral', 'interpolation')),
         # --- vector group -----------------------------------------------------------------------
         Register("vec_x", 0x20, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
-                 "X of the next segment's end point (offset binary, 32768 = centre)"),
+                 "X of the next segment's end point (offset binary, 32768 = centre)",
+                 needs=('vector',)),
         Register("vec_y", 0x21, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
-                 "Y of the next segment's end point"),
+                 "Y of the next segment's end point",
+                 needs=('vector',)),
         Register("vec_op", 0x22, "queue", 0, 0, 255, "enum + factor",
                  "writing queues a segment to (vec_x, vec_y): bit 0: 0 = jump (laser off, then "
                  "jump_delay), 1 = mark (laser on, points every pitch); bits 7:1 of a mark: the hold "
                  "in 10 µs frames of the corner it leaves, if polygon_scaled; refused if the "
-                 "queue is full", width=8),
+                 "queue is full", width=8,
+                 needs=('vector',)),
         Register("fifo_free", 0x23, "ro", 0, 0, 0, "segments",
-                 "free places in the vector queue"),
+                 "free places in the vector queue",
+                 needs=('vector',)),
         Register("pitch", 0x24, "rw", 60, 1, WORD_MAX, "galvo units",
-                 "distance between marked points; 60 ≈ 0.1 mm on a 110 mm field, the pitch of Wan et al."),
+                 "distance between marked points; 60 ≈ 0.1 mm on a 110 mm field, the pitch of Wan et al.",
+                 needs=('vector',)),
         Register("pulses_per_point", 0x25, "rw", 1, 1, 255, "laser pulses",
                  "pulses each marked point gets; the line speed is pitch × PRR / pulses_per_point"
-                 , width=8),
+                 , width=8,
+                 needs=('vector',)),
         Register("jump_delay", 0x26, "rw", 500, 0, WORD_MAX, "µs",
                  "laser-off wait after a jump for the mirrors to settle, before marking resumes; "
-                 "rounded up to whole 10 µs frames, at least one"),
+                 "rounded up to whole 10 µs frames, at least one",
+                 needs=('vector',)),
         Register("vec_rejected", 0x27, "ro", 0, 0, 0, "writes",
-                 "vec_op writes refused because the queue was full; stops at 65535"),
+                 "vec_op writes refused because the queue was full; stops at 65535",
+                 needs=('vector',)),
         Register("vec_underruns", 0x28, "ro", 0, 0, 0, "times",
                  "times the queue ran empty in the middle of marking (the laser stopped and the "
-                 "mirrors held until more segments came); stops at 65535"),
+                 "mirrors held until more segments came); stops at 65535",
+                 needs=('vector',)),
         Register("vec_stalls", 0x29, "ro", 0, 0, 0, "frames",
                  "frames a marked line waited, laser off, for the next segment to be set up (140 "
-                 "clocks: at 12 MHz only after two one-point segments in a row); stops at 65535"),
+                 "clocks: at 12 MHz only after two one-point segments in a row); stops at 65535",
+                 needs=('vector',)),
         # The RTC's delays (SCANLAB RTC5/6 manuals; EzCad's start/end/corner TC): the laser
         # ones move the modulation edges to the clock, the scanner ones hold the mirrors for
         # whole frames.
@@ -158,127 +180,169 @@ def all_registers(table_points, correction_nodes):
                  "laser (DB25 modulation, pin 19) on this long after a mark's first point reaches "
                  "the head; negative switches it on that much earlier, down to -19 µs (the "
                  "sequencer decides two frames ahead); placed to the clock on the modulation edge",
-                 width=11, signed=True),
+                 width=11, signed=True,
+                 needs=('vector', 'delays')),
         Register("laser_off_delay", 0x2B, "rw", 50, 0, LASER_DELAY_MAX_US, "µs",
                  "laser stays on this long after a mark's last point reaches the head (the mirror "
-                 "still lags it); placed to the clock on the modulation edge", width=10),
+                 "still lags it); placed to the clock on the modulation edge", width=10,
+                 needs=('vector', 'delays')),
         Register("mark_delay", 0x2C, "rw", 100, 0, SCANNER_DELAY_MAX_US, "µs",
                  "after a mark followed by a jump, the mirrors hold its end point this long, laser "
                  "off (after laser_off_delay runs out), before the jump; whole 10 µs frames, "
-                 "rounded up", width=12),
+                 "rounded up", width=12,
+                 needs=('vector', 'delays')),
         Register("polygon_delay", 0x2D, "rw", 0, 0, SCANNER_DELAY_MAX_US, "µs",
                  "between two marks, the mirrors hold the corner this long with the laser on; "
-                 "whole 10 µs frames, rounded up", width=12),
+                 "whole 10 µs frames, rounded up", width=12,
+                 needs=('vector', 'delays')),
         Register("polygon_scaled", 0x2E, "rw", 0, 0, 1, "bool",
                  "1 = hold each corner for the frames sent with the mark that leaves it (vec_op "
                  "bits 7:1: the host's polygon delay × (1 - cos φ), RTC's variable polygon "
-                 "delay); 0 = polygon_delay at every corner", width=1),
+                 "delay); 0 = polygon_delay at every corner", width=1,
+                 needs=('vector', 'delays')),
+        Register("vec_flush", 0x2F, "strobe", 0, 0, 1, "write 1",
+                 "empties the vector queue and stops vector mode where it is (the sequencer, the "
+                 "wobble and the laser delays start afresh): a job left half-queued no longer "
+                 "refuses the next (galvoscan reset)", width=1,
+                 needs=('vector',)),
         # --- wobble group (built with GalvoScanTop(wobble=True)) -------------------------------
         Register("wob_shape", 0x50, "rw", WobbleShape.OFF.value, 0, len(WobbleShape) - 1, "enum",
                  "figure laid over every marked vector point, a new position each frame while "
                  "the point is held: 0 = off, 1 = ellipse (wob_along × wob_across; a circle when "
-                 "equal)", width=Shape.cast(WobbleShape).width),
+                 "equal)", width=Shape.cast(WobbleShape).width,
+                 needs=('vector', 'wobble')),
         Register("wob_along", 0x51, "rw", 30, 0, WOBBLE_MAX_AMPLITUDE, "galvo units",
                  "wobble amplitude along the line (half the figure's length; the host converts "
                  "µm through the field size: 30 ≈ 50 µm on a 110 mm field)",
-                 width=_width(WOBBLE_MAX_AMPLITUDE)),
+                 width=_width(WOBBLE_MAX_AMPLITUDE),
+                 needs=('vector', 'wobble')),
         Register("wob_across", 0x52, "rw", 30, 0, WOBBLE_MAX_AMPLITUDE, "galvo units",
                  "wobble amplitude across the line (half the track's added width)",
-                 width=_width(WOBBLE_MAX_AMPLITUDE)),
+                 width=_width(WOBBLE_MAX_AMPLITUDE),
+                 needs=('vector', 'wobble')),
         Register("wob_freq", 0x53, "rw", 1000, 1, WOBBLE_MAX_HZ, "Hz",
                  "turns of the figure per second (at most a quarter of the 100 kHz frame rate); "
-                 "each mark starts at the figure's first point", width=_width(WOBBLE_MAX_HZ)),
+                 "each mark starts at the figure's first point", width=_width(WOBBLE_MAX_HZ),
+                 needs=('vector', 'wobble')),
         # --- raster group -----------------------------------------------------------------------
         Register("ras_x", 0x30, "rw", 28768, 0, WORD_MAX, "galvo units",
-                 "raster rectangle: X of its lower-left corner"),
+                 "raster rectangle: X of its lower-left corner",
+                 needs=('raster',)),
         Register("ras_y", 0x31, "rw", 28768, 0, WORD_MAX, "galvo units",
-                 "raster rectangle: Y of its lower-left corner"),
+                 "raster rectangle: Y of its lower-left corner",
+                 needs=('raster',)),
         Register("ras_w", 0x32, "rw", 8000, 0, WORD_MAX, "galvo units",
-                 "raster rectangle: width (positions past 65535 are clamped)"),
+                 "raster rectangle: width (positions past 65535 are clamped)",
+                 needs=('raster',)),
         Register("ras_h", 0x33, "rw", 8000, 0, WORD_MAX, "galvo units",
-                 "raster rectangle: height"),
+                 "raster rectangle: height",
+                 needs=('raster',)),
         Register("ras_spacing", 0x34, "rw", 30, 1, WORD_MAX, "galvo units",
-                 "line spacing; 30 ≈ 0.05 mm on a 110 mm field"),
+                 "line spacing; 30 ≈ 0.05 mm on a 110 mm field",
+                 needs=('raster',)),
         Register("ras_step", 0x35, "rw", 30, 1, WORD_MAX, "galvo units per frame",
                  "distance along a line per 10 µs frame: the line speed; 30 ≈ 5 m/s on a 110 mm "
-                 "field"),
+                 "field",
+                 needs=('raster',)),
         Register("ras_flags", 0x36, "rw", 0, 0, 3, "flags",
                  "bit 0: lines along Y (else X); bit 1: every line in the same direction, with a "
-                 "jump back (else serpentine)", width=2),
+                 "jump back (else serpentine)", width=2,
+                 needs=('raster',)),
         Register("ras_turn_gate", 0x37, "rw", 0, 0, WORD_MAX, "frames (10 µs)",
                  "laser off for this many frames at the start of each line but the first, while the "
-                 "mirrors turn; 0 keeps it on, as the paper's raster does"),
+                 "mirrors turn; 0 keeps it on, as the paper's raster does",
+                 needs=('raster',)),
         # --- distortion correction group ------------------------------------------------------
         Register("cor_enable", 0x40, "rw", 1, 0, 1, "bool",
                  "1 = add the correction table's interpolated offset to every point (the identity "
-                 "table changes nothing); 0 = positions pass unchanged", width=1),
+                 "table changes nothing); 0 = positions pass unchanged", width=1,
+                 needs=('correction',)),
         Register("cor_node", 0x41, "rw", 0, 0, last_node, "node index",
                  "table node the next cor_write stores: iy × n + ix, n = cor_nodes (node (ix, iy) "
                  "sits at galvo position (ix, iy) × 65536 / (n - 1)); up to n × n - 1",
-                 width=_width(last_node)),
+                 width=_width(last_node),
+                 needs=('correction',)),
         Register("cor_dx", 0x42, "rw", 0, 0, WORD_MAX, "galvo units, two's complement",
-                 "X offset for cor_write (65535 = -1): added to positions at that node"),
+                 "X offset for cor_write (65535 = -1): added to positions at that node",
+                 needs=('correction',)),
         Register("cor_dy", 0x43, "rw", 0, 0, WORD_MAX, "galvo units, two's complement",
-                 "Y offset for cor_write"),
+                 "Y offset for cor_write",
+                 needs=('correction',)),
         Register("cor_write", 0x44, "strobe", 0, 0, 1, "write 1",
                  "stores (cor_dx, cor_dy) at node cor_node, both at once and between two points, so "
                  "no point is made from a half-written node; the values are those of the moment "
                  "of the write. Refused (counted in errors) while the last write still waits for "
-                 "a point to finish (at most 16 clocks)", width=1, refusable=True),
+                 "a point to finish (at most 16 clocks)", width=1, refusable=True,
+                 needs=('correction',)),
         Register("cor_nodes", 0x45, "ro", 0, 0, 0, "nodes",
                  "correction table nodes per axis in this build (5, 9, 17, 33 or 65); fixed "
-                 "when it is built", width=_width(max(TABLE_SIZES)), fixed=True),
+                 "when it is built", width=_width(max(TABLE_SIZES)), fixed=True,
+                 needs=('correction',)),
         # --- laser group ------------------------------------------------------------------------
         Register("arm", 0x10, "rw", 0, 0, 1, "bool",
                  "1 = arm the laser: laser_enable on, latch power, MO on, modulation after the "
                  "MO lead (5 ms) while the spiral runs; 0 = laser_enable and every laser "
-                 "output off", width=1),
+                 "output off", width=1,
+                 needs=('laser',)),
         Register("laser_power", 0x11, "rw", 0, 0, 255, "1/255 of full power",
                  "laser power on DB25 pins 1-8, latched by pin 9 on arming and on every change "
-                 "while armed", width=8),
+                 "while armed", width=8,
+                 needs=('laser',)),
         Register("laser_prr", 0x12, "rw", 500, 200, 2000, "100 Hz",
                  "pulse repetition rate on DB25 pin 20, 20.0 … 200.0 kHz (500 = 50 kHz), 50 % duty",
-                 width=11),
+                 width=11,
+                 needs=('laser',)),
         Register("watchdog", 0x13, "rw", 1000, 1, 60000, "ms",
                  "while armed, no accepted command frame for this long switches the laser off and "
-                 "latches a watchdog fault"),
+                 "latches a watchdog fault",
+                 needs=('laser',)),
         Register("fault_clear", 0x14, "strobe", 0, 0, 1, "write 1",
                  "clears latched faults if the interlock is closed and no alarm is active; the "
-                 "laser then stays off until arm is written 0 and 1 again", width=1),
+                 "laser then stays off until arm is written 0 and 1 again", width=1,
+                 needs=('laser',)),
         Register("pulses", 0x15, "ro", 0, 0, 0, "pulses",
                  "laser pulses emitted (PRR rising edges while modulating) since reset, modulo "
-                 "65536"),
+                 "65536",
+                 needs=('laser',)),
         Register("guide", 0x16, "rw", 0, 0, 1, "bool",
                  "1 = guide (red pointer) laser on, to frame a job with the mirrors; it is off "
-                 "whenever arm is set, whatever this holds", width=1),
+                 "whenever arm is set, whatever this holds", width=1,
+                 needs=('laser',)),
+        # --- job player group (built with GalvoScanTop(player=True)) -------------------------
+        Register("player", 0x17, "ro", 0, 0, 0, "fields",
+                 "the job player: bits 1:0 state (0 idle, 1 checking the flash's image, 2 "
+                 "playing it), bits 5:2 how the last start ended (0 none yet, 1 done, 2 no "
+                 "image, 3 other version, 4 bad header, 5 bad CRC, 6 bad setting, 7 a write "
+                 "refused, 8 laser fault, 9 a host took over), bits 13:6 images refused since "
+                 "reset (stops at 255)", width=PlayerStatus.size,
+                 needs=('player',)),
     ]
+
+
+def _needing(option, *, also=None):
+    """The registers declared with ``option`` among their needs (and ``also``, if given)."""
+    return tuple(reg.name for reg in all_registers(2, 2) if option in reg.needs and
+                 (also is None or also in reg.needs))
 
 
 #: Registers that only a build with that scan mode has (see ``GalvoScanTop(modes=...)``); a
 #: build without the mode answers their addresses as unknown.
-MODE_REGISTERS = {
-    Mode.SPIRAL.label: ("dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp"),
-    Mode.RASTER.label: ("ras_x", "ras_y", "ras_w", "ras_h", "ras_spacing", "ras_step",
-                        "ras_flags", "ras_turn_gate"),
-    Mode.VECTOR.label: ("vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
-                        "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls",
-                        "laser_on_delay", "laser_off_delay", "mark_delay", "polygon_delay",
-                        "polygon_scaled"),
-}
+MODE_REGISTERS = {mode.label: _needing(mode.label) for mode in Mode}
 
 #: Registers only a build with the wobble stage has (``GalvoScanTop(wobble=True)``, vector mode).
-WOBBLE_REGISTERS = ("wob_shape", "wob_along", "wob_across", "wob_freq")
+WOBBLE_REGISTERS = _needing("wobble")
 
 #: Registers only a build with the spiral's interpolation has.
-INTERPOLATION_REGISTERS = ("spiral_interp",)
+INTERPOLATION_REGISTERS = _needing("interpolation")
 
 #: Registers of vector mode's RTC delays (``GalvoScanTop(vector_delays=True)``).
-DELAY_REGISTERS = ("laser_on_delay", "laser_off_delay", "mark_delay", "polygon_delay",
-                   "polygon_scaled")
+DELAY_REGISTERS = _needing("delays")
 
 #: Registers only a build with the laser controller has.
-LASER_REGISTERS = ("arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses",
-                   "guide")
+LASER_REGISTERS = _needing("laser")
 
 #: Registers only a build with the distortion correction stage has.
-CORRECTION_REGISTERS = ("cor_enable", "cor_node", "cor_dx", "cor_dy", "cor_write", "cor_nodes")
+CORRECTION_REGISTERS = _needing("correction")
+
+#: Registers only a build with the job player has.
+PLAYER_REGISTERS = _needing("player")

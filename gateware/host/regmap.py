@@ -37,9 +37,11 @@ from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NO
                       SCANNER_DELAY_MAX_US, VECTOR_QUEUE_DEPTH, WOBBLE_MAX_AMPLITUDE,
                       WOBBLE_MAX_HZ, WORD_MAX)
 from . import fields, register_list
-from .fields import STATUS_BITS, Capabilities, Mode, Status, VectorOp, WobbleShape, pack
+from .fields import (STATUS_BITS, Capabilities, Mode, PlayerResult, PlayerState, PlayerStatus,
+                     Status, VectorOp, WobbleShape, pack)
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION_REGISTERS,
-                            LASER_REGISTERS, MODE_REGISTERS, WOBBLE_REGISTERS, Register,
+                            LASER_REGISTERS, MODE_REGISTERS, PLAYER_REGISTERS,
+                            WOBBLE_REGISTERS, Register,
                             all_registers)
 
 
@@ -112,7 +114,7 @@ class RegisterMap:
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
-                 vector_delays=False, resets=None, fixed=None):
+                 vector_delays=False, player=False, resets=None, fixed=None):
     """The register map of a build (by default, the default build's: the same defaults as
     :class:`~galvoscan.gateware.top.GalvoScanTop`).
 
@@ -136,6 +138,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     vector_delays : bool
         The build has vector mode's laser and scanner delays (else their registers are left
         out and ``vec_op`` takes only 0 and 1).
+    player : bool
+        The build has the job player (else its ``player`` register is left out).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -157,21 +161,19 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     modes = tuple(sorted({Mode.named(mode) for mode in modes}, key=lambda mode: mode.value))
     if not modes:
         raise ValueError("a build needs at least one scan mode")
-    leave_out = {name for mode in Mode if mode not in modes
-                 for name in MODE_REGISTERS[mode.label]}
-    if correction_nodes is None:
-        leave_out |= set(CORRECTION_REGISTERS)
-    if not laser:
-        leave_out |= set(LASER_REGISTERS)
-    if not wobble:
-        leave_out |= set(WOBBLE_REGISTERS)
-    elif Mode.VECTOR not in modes:
+    if wobble and Mode.VECTOR not in modes:
         raise ValueError("the wobble stage works on vector points: it needs vector mode")
-    if not spiral_interpolation:
-        leave_out |= set(INTERPOLATION_REGISTERS)
+    if player and not (Mode.VECTOR in modes and laser):
+        raise ValueError("the job player plays vector jobs: it needs vector mode and the laser")
+    # The build's options, and the registers that come with them (each register's needs).
+    options = {mode.label for mode in modes}
+    options |= {name for name, built in (
+        ("correction", correction_nodes is not None), ("laser", laser), ("wobble", wobble),
+        ("interpolation", spiral_interpolation), ("delays", vector_delays),
+        ("player", player)) if built}
     every = {r.name: r for r in all_registers(table_points, correction_nodes or 2)}
+    leave_out = {name for name, reg in every.items() if not set(reg.needs) <= options}
     if not vector_delays:
-        leave_out |= set(DELAY_REGISTERS)
         every["vec_op"] = replace(every["vec_op"], high=1, width=1, unit="enum", description=(
             "writing queues a segment to (vec_x, vec_y): 0 = jump (laser off, then jump_delay), "
             "1 = mark (laser on, points every pitch); refused if the queue is full"))
@@ -213,7 +215,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, vector_delays=True, resets={name: default[name].reset
+                        wobble=True, vector_delays=True, player=True, resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
 
@@ -227,7 +229,7 @@ BY_ADDRESS = HOST_MAP.by_address
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
-           WOBBLE_REGISTERS + DELAY_REGISTERS)
+           WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS)
 
 
 class FrameError(ValueError):
