@@ -368,3 +368,24 @@ def test_the_minutes_of_zigs_first_run_are_told_only_before_it(monkeypatch, tmp_
     assert _zig_cache_is_empty()                    # there, empty
     (tmp_path / "zig" / "o").mkdir()
     assert not _zig_cache_is_empty()
+
+
+def test_the_job_player_from_the_flash_is_the_same_on_both_backends():
+    """The stand-alone board: the flash (the C++ model in board.cc, the Python one in
+    galvoscan/sim/spi_flash.py, both from the datasheet), the foot switch, the player; a good
+    image played twice and a damaged one refused, the same to the clock."""
+    from galvoscan.jobs.image import job_image
+    from test_player import JOB, PLAYER_BOARD, REGISTERS
+    good = job_image(JOB, REGISTERS, repeats=2)
+    damaged = bytearray(good)
+    damaged[-1] ^= 0x40
+    for image in (good, bytes(damaged)):
+        compiled, python = (SimulatedBoard(backend=backend, flash=image, record_pins=True,
+                                           **PLAYER_BOARD) for backend in ("compiled", "python"))
+        for board in (compiled, python):
+            board.press_start(1.5e-3)
+            board.run_for(4e-3)
+        assert_same_records(compiled, python)
+        assert compiled.engine.flash_counts() == (len(python.flash.commands),
+                                                  len(python.flash.ignored))
+        assert bool(python.pulses) == (image == good) and python.flash.commands

@@ -129,6 +129,104 @@ struct XY2Receiver {
     }
 };
 
+#if GS_PLAYER
+// The board's configuration flash, a W25Q128JV, from its datasheet as the FPGA reads it
+// (galvoscan/sim/spi_flash.py is the Python board's, for reads and writes alike): deep
+// power-down and its release (0xB9, 0xAB, tDP = tRES1 = 3 µs; any other instruction in
+// power-down, or within tRES1 of the release, is ignored and counted), Read Data (0x03),
+// Fast Read (0x0B), the JEDEC id (0x9F) and the status register (0x05, never busy: nothing
+// here programs it). SPI mode 0: COPI taken as SCK rises, CIPO set as it falls; a read past
+// the top wraps to 0; CIPO reads 1 (the pull-up) while /CS is high.
+struct FlashModel {
+    static const int64_t BYTES = 16 * 1024 * 1024;
+    static const int64_t T_RES1_FS = 3000000000;        // 3 µs
+    std::vector<uint8_t> memory = std::vector<uint8_t>(BYTES, 0xFF);
+    bool powered_down = true;
+    int64_t ready_at = 0;
+    bool selected = false, accepted = false, last_sck = false, cipo = true;
+    int n = 0, bit = 0;
+    uint8_t command = 0, in = 0, out = 0xFF, next_out = 0xFF;
+    uint32_t address = 0;
+    int64_t commands = 0, ignored = 0;
+
+    void byte(uint8_t value, int64_t now) {
+        n++;
+        if (n == 1) {
+            command = value;
+            address = 0;
+            accepted = powered_down ? command == 0xAB : now >= ready_at;
+            (accepted ? commands : ignored)++;
+        } else if (n <= 4) {
+            address = (address << 8) | value;
+        }
+        uint8_t result = 0xFF;
+        if (accepted) {
+            static const uint8_t jedec[3] = {0xEF, 0x40, 0x18};
+            if (command == 0x03 || command == 0x0B) {
+                int first = command == 0x03 ? 4 : 5;
+                if (n >= first)
+                    result = memory[(int64_t(address) + n - first) % BYTES];
+            } else if (command == 0x9F) {
+                result = n <= 3 ? jedec[n - 1] : 0xFF;
+            } else if (command == 0x05) {
+                result = 0;
+            } else if (command == 0xAB && n >= 4) {
+                result = 0x17;
+            }
+        }
+        next_out = result;
+    }
+
+    void deselect(int64_t now) {
+        selected = false;
+        if (n == 0)
+            return;
+        if (powered_down) {
+            if (command == 0xAB) {
+                powered_down = false;
+                ready_at = now + T_RES1_FS;
+            }
+            return;
+        }
+        if (accepted && command == 0xB9 && n == 1) {
+            powered_down = true;
+            ready_at = now + T_RES1_FS;
+        }
+    }
+
+    bool pins(bool cs_n, bool sck, bool copi, int64_t now) {
+        if (cs_n) {
+            if (selected)
+                deselect(now);
+            last_sck = sck;
+            cipo = true;
+            return cipo;
+        }
+        if (!selected) {
+            selected = true;
+            n = 0;
+            bit = 0;
+            in = 0;
+            out = next_out = 0xFF;
+            cipo = true;
+        }
+        if (sck && !last_sck) {
+            in = uint8_t((in << 1) | copi);
+            if (++bit == 8) {
+                bit = 0;
+                byte(in, now);
+            }
+        } else if (last_sck && !sck) {
+            if (bit == 0)
+                out = next_out;
+            cipo = (out >> (7 - bit)) & 1;
+        }
+        last_sck = sck;
+        return cipo;
+    }
+};
+#endif
+
 struct Board {
     design_t top;
     int flags = 0;
@@ -167,9 +265,18 @@ struct Board {
     int spi_step = -1;          // -1 idle; else the step of the transfer (see spi_host)
     SPITransfer spi;
 
-    // The machine: interlock loop and laser alarms, set every machine_fs from t = 0.
+    // The machine: interlock loop and laser alarms, set every machine_fs from t = 0, and the
+    // foot switch.
     int64_t machine_wake = 0;
-    bool interlock_closed = true, alarms_clear = true;
+    bool interlock_closed = true, alarms_clear = true, start_pressed = false;
+
+#if GS_PLAYER
+    FlashModel flash;
+    bool last_flash_cs_n = true, last_flash_sck = false;
+#endif
+    // An input set while looking at an edge's state, after the eval that made the next
+    // state: evaluated again before that state is committed.
+    bool inputs_changed = false;
 
     // Pins as last seen, for their edges.
     bool last_tx = true, last_xy2_clk = false, last_sync = false, last_prr = false;
@@ -293,6 +400,21 @@ struct Board {
             records[LASER_CHANGES].push_back(laser);
             last_laser = laser;
         }
+#if GS_PLAYER
+        // The flash, at each change of /CS or SCK (the Python board's trigger), at the time
+        // of the clock that made it.
+        bool cs_n = top.GS_PORT_flash_cs_n.get<bool>(), sck = top.GS_PORT_flash_clk.get<bool>();
+        if (cs_n != last_flash_cs_n || sck != last_flash_sck) {
+            last_flash_cs_n = cs_n;
+            last_flash_sck = sck;
+            bool cipo = flash.pins(cs_n, sck, top.GS_PORT_flash_copi.get<bool>(),
+                                   (cycles * 2 * half_fs));
+            if (cipo != top.GS_PORT_flash_cipo.get<bool>()) {
+                top.GS_PORT_flash_cipo.set<bool>(cipo);
+                inputs_changed = true;
+            }
+        }
+#endif
         return ok;
     }
 
@@ -300,6 +422,9 @@ struct Board {
         top.GS_PORT_interlock_open.set<bool>(!interlock_closed);
 #if GS_ALARM_BITS > 0
         top.GS_PORT_laser_alarm.set<uint32_t>(alarms_clear ? 0u : (1u << GS_ALARM_BITS) - 1);
+#endif
+#if GS_PLAYER
+        top.GS_PORT_start_n.set<uint32_t>(start_pressed ? 0b10u : 0b11u);
 #endif
     }
 
@@ -441,7 +566,10 @@ struct Board {
                             settle();
                         if (!look_at_edge())
                             return PROTOCOL_ERROR;
+                        if (inputs_changed)
+                            top.eval();         // (the next state, with the new inputs)
                     }
+                    inputs_changed = false;
                     top.commit();
                     cycles++;
                     stale = true;
@@ -536,6 +664,10 @@ void *gs_board_new(const int64_t *timing, int flags) {
     board->top.GS_PORT_spi_sck.set<bool>(false);
     board->top.GS_PORT_spi_copi.set<bool>(false);
     board->top.GS_PORT_interlock_open.set<bool>(true);
+#if GS_PLAYER
+    board->top.GS_PORT_start_n.set<uint32_t>(0b11u);
+    board->top.GS_PORT_flash_cipo.set<bool>(true);
+#endif
 #if GS_ALARM_BITS > 0
     board->top.GS_PORT_laser_alarm.set<uint32_t>((1u << GS_ALARM_BITS) - 1);
 #endif
@@ -574,6 +706,28 @@ void gs_board_machine(void *handle, int interlock_closed, int alarms_clear) {
     board->alarms_clear = alarms_clear;
 }
 
+// The foot switch on start_n (a build with the job player).
+void gs_board_start(void *handle, int pressed) {
+    static_cast<Board *>(handle)->start_pressed = pressed;
+}
+
+// The flash's contents from `address` on, and whether it starts in deep power-down.
+// Returns 0, or -1 on a build without the player (no flash) or past the flash's end.
+int gs_board_flash(void *handle, int64_t address, const uint8_t *data, int64_t size,
+                   int powered_down) {
+#if GS_PLAYER
+    Board *board = static_cast<Board *>(handle);
+    if (address < 0 || size < 0 || address + size > FlashModel::BYTES)
+        return -1;
+    std::memcpy(board->flash.memory.data() + address, data, size_t(size));
+    board->flash.powered_down = powered_down;
+    return 0;
+#else
+    (void)handle, (void)address, (void)data, (void)size, (void)powered_down;
+    return -1;
+#endif
+}
+
 int gs_board_run_until(void *handle, int64_t deadline_fs) {
     return static_cast<Board *>(handle)->run_until(deadline_fs);
 }
@@ -581,7 +735,7 @@ int gs_board_run_until(void *handle, int64_t deadline_fs) {
 const char *gs_board_message(void *handle) { return static_cast<Board *>(handle)->message; }
 
 // 0 UART items started, 1 framing errors, 2 rising clock edges, 3 the board's time (fs),
-// 4 SPI transfers started.
+// 4 SPI transfers started, 5 flash instructions carried out, 6 flash instructions ignored.
 int64_t gs_board_counter(void *handle, int which) {
     Board *board = static_cast<Board *>(handle);
     switch (which) {
@@ -590,6 +744,10 @@ int64_t gs_board_counter(void *handle, int which) {
     case 2: return board->cycles;
     case 3: return board->now;
     case 4: return board->transfers_started;
+#if GS_PLAYER
+    case 5: return board->flash.commands;
+    case 6: return board->flash.ignored;
+#endif
     }
     return -1;
 }

@@ -56,6 +56,12 @@ class CompiledEngine:
         self._handle = self._lib.gs_board_new(timing, self._flags)
         if not self._handle:
             raise MemoryError("no memory for the compiled board")
+        if board.flash is not None:
+            memory = bytes(board.flash.memory)
+            if self._lib.gs_board_flash(self._handle, 0, memory, len(memory),
+                                        int(board.flash.powered_down)) != 0:
+                raise ValueError("the compiled model has no flash: it was built without "
+                                 "the job player")
         self._given = 0          # items of board.to_board already handed to the model
         self._spi_given = 0      # transfers of board.spi_queue likewise
         self._spi_results = []   # the result lists of the transfers handed over, in order
@@ -81,6 +87,7 @@ class CompiledEngine:
         self._spi_given = len(board.spi_queue)
         lib.gs_board_machine(handle, int(bool(board.interlock_closed)),
                              int(bool(board.alarms_clear)))
+        lib.gs_board_start(handle, int(bool(board.start_pressed)))
         started = lib.gs_board_counter(handle, 0)
         transfers = lib.gs_board_counter(handle, 4)
         outcome = lib.gs_board_run_until(handle, int(seconds * 1e15))
@@ -127,6 +134,11 @@ class CompiledEngine:
                 self._spi_results.pop(0).append("done")
             else:
                 self._spi_results[0].append(value)
+
+    def flash_counts(self):
+        """``(carried out, ignored)``: the flash's instructions so far."""
+        return self._lib.gs_board_counter(self._handle, 5), \
+            self._lib.gs_board_counter(self._handle, 6)
 
     def crash(self):
         """Make the model fail as a broken one would (for the test of what the user then

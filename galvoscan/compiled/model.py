@@ -68,6 +68,8 @@ def design_rtlil(top):
 PORT_ROLES = ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y", "uart_rx", "uart_tx", "spi_sck",
               "spi_cs_n", "spi_copi", "spi_cipo", "laser_power", "laser_latch", "laser_mo",
               "laser_am", "laser_prr", "laser_enable", "laser_guide", "interlock_open")
+#: The job player's pins, on a design that has it.
+PLAYER_ROLES = ("flash_cs_n", "flash_clk", "flash_copi", "flash_cipo", "start_n")
 
 
 def cxxrtl_name(name):
@@ -90,6 +92,9 @@ class Design:
         the design's port for it.
     alarm_bits : int
         Width of the laser alarm input (0: none).
+    player : bool
+        The design has the job player's pins (:data:`PLAYER_ROLES`): the board gives it a
+        flash and a foot switch.
     settle_falling : bool
         Evaluate the design at the clock's falling edge too, and at each edge until it settles
         (a netlist, whose clock reaches its flip-flops through its input cell).
@@ -103,6 +108,7 @@ class Design:
     script: str
     ports: dict
     alarm_bits: int = 0
+    player: bool = False
     settle_falling: bool = False
     optimise: bool = True
     description: str = field(default="this design", compare=False)
@@ -112,6 +118,7 @@ class Design:
                  for role, port in sorted(self.ports.items())]
         lines += [f"#define GS_PREV_CLK prev_{cxxrtl_name(self.ports['clk'])}",
                   f"#define GS_ALARM_BITS {self.alarm_bits}",
+                  f"#define GS_PLAYER {int(self.player)}",
                   f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
@@ -133,8 +140,11 @@ def top_design(top):
     if "laser_alarm" in members:
         ports["laser_alarm"] = "laser_alarm"
         alarm_bits = len(top.laser_alarm)
+    player = "flash_cs_n" in members
+    if player:
+        ports.update({role: role for role in PLAYER_ROLES})
     return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
-                  alarm_bits=alarm_bits)
+                  alarm_bits=alarm_bits, player=player)
 
 
 def _board_source():
@@ -166,6 +176,8 @@ class CompiledModel:
             "gs_board_spi": (None, [p, ctypes.c_char_p, i64, i64, i64]),
             "gs_board_crash": (None, [p]),
             "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
+            "gs_board_start": (None, [p, ctypes.c_int]),
+            "gs_board_flash": (ctypes.c_int, [p, i64, ctypes.c_char_p, i64, ctypes.c_int]),
             "gs_board_run_until": (ctypes.c_int, [p, i64]),
             "gs_board_message": (ctypes.c_char_p, [p]),
             "gs_board_counter": (i64, [p, ctypes.c_int]),
