@@ -13,7 +13,8 @@ from .gateware.clocking import DEFAULT_BAUD
 from .placer import placed_by
 from .gateware.field.correction_table import CorrectionTable
 from .gateware.top import DEFAULT_CORRECTION_NODES, MODES
-from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform, system_clock
+from .platforms.icebreaker import (CRYSTAL_HZ, ICEBreakerScanner, icebreaker_platform,
+                                   system_clock)
 from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check, \
     icestick_platform
 from .toolchain import tool_env
@@ -39,6 +40,28 @@ DEFAULT_MODES = {
 }
 
 
+#: One bitstream for each kind of machine (``galvoscan build --preset``): the options of
+#: :func:`build_bitstream` each takes.
+PRESETS = {
+    # A marking station: vector mode with the RTC delays, the correction stage, and the job
+    # player (stand-alone from the flash, started by a foot switch), on the PLL's 24 MHz.
+    "marker": {"modes": ("vector",), "delays": True, "player": True, "clock": 24e6},
+    # A cleaning head: the spiral with its interpolator, the raster fill and the correction
+    # stage, on the crystal.
+    "cleaner": {"modes": ("spiral", "raster"), "interpolation": True},
+}
+
+
+def preset_top_options(name):
+    """The :class:`~galvoscan.gateware.top.GalvoScanTop` options of preset ``name``'s
+    bitstream on the iCEBreaker (what a simulated board of it is built with)."""
+    preset = PRESETS[name]
+    options = ICEBreakerScanner.top_options(**{key: preset[key] for key in
+                                               ("wobble", "interpolation", "delays", "player")
+                                               if key in preset})
+    return {"modes": preset["modes"], **options}, preset.get("clock") or CRYSTAL_HZ
+
+
 @dataclass
 class BuildReport:
     """What one build produced and what nextpnr measured."""
@@ -58,6 +81,7 @@ class BuildReport:
     baud: int = DEFAULT_BAUD    # host serial port rate
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
     placer: str = "heap"        # nextpnr's placer that placed it: "static" or "heap"
+    player: bool = False        # the job player (stand-alone marking; the UART link alone)
 
     @property
     def meets_timing(self):
@@ -96,7 +120,7 @@ class TimingError(BuildError):
 def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
                     modes=None, correction="identity", clock=None, bit_rate=2_000_000,
                     baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False,
-                    interpolation=False, delays=False):
+                    interpolation=False, delays=False, player=False):
     """Synthesise, place and route and pack the full system for ``board``.
 
     nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
@@ -106,7 +130,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
     ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode,
     ``interpolation`` the spiral's interpolator (about 280 cells; not in the default build,
     which it would not fit beside all three modes), ``delays`` vector mode's RTC delays (about
-    240 cells; likewise).
+    240 cells; likewise), ``player`` the job player (the iCEBreaker: stand-alone marking from
+    its flash, the SPI link's pins taken by the machine's lines).
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -140,6 +165,11 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                          "scan modes: leave one out with --modes (spiral,vector fits)")
     if interpolation and "spiral" not in modes:
         raise ValueError("the interpolator is the spiral's: build it with the spiral mode")
+    if player and board != "icebreaker":
+        raise ValueError("the job player reads the iCEBreaker's flash: build it for the "
+                         "iCEBreaker")
+    if player and "vector" not in modes:
+        raise ValueError("the job player plays vector jobs: build it with the vector mode")
     if isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
     platform = make_platform()
@@ -151,7 +181,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                                   correction=correction, clock=clock, bit_rate=bit_rate,
                                   baud=baud, **({"wobble": True} if wobble else {}),
                                   **({"interpolation": True} if interpolation else {}),
-                                  **({"delays": True} if delays else {})),
+                                  **({"delays": True} if delays else {}),
+                                  **({"player": True} if player else {})),
                           name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design
@@ -193,7 +224,8 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
                        modes=modes, correction_nodes=correction.n if correction else 0,
-                       bit_rate_mhz=bit_rate / 1e6, baud=baud, placer=placer)
+                       bit_rate_mhz=bit_rate / 1e6, baud=baud, placer=placer,
+                       player=bool(player))
     # The build's record beside its netlist (its clock, baud and options): what a simulation
     # of the netlist needs to know of it.
     record = {**result.as_dict(), "interpolation": bool(interpolation), "delays": bool(delays),

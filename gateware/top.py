@@ -463,20 +463,31 @@ class GalvoScanTop(wiring.Component):
         m.submodules.start = start = StartInput(inputs=2, debounce_ms=self.start_debounce_ms,
                                                 tick_us=int(self.frame_us))
         m.submodules.player = player = JobPlayer()
+        # What the player hears of the laser and the host, and what it tells the flash
+        # reader, a clock late: it waits on all of them anyway, and the flip-flops take the
+        # laser's fault logic and the register file's checks off the paths into the reader.
+        fault, took_over, laser_ready = Signal(), Signal(), Signal()
+        read_start, read_stop = Signal(), Signal()
+        m.d.sync += [
+            fault.eq(laser.faults.as_value().any()),
+            took_over.eq(arbiter.host_took_over),
+            laser_ready.eq(laser.mo_ready & laser.laser_enable),
+            read_start.eq(player.read_start), read_stop.eq(player.read_stop),
+        ]
         m.d.comb += [
             self.flash_cs_n.eq(flash.cs_n), self.flash_clk.eq(flash.sck),
             self.flash_copi.eq(flash.copi), flash.cipo.eq(self.flash_cipo),
-            flash.address.eq(player.read_address), flash.start.eq(player.read_start),
-            flash.stop.eq(player.read_stop), player.read_idle.eq(flash.idle),
+            flash.address.eq(player.read_address), flash.start.eq(read_start),
+            flash.stop.eq(read_stop), player.read_idle.eq(flash.idle),
             start.start_n.eq(self.start_n), start.tick.eq(phy.frame_strobe),
             player.start.eq(start.pressed),
             player.grant.eq(arbiter.grant),
-            player.host_took_over.eq(arbiter.host_took_over),
+            player.host_took_over.eq(took_over),
             player.queue_ready.eq(self._queue.w_stream.ready),
             player.queue_empty.eq(self._queue.level == 0),
             player.vector_busy.eq(vector.busy),
-            player.laser_ready.eq(laser.mo_ready & laser.laser_enable),
-            player.fault.eq(laser.faults.as_value().any()),
+            player.laser_ready.eq(laser_ready),
+            player.fault.eq(fault),
             self._player_alive.eq(player.alive),
             regs.player.eq(Cat(player.state, player.result, player.refused)),
             status.flags.player_busy.eq(player.state != PlayerState.IDLE),
@@ -580,7 +591,7 @@ class GalvoScanTop(wiring.Component):
                 delays.on_delay.eq(regs.laser_on_delay.as_signed()),
                 delays.off_delay.eq(regs.laser_off_delay),
             ]
-            with m.If(select.mode == Mode.VECTOR):
+            with m.If(selected[Mode.VECTOR]):
                 m.d.comb += marking.eq(delays.marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),

@@ -53,12 +53,27 @@ Before and while the FPGA configures, its pins float with weak pull-ups: the buf
 off then (``laser_enable`` pulled down, so the buffers' outputs are disabled) and the laser
 lines held low by pull-downs behind them (README "Wiring").
 
+A stand-alone build (``galvoscan build --preset marker``: the job player, no SPI link) takes the
+four SPI pins of PMOD1B for the machine's lines, and reads the job from the board's own
+configuration flash after configuration:
+
+====  ========  ===========
+PMOD  FPGA pin  signal
+====  ========  ===========
+1     43        start_n (foot switch or PLC to GND; pulled up); the board's button starts too
+2     38        busy (a job is being checked or played)
+3     34        ready (armed and past the MO lead: marking emits)
+4     31        (free)
+====  ========  ===========
+
+The green LED lights while the player is busy and blinks after it refused an image.
+
 The red LED lights once frames are going out. The four bus lines and every laser line leave
 through the I/O cells' output flip-flops, one system clock after the core's own logic.
 """
 
 from amaranth.build import Attrs, Pins, Resource, Subsignal
-from amaranth.hdl import ClockDomain, Elaboratable, Module, Signal
+from amaranth.hdl import Cat, ClockDomain, Elaboratable, Module, Signal
 from amaranth.lib import io
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
@@ -71,7 +86,8 @@ from .pll import ICE40PLL, pll_settings
 CRYSTAL_HZ = 12_000_000
 
 __all__ = ["CRYSTAL_HZ", "ICEBreakerScanner", "system_clock", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
-           "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN", "ALARM_PMOD_PINS"]
+           "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN", "ALARM_PMOD_PINS",
+           "MACHINE_PMOD_PINS"]
 
 
 #: PMOD1A pin of each XY2-100 signal (the README's table is checked against these).
@@ -90,6 +106,9 @@ LASER_PMOD_PINS = {
     # own that laser_enable does not gate; the DB25 pin differs between lasers.
     "guide": (1, "10", "22"),
 }
+#: The stand-alone build's machine lines on PMOD1B (the SPI link's pins): name → (pin,
+#: direction).
+MACHINE_PMOD_PINS = {"start_n": (1, "i"), "busy": (2, "o"), "ready": (3, "o")}
 #: The interlock loop input: (PMOD number, PMOD pin).
 INTERLOCK_PMOD_PIN = (1, "7")
 #: The laser alarm inputs: (PMOD number, PMOD pins); as many alarms as pins.
@@ -116,6 +135,12 @@ def icebreaker_platform():
         Resource("interlock", 0,
                  Pins(INTERLOCK_PMOD_PIN[1], dir="i", conn=("pmod", INTERLOCK_PMOD_PIN[0])),
                  Attrs(IO_STANDARD="SB_LVCMOS", PULLUP=1)),
+        # The stand-alone build's: start pulled up (an open switch is no press).
+        Resource("machine", 0,
+                 *(Subsignal(name, Pins(str(pin), dir=direction, conn=("pmod", 1)),
+                             Attrs(PULLUP=1) if direction == "i" else Attrs())
+                   for name, (pin, direction) in MACHINE_PMOD_PINS.items()),
+                 Attrs(IO_STANDARD="SB_LVCMOS")),
         # Pulled up: an unconnected alarm input reads as an alarm, and the laser stays off.
         Resource("laser_alarm", 0,
                  Pins(ALARM_PMOD_PINS[1], dir="i", conn=("pmod", ALARM_PMOD_PINS[0])),
@@ -154,12 +179,16 @@ class ICEBreakerScanner(Elaboratable):
     clock : float or None
         System clock in Hz: None runs on the 12 MHz crystal, anything else from the PLL
         (:func:`~galvoscan.platforms.pll.pll_settings` must reach it exactly).
+    player : bool
+        Build the job player (``GalvoScanTop(player=True)``): the flash read after
+        configuration, the machine's lines on PMOD1B in place of the SPI link.
     """
 
     def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
                  bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False,
-                 interpolation=False, delays=False):
+                 interpolation=False, delays=False, player=False):
         self.delays = delays
+        self.player = player
         self.table = table
         self.wobble = wobble
         self.interpolation = interpolation
@@ -180,8 +209,9 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, correction=self.correction,
-            laser_alarms=len(ALARM_PMOD_PINS[1].split()), wobble=self.wobble,
-            spiral_interpolation=self.interpolation, vector_delays=self.delays, **extra)
+            laser_alarms=len(ALARM_PMOD_PINS[1].split()),
+            **self.top_options(wobble=self.wobble, interpolation=self.interpolation,
+                               delays=self.delays, player=self.player), **extra)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.
@@ -192,10 +222,14 @@ class ICEBreakerScanner(Elaboratable):
 
         # Host link. The cores synchronise their inputs, so plain buffers here.
         uart = platform.request("uart", 0, dir="-")
-        spi = platform.request("host_spi", 0, dir="-")
-        inputs = {"uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n,
-                  "spi_copi": spi.copi}
-        outputs = {"uart_tx": uart.tx, "spi_cipo": spi.cipo}
+        inputs = {"uart_rx": uart.rx}
+        outputs = {"uart_tx": uart.tx}
+        if self.player:
+            self._player_pins(m, platform, scanner)
+        else:
+            spi = platform.request("host_spi", 0, dir="-")
+            inputs.update({"spi_sck": spi.sck, "spi_cs_n": spi.cs_n, "spi_copi": spi.copi})
+            outputs["spi_cipo"] = spi.cipo
         for name, port in inputs.items():
             m.submodules[f"{name}_pad"] = pad = io.Buffer("i", port)
             m.d.comb += getattr(scanner, name).eq(pad.i)
@@ -223,3 +257,45 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.led_pad = led = io.Buffer("o", platform.request("led_r", 0, dir="-"))
         m.d.comb += led.o.eq(running)
         return m
+
+    @staticmethod
+    def top_options(*, wobble=False, interpolation=False, delays=False, player=False):
+        """The :class:`~galvoscan.gateware.top.GalvoScanTop` options of a build with these
+        (what a simulated board of the bitstream is built with, beside its modes)."""
+        options = {"wobble": wobble, "spiral_interpolation": interpolation,
+                   "vector_delays": delays, "player": player}
+        if player:
+            # The SPI link's pins are the machine's lines; the client waits for each answer,
+            # so one queued is enough, and the player needs the cells a deep queue's logic
+            # takes.
+            options.update(links=("uart",), uart_reply_depth=1)
+        return options
+
+    def _player_pins(self, m, platform, scanner):
+        """The flash, the start inputs, the PLC's lines and the green LED."""
+        # The flash's lines straight from the reader's flip-flops (an output flip-flop would
+        # put SCK a clock behind the moment the reader samples CIPO); WP and HOLD held high.
+        flash = platform.request("spi_flash_1x", 0, dir="-")
+        for name, port in (("cs_n", flash.cs), ("clk", flash.clk), ("copi", flash.copi),
+                           ("wp", flash.wp), ("hold", flash.hold)):
+            m.submodules[f"flash_{name}_pad"] = pad = io.Buffer("o", port)
+            if name in ("wp", "hold"):
+                m.d.comb += pad.o.eq(0)         # (active-low pins: 0 = high, inactive)
+            elif name == "cs_n":
+                m.d.comb += pad.o.eq(~scanner.flash_cs_n)     # (the resource is active low)
+            else:
+                m.d.comb += pad.o.eq(getattr(scanner, f"flash_{name}"))
+        m.submodules.flash_cipo_pad = cipo = io.Buffer("i", flash.cipo)
+        m.d.comb += scanner.flash_cipo.eq(cipo.i)
+        machine = platform.request("machine", 0, dir="-")
+        m.submodules.start_pad = start = io.Buffer("i", machine.start_n)
+        m.submodules.button_pad = button = io.Buffer("i", platform.request("button", 0,
+                                                                           dir="-"))
+        # (The button resource is active low: its buffer reads 1 while pressed.)
+        m.d.comb += scanner.start_n.eq(Cat(start.i, ~button.i))
+        for name in ("busy", "ready"):
+            m.submodules[f"{name}_pad"] = pad = io.FFBuffer("o", getattr(machine, name))
+            m.d.comb += pad.o.eq(getattr(scanner, name))
+        m.submodules.player_led_pad = led = io.Buffer("o", platform.request("led_g", 0,
+                                                                            dir="-"))
+        m.d.comb += led.o.eq(scanner.player_led)

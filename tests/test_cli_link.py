@@ -108,3 +108,26 @@ def test_a_board_that_answers_late_or_not_at_all_is_told_apart():
     finally:
         os.close(master)
         os.close(slave)
+
+
+def test_reset_empties_a_half_queued_job(capsys):
+    """A host that died mid-job left segments queued: `galvoscan reset` disarms, stops and
+    flushes, and the next job is taken."""
+    from galvoscan.gateware.top import ScanSettings
+    board = SimBoard(baud=500_000, modes=("vector",), correction=None,
+                     settings=ScanSettings(mode="vector", run=False), vector_queue_depth=8)
+    bridge = SerialBridge(board)
+    try:
+        link = ["--port", bridge.port, "--baud", "500000", "--timeout", "5"]
+        assert main(["send", "vec_x=30000", "vec_y=30000", "vec_op=1", "vec_x=31000",
+                     "vec_op=1", *link]) == 0
+        capsys.readouterr()
+        assert main(["read", "fifo_free", "--json", *link]) == 0
+        assert json.loads(capsys.readouterr().out)["fifo_free"] < 8
+        assert main(["reset", *link]) == 0
+        out = capsys.readouterr().out
+        assert "vector queue emptied (8 segments free)" in out and "no fault latched" in out
+        assert main(["read", "fifo_free", "errors", "--json", *link]) == 0
+        assert json.loads(capsys.readouterr().out) == {"fifo_free": 8, "errors": 0}
+    finally:
+        bridge.close()

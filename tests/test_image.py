@@ -55,8 +55,8 @@ def test_what_the_player_would_refuse_is_refused_here(registers, repeats, messag
 
 
 def test_a_job_too_big_for_the_flash():
-    with pytest.raises(ImageError, match="MiB above the bitstream"):
-        job_image([("mark", k % 60000, 0) for k in range(2_700_000)], {})
+    with pytest.raises(ImageError, match="the player reads 1 MiB at most"):
+        job_image([("mark", k % 60000, 0) for k in range(180_000)], {})
 
 
 @settings(max_examples=200, deadline=None)

@@ -82,7 +82,7 @@ def test_plays_the_image_as_the_streamer_streams_it():
     assert played_points[2:] == streamed_points[2:]
     assert sum(p[2] for p in played_points) > 10
     # Disarmed at the end, the queue empty, nothing refused or counted as an error.
-    flags = Status.const({}).shape().from_bits(client.read("status"))
+    flags = Status.from_bits(client.read("status"))
     assert not flags.armed and not flags.vector_busy and not flags.player_busy
     assert client.read("errors") == 0 and client.read("vec_underruns") == 0
 
@@ -127,6 +127,10 @@ REFUSALS = {
                               PlayerResult.BAD_HEADER),
     "length past the flash": (_with_crc(_word(GOOD, Word.LENGTH_HIGH, 0xF1)),
                               PlayerResult.BAD_HEADER),
+    "length past 1 MiB": (_with_crc(_word(GOOD, Word.LENGTH_HIGH, 0x10)),
+                          PlayerResult.BAD_HEADER),
+    "too many settings": (_with_crc(_word(GOOD, Word.SETTINGS, 256)),
+                          PlayerResult.BAD_HEADER),
     "no repeats": (_with_crc(_word(GOOD, Word.REPEATS, 0)), PlayerResult.BAD_HEADER),
     "a setting arms": (_with_crc(_word(GOOD, Word.SETTINGS + 1, 0x10)),
                        PlayerResult.BAD_SETTING),
@@ -145,7 +149,7 @@ def test_a_bad_image_never_arms_the_laser(name):
     status = press_and_wait(board, client)
     assert status.result == result
     assert not laser_was_enabled(board) and not board.pulses
-    flags = Status.const({}).shape().from_bits(client.read("status"))
+    flags = Status.from_bits(client.read("status"))
     assert flags.job_refused == result.refused and not flags.armed
     assert status.refused == int(result.refused)
     # The head is left where it was: nothing was queued.
@@ -175,7 +179,7 @@ def test_a_host_write_of_arm_stops_the_job():
     board.run_for(0.1e-3)
     status = player_status(client)
     assert status.state == PlayerState.IDLE and status.result == PlayerResult.HOST
-    flags = Status.const({}).shape().from_bits(client.read("status"))
+    flags = Status.from_bits(client.read("status"))
     assert not flags.armed and not flags.laser_enable and not flags.vector_busy
     # The queue was emptied: the next job (a host's) is not refused.
     assert client.read("fifo_free") == PLAYER_BOARD["vector_queue_depth"]

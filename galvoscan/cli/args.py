@@ -169,6 +169,14 @@ def read_text(path, what="file"):
         fail(f"{path}, line {line}: the {what} is not UTF-8 text (save it as UTF-8)")
 
 
+def read_bytes(path, what="file"):
+    """The bytes of ``path``, or a one-line error naming it."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as error:
+        fail(f"cannot read the {what} {path}: {error.strerror or error}")
+
+
 # --- spiral tables -------------------------------------------------------------------------------
 
 def add_table_options(parser):

@@ -46,8 +46,30 @@ def _correction(args):
     return CorrectionTable.identity(nodes)
 
 
+def _apply_preset(args):
+    """``--preset``'s options, where the command line gives none of its own (one line if it
+    contradicts the preset)."""
+    from ..build import PRESETS
+    if args.preset is None:
+        return
+    if args.board != "icebreaker":
+        fail(f"the {args.preset} preset is the iCEBreaker's")
+    preset = PRESETS[args.preset]
+    if args.modes and tuple(args.modes) != preset["modes"]:
+        fail(f"--preset {args.preset} builds {','.join(preset['modes'])}: leave out --modes, "
+             f"or the preset")
+    args.modes = preset["modes"]
+    for name in ("delays", "interpolation", "wobble"):
+        setattr(args, name, getattr(args, name) or preset.get(name, False))
+    args.player = preset.get("player", False)
+    if args.clock is None:
+        args.clock = preset.get("clock")
+
+
 def _cmd_build(args):
     from ..build import BuildError, build_bitstream
+    args.player = False
+    _apply_preset(args)
     table = table_from(args)
     if args.modes and "spiral" not in args.modes:
         # Start, stopped, in the first mode built.
@@ -60,7 +82,7 @@ def _cmd_build(args):
                                  settings=settings, modes=args.modes, correction=correction,
                                  clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
                                  wobble=args.wobble, interpolation=args.interpolation,
-                                 delays=args.delays)
+                                 delays=args.delays, player=args.player)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -71,7 +93,9 @@ def _cmd_build(args):
     print(f"  XY2 rate     {report.bit_rate_mhz:g} Mbit/s "
           f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
           f"system clock")
-    print(f"  host link    UART {report.baud:,} baud, SPI")
+    print(f"  host link    UART {report.baud:,} baud" +
+          (" (the job player: PMOD1B holds the start input and the PLC's lines)"
+           if report.player else ", SPI"))
     print(f"  modes        {', '.join(report.modes)}; correction "
           f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
     print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
@@ -119,6 +143,11 @@ def add_parsers(commands):
                        help="target board (default: %(default)s)")
     build.add_argument("--build-dir", type=output_dir, default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
+    build.add_argument("--preset", choices=["marker", "cleaner"], default=None,
+                       help="one bitstream for the kind of machine: marker (vector mode "
+                            "with the RTC delays, correction, and the job player for "
+                            "stand-alone marking from the flash, 24 MHz on the PLL) or "
+                            "cleaner (spiral with interpolation, raster, correction)")
     build.add_argument("--wobble", action="store_true",
                        help="add the wobble stage to vector mode (galvoscan mark --wobble); "
                             "with every mode it does not fit the UP5K: drop one with --modes "

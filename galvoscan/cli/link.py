@@ -108,6 +108,32 @@ def _cmd_read(args):
     return 0
 
 
+def _cmd_reset(args):
+    from ..client import ClientError, HostClient
+    from ..gateware.host.fields import Status
+    with open_link(args) as link:
+        board = HostClient(link)
+        try:
+            errors = board.read("errors")
+            # Laser off first; then the vector queue emptied and the mode stopped.
+            for name, value in (("arm", 0), ("run", 0), ("vec_flush", 1)):
+                board.write(name, value)
+            refused = (board.read("errors") - errors) & 0xFFFF
+            flags = Status.from_bits(board.read("status"))
+            free = board.read("fifo_free") if not refused else None
+        except ClientError as error:
+            fail(error)
+    if refused:
+        fail("the board took arm=0 and run=0 but not vec_flush: its bitstream is older "
+             "than the flush (power-cycle it to empty the queue, or build and flash it "
+             "again)")
+    latched = flags.fault_interlock or flags.fault_watchdog or flags.fault_alarm
+    print(f"reset: disarmed, stopped, vector queue emptied ({free} segments free); " +
+          ("a fault is latched (galvoscan send fault_clear=1 clears it)" if latched else
+           "no fault latched"))
+    return 0
+
+
 def add_parsers(commands):
     from ..gateware.field.correction_table import TABLE_SIZES
     regs = commands.add_parser(
@@ -144,6 +170,14 @@ def add_parsers(commands):
     send.add_argument("--verify", action="store_true", help="read each value back")
     add_link_options(send)
     send.set_defaults(run=_cmd_send)
+
+    reset = commands.add_parser(
+        "reset", help="disarm, stop, and empty the vector queue",
+        description="Make a board ready for the next job without a power cycle: arm = 0 "
+                    "(laser off), run = 0, and vec_flush (the vector queue emptied, a job "
+                    "left half-queued dropped). Latched faults stay latched.")
+    add_link_options(reset)
+    reset.set_defaults(run=_cmd_reset)
 
     read = commands.add_parser("read", help="read registers from a board",
                                description="Read registers over the serial port or SPI.")

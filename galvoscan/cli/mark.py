@@ -20,7 +20,7 @@ from .jobargs import (add_job_link_options, add_job_options, board_link, frame_j
 from .machine import add_machine_option, profile_from
 
 
-__all__ = ["add_parsers"]
+__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
 
 
 def _hatch(text):
@@ -175,9 +175,10 @@ def _sim_report(board, job, placement, drawing, profile, report):
     }
 
 
-def _cmd_mark(args):
-    from ..jobs.stream import JobStreamer
-    check_backend_needs_sim(args)
+def planned_job(args):
+    """What ``mark`` and ``store`` do before any board: the profile, the job planned and
+    checked (the wobble's reach too), its description said, the preview drawn. Returns
+    ``(job, placement, drawing, profile, wobble_regs, say)``; one line and exit on a fault."""
     profile = profile_from(args)
     wobble, wobble_regs = _wobble(args, profile)
     job, placement, drawing = _plan(args, profile)
@@ -192,7 +193,8 @@ def _cmd_mark(args):
                  f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
         job.registers.update(wobble_regs)
     speed, power, prr = job_settings_values(args, profile)
-    say = (lambda line: print(line, file=sys.stderr)) if args.json else print
+    say = (lambda line: print(line, file=sys.stderr)) if getattr(args, "json", False) \
+        else print
     for line in _describe(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
                                         f"of {profile.laser.max_power_w:g} W), "
                                         f"{prr:g} kHz, {args.passes or 1} pass(es)"):
@@ -202,6 +204,13 @@ def _cmd_mark(args):
         preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
                 title=f"{Path(args.file).name}: {job.mark_mm:.1f} mm marked")
         say(f"wrote {args.preview}")
+    return job, placement, drawing, profile, wobble_regs, say
+
+
+def _cmd_mark(args):
+    from ..jobs.stream import JobStreamer
+    check_backend_needs_sim(args)
+    job, placement, drawing, profile, wobble_regs, say = planned_job(args)
     if args.estimate or not has_link(args, profile):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")
@@ -241,18 +250,14 @@ def _cmd_mark(args):
     return 0
 
 
-def add_parsers(commands):
-    mark = commands.add_parser(
-        "mark", help="mark a drawing (SVG, DXF or .job) in mm",
-        description="Mark a drawing: read it (SVG, DXF, or a .job in galvo units), place it in "
-                    "the field, hatch closed shapes, order the paths to cut jumps, check it "
-                    "against the field, then stream it to a board (--port, --spi or --sim). "
-                    "Without a board: plan, --preview and --estimate only.")
-    mark.add_argument("file", metavar="FILE", help="the drawing: .svg, .dxf or .job")
-    add_job_options(mark)
-    mark.add_argument("--passes", type=int_in(1, 1000, "passes"), default=None,
-                      metavar="N", help="times the job is marked (default: the profile's)")
-    shape = mark.add_argument_group("drawing")
+def add_drawing_options(parser):
+    """The drawing, its placement, hatch, wobble and the job's laser and speed: what ``mark``
+    and ``store`` plan a job from."""
+    parser.add_argument("file", metavar="FILE", help="the drawing: .svg, .dxf or .job")
+    add_job_options(parser)
+    parser.add_argument("--passes", type=int_in(1, 1000, "passes"), default=None,
+                        metavar="N", help="times the job is marked (default: the profile's)")
+    shape = parser.add_argument_group("drawing")
     shape.add_argument("--hatch", type=_hatch, metavar="SPACING[,ANGLE]",
                        help="fill closed shapes with lines SPACING mm apart at ANGLE degrees "
                             "(holes by the even-odd rule)")
@@ -261,7 +266,7 @@ def add_parsers(commands):
     shape.add_argument("--tolerance", type=number_in("tolerance", 0.0005, 1), default=0.01,
                        metavar="MM", help="curves as chords at most this far off "
                                           "(default: 0.01 mm)")
-    wobble = mark.add_argument_group(
+    wobble = parser.add_argument_group(
         "wobble (an ellipse laid over marked lines; needs a bitstream with the wobble stage; "
         "defaults: the profile's [wobble])")
     wobble.add_argument("--wobble", type=number_in("wobble", 0, 10_000), metavar="UM",
@@ -271,7 +276,7 @@ def add_parsers(commands):
                         metavar="UM", help="amplitude along the line, µm (an ellipse)")
     wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, WOBBLE_MAX_HZ), metavar="HZ",
                         help="turns of the figure a second (default: the profile's, 1000)")
-    place = mark.add_argument_group("placement")
+    place = parser.add_argument_group("placement")
     place.add_argument("--origin", choices=["centre", "center", "lower-left"],
                        default="centre", help="what of the drawing's bounding box goes to "
                                               "--offset (default: centre)")
@@ -282,11 +287,26 @@ def add_parsers(commands):
                        help="size factor, about the drawing's centre (default: 1)")
     place.add_argument("--rotate", type=number_in("rotate", -360, 360), default=0.0,
                        metavar="DEG", help="counter-clockwise, degrees")
+
+
+def add_plan_outputs(group):
+    """``--preview`` and ``--estimate``."""
+    group.add_argument("--preview", type=image_file, metavar="PNG",
+                       help="draw the marks, jumps and field")
+    group.add_argument("--estimate", action="store_true",
+                       help="print the plan and the estimated time; send or write nothing")
+
+
+def add_parsers(commands):
+    mark = commands.add_parser(
+        "mark", help="mark a drawing (SVG, DXF or .job) in mm",
+        description="Mark a drawing: read it (SVG, DXF, or a .job in galvo units), place it in "
+                    "the field, hatch closed shapes, order the paths to cut jumps, check it "
+                    "against the field, then stream it to a board (--port, --spi or --sim). "
+                    "Without a board: plan, --preview and --estimate only.")
+    add_drawing_options(mark)
     out = mark.add_argument_group("output")
-    out.add_argument("--preview", type=image_file, metavar="PNG",
-                     help="draw the marks, jumps and field")
-    out.add_argument("--estimate", action="store_true",
-                     help="print the plan and the estimated time; send nothing")
+    add_plan_outputs(out)
     out.add_argument("--frame", type=int_in(1, 100, "frame"), nargs="?", const=1,
                      default=None, metavar="N",
                      help="trace the job's bounding box N times (default 1) with the guide "

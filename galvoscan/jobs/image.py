@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from ..gateware.host.regmap import BY_ADDRESS, BY_NAME
 from ..gateware.player.image_format import (CRC_BYTES, FORMAT_VERSION, HEADER_BYTES,
                                             HEADER_WORDS, JOB_OFFSET, MAGIC, MAX_IMAGE_BYTES,
+                                            MAX_SETTINGS,
                                             PLAYER_OWNED, SEGMENT_WORDS, Word)
 from .corners import corner_frames
 from .stream import check_segment, job_segments, segment_words
@@ -58,12 +59,14 @@ def job_image(segments, registers, *, repeats=1):
                 not reg.low <= value <= reg.high:
             raise ImageError(f"{name} = {value!r} is outside {reg.low} … {reg.high}")
         settings.append((reg.address, reg.encode(value)))
+    if len(settings) > MAX_SETTINGS:
+        raise ImageError(f"{len(settings)} settings: an image holds {MAX_SETTINGS} at most")
     segments = job_segments(segments)
     length = HEADER_BYTES + 4 * len(settings) + 2 * SEGMENT_WORDS * len(segments)
     if length > MAX_IMAGE_BYTES:
-        raise ImageError(f"the job needs {length / 2**20:.1f} MiB; the flash holds "
-                         f"{MAX_IMAGE_BYTES / 2**20:.0f} MiB above the bitstream "
-                         f"({len(segments)} segments: split it)")
+        raise ImageError(f"the job needs {length / 2**20:.1f} MiB; the player reads "
+                         f"{MAX_IMAGE_BYTES / 2**20:g} MiB at most ({len(segments):,} "
+                         f"segments: split it, or mark it from a host)")
     for segment in segments:
         try:
             check_segment(*segment)
@@ -117,6 +120,8 @@ def read_image(data):
     repeats, count = words[Word.REPEATS], words[Word.SETTINGS]
     if repeats == 0:
         raise ImageError("a damaged image: 0 repeats")
+    if count > MAX_SETTINGS:
+        raise ImageError(f"a damaged image: {count} settings")
     body = words[HEADER_WORDS:]
     if 2 * count > len(body) or (len(body) - 2 * count) % SEGMENT_WORDS:
         raise ImageError("a damaged image: its settings and segments do not fill it")

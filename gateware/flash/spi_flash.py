@@ -7,7 +7,7 @@ taken. SPI mode 0; SCK is half the system clock, and stops (low) while a byte wa
 taken, which a flash allows at any time during a read.
 """
 
-from amaranth.hdl import Cat, Const, Module, Signal
+from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -44,7 +44,8 @@ class SPIFlashReader(wiring.Component):
         The flash's pins (/CS idles high, SCK low). CIPO is sampled as SCK rises, half an SCK
         period after the flash set it on the falling edge (within a system clock).
     address : ``In(24)``
-        The first byte's address, taken with :attr:`start`.
+        The first byte's address: held from :attr:`start` until the first byte comes (it
+        goes out after tRES1, a byte at a time).
     start : ``In(1)``
         Begin a read (ignored unless :attr:`idle`).
     stop : ``In(1)``
@@ -75,42 +76,48 @@ class SPIFlashReader(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        # What goes out, MSB first: the release (8 bits), then the read and its address (32),
-        # all loaded at the start.
-        shift_out = Signal(40)
+        # What goes out, a byte at a time, MSB first: the release, then (after tRES1) the read
+        # command and the address's three bytes, taken from `address` as each is sent.
+        shift_out = Signal(8)
         shift_in = Signal(8)
-        bits = Signal(range(33))            # bits left to send, or to receive in a byte
+        bits = Signal(range(9))             # bits left to send, or to receive in a byte
+        command_byte = Signal(range(4))     # of the read command's bytes, the one going out
         wait = Signal(range(self.release_clocks + 1))
-        m.d.comb += self.copi.eq(shift_out[39])
+        m.d.comb += self.copi.eq(shift_out[7])
+        next_byte = Signal(8)
+        with m.Switch(command_byte):
+            for index, part in enumerate((self.address[16:24], self.address[8:16],
+                                          self.address[0:8])):
+                with m.Case(index):
+                    m.d.comb += next_byte.eq(part)
 
         with m.FSM():
             with m.State("IDLE"):
                 m.d.comb += self.idle.eq(1)
                 m.d.sync += [self.cs_n.eq(1), self.sck.eq(0)]
                 with m.If(self.start & ~self.stop):
-                    m.d.sync += [
-                        self.cs_n.eq(0),
-                        shift_out.eq(Cat(self.address, Const(READ_DATA, 8),
-                                         Const(RELEASE_POWER_DOWN, 8))),
-                        bits.eq(8),
-                    ]
+                    m.d.sync += [self.cs_n.eq(0), shift_out.eq(RELEASE_POWER_DOWN), bits.eq(8)]
                     m.next = "RELEASE"
             with m.State("RELEASE"):
-                self._send(m, shift_out, bits, then="WAKE")
-                with m.If(bits == 0):
+                with m.If(self._send(m, shift_out, bits)):
                     m.d.sync += wait.eq(self.release_clocks)
+                    m.next = "WAKE"
                 self._stoppable(m)
             with m.State("WAKE"):
-                # /CS high for tRES1, then the read command and the address.
+                # /CS high for tRES1, then the read command.
                 m.d.sync += [self.cs_n.eq(1), wait.eq(wait - 1)]
                 with m.If(wait == 0):
-                    m.d.sync += [self.cs_n.eq(0), bits.eq(32)]
+                    m.d.sync += [self.cs_n.eq(0), shift_out.eq(READ_DATA), bits.eq(8),
+                                 command_byte.eq(0)]
                     m.next = "COMMAND"
                 self._stoppable(m)
             with m.State("COMMAND"):
-                self._send(m, shift_out, bits, then="READ")
-                with m.If(bits == 0):
-                    m.d.sync += bits.eq(8)
+                # The command, then the address, high byte first.
+                with m.If(self._send(m, shift_out, bits)):
+                    m.d.sync += [shift_out.eq(next_byte), bits.eq(8),
+                                 command_byte.eq(command_byte + 1)]
+                    with m.If(command_byte == 3):
+                        m.next = "READ"
                 self._stoppable(m)
             with m.State("READ"):
                 # A byte in eight SCK periods; SCK waits low while the last byte is untaken.
@@ -135,13 +142,14 @@ class SPIFlashReader(wiring.Component):
             m.d.sync += [self.cs_n.eq(1), self.sck.eq(0), self.data.valid.eq(0)]
             m.next = "IDLE"
 
-    def _send(self, m, shift_out, bits, *, then):
-        """Clock ``bits`` bits of ``shift_out`` out, MSB first: COPI is set while SCK is low
-        and taken by the flash as SCK rises."""
+    def _send(self, m, shift_out, bits):
+        """Clock the byte in ``shift_out`` out, MSB first: COPI is set while SCK is low and
+        taken by the flash as SCK rises. True on the clock it is all out (SCK low again)."""
+        done = Signal()
         with m.If(bits == 0):
-            m.d.sync += self.sck.eq(0)
-            m.next = then
+            m.d.comb += done.eq(1)
         with m.Elif(~self.sck):
             m.d.sync += self.sck.eq(1)
         with m.Else():
             m.d.sync += [self.sck.eq(0), shift_out.eq(shift_out << 1), bits.eq(bits - 1)]
+        return done

@@ -6,10 +6,11 @@ An image is a sequence of 16-bit little-endian words::
     word  0, 1   magic, the bytes "GSJB"
     word  2      format version (FORMAT_VERSION)
     word  3, 4   length of the whole image in bytes (low word first): even, at least
-                 HEADER_BYTES, at most MAX_IMAGE_BYTES
+                 HEADER_BYTES, at most MAX_IMAGE_BYTES (1 MiB)
     word  5, 6   CRC-32 (zlib's) of the whole image with these four bytes read as zero
     word  7      repeats: times the job runs on each start (1 … 65535)
-    word  8      settings: the number of (address, value) pairs that follow
+    word  8      settings: the number of (address, value) pairs that follow (at most
+                 MAX_SETTINGS)
     then         the settings: register writes done before the laser is armed
     then         the segments, three words each: vec_x, vec_y, vec_op (the queue's words,
                  as the register map spells them)
@@ -20,7 +21,7 @@ register; a setting may not address a register the player drives itself (PLAYER_
 
 __all__ = ["MAGIC", "MAGIC_WORDS", "FORMAT_VERSION", "JOB_OFFSET", "FLASH_BYTES",
            "MAX_IMAGE_BYTES", "HEADER_WORDS", "HEADER_BYTES", "SEGMENT_WORDS", "Word",
-           "PLAYER_OWNED", "CRC_BYTES"]
+           "PLAYER_OWNED", "CRC_BYTES", "MAX_SETTINGS"]
 
 
 #: The image's first four bytes.
@@ -32,8 +33,9 @@ FORMAT_VERSION = 1
 JOB_OFFSET = 0x100000
 #: The iCEBreaker's flash (W25Q128JV): 16 MiB.
 FLASH_BYTES = 16 * 1024 * 1024
-#: The largest image: the flash above JOB_OFFSET.
-MAX_IMAGE_BYTES = FLASH_BYTES - JOB_OFFSET
+#: The largest image the player reads: 1 MiB, some 174,000 segments (the flash holds 15 MiB
+#: above JOB_OFFSET; the player's word counters are sized to this).
+MAX_IMAGE_BYTES = 1 << 20
 
 
 class Word:
@@ -50,6 +52,8 @@ class Word:
 
 
 HEADER_WORDS = 9
+#: The most settings an image holds (a job writes some twenty registers).
+MAX_SETTINGS = 255
 HEADER_BYTES = 2 * HEADER_WORDS
 #: Bytes of the image the CRC reads as zero: the CRC's own.
 CRC_BYTES = range(2 * Word.CRC_LOW, 2 * Word.CRC_HIGH + 2)

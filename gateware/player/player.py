@@ -8,11 +8,16 @@ from ..host.fields import Mode, PlayerResult, PlayerState
 from ..host.registers import RegisterBus
 from ..host.regmap import BY_NAME
 from .crc32 import CRC32
-from .image_format import (CRC_BYTES, FORMAT_VERSION, HEADER_BYTES, HEADER_WORDS, JOB_OFFSET,
+from .image_format import (FORMAT_VERSION, HEADER_BYTES, HEADER_WORDS, JOB_OFFSET,
                            MAGIC_WORDS, MAX_IMAGE_BYTES, PLAYER_OWNED, SEGMENT_WORDS, Word)
 
 
 __all__ = ["JobPlayer"]
+
+
+#: The registers the player writes, by the code it names them with: None, a setting's own
+#: address; from "vec_x" on, the value is the word read.
+_TARGETS = ("arm", "mode", "run", "vec_flush", None, "vec_x", "vec_y", "vec_op")
 
 
 class _Section(enum.Enum, shape=2):
@@ -103,79 +108,88 @@ class JobPlayer(wiring.Component):
         m.submodules.crc = crc = CRC32()
         words_max = self.max_image_bytes // 2
 
-        # --- its writes to the register file, one at a time ----------------------------------
+        # --- the image, a word at a time ---------------------------------------------------------
+        live = Signal()                 # the second reading, which writes
+        section = Signal(_Section)
+        position = Signal(range(words_max + 1))         # words taken since the image's start
+        length = Signal.like(position)                  # the image's length, in words
+        byte_high = Signal()            # the next byte is a word's high byte
+        word = Signal(16)
+        word_valid = Signal()
+        expected_crc = Signal(32)
+        repeats_left = Signal(16)
+        settings_left = Signal(8)       # (address, value) pairs still to come
+        setting_address = Signal(7)
+        setting_value_next = Signal()   # the next settings word is a value
+        segment_word = Signal(range(SEGMENT_WORDS))
+        segments_from = Signal.like(position)           # the first segment's word
+        repeating = Signal()            # reading the segments again
+        result = self.result            # how this start ends (NONE while it runs)
+
+        # --- its writes to the register file, one at a time -------------------------------------
         # A write waits for a clock the arbiter grants, and is done (or refused) on the next.
-        write_address = Signal(7)
-        write_value = Signal(16)
+        # The value is the word it came in (the next word is not taken meanwhile) or a small
+        # constant; the register is named by a code (a setting's, or one the player drives).
+        write_target = Signal(range(len(_TARGETS)))
+        write_constant = Signal(2)
         write_waiting = Signal()        # given, not yet granted
         write_checking = Signal()       # granted: done or refused on this clock
         write_refused = Signal()        # the last write was refused
         write_free = ~write_waiting & ~write_checking
-        m.d.comb += [self.bus.address.eq(write_address), self.bus.write_data.eq(write_value),
-                     self.bus.write_en.eq(write_checking)]
-        with m.If(write_waiting & self.grant):
-            m.d.sync += [write_waiting.eq(0), write_checking.eq(1)]
+        address = Signal(7)
+        with m.Switch(write_target):
+            for code, name in enumerate(_TARGETS):
+                with m.Case(code):
+                    m.d.comb += address.eq(setting_address if name is None else
+                                           BY_NAME[name].address)
+        from_word = write_target >= _TARGETS.index(None)
+        m.d.comb += [
+            self.bus.address.eq(address),
+            self.bus.write_data.eq(Mux(from_word, word, write_constant)),
+            self.bus.write_en.eq(write_checking),
+        ]
         wrote = Signal()                # a write of its own done: progress
         waiting_on_machine = Signal()   # waiting for the machine, which is at work
         m.d.comb += [wrote.eq(write_checking & self.bus.write_ok),
                      self.alive.eq(wrote | waiting_on_machine)]
+        with m.If(write_waiting & self.grant):
+            m.d.sync += [write_waiting.eq(0), write_checking.eq(1)]
         with m.If(write_checking):
             m.d.sync += [write_checking.eq(0), write_refused.eq(~self.bus.write_ok)]
 
-        def write(register, value):
-            address = BY_NAME[register].address if isinstance(register, str) else register
-            m.d.sync += [write_address.eq(address), write_value.eq(value),
+        def write(target, value=0):
+            m.d.sync += [write_target.eq(_TARGETS.index(target)), write_constant.eq(value),
                          write_waiting.eq(1), write_refused.eq(0)]
 
-        # --- the image: bytes into words and into the CRC -------------------------------------
-        live = Signal()                 # the second reading, which writes
-        section = Signal(_Section)
-        header_word = Signal(range(HEADER_WORDS))
-        byte_high = Signal()            # the next byte is a word's high byte
-        low_byte = Signal(8)
-        word = Signal(16)
-        word_valid = Signal()
+        # Bytes from the flash into words (low byte first), and into the CRC, which reads its
+        # own four bytes as zero. A word's bytes come while ``position`` is its index.
         take_byte = Signal()
-        # The CRC reads its own four bytes as zero.
-        header_byte = Cat(byte_high, header_word)
         in_crc_field = (section == _Section.HEADER) & \
-            (header_byte >= CRC_BYTES.start) & (header_byte < CRC_BYTES.stop)
+            ((position[:4] == Word.CRC_LOW) | (position[:4] == Word.CRC_HIGH))
         m.d.comb += [
             self.read_data.ready.eq(take_byte),
             crc.data.eq(Mux(in_crc_field, 0, self.read_data.payload)),
             crc.strobe.eq(self.read_data.valid & take_byte),
+            # The image from its start, or (a repeat) from its first segment.
+            self.read_address.eq(self.offset + Mux(repeating, segments_from << 1, 0)),
         ]
         with m.If(self.read_data.valid & take_byte):
             m.d.sync += byte_high.eq(~byte_high)
             with m.If(byte_high):
-                m.d.sync += [word.eq(Cat(low_byte, self.read_data.payload)), word_valid.eq(1)]
+                m.d.sync += [word[8:].eq(self.read_data.payload), word_valid.eq(1)]
             with m.Else():
-                m.d.sync += low_byte.eq(self.read_data.payload)
+                m.d.sync += word[:8].eq(self.read_data.payload)
 
-        remaining = Signal(range(words_max + 1))    # words of the image still to come
-        length_low = Signal(15)         # the length's low word, in words
-        expected_crc = Signal(32)
-        repeats = Signal(16)
-        repeats_left = Signal(16)
-        settings = Signal(16)           # (address, value) pairs
-        settings_done = Signal(16)
-        setting_address = Signal(7)
-        setting_value_next = Signal()   # the next settings word is a value
-        segment_word = Signal(range(SEGMENT_WORDS))
-        segment_words = Signal(range(words_max + 1))    # words of segments in the image
-        result = Signal(PlayerResult)   # how this start ends
-        segments_at = Signal(24)
-        m.d.comb += segments_at.eq(self.offset + HEADER_BYTES + (settings << 2))
-
-        def begin(address, *, segments_only=False):
-            """Read from ``address``, from a word's start, after a clock with the reader
+        def begin(*, repeat=False):
+            """Read the image (or, a repeat, its segments), after a clock with the reader
             stopped."""
             m.d.comb += self.read_stop.eq(1)
-            m.d.sync += [self.read_address.eq(address), byte_high.eq(0), word_valid.eq(0),
-                         segment_word.eq(0)]
-            if not segments_only:
-                m.d.sync += [section.eq(_Section.HEADER), header_word.eq(0),
-                             remaining.eq(HEADER_WORDS), settings_done.eq(0),
+            m.d.sync += [byte_high.eq(0), word_valid.eq(0), segment_word.eq(0),
+                         repeating.eq(repeat)]
+            if repeat:
+                m.d.sync += position.eq(segments_from)
+            else:
+                m.d.sync += [section.eq(_Section.HEADER), position.eq(0),
                              setting_value_next.eq(0)]
                 m.d.comb += crc.clear.eq(1)
             m.next = "READ"
@@ -189,79 +203,90 @@ class JobPlayer(wiring.Component):
             with m.Else():
                 m.next = "REFUSE"
 
+        # A host's write of arm, run or mode, or a fault while armed, ends a start, whatever
+        # state it is in: latched here, acted on by the states that wait (the others pass
+        # within a few clocks).
+        abort = Signal()
+        with m.If(self.host_took_over | (self.armed & self.fault)):
+            m.d.sync += abort.eq(1)
+        with m.If(~abort):
+            with m.If(self.host_took_over):
+                m.d.sync += result.eq(PlayerResult.HOST)
+            with m.Elif(self.armed & self.fault):
+                m.d.sync += result.eq(PlayerResult.FAULT)
+
         owned = Cat(setting_address == BY_NAME[name].address
                     for name in PLAYER_OWNED if name in BY_NAME).any()
+        # The image's end, a clock after the word that reached it was taken (a register:
+        # the compare is off the paths into the word's handling); no byte is taken on that
+        # clock, so none past the end reaches the CRC.
+        ended = Signal()
+        took = Signal()
+        m.d.sync += [ended.eq((section != _Section.HEADER) & (position == length)),
+                     took.eq(0)]
 
         with m.FSM() as fsm:
             with m.State("IDLE"):
-                m.d.sync += [live.eq(0), self.armed.eq(0)]
+                m.d.sync += [live.eq(0), self.armed.eq(0), abort.eq(0)]
                 with m.If(self.start):
-                    m.d.sync += [self.result.eq(PlayerResult.NONE),
-                                 result.eq(PlayerResult.NONE)]
-                    begin(self.offset)
+                    m.d.sync += result.eq(PlayerResult.NONE)
+                    begin()
 
             with m.State("READ"):
                 m.d.comb += self.read_start.eq(1)
                 with m.If(self.read_idle):
                     m.next = "PARSE"
-                self._guard(m, live, result)
 
             with m.State("PARSE"):
                 # A word is taken once the last write is done (and, for vec_op, once the queue
-                # has room); the next word's bytes come meanwhile.
+                # has room); the next word's bytes come once it is taken.
                 queue_wait = live & (section == _Section.SEGMENTS) & (segment_word == 2) & \
                     ~self.queue_ready
-                m.d.comb += [take_byte.eq(~word_valid),
-                             waiting_on_machine.eq(live & (section == _Section.SEGMENTS) &
-                                                   self.armed & ~self.queue_ready)]
-                ended = (section != _Section.HEADER) & (remaining == 0)
+                m.d.comb += [take_byte.eq(~word_valid & write_free & ~took & ~ended),
+                             waiting_on_machine.eq(queue_wait & self.armed)]
                 with m.If(write_free & write_refused):
                     stop(PlayerResult.REFUSED)
                 with m.Elif(write_free & word_valid & ~queue_wait & ~ended):
-                    m.d.sync += [word_valid.eq(0), remaining.eq(remaining - 1)]
-                    self._word(m, live, section, header_word, word, remaining, length_low,
-                               expected_crc, repeats, settings, settings_done,
-                               setting_address, setting_value_next, segment_word,
-                               segment_words, owned, write, stop, words_max)
+                    m.d.sync += [word_valid.eq(0), position.eq(position + 1), took.eq(1)]
+                    self._word(m, live, section, position, length, word, expected_crc,
+                               repeats_left, settings_left, setting_address,
+                               setting_value_next, segment_word, segments_from, owned, write,
+                               stop, words_max)
                 with m.Elif(write_free & ended):
                     # The last word is in: it must end the settings, or a segment.
+                    m.d.comb += self.read_stop.eq(1)
                     with m.If((section != _Section.SEGMENTS) | (segment_word != 0)):
                         stop(PlayerResult.BAD_HEADER)
                     with m.Elif(live):
-                        m.d.comb += self.read_stop.eq(1)
                         m.next = "DRAIN"
                     with m.Else():
-                        m.d.comb += self.read_stop.eq(1)
                         m.next = "VERDICT"
                 # As a host does: the queue filled (or the job all in) before the laser is armed
                 # and the mode run.
                 with m.If(live & (section == _Section.SEGMENTS) & ~self.armed & write_free &
                           ~write_refused & (queue_wait | ended)):
                     m.next = "ARM"
-                self._guard(m, live, result)
+                self._guard(m, live, abort)
 
             with m.State("VERDICT"):
                 with m.If(~crc.busy):
                     with m.If(crc.crc == expected_crc):
                         # Checked: vector mode, stopped, then the image read again and played.
-                        m.d.sync += [live.eq(1), repeats_left.eq(repeats)]
+                        m.d.sync += live.eq(1)
                         write("run", 0)
                         m.next = "SELECT"
                     with m.Else():
                         stop(PlayerResult.BAD_CRC)
-                self._guard(m, live, result)
 
             with m.State("SELECT"):
                 with m.If(write_free):
                     write("mode", Mode.VECTOR.value)
-                    begin(self.offset)
-                self._guard(m, live, result)
+                    begin()
 
             with m.State("ARM"):
                 write("arm", 1)
                 m.d.sync += self.armed.eq(1)
                 m.next = "LEAD"
-                self._guard(m, live, result)
 
             with m.State("LEAD"):
                 m.d.comb += waiting_on_machine.eq(1)
@@ -270,21 +295,20 @@ class JobPlayer(wiring.Component):
                 with m.Elif(write_free & self.laser_ready):
                     write("run", 1)
                     m.next = "PARSE"
-                self._guard(m, live, result)
+                self._guard(m, live, abort)
 
             with m.State("DRAIN"):
                 m.d.comb += waiting_on_machine.eq(self.vector_busy | ~self.queue_empty)
                 with m.If(write_free & write_refused):
                     stop(PlayerResult.REFUSED)
                 with m.Elif(write_free & self.queue_empty & ~self.vector_busy):
-                    with m.If(repeats_left > 1):
-                        m.d.sync += [repeats_left.eq(repeats_left - 1),
-                                     remaining.eq(segment_words)]
-                        begin(segments_at, segments_only=True)
+                    with m.If(repeats_left[1:] != 0):       # (more than one left)
+                        m.d.sync += repeats_left.eq(repeats_left - 1)
+                        begin(repeat=True)
                     with m.Else():
                         m.d.sync += result.eq(PlayerResult.DONE)
                         m.next = "STOP"
-                self._guard(m, live, result)
+                self._guard(m, live, abort)
 
             # The stop of a job that has written: laser off first (whatever write is under
             # way), then the queue emptied and the mode stopped.
@@ -303,13 +327,11 @@ class JobPlayer(wiring.Component):
             with m.State("END"):
                 m.d.comb += self.read_stop.eq(1)
                 with m.If(write_free):
-                    m.d.sync += self.result.eq(result)
                     m.next = "IDLE"
 
             with m.State("REFUSE"):
                 # Refused in the check, before any write: counted.
                 m.d.comb += self.read_stop.eq(1)
-                m.d.sync += self.result.eq(result)
                 with m.If(self.refused != 255):
                     m.d.sync += self.refused.eq(self.refused + 1)
                 m.next = "IDLE"
@@ -318,31 +340,25 @@ class JobPlayer(wiring.Component):
                                       Mux(live, PlayerState.RUNNING, PlayerState.CHECKING)))
         return m
 
-    def _guard(self, m, live, result):
-        """In a state of a start under way: whatever the state does, a host's write of
-        ``arm``, ``run`` or ``mode``, or a fault while armed, ends the start (in the check,
-        where nothing has been written, the host's write just ends it)."""
-        with m.If(self.host_took_over):
-            m.d.sync += result.eq(PlayerResult.HOST)
+    def _guard(self, m, live, abort):
+        """In a state that waits: whatever the state does, an abort ends the start, through
+        the laser-first stop (in the check, where nothing has been written, at once)."""
+        with m.If(abort):
             with m.If(live):
                 m.next = "STOP"
             with m.Else():
                 m.next = "END"
-        with m.Elif(self.armed & self.fault):
-            m.d.sync += result.eq(PlayerResult.FAULT)
-            m.next = "STOP"
 
-    def _word(self, m, live, section, header_word, word, remaining, length_low, expected_crc,
-              repeats, settings, settings_done, setting_address, setting_value_next,
-              segment_word, segment_words, owned, write, stop, words_max):
+    def _word(self, m, live, section, position, length, word, expected_crc, repeats_left,
+              settings_left, setting_address, setting_value_next, segment_word,
+              segments_from, owned, write, stop, words_max):
         """What one word of the image does, in the check and in the playing."""
         def enter_segments():
-            m.d.sync += [section.eq(_Section.SEGMENTS), segment_words.eq(remaining - 1)]
+            m.d.sync += [section.eq(_Section.SEGMENTS), segments_from.eq(position + 1)]
 
         with m.Switch(section):
             with m.Case(_Section.HEADER):
-                m.d.sync += header_word.eq(header_word + 1)
-                with m.Switch(header_word):
+                with m.Switch(position[:4]):
                     with m.Case(Word.MAGIC_LOW):
                         with m.If(word != MAGIC_WORDS[0]):
                             stop(PlayerResult.NO_IMAGE)
@@ -353,26 +369,31 @@ class JobPlayer(wiring.Component):
                         with m.If(word != FORMAT_VERSION):
                             stop(PlayerResult.BAD_VERSION)
                     with m.Case(Word.LENGTH_LOW):
-                        m.d.sync += length_low.eq(word[1:])
+                        m.d.sync += length[:15].eq(word[1:])
                         with m.If(word[0]):
                             stop(PlayerResult.BAD_HEADER)
                     with m.Case(Word.LENGTH_HIGH):
-                        words = Cat(length_low, word)
-                        with m.If((words > words_max) | (words < HEADER_WORDS)):
+                        # (In words: the high word's bits above the flash's 2**23 words must
+                        # be clear, and only the low bits are compared.)
+                        high = len(length) - 15
+                        words = Cat(length[:15], word[:high])
+                        m.d.sync += length[15:].eq(word)
+                        with m.If((word[high:] != 0) | (words > words_max) |
+                                  (words < HEADER_WORDS)):
                             stop(PlayerResult.BAD_HEADER)
-                        # The words after this one.
-                        m.d.sync += remaining.eq(words - (Word.LENGTH_HIGH + 1))
                     with m.Case(Word.CRC_LOW):
                         m.d.sync += expected_crc[:16].eq(word)
                     with m.Case(Word.CRC_HIGH):
                         m.d.sync += expected_crc[16:].eq(word)
                     with m.Case(Word.REPEATS):
-                        m.d.sync += repeats.eq(word)
+                        m.d.sync += repeats_left.eq(word)
                         with m.If(word == 0):
                             stop(PlayerResult.BAD_HEADER)
                     with m.Case(Word.SETTINGS):
-                        m.d.sync += settings.eq(word)
-                        with m.If(word == 0):
+                        m.d.sync += settings_left.eq(word)
+                        with m.If(word[8:] != 0):
+                            stop(PlayerResult.BAD_HEADER)
+                        with m.Elif(word == 0):
                             enter_segments()
                         with m.Else():
                             m.d.sync += section.eq(_Section.SETTINGS)
@@ -382,17 +403,17 @@ class JobPlayer(wiring.Component):
                     with m.If(word[7:] != 0):
                         stop(PlayerResult.BAD_SETTING)
                 with m.Else():
-                    m.d.sync += [setting_value_next.eq(0), settings_done.eq(settings_done + 1)]
+                    m.d.sync += [setting_value_next.eq(0), settings_left.eq(settings_left - 1)]
                     with m.If(owned):
                         stop(PlayerResult.BAD_SETTING)
                     with m.Elif(live):
-                        write(setting_address, word)
-                    with m.If(settings_done + 1 == settings):
+                        write(None)
+                    with m.If(settings_left == 1):
                         enter_segments()
             with m.Case(_Section.SEGMENTS):
                 with m.Switch(segment_word):
                     for index, name in enumerate(("vec_x", "vec_y", "vec_op")):
                         with m.Case(index):
                             with m.If(live):
-                                write(name, word)
+                                write(name)
                             m.d.sync += segment_word.eq((index + 1) % SEGMENT_WORDS)

@@ -1,6 +1,6 @@
 """Source select: the scan mode register picks which position source reaches the head."""
 
-from amaranth.hdl import Module
+from amaranth.hdl import Const, Module
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -60,7 +60,8 @@ class SourceSelect(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         for index, (mode, source) in enumerate(zip(self.modes, self.sources)):
-            selected = self.mode == mode
+            # (A build of one mode: its mode register takes that one alone.)
+            selected = self.mode == mode if len(self.modes) > 1 else Const(1)
             m.d.comb += [
                 self.selected[index].eq(selected),
                 self.source_run[index].eq(self.run & selected),

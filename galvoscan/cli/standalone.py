@@ -1,0 +1,220 @@
+"""``galvoscan store``, ``flash`` and ``standalone``: a job that runs with no PC attached.
+
+``store`` plans a drawing exactly as ``mark`` does (the same options and refusals) and writes
+it as a job image; ``flash`` puts a bitstream and an image into the iCEBreaker's flash through
+its FTDI (pyftdi and pyspiflash, from PyPI), reads them back and compares; ``standalone
+--sim`` presses the foot switch of a simulated stand-alone board whose flash holds the image,
+and reports what ``mark --sim --json`` reports, with the player's verdict.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+from .args import add_backend_option, fail, int_in, output_file, read_bytes
+from .machine import add_machine_option, profile_from
+from .mark import add_drawing_options, add_plan_outputs, planned_job
+
+
+__all__ = ["add_parsers"]
+
+
+def _cmd_store(args):
+    from ..jobs.image import ImageError, job_image
+    if not args.output and not args.estimate:
+        fail("give -o FILE for the image (or --estimate to plan only)")
+    job, _, _, _, wobble_regs, say = planned_job(args)
+    try:
+        image = job_image(job.segments, job.registers, repeats=args.repeats)
+    except ImageError as error:
+        fail(error)
+    if args.estimate:
+        say(f"the image would be {len(image):,} bytes; nothing written")
+        return 0
+    Path(args.output).write_bytes(image)
+    say(f"wrote {args.output}: {len(image):,} bytes, {len(job_segments_of(image))} segments, "
+        f"{args.repeats} repeat(s) a start; put it on the board with `galvoscan flash --job "
+        f"{args.output}` (a bitstream built with --preset marker plays it"
+        f"{', with the wobble stage' if wobble_regs else ''})")
+    return 0
+
+
+def job_segments_of(image):
+    from ..jobs.image import read_image
+    return read_image(image).segments
+
+
+def _cmd_flash(args):
+    from ..flashing import FlashingError, ModelPort, flash_regions, open_icebreaker, program
+    from ..jobs.image import ImageError, read_image
+    from .jobargs import progress_bar
+    bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
+    job = read_bytes(args.job, "job image") if args.job else None
+    try:
+        if job is not None:
+            read_image(job)             # the player's own checks, before any byte goes out
+        regions = flash_regions(bitstream, job)
+    except (ImageError, FlashingError) as error:
+        fail(f"{args.job if isinstance(error, ImageError) else args.bitstream or ''}: "
+             f"{error}".lstrip(": "))
+    total = sum(len(data) for _, data in regions)
+    bar = progress_bar(total, "B")
+    try:
+        if args.to:
+            from ..sim.spi_flash import SPIFlashModel
+            path = Path(args.to)
+            model = SPIFlashModel(path.read_bytes() if path.is_file() else None,
+                                  powered_down=False)
+            what = program(ModelPort(model), regions, progress=bar.update)
+            path.write_bytes(bytes(model.memory))
+        else:
+            port, release = open_icebreaker(args.url)
+            try:
+                what = program(port, regions, progress=bar.update)
+            finally:
+                release()
+    except FlashingError as error:
+        fail(error)
+    finally:
+        bar.close()
+    for address, data in regions:
+        name = "job image" if address else "bitstream"
+        print(f"wrote the {name} at {address:#08x}: {len(data):,} bytes, read back and "
+              f"compared")
+    print(f"{what}{f' (the file {args.to})' if args.to else ''}")
+    return 0
+
+
+def _cmd_standalone(args):
+    from ..build import preset_top_options
+    from ..client import HostClient
+    from ..gateware.host.fields import PlayerResult, PlayerState
+    from ..jobs.image import ImageError, read_image
+    from ..sim.board import SimTransport
+    from .args import simulated_board
+    if not args.sim:
+        fail("a real stand-alone board runs on its own: press its start input (this command "
+             "simulates one: give --sim)")
+    image = read_bytes(args.flash, "job image")
+    try:
+        planned = read_image(image)
+    except ImageError as error:
+        planned = None
+        print(f"galvoscan: note: {args.flash}: {error}; the board's player will refuse it",
+              file=sys.stderr)
+    profile = profile_from(args)
+    from ..gateware.settings import ScanSettings
+    options, clock = preset_top_options("marker")
+    options["settings"] = ScanSettings(mode="vector", run=False)
+    if planned is not None and planned.registers.get("wob_shape"):
+        options["wobble"] = True
+    board = simulated_board(args, clk_freq=clock, flash=image, **options)
+    client = HostClient(SimTransport(board))
+    presses = []
+    step = 2e-3
+    for _ in range(args.presses):
+        board.press_start()
+        waited = 0.0
+        while True:
+            word = client.read("player")
+            if word & 3 == PlayerState.IDLE.value:
+                break
+            board.run_for(step)
+            waited += step
+            if waited > args.timeout:
+                fail(f"the player was still busy after {args.timeout:g} s of the board's "
+                     f"time (--timeout)")
+        result = PlayerResult((word >> 2) & 15)
+        presses.append(result)
+        print(f"press {len(presses)}: {result.label}", file=sys.stderr if args.json else
+              sys.stdout)
+    board.run_for(1e-3)
+    report = _report(board, profile, planned, presses, client.read("player") >> 6)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print(f"{report['pulses']} pulses, {len(report['marks'])} marked points; images "
+              f"refused {report['refused']}")
+    board.close()
+    return 0 if all(result == PlayerResult.DONE for result in presses) else 1
+
+
+def _report(board, profile, planned, presses, refused):
+    """What ``mark --sim --json`` reports, off the wires, and the player's verdicts."""
+    import numpy as np
+    from ..jobs.plan import from_galvo
+    points = board.points()
+    marked = [p for p in points if p[2] > 0]
+    xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)
+    mm = from_galvo(xy, profile.field.size_mm)
+    registers = planned.registers if planned else {}
+    pitch_mm = registers.get("pitch", 0) * profile.mm_per_unit
+    distance = seconds = 0.0
+    for i in range(1, len(marked)):
+        step = float(np.hypot(*(mm[i] - mm[i - 1])))
+        if pitch_mm and abs(step - pitch_mm) <= 1.5 * profile.mm_per_unit:
+            distance += step
+            seconds += (marked[i][5] - marked[i - 1][5]) / board.clk_freq
+    return {
+        "presses": [result.label for result in presses],
+        "refused": int(refused),
+        "marks": [[round(float(x), 4), round(float(y), 4)] for x, y in mm],
+        "pulses": len(board.pulses),
+        "pulses_per_point": registers.get("pulses_per_point"),
+        "speed_mm_s": round(distance / seconds, 2) if seconds else None,
+        "segments": len(planned.segments) if planned else 0,
+        "repeats": planned.repeats if planned else 0,
+    }
+
+
+def add_parsers(commands):
+    store = commands.add_parser(
+        "store", help="plan a drawing as mark does and write it as a job image",
+        description="Plan a drawing exactly as `galvoscan mark` does (the same options, the "
+                    "same checks) and write it as a job image for the board's flash, which "
+                    "a stand-alone bitstream (build --preset marker) plays on each press of "
+                    "its start input.")
+    add_drawing_options(store)
+    store.add_argument("-o", "--output", type=output_file, metavar="FILE",
+                       help="the job image to write (.img)")
+    store.add_argument("--repeats", type=int_in(1, 65535, "repeats"), default=1, metavar="N",
+                       help="times the job runs on each start (default 1)")
+    add_plan_outputs(store.add_argument_group("output"))
+    add_machine_option(store)
+    store.set_defaults(run=_cmd_store)
+
+    flash = commands.add_parser(
+        "flash", help="write a bitstream and a job image into the iCEBreaker's flash",
+        description="Write a bitstream (at 0) and a job image (at 1 MiB) into the "
+                    "iCEBreaker's configuration flash through its FTDI, read them back and "
+                    "compare; the FPGA then configures from it. Needs no system tools: "
+                    "pyftdi and pyspiflash drive the FTDI, libusb comes from PyPI.")
+    flash.add_argument("bitstream", nargs="?", metavar="BITSTREAM",
+                       help="the .bin galvoscan build wrote (default: none, the job only)")
+    flash.add_argument("--job", metavar="IMAGE", help="a job image (galvoscan store)")
+    flash.add_argument("--url", default="ftdi://ftdi:2232h/1",
+                       help="pyftdi URL of the board's FTDI (default: ftdi://ftdi:2232h/1)")
+    flash.add_argument("--to", type=output_file, metavar="FILE",
+                       help="write a 16 MiB flash image file instead of a board (for "
+                            "another programmer)")
+    flash.set_defaults(run=_cmd_flash)
+
+    standalone = commands.add_parser(
+        "standalone", help="press the start input of a simulated stand-alone board",
+        description="A simulated stand-alone board (the marker preset's bitstream) whose "
+                    "flash holds IMAGE: press its start input, let the player check and "
+                    "play the job, and report what the wires and the laser did.")
+    standalone.add_argument("--sim", action="store_true", help="the simulated board")
+    standalone.add_argument("--flash", required=True, metavar="IMAGE",
+                            help="what its flash holds at 1 MiB (a job image, or anything)")
+    standalone.add_argument("--presses", type=int_in(1, 100, "presses"), default=1,
+                            metavar="N", help="presses of the start input (default 1)")
+    standalone.add_argument("--timeout", type=int_in(1, 3600, "timeout"), default=600,
+                            metavar="S", help="the most of the board's own time a press may "
+                                              "take (default 600 s)")
+    standalone.add_argument("--json", action="store_true",
+                            help="print the marks off the wires, the pulses and the "
+                                 "player's verdicts as JSON")
+    add_backend_option(standalone)
+    add_machine_option(standalone)
+    standalone.set_defaults(run=_cmd_standalone)
