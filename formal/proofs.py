@@ -12,10 +12,13 @@ from ..gateware.field.correction_table import CorrectionTable
 from .laser import LaserSafetySpec
 from ..gateware.laser.controller import LaserController, clocks_at_least
 from .xy2_100 import XY2TransmitterSpec
+from .player import PlayerSpec
+from ..gateware.player.player import JobPlayer
 
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "command_path_proof", "laser_safety_proof",
-           "correction_proof", "correction_link_proof", "LASER_PROOF_PARAMETERS"]
+           "correction_proof", "correction_link_proof", "player_proof",
+           "LASER_PROOF_PARAMETERS"]
 
 
 @dataclass(frozen=True)
@@ -189,6 +192,37 @@ def laser_safety_proof(*, make_controller=None, lead_clocks=None, helpers=True,
         depth=10, cover_depth=30)
 
 
+#: The player proof's image: the header and one segment, 24 bytes.
+PLAYER_PROOF_IMAGE_BYTES = 24
+
+
+def player_proof(*, make_player=None, helpers=True, image=None, name="player_check"):
+    """The job player writes (and arms) only after a whole image has passed its check.
+
+    On an image of at most 24 bytes at address 0 (the counters' width does not enter the
+    property) with a CRC core of a byte a clock (the board's takes eight; both are simulated
+    against zlib). Helper invariants tie the player's word count, length, expected CRC and
+    CRC register to the spec's, so a short induction is enough. The covers (a whole image
+    checked; the first write after it) are searched with the flash giving a valid image
+    (``image``: the header alone, by default), and so are the broken players' bounded
+    checks, each with the image its fault lets through; nothing can be reached before the
+    header's nine words are in (``cover_skip``)."""
+    from .player import valid_image
+    make_player = make_player or (lambda: JobPlayer(
+        max_image_bytes=PLAYER_PROOF_IMAGE_BYTES, offset=0, crc_bits_per_clock=8))
+    image = valid_image(segments=()) if image is None else image
+    # (The helper invariants are for the induction: the restricted searches go without.)
+    restricted = lambda: PlayerSpec(make_player(), helpers=False, image=image)
+    return Proof(
+        name=name,
+        description="player: no register written, arm included, until a whole image (magic, "
+                    "version, length, CRC-32 of every byte) has passed the check since the "
+                    "start",
+        harness=lambda: PlayerSpec(make_player(), helpers=helpers),
+        depth=8, cover_depth=52, bmc_depth=52, cover_skip=40, bmc_skip=40,
+        cover_harness=restricted, bmc_harness=restricted)
+
+
 def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correction_writes"):
     """The correction stage: no torn point, no lost write, the stream rules.
 
@@ -253,4 +287,5 @@ PROOFS = [
         name="laser_safety_free_prr"),
     correction_proof(),
     correction_link_proof(),
+    player_proof(),
 ]

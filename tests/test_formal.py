@@ -10,7 +10,7 @@ import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
                                     correction_link_proof, correction_proof,
-                                    laser_safety_proof, xy2_phy_proof)
+                                    laser_safety_proof, player_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
@@ -18,6 +18,7 @@ from galvoscan.formal.runner import run_sby
 from broken_command import BROKEN_COMMAND_PATHS
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
+from broken_player import PLAYER_FAULTS, TamperedPlayer
 from broken_phys import FAULTS, TamperedPHY
 
 
@@ -149,3 +150,39 @@ def test_broken_correction_link_fails_the_proof(fault, property, tmp_path):
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
+
+
+def _player_fault_image(fault):
+    """What the flash gives in a broken player's bounded check: an image the player is
+    deceived into passing, where the flash's own bytes fail the check."""
+    from galvoscan.formal.player import valid_image
+
+    def flip_repeats(image):
+        image[14] ^= 0x02
+    if fault == "byte_unchecked":
+        # Valid as the player sees it (byte 14 changed), not as the flash holds it.
+        image = bytearray(valid_image(segments=(), tamper=flip_repeats))
+        flip_repeats(image)
+        return bytes(image)
+    if fault == "magic_not_checked":
+        return b"XXXX" + valid_image(segments=())[4:]
+    if fault == "length_short":
+        # The flash says 20 bytes (the player is told 18, and checks 18 whose CRC is right).
+        image = bytearray(valid_image(segments=()))
+        image[6] = 20
+        return bytes(image) + b"\x00\x00"
+    return valid_image(segments=())
+
+
+@pytest.mark.parametrize("fault", sorted(PLAYER_FAULTS))
+def test_broken_player_fails_the_proof(fault, tmp_path):
+    proof = player_proof(make_player=lambda: TamperedPlayer(
+        fault, max_image_bytes=24, offset=0, crc_bits_per_clock=8), helpers=False,
+        image=_player_fault_image(fault), name=f"broken_{fault}")
+    if fault == "arms_on_start":
+        # (The write comes on the clock after the start.)
+        proof = replace(proof, bmc_skip=0, bmc_depth=4)
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert failed_properties(bmc) == {
+        "no register written before a whole image passed the check"}, (fault, bmc.failed)

@@ -54,6 +54,9 @@ class JobPlayer(wiring.Component):
         small one).
     offset : int
         The image's flash address.
+    crc_bits_per_clock : int
+        The CRC core's (:class:`~.crc32.CRC32`): 1 on the board; the proof's 8 make its
+        covers short.
 
     Interface attributes
     --------------------
@@ -83,7 +86,8 @@ class JobPlayer(wiring.Component):
         while the player waits on it (the MO lead, a full queue, the queue running dry).
     """
 
-    def __init__(self, *, max_image_bytes=MAX_IMAGE_BYTES, offset=JOB_OFFSET):
+    def __init__(self, *, max_image_bytes=MAX_IMAGE_BYTES, offset=JOB_OFFSET,
+                 crc_bits_per_clock=1):
         if not isinstance(max_image_bytes, int) or max_image_bytes % 2 or \
                 not HEADER_BYTES <= max_image_bytes <= MAX_IMAGE_BYTES:
             raise ValueError(f"max_image_bytes must be an even number from {HEADER_BYTES} to "
@@ -93,6 +97,24 @@ class JobPlayer(wiring.Component):
                              f"24-bit flash addresses")
         self.max_image_bytes = max_image_bytes
         self.offset = offset
+        self._crc = CRC32(bits_per_clock=crc_bits_per_clock)
+        words_max = max_image_bytes // 2
+        # Made here, so that the proof's helper invariants can name them (formal/player.py).
+        self._live = Signal(name="live")                # the second reading, which writes
+        self._position = Signal(range(words_max + 1), name="position")
+        self._length = Signal(range(words_max + 1), name="length")
+        self._byte_high = Signal(name="byte_high")
+        self._word_valid = Signal(name="word_valid")
+        self._expected_crc = Signal(32, name="expected_crc")
+        self._parsing = Signal(name="parsing")          # reading the image through
+        self._writing = Signal(name="writing")          # a write given, not yet done
+        self._playing = Signal(name="playing")          # in a state of the playing only
+        self._section = Signal(_Section, name="section")
+        self._ended = Signal(name="ended")
+        self._took = Signal(name="took")
+        self._reading = Signal(name="reading")          # starting a read
+        self._repeating = Signal(name="repeating")      # reading the segments again
+        self._word = Signal(16, name="word")
         super().__init__({
             "read_address": Out(24), "read_start": Out(1), "read_stop": Out(1),
             "read_data": In(stream.Signature(8)), "read_idle": In(1),
@@ -105,25 +127,25 @@ class JobPlayer(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.crc = crc = CRC32()
+        m.submodules.crc = crc = self._crc
         words_max = self.max_image_bytes // 2
 
         # --- the image, a word at a time ---------------------------------------------------------
-        live = Signal()                 # the second reading, which writes
-        section = Signal(_Section)
-        position = Signal(range(words_max + 1))         # words taken since the image's start
-        length = Signal.like(position)                  # the image's length, in words
-        byte_high = Signal()            # the next byte is a word's high byte
-        word = Signal(16)
-        word_valid = Signal()
-        expected_crc = Signal(32)
+        live = self._live
+        section = self._section
+        position = self._position       # words taken since the image's start
+        length = self._length           # the image's length, in words
+        byte_high = self._byte_high     # the next byte is a word's high byte
+        word = self._word
+        word_valid = self._word_valid
+        expected_crc = self._expected_crc
         repeats_left = Signal(16)
         settings_left = Signal(8)       # (address, value) pairs still to come
         setting_address = Signal(7)
         setting_value_next = Signal()   # the next settings word is a value
         segment_word = Signal(range(SEGMENT_WORDS))
         segments_from = Signal.like(position)           # the first segment's word
-        repeating = Signal()            # reading the segments again
+        repeating = self._repeating     # reading the segments again
         result = self.result            # how this start ends (NONE while it runs)
 
         # --- its writes to the register file, one at a time -------------------------------------
@@ -136,6 +158,7 @@ class JobPlayer(wiring.Component):
         write_checking = Signal()       # granted: done or refused on this clock
         write_refused = Signal()        # the last write was refused
         write_free = ~write_waiting & ~write_checking
+        m.d.comb += self._writing.eq(~write_free)
         address = Signal(7)
         with m.Switch(write_target):
             for code, name in enumerate(_TARGETS):
@@ -220,8 +243,8 @@ class JobPlayer(wiring.Component):
         # The image's end, a clock after the word that reached it was taken (a register:
         # the compare is off the paths into the word's handling); no byte is taken on that
         # clock, so none past the end reaches the CRC.
-        ended = Signal()
-        took = Signal()
+        ended = self._ended
+        took = self._took
         m.d.sync += [ended.eq((section != _Section.HEADER) & (position == length)),
                      took.eq(0)]
 
@@ -233,7 +256,7 @@ class JobPlayer(wiring.Component):
                     begin()
 
             with m.State("READ"):
-                m.d.comb += self.read_start.eq(1)
+                m.d.comb += [self.read_start.eq(1), self._reading.eq(1)]
                 with m.If(self.read_idle):
                     m.next = "PARSE"
 
@@ -242,13 +265,16 @@ class JobPlayer(wiring.Component):
                 # has room); the next word's bytes come once it is taken.
                 queue_wait = live & (section == _Section.SEGMENTS) & (segment_word == 2) & \
                     ~self.queue_ready
-                m.d.comb += [take_byte.eq(~word_valid & write_free & ~took & ~ended),
+                # (In the check, a byte waits for the CRC to take the last one.)
+                m.d.comb += [take_byte.eq(~word_valid & write_free & ~took & ~ended &
+                                          ~(crc.busy & ~live)),
+                             self._parsing.eq(~live),
                              waiting_on_machine.eq(queue_wait & self.armed)]
                 with m.If(write_free & write_refused):
                     stop(PlayerResult.REFUSED)
                 with m.Elif(write_free & word_valid & ~queue_wait & ~ended):
                     m.d.sync += [word_valid.eq(0), position.eq(position + 1), took.eq(1)]
-                    self._word(m, live, section, position, length, word, expected_crc,
+                    self._take_word(m, live, section, position, length, word, expected_crc,
                                repeats_left, settings_left, setting_address,
                                setting_value_next, segment_word, segments_from, owned, write,
                                stop, words_max)
@@ -269,6 +295,7 @@ class JobPlayer(wiring.Component):
                 self._guard(m, live, abort)
 
             with m.State("VERDICT"):
+                m.d.comb += self._parsing.eq(1)
                 with m.If(~crc.busy):
                     with m.If(crc.crc == expected_crc):
                         # Checked: vector mode, stopped, then the image read again and played.
@@ -336,6 +363,8 @@ class JobPlayer(wiring.Component):
                     m.d.sync += self.refused.eq(self.refused + 1)
                 m.next = "IDLE"
 
+        m.d.comb += self._playing.eq(Cat(fsm.ongoing(state) for state in (
+            "SELECT", "ARM", "LEAD", "DRAIN", "STOP", "FLUSH", "HALT")).any())
         m.d.comb += self.state.eq(Mux(fsm.ongoing("IDLE"), PlayerState.IDLE,
                                       Mux(live, PlayerState.RUNNING, PlayerState.CHECKING)))
         return m
@@ -349,7 +378,7 @@ class JobPlayer(wiring.Component):
             with m.Else():
                 m.next = "END"
 
-    def _word(self, m, live, section, position, length, word, expected_crc, repeats_left,
+    def _take_word(self, m, live, section, position, length, word, expected_crc, repeats_left,
               settings_left, setting_address, setting_value_next, segment_word,
               segments_from, owned, write, stop, words_max):
         """What one word of the image does, in the check and in the playing."""
@@ -369,15 +398,19 @@ class JobPlayer(wiring.Component):
                         with m.If(word != FORMAT_VERSION):
                             stop(PlayerResult.BAD_VERSION)
                     with m.Case(Word.LENGTH_LOW):
-                        m.d.sync += length[:15].eq(word[1:])
-                        with m.If(word[0]):
+                        # In words: the low word's bits 15:1, as far as `length` holds them
+                        # (a small build's: the rest must be clear).
+                        low = min(15, len(length))
+                        m.d.sync += length[:low].eq(word[1:1 + low])
+                        with m.If(word[0] | (word[1 + low:] != 0 if low < 15 else 0)):
                             stop(PlayerResult.BAD_HEADER)
                     with m.Case(Word.LENGTH_HIGH):
-                        # (In words: the high word's bits above the flash's 2**23 words must
-                        # be clear, and only the low bits are compared.)
-                        high = len(length) - 15
-                        words = Cat(length[:15], word[:high])
-                        m.d.sync += length[15:].eq(word)
+                        # The high word's bits above the counters' must be clear, and only the
+                        # low bits are compared.
+                        high = max(0, len(length) - 15)
+                        words = Cat(length[:15], word[:high]) if high else length
+                        if high:
+                            m.d.sync += length[15:].eq(word)
                         with m.If((word[high:] != 0) | (words > words_max) |
                                   (words < HEADER_WORDS)):
                             stop(PlayerResult.BAD_HEADER)
