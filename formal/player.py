@@ -155,7 +155,6 @@ class PlayerSpec(Elaboratable):
     def _helpers(m, dut, count, from_offset, crc, magic, version, length, field, passed,
                  last_two):
         position = dut._position
-        words = Const(0, 1)
         parsing = dut._parsing
         m.d.comb += [
             Assert(~dut._live | passed),
@@ -175,7 +174,7 @@ class PlayerSpec(Elaboratable):
             Assert(~parsing | ((position < HEADER_WORDS) == (dut._section.as_value() == 0))),
             Assert(~parsing | dut._took |
                    (dut._ended == ((dut._section.as_value() != 0) & (position == dut._length)))),
-            Assert(~parsing | (count == Cat(dut._byte_high, words) +
+            Assert(~parsing | (count == dut._byte_high +
                                2 * (position + dut._word_valid))),
             Assert(~parsing | (position <= 0) |
                    (magic[:16] == int.from_bytes(MAGIC[:2], "little"))),

@@ -27,7 +27,7 @@ from .host.command import CommandDecoder
 from .host.registers import RegisterFile
 from .host.fields import pack
 from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
-                          PlayerResult, PlayerState, register_map)
+                          PlayerResult, PlayerState, PlayerStatus, register_map)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
@@ -474,6 +474,10 @@ class GalvoScanTop(wiring.Component):
             laser_ready.eq(laser.mo_ready & laser.laser_enable),
             read_start.eq(player.read_start), read_stop.eq(player.read_stop),
         ]
+        player_status = Signal(PlayerStatus)
+        m.d.comb += [player_status.state.eq(player.state),
+                     player_status.result.eq(player.result),
+                     player_status.refused.eq(player.refused)]
         m.d.comb += [
             self.flash_cs_n.eq(flash.cs_n), self.flash_clk.eq(flash.sck),
             self.flash_copi.eq(flash.copi), flash.cipo.eq(self.flash_cipo),
@@ -489,12 +493,12 @@ class GalvoScanTop(wiring.Component):
             player.laser_ready.eq(laser_ready),
             player.fault.eq(fault),
             self._player_alive.eq(player.alive),
-            regs.player.eq(Cat(player.state, player.result, player.refused)),
+            regs.player.eq(player_status),
             status.flags.player_busy.eq(player.state != PlayerState.IDLE),
             status.flags.job_refused.eq(Cat(player.result == result for result in PlayerResult
                                             if result.refused).any()),
             self.busy.eq(player.state != PlayerState.IDLE),
-            self.ready.eq(laser.mo_ready & laser.laser_enable),
+            self.ready.eq(status.flags.laser_ready),
         ]
         connect(m, flash.data, player.read_data)
         connect(m, player.bus, arbiter.player)

@@ -34,9 +34,7 @@ def board_with(image, **kwargs):
 
 
 def player_status(client):
-    word = client.read("player")
-    return PlayerStatus.const({"state": word & 3, "result": word >> 2 & 15,
-                               "refused": word >> 6})
+    return PlayerStatus.from_bits(client.read("player"))
 
 
 def press_and_wait(board, client, *, timeout_s=0.05):

@@ -21,6 +21,7 @@ __all__ = ["add_parsers"]
 
 def _cmd_store(args):
     from ..jobs.image import ImageError, job_image
+    from ..jobs.stream import job_segments
     if not args.output and not args.estimate:
         fail("give -o FILE for the image (or --estimate to plan only)")
     job, _, _, _, wobble_regs, say = planned_job(args)
@@ -32,16 +33,12 @@ def _cmd_store(args):
         say(f"the image would be {len(image):,} bytes; nothing written")
         return 0
     Path(args.output).write_bytes(image)
-    say(f"wrote {args.output}: {len(image):,} bytes, {len(job_segments_of(image))} segments, "
+    say(f"wrote {args.output}: {len(image):,} bytes, {len(job_segments(job.segments))} "
+        f"segments, "
         f"{args.repeats} repeat(s) a start; put it on the board with `galvoscan flash --job "
         f"{args.output}` (a bitstream built with --preset marker plays it"
         f"{', with the wobble stage' if wobble_regs else ''})")
     return 0
-
-
-def job_segments_of(image):
-    from ..jobs.image import read_image
-    return read_image(image).segments
 
 
 def _cmd_flash(args):
@@ -88,7 +85,7 @@ def _cmd_flash(args):
 def _cmd_standalone(args):
     from ..build import preset_top_options
     from ..client import HostClient
-    from ..gateware.host.fields import PlayerResult, PlayerState
+    from ..gateware.host.fields import PlayerResult, PlayerState, PlayerStatus
     from ..jobs.image import ImageError, read_image
     from ..sim.board import SimTransport
     from .args import simulated_board
@@ -116,20 +113,21 @@ def _cmd_standalone(args):
         board.press_start()
         waited = 0.0
         while True:
-            word = client.read("player")
-            if word & 3 == PlayerState.IDLE.value:
+            status = PlayerStatus.from_bits(client.read("player"))
+            if status.state == PlayerState.IDLE:
                 break
             board.run_for(step)
             waited += step
             if waited > args.timeout:
                 fail(f"the player was still busy after {args.timeout:g} s of the board's "
                      f"time (--timeout)")
-        result = PlayerResult((word >> 2) & 15)
+        result = PlayerResult(status.result)
         presses.append(result)
         print(f"press {len(presses)}: {result.label}", file=sys.stderr if args.json else
               sys.stdout)
     board.run_for(1e-3)
-    report = _report(board, profile, planned, presses, client.read("player") >> 6)
+    refused = PlayerStatus.from_bits(client.read("player")).refused
+    report = _report(board, profile, planned, presses, refused)
     if args.json:
         print(json.dumps(report))
     else:

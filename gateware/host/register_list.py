@@ -310,11 +310,12 @@ def all_registers(table_points, correction_nodes):
                  needs=('laser',)),
         # --- job player group (built with GalvoScanTop(player=True)) -------------------------
         Register("player", 0x17, "ro", 0, 0, 0, "fields",
-                 "the job player: bits 1:0 state (0 idle, 1 checking the flash's image, 2 "
-                 "playing it), bits 5:2 how the last start ended (0 none yet, 1 done, 2 no "
-                 "image, 3 other version, 4 bad header, 5 bad CRC, 6 bad setting, 7 a write "
-                 "refused, 8 laser fault, 9 a host took over), bits 13:6 images refused since "
-                 "reset (stops at 255)", width=PlayerStatus.size,
+                 "the job player: " + "; ".join(
+                     f"bits {field.offset + field.width - 1}:{field.offset} {name}" +
+                     (f" ({', '.join(f'{v.value} {v.label}' for v in field.shape)})"
+                      if name != "refused" else " (images refused since reset, stops at "
+                      "255)")
+                     for name, field in PlayerStatus), width=PlayerStatus.size,
                  needs=('player',)),
     ]
 
