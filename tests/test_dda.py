@@ -120,6 +120,22 @@ def test_random_lines():
     check(lines)
 
 
+def test_whole_number_lengths():
+    """Lines whose length is a whole number (dx² + dy² a perfect square): a point falls exactly
+    one pitch short of the end when the pitch divides the length, and must not be given."""
+    lines = []
+    for a, b, c in [(3, 4, 5), (5, 12, 13), (8, 15, 17), (20, 21, 29), (65, 72, 97),
+                    (119, 120, 169), (2772, 2665, 3845)]:
+        for scale in (1, 7):
+            dx, dy, length = a * scale, b * scale, c * scale
+            for pitch in {length, length - 1, length + 1, max(1, length // 3),
+                          max(1, length // 4), max(1, length // 4 + 1)}:
+                if length <= 40000:
+                    lines.append((20000, 30000, 20000 + dx, 30000 - dy, pitch))
+                    lines.append((20000 + dy, 30000, 20000, 30000 + dx, pitch))
+    check(lines)
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.tuples(st.integers(0, 65535), st.integers(0, 65535), st.integers(0, 65535),
                  st.integers(0, 65535), st.integers(200, 65535)))
@@ -153,3 +169,38 @@ def test_set_up_takes_the_clocks_the_planner_counts_on(direction):
     sim.add_testbench(testbench)
     sim.run()
     assert counted == [DIRECTED_SETUP_CLOCKS if direction else SETUP_CLOCKS]
+
+
+@pytest.mark.parametrize("direction", [False, True])
+def test_short_lines_set_up_within_a_frame(direction):
+    """A line no longer than the pitch (a flattened curve's short piece) gives its end point
+    sooner than a frame at 12 MHz and XY2-100 (120 clocks), so a run of them never makes the
+    mirrors wait; a zero-length one is done sooner still."""
+    dut = LineDDA(direction=direction)
+    counted = {}
+
+    async def testbench(ctx):
+        ctx.set(dut.points.ready, 1)
+        for name, end, pitch in [("short", (1050, 2040), 65), ("one pitch", (1039, 2052), 65),
+                                 ("zero", (1000, 2000), 65)]:
+            ctx.set(dut.pitch, pitch)
+            ctx.set(dut.segment.payload, {"x0": 1000, "y0": 2000, "x1": end[0], "y1": end[1]})
+            ctx.set(dut.segment.valid, 1)
+            await ctx.tick().until(dut.segment.ready)
+            ctx.set(dut.segment.valid, 0)
+            clocks, points = 1, []
+            while ctx.get(dut.busy):
+                if ctx.get(dut.points.valid):
+                    points.append((ctx.get(dut.points.payload.x), ctx.get(dut.points.payload.y)))
+                    counted.setdefault(name, clocks)
+                await ctx.tick()
+                clocks += 1
+            counted.setdefault(name, clocks)
+            assert points == ([] if name == "zero" else [end]), name
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(testbench)
+    sim.run()
+    assert counted["short"] < 120 and counted["one pitch"] < 120, counted
+    assert counted["zero"] < 10, counted

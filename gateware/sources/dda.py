@@ -11,15 +11,20 @@ The per-segment arithmetic is done once, sequentially, at the start of a segment
 while the segment before is still being marked; a segment of one point after another of one
 point can make the mirrors wait a frame at 12 MHz, see :class:`VectorSequencer`):
 
-* ``D² = dx² + dy²`` and ``p²``, exact, through one shared 16 × 16 multiplier (one DSP);
+* ``D² = dx² + dy²``, exact, through one shared 16 × 16 multiplier (one DSP);
 * ``L = √D²`` to 16 fractional bits (digit by digit, 33 clocks);
 * the steps ``|dx|·p/L`` and ``|dy|·p/L`` to 32 fractional bits, one after the other
   (restoring division, 48 clocks each, on the square root's remainder and subtractor).
 
 Then each point costs one clock: the positions are accumulated with 32 fractional bits, and
-whether another point fits (``(k·p)² < D²``) is decided exactly with integers, by adding the
-odd multiples of ``p²``. The accumulated error stays below 2⁻¹⁵ unit, so a point can differ
-from the exact rounding only when the exact value lies that close to a half.
+whether another point fits (``k·p < L``) is decided exactly with integers, by taking the pitch
+from the whole part of ``L`` once a point: ``k·p < L`` holds exactly when ``k·p ≤ ⌊L⌋``, or,
+when ``D²`` is a perfect square (the root's remainder is zero, ``L`` a whole number), when
+``k·p < ⌊L⌋``. The accumulated error stays below 2⁻¹⁵ unit, so a point can differ from the
+exact rounding only when the exact value lies that close to a half.
+
+A zero-length segment gives nothing after 6 clocks; one no longer than the pitch gives its end
+point after the square root (41 clocks), without the divisions.
 
 Built with ``direction=True`` (for the wobble stage) it also gives the line's direction, the
 unit vector ``|dx|/L`` and ``|dy|/L`` to 10 fractional bits (two more divisions, 13 clocks
@@ -123,11 +128,9 @@ class LineDDA(wiring.Component):
         mul_b = Signal(16)
         product = Signal(32)
         m.d.sync += product.eq(mul_a * mul_b)
-        d2 = Signal(34)            # |D|², exact
-        p2 = Signal(32)            # p², exact
-        phase = Signal(range(4))
+        phase = Signal(range(3))
         # One remainder and one subtractor serve the square root and both divisions.
-        radicand = Signal(34)      # D², then the zero bits that follow it
+        radicand = Signal(34)      # D² (exact), then the zero bits that follow it
         remainder = Signal(36)
         root = Signal(18 + G)      # ⌊L · 2^G⌋ < 2^(17+G)
         steps = Signal(range(64))
@@ -137,16 +140,22 @@ class LineDDA(wiring.Component):
         # Stepping state.
         acc_x = Signal(17 + F)     # position + ½, units · 2^F
         acc_y = Signal(17 + F)
-        kp2 = Signal(36)           # (k·p)²
-        odd = Signal(37)           # (2k + 1)·p²
+        # Whether another point fits: ⌊L⌋ − k·p, and whether L is a whole number (D² a perfect
+        # square), when k·p < L needs ⌊L⌋ − k·p > 0 rather than ≥ 0.
+        left = Signal(17)          # L < 65536·√2 < 2^17
+        exact = Signal()
+        after = Signal(18)         # ⌊L⌋ − (k + 1)·p; bit 17 set when negative
+        m.d.comb += after.eq(left - pitch)
+        fits = Signal()
+        m.d.comb += fits.eq(~after[17] & ~(exact & (after == 0)))
 
         # Square-root step: bring down two bits, try (root << 2) | 1. Division step: bring
         # down a zero, try the root. Both subtract from the same remainder.
         in_sqrt = Signal()
         brought = Mux(in_sqrt, Cat(radicand[-2:], remainder), remainder << 1)[:37]
         trial = Mux(in_sqrt, Cat(Const(1, 2), root), root)
-        fits = brought >= trial
-        next_remainder = Mux(fits, brought - trial, brought)[:36]
+        trial_fits = brought >= trial
+        next_remainder = Mux(trial_fits, brought - trial, brought)[:36]
 
         # Only the idle state takes a segment.
         m.d.comb += self.busy.eq(~self.segment.ready)
@@ -170,32 +179,26 @@ class LineDDA(wiring.Component):
                         ay.eq((delta_y[:16] ^ delta_y[16].replicate(16)) + delta_y[16]),
                         acc_x.eq(Cat(Const(1 << (F - 1), F), p.x0)),   # x0 + ½, for rounding
                         acc_y.eq(Cat(Const(1 << (F - 1), F), p.y0)),
-                        kp2.eq(0),
                         phase.eq(0),
                     ]
                     m.next = "SQUARES"
             with m.State("SQUARES"):
+                # D² straight into the square root's radicand.
                 with m.Switch(phase):
                     with m.Case(0):
                         m.d.comb += [mul_a.eq(ax), mul_b.eq(ax)]
                     with m.Case(1):
                         m.d.comb += [mul_a.eq(ay), mul_b.eq(ay)]
-                        m.d.sync += d2.eq(product)
+                        m.d.sync += radicand.eq(product)
                     with m.Case(2):
-                        m.d.comb += [mul_a.eq(pitch), mul_b.eq(pitch)]
-                        m.d.sync += d2.eq(d2 + product)
-                    with m.Case(3):
-                        m.d.sync += [p2.eq(product), odd.eq(product)]
+                        m.d.sync += radicand.eq(radicand + product)
                 m.d.sync += phase.eq(phase + 1)
-                with m.If(phase == 3):
+                with m.If(phase == 2):
                     m.next = "CHECK"
             with m.State("CHECK"):
-                m.d.sync += [radicand.eq(d2), remainder.eq(0), root.eq(0),
-                             steps.eq(17 + G - 1)]
-                with m.If(d2 == 0):
+                m.d.sync += [remainder.eq(0), root.eq(0), steps.eq(17 + G - 1)]
+                with m.If((ax | ay) == 0):
                     m.next = "IDLE"                        # zero length: no point
-                with m.Elif(d2 <= p2):
-                    m.next = "END"                         # one pitch or less: the end only
                 with m.Else():
                     m.next = "SQRT"
             with m.State("SQRT"):
@@ -203,16 +206,21 @@ class LineDDA(wiring.Component):
                 m.d.sync += [
                     radicand.eq(radicand << 2),
                     remainder.eq(next_remainder),
-                    root.eq(Cat(fits, root)),
+                    root.eq(Cat(trial_fits, root)),
                     steps.eq(steps - 1),
                 ]
                 with m.If(steps == 0):
-                    m.d.sync += second_axis.eq(0)
-                    m.next = "PRODUCT"
+                    m.next = "COUNT"
+            with m.State("COUNT"):
+                m.d.sync += [left.eq(root[G:]), exact.eq(remainder == 0),
+                             second_axis.eq(0)]
+                m.next = "PRODUCT"
             with m.State("PRODUCT"):
                 # |dx|·p (then |dy|·p): the division's dividend.
                 m.d.comb += [mul_a.eq(Mux(second_axis, ay, ax)), mul_b.eq(pitch)]
                 m.next = "LOAD"
+                with m.If(~second_axis & ~fits):
+                    m.next = "END"                         # one pitch or less: the end only
             with m.State("LOAD"):
                 # |dx|·p < L·2^G, so the division starts with the whole product as its
                 # remainder; the quotient |dx|·p·2^F / L < p·2^F has 16 + F bits.
@@ -221,9 +229,9 @@ class LineDDA(wiring.Component):
             with m.State("DIVIDE"):
                 m.d.sync += [remainder.eq(next_remainder), steps.eq(steps - 1)]
                 with m.If(second_axis):
-                    m.d.sync += step_y.eq(Cat(fits, step_y))
+                    m.d.sync += step_y.eq(Cat(trial_fits, step_y))
                 with m.Else():
-                    m.d.sync += step_x.eq(Cat(fits, step_x))
+                    m.d.sync += step_x.eq(Cat(trial_fits, step_x))
                 with m.If(steps == 0):
                     m.d.sync += second_axis.eq(1)
                     with m.If(second_axis):
@@ -245,24 +253,22 @@ class LineDDA(wiring.Component):
                     m.next = "UNIT"
                 with m.State("UNIT"):
                     m.d.sync += [remainder.eq(next_remainder), steps.eq(steps - 1),
-                                 unit.eq(Cat(fits, unit))]
+                                 unit.eq(Cat(trial_fits, unit))]
                     with m.If(steps == 0):
                         m.d.sync += second_axis.eq(1)
                         with m.If(second_axis):
-                            m.d.sync += [self.direction.uy.eq(Cat(fits, unit)),
+                            m.d.sync += [self.direction.uy.eq(Cat(trial_fits, unit)),
                                          self.direction.negative_x.eq(negative_x),
                                          self.direction.negative_y.eq(negative_y)]
                             m.next = "NEXT"
                         with m.Else():
-                            m.d.sync += self.direction.ux.eq(Cat(fits, unit))
+                            m.d.sync += self.direction.ux.eq(Cat(trial_fits, unit))
                             m.next = "UNIT_LOAD"
             with m.State("NEXT"):
                 # Is there a point k·p < L before the end?
-                next_kp2 = kp2 + odd
-                with m.If(next_kp2 < d2):
+                with m.If(fits):
                     m.d.sync += [
-                        kp2.eq(next_kp2),
-                        odd.eq(odd + (p2 << 1)),
+                        left.eq(after),
                         # acc ± step as one adder: add the complement and one to subtract.
                         acc_x.eq(acc_x + Cat(step_x ^ negative_x.replicate(len(step_x)),
                                              negative_x.replicate(len(acc_x) - len(step_x)))
