@@ -40,6 +40,10 @@ class Proof:
     #: Builds the harness the bounded check searches, where that is a restriction of the
     #: proof's: a counterexample found in it is one in the proof's harness too. None: the same.
     bmc_harness: Callable[[], object] = None
+    #: Solve the covers' and the bounded check's queries each with a new solver
+    #: (:func:`~.runner.run_sby`'s ``fresh_solver``): for a search of a few clocks after a long
+    #: ``cover_skip``.
+    fresh_solver: bool = False
 
     def __post_init__(self):
         if self.bmc_depth is None:
@@ -61,7 +65,7 @@ class Proof:
             harness = self.cover_harness or self.harness
             result, = run_sby(harness(), f"{self.name}_covers", workdir, depth=self.depth,
                               cover_depth=self.cover_depth, cover_skip=self.cover_skip,
-                              tasks=("cover",))
+                              tasks=("cover",), fresh_solver=self.fresh_solver)
             result.name = self.name         # reported as this proof's cover
         else:
             raise ValueError(f"unknown task {task!r}; known: {', '.join(self.TASKS)}")
@@ -77,7 +81,8 @@ class Proof:
         from .runner import run_sby
         harness = self.bmc_harness or self.harness
         bmc, = run_sby(harness(), self.name, workdir, depth=self.depth,
-                       cover_depth=self.bmc_depth, cover_skip=self.bmc_skip, tasks=("bmc",))
+                       cover_depth=self.bmc_depth, cover_skip=self.bmc_skip, tasks=("bmc",),
+                       fresh_solver=self.fresh_solver)
         return bmc
 
 
@@ -220,7 +225,7 @@ def player_proof(*, make_player=None, helpers=True, image=None, name="player_che
                     "start",
         harness=lambda: PlayerSpec(make_player(), helpers=helpers),
         depth=8, cover_depth=52, bmc_depth=52, cover_skip=40, bmc_skip=40,
-        cover_harness=restricted, bmc_harness=restricted)
+        cover_harness=restricted, bmc_harness=restricted, fresh_solver=True)
 
 
 def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correction_writes"):

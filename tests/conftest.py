@@ -32,7 +32,10 @@ def collect_garbage():
 #: gives each worker its share of the long ones and the two finish together. Only an order:
 #: a name missing here runs after these, as collected.
 LONGEST_FIRST = {
-    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[player_check]": 360,
+    "tests/test_formal.py::test_proof_holds_and_covers_are_reached[player_check]": 130,
+    "tests/test_formal.py::test_broken_player_fails_the_proof[byte_unchecked]": 120,
+    "tests/test_formal.py::test_broken_player_fails_the_proof[length_short]": 120,
+    "tests/test_formal.py::test_broken_player_fails_the_proof[magic_not_checked]": 110,
     "tests/test_cli.py::test_build_icebreaker": 127,
     "tests/test_netlist.py::test_the_default_builds_netlist_behaves_as_its_design": 127,
     "tests/test_cli.py::test_build_xy2_200_on_the_pll": 126,

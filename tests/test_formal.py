@@ -3,7 +3,6 @@ exactly the property it breaks."""
 
 from dataclasses import replace
 from functools import partial
-import os
 from pathlib import Path
 import re
 
@@ -175,16 +174,7 @@ def _player_fault_image(fault):
     return valid_image(segments=())
 
 
-#: The broken players whose counterexample is a whole check deep (some 50 clocks, 7 minutes
-#: each here): run with GALVOSCAN_DEEP_PROOFS=1; the suite runs the one that writes early.
-DEEP_PLAYER_FAULTS = {"byte_unchecked", "magic_not_checked", "length_short"}
-
-
-@pytest.mark.parametrize("fault", [
-    pytest.param(fault, marks=pytest.mark.skipif(
-        fault in DEEP_PLAYER_FAULTS and os.environ.get("GALVOSCAN_DEEP_PROOFS") != "1",
-        reason="a whole check deep: GALVOSCAN_DEEP_PROOFS=1 runs it"))
-    for fault in sorted(PLAYER_FAULTS)])
+@pytest.mark.parametrize("fault", sorted(PLAYER_FAULTS))
 def test_broken_player_fails_the_proof(fault, tmp_path):
     proof = player_proof(make_player=lambda: TamperedPlayer(
         fault, max_image_bytes=24, offset=0, crc_bits_per_clock=8), helpers=False,
