@@ -47,12 +47,17 @@ BUILDS = {
     # The whole default system on the PLL's 24 MHz, for XY2-200.
     "icebreaker_xy2_200": ("icebreaker", {"clock": 24e6, "bit_rate": 4e6}),
     "icestick": ("icestick", {}),
+    # The presets (`build --preset`): a marking station's and a cleaning head's bitstream.
+    "marker": ("icebreaker", {"preset": "marker"}),
+    "cleaner": ("icebreaker", {"preset": "cleaner"}),
 }
 
 
 def _build(label):
-    from .build import BuildError, build_bitstream
+    from .build import BuildError, build_bitstream, preset_build_options
     board, kwargs = BUILDS[label]
+    if "preset" in kwargs:
+        kwargs = preset_build_options(kwargs["preset"])
     with tempfile.TemporaryDirectory() as directory:
         # The bench records a slow build's figures rather than stopping at it, and a build
         # that fails (a placer that gives up) as a failure, with the others' figures kept.
@@ -65,7 +70,9 @@ def _build(label):
                    "clock_mhz": report.clock_mhz, "meets_timing": report.meets_timing,
                    "modes": list(report.modes), "correction_nodes": report.correction_nodes,
                    "bit_rate_mhz": report.bit_rate_mhz, "build_s": report.seconds,
-                   "placer": report.placer}
+                   "placer": report.placer,
+                   "options": [name for name in ("delays", "wobble", "interpolation", "player")
+                               if kwargs.get(name)]}
 
 
 def _blocks():
@@ -239,7 +246,8 @@ def table(result):
         if "failed" in board:
             rows.append((f"build {label}", f"FAILED: {board['failed']}"))
             continue
-        rows.append((f"build {label} ({', '.join(board['modes'])}; correction "
+        extras = "".join(f", {name}" for name in board.get("options", ()))
+        rows.append((f"build {label} ({', '.join(board['modes'])}{extras}; correction "
                      f"{board['correction_nodes'] or 'none'}; {board['clock_mhz']:g} MHz, "
                      f"{board['bit_rate_mhz']:g} Mbit/s)",
                      f"{board['luts']} / {board['luts_available']} cells, {board['brams']} RAMs, "

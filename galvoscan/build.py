@@ -20,7 +20,8 @@ from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check,
 from .toolchain import tool_env
 
 
-__all__ = ["BOARDS", "DEFAULT_MODES", "BuildReport", "build_bitstream"]
+__all__ = ["BOARDS", "DEFAULT_MODES", "PRESETS", "BuildReport", "build_bitstream",
+           "preset_build_options", "preset_top_options"]
 
 
 #: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory, options for
@@ -60,6 +61,17 @@ def preset_top_options(name):
                                                ("wobble", "interpolation", "delays", "player")
                                                if key in preset})
     return {"modes": preset["modes"], **options}, preset.get("clock") or CRYSTAL_HZ
+
+
+def preset_build_options(name):
+    """:func:`build_bitstream`'s options for preset ``name``'s bitstream (``bench`` builds it so),
+    its start settings among them: a build without the spiral starts, stopped, in its first
+    mode."""
+    from .gateware.settings import ScanSettings
+    options = dict(PRESETS[name])
+    if "spiral" not in options["modes"]:
+        options["settings"] = ScanSettings(mode=options["modes"][0], run=False)
+    return options
 
 
 @dataclass

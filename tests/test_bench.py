@@ -61,7 +61,9 @@ def test_table_shows_seeds_proofs_and_suite():
                  for k in ("frames_per_s", "latency_us", "latency_max_us")},
         "boards": {"icebreaker": {**board, "fmax_mhz": 25.0, "placer": "static"},
                    "icebreaker_seed2": {**board, "fmax_mhz": 24.2},
-                   "icebreaker_seed3": {**board, "fmax_mhz": 26.0}},
+                   "icebreaker_seed3": {**board, "fmax_mhz": 26.0},
+                   "marker": {**board, "modes": ["vector"], "options": ["delays", "player"],
+                              "clock_mhz": 24, "fmax_mhz": 25.4}},
         "proofs": {"a": {"prove": {"status": "PASS", "seconds": 10.0}},
                    "b": {"prove": {"status": "PASS", "seconds": 5.0},
                          "cover": {"status": "PASS", "seconds": 20.0}}},
@@ -73,6 +75,8 @@ def test_table_shows_seeds_proofs_and_suite():
     assert "| default build, lowest Fmax of 3 placer seeds | 24.2 MHz |" in text
     assert "Fmax 25.0 MHz (met), static placer, 200 s |" in text
     assert "Fmax 24.2 MHz (met), heap placer, 200 s |" in text
+    assert "| build marker (vector, delays, player; correction 17; 24 MHz, 2 Mbit/s) | " \
+           "4900 / 5280 cells" in text
     assert "| every proof and cover, one after another | 35 s |" in text
     assert "| test suite (the README's test command, on every core) | 10.0 min, 800 passed, " \
            "2 skipped |" in text
