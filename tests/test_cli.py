@@ -85,11 +85,12 @@ def test_sim_writes_frames_and_plot(tmp_path, capsys, interp):
     assert code == 0
     summary = json.loads(out)
     assert summary["frames"] == PARK_FRAMES + 80
-    assert summary["interpolation"] == (interp or "linear")      # the register's reset
+    # (Left out: what the default bitstream does, which has no interpolator.)
+    assert summary["interpolation"] == (interp or "off")
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
     assert [int(r["frame"]) for r in rows] == list(range(PARK_FRAMES + 80))
     table = SpiralTable()
-    want = spiral_frames(table.x, table.y, 40, dwell=2, interp=int(interp != "off"),
+    want = spiral_frames(table.x, table.y, 40, dwell=2, interp=int(interp == "linear"),
                          x_range=(0, 127), y_range=(1, 126))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
     assert png_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -324,8 +325,8 @@ def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
     assert code == 0 and summary["x_range"] == [0, 511] and summary["y_range"] == [1, 510]
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
     table = SpiralTable(points=512)
-    assert summary["interpolation"] == "linear"
-    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"], interp=1,
+    assert summary["interpolation"] == "off"
+    want = spiral_frames(table.x, table.y, 20, dwell=summary["dwell_frames"], interp=0,
                          x_range=(0, 511), y_range=(1, 510))
     assert [(int(r["x"]), int(r["y"])) for r in rows] == want
 

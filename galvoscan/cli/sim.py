@@ -196,6 +196,9 @@ def _sim_spiral(args):
         fail("--job is for --mode vector")
     if args.points is None:
         fail("the spiral needs --points N (8064 is the whole pattern)")
+    if args.interp is None and not args.netlist:
+        # What the default bitstream does: it has no interpolator, so it holds each point.
+        args.interp = "off"
     table = table_from(args)
     settings = settings_from(args, table)
     correction = _correction(args)
@@ -310,8 +313,10 @@ def add_parsers(commands):
     interp = BY_NAME["spiral_interp"]
     sim.add_argument("--interp", choices=INTERPOLATIONS, default=None,
                      help=f"between spiral points: off (hold each point, then jump) or linear "
-                          f"(every frame moves part of the way to the next; default: the "
-                          f"register's {INTERPOLATIONS[interp.reset]})")
+                          f"(every frame moves part of the way to the next). Default: off, "
+                          f"what the default bitstream does (it has no interpolator); a build "
+                          f"with --interpolation, or --preset cleaner, starts "
+                          f"{INTERPOLATIONS[interp.reset]}")
     sim.add_argument("--correction", metavar="FILE",
                      help="distortion correction table (.json, .ctb, .cor) the top starts with "
                           "(default: the identity); the wires carry corrected positions")
