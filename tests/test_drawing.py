@@ -285,7 +285,10 @@ def valid(tmp_path_factory):
     msp.add_spline([(0, 0), (3, 4), (6, 0)])
     msp.add_text("skip me")
     doc.saveas(folder / "valid.dxf")
+    doc.saveas(folder / "valid-binary.dxf", fmt="bin")
     return folder, {
+        # (A binary DXF: its case file is named case-binary.dxf.)
+        "-binary.dxf": (folder / "valid-binary.dxf").read_bytes(),
         ".svg": svg('<g transform="rotate(10)"><path d="M0,0 H10 V10 H0 Z M3,3 H7 V7 H3 Z"/>'
                     '<circle cx="5" cy="5" r="2"/><text>t</text></g>').encode(),
         ".dxf": (folder / "valid.dxf").read_bytes(),
@@ -305,7 +308,7 @@ def only_drawing_errors(folder, data, suffix):
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(suffix=st.sampled_from([".svg", ".dxf"]), fraction=st.floats(0, 1))
+@given(suffix=st.sampled_from([".svg", ".dxf", "-binary.dxf"]), fraction=st.floats(0, 1))
 def test_truncated_files_give_drawing_errors_only(valid, suffix, fraction):
     folder, files = valid
     data = files[suffix]
@@ -319,10 +322,24 @@ def test_garbage_gives_drawing_errors_only(valid, suffix, data):
 
 
 @settings(max_examples=40, deadline=None)
-@given(suffix=st.sampled_from([".svg", ".dxf"]), position=st.floats(0, 1),
+@given(suffix=st.sampled_from([".svg", ".dxf", "-binary.dxf"]), position=st.floats(0, 1),
        junk=st.binary(min_size=1, max_size=20))
 def test_corrupted_files_give_drawing_errors_only(valid, suffix, position, junk):
     folder, files = valid
     data = files[suffix]
     at = int(len(data) * position)
     only_drawing_errors(folder, data[:at] + junk + data[at + len(junk):], suffix)
+
+
+def test_binary_dxf_reads_as_its_text_twin(valid):
+    """A binary DXF (AutoCAD's other DXF encoding, which ezdxf.readfile reads) gives the
+    same paths as the same drawing saved as text; cut short, it is one line that says so."""
+    folder, files = valid
+    text, binary = load_drawing(folder / "valid.dxf"), load_drawing(folder / "valid-binary.dxf")
+    assert len(binary.paths) == len(text.paths) > 0
+    for a, b in zip(text.paths, binary.paths):
+        assert np.allclose(a, b)
+    assert binary.closed == text.closed and binary.skipped == text.skipped
+    cut = folder / "cut-binary.dxf"
+    cut.write_bytes(files["-binary.dxf"][:300])
+    refused(cut, "damaged binary DXF: it ends early or a group is corrupt")

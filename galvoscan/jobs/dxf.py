@@ -22,6 +22,8 @@ __all__ = []                                # nothing public: load_drawing reads
 
 
 _TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB", "ATTDEF"}
+#: How a binary DXF file starts (AutoCAD's DXF reference, "Binary DXF Files").
+_BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
 #: mm per $INSUNITS unit where the definition is exact (ezdxf's table has 1 in = 25.4000000001).
 _EXACT_MM = {1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 8: 25.4e-6, 9: 0.0254, 10: 914.4,
              13: 1e-3, 14: 100.0}
@@ -155,14 +157,26 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
 def _read_dxf(data, tolerance_mm):
     from ezdxf import recover, units
 
-    # recover reads what readfile reads and more: damaged files, binary DXF, any encoding. What
-    # it logs about a damaged file becomes a note, rather than lines on the user's terminal.
+    # recover reads damaged text files in any encoding; binary DXF it does not (it takes the
+    # sentinel for a group code), so that is loaded as ezdxf.readfile loads it, then audited.
+    # What ezdxf logs about a damaged file becomes a note, rather than lines on the user's
+    # terminal.
     logger, said = logging.getLogger("ezdxf"), BufferingHandler(1 << 30)
     said.setLevel(logging.WARNING)
     logger.addHandler(said)
     propagate, logger.propagate = logger.propagate, False
     try:
-        document, auditor = recover.read(io.BytesIO(data))
+        if data.startswith(_BINARY_SENTINEL):
+            from ezdxf.document import Drawing
+            from ezdxf.lldxf.tagger import binary_tags_loader
+            try:
+                document = Drawing.load(binary_tags_loader(data))
+            except Exception as error:      # struct's and ezdxf's words for a cut-off file
+                raise DrawingError(f"damaged binary DXF: it ends early or a group is corrupt "
+                                   f"({_one_line(error)})") from None
+            auditor = document.audit()
+        else:
+            document, auditor = recover.read(io.BytesIO(data))
     finally:
         logger.removeHandler(said)
         logger.propagate = propagate
