@@ -157,3 +157,17 @@ def test_not_utf8_names_the_line(tmp_path, capsys):
     job.write_bytes(b"jump 1 1\nmark 2 2\n# caf\xe9\n")
     line = _one_line_error(capsys, ["sim", "--mode", "vector", "--job", str(job)])
     assert "latin1.job, line 3" in line
+
+
+@pytest.mark.parametrize("tail", [["--no-such-option"], ["--help-me", "3"]])
+def test_argument_errors_are_one_line_for_every_command(capsys, tail):
+    """A wrong option, to any command, is one line that names it and where the options are
+    listed (not argparse's usage block), exit status 2."""
+    for where, _ in _parsers(parser()):
+        argv = where.split()[1:] + tail
+        with pytest.raises(SystemExit) as exit:
+            main(argv)
+        err = capsys.readouterr().err
+        assert exit.value.code == 2, argv
+        assert len(err.strip().splitlines()) == 1 and "usage:" not in err, (argv, err)
+        assert "--help` lists the options" in err, (argv, err)

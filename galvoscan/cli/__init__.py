@@ -32,9 +32,18 @@ def _version():
         return "unknown (not installed)"
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (what was wrong, and where the options are
+    listed), not argparse's usage block; subcommands' parsers are of this class too."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
+                     f"options)\n")
+
+
 def parser():
     """The whole command line."""
-    top = argparse.ArgumentParser(
+    top = _OneLineParser(
         prog="galvoscan",
         description="Open FPGA gateware that drives a laser scan head over XY2-100: "
                     "precessing Gaussian spiral fill, vector marking, raster fill and field "
