@@ -235,13 +235,14 @@ def baud(text):
     return int(value)
 
 
-def add_baud_option(parser):
-    """``--baud`` of a build: the rate the bitstream's serial port runs at."""
+def add_baud_option(parser, *, clock_option="--clock"):
+    """``--baud`` of a build: the rate the bitstream's serial port runs at (``clock_option``:
+    the command's option for the system clock)."""
     from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
     parser.add_argument("--baud", type=baud, default=DEFAULT_BAUD, metavar="BAUD",
                         help=f"host serial port rate (default: {_number(DEFAULT_BAUD)}; the "
                              f"FT2232H makes {', '.join(map(_number, FTDI_BAUDS))} exactly; "
-                             f"3e6 needs --clock 24e6 or more)")
+                             f"3e6 needs {clock_option} 24e6 or more)")
 
 
 def add_link_options(parser):

@@ -194,6 +194,6 @@ def add_parsers(commands):
                         metavar="HZ", help="frequency of clk (default: 12e6)")
     export.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
                         metavar="HZ", help="XY2 bit rate (default: 2e6; 4e6 for XY2-200)")
-    add_baud_option(export)
+    add_baud_option(export, clock_option="--clk-freq")
     add_table_options(export)
     export.set_defaults(run=_cmd_export)
