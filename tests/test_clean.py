@@ -96,3 +96,17 @@ def test_clean_on_the_simulated_board_counts_its_pulses(capsys):
     # 1 ms at 50 kHz is 50 pulses; the host stops once it has counted them.
     assert result["pulses"] >= 50
     assert result["errors"] == 0 and result["frames"] > 100
+
+
+def test_estimate_json_is_one_object_on_stdout(capsys):
+    """``clean --estimate --json``: the plan as one JSON object on stdout, the text on stderr;
+    the dose is the energy over the area (2 passes of a 1 cm² square)."""
+    assert main(["clean", "--area", "10x10", "--pattern", "raster", "--passes", "2",
+                 "--power", "50", "--estimate", "--json"]) == 0
+    out, err = capsys.readouterr()
+    record = json.loads(out)
+    assert "passes" in err
+    assert record["pattern"] == "raster" and record["area_mm"] == [10, 10]
+    assert record["passes"] == 2 and record["seconds"] == pytest.approx(2 * record["pass_s"])
+    assert record["dose_j_cm2"] == pytest.approx(record["power_w"] * record["seconds"] / 1.0,
+                                                 rel=1e-3)       # (power_w is rounded)

@@ -283,6 +283,31 @@ def test_units_and_placement_in_the_plan(tmp_path, capsys):
     assert "X 10.00 … 35.40 mm, Y 5.00 … 5.00 mm" in out
 
 
+def test_estimate_json_is_one_object_on_stdout(tmp_path, capsys):
+    """``--estimate --json`` (and ``--json`` with no board) print the plan as one JSON object
+    on stdout, the text going to stderr: a 1 inch line, 25.4 mm, three times, at the asked
+    speed and PRR."""
+    import ezdxf
+    doc = ezdxf.new(units=1)            # inches
+    doc.modelspace().add_line((0, 0), (1, 0))
+    path = tmp_path / "inch.dxf"
+    doc.saveas(path)
+    for extra in (["--estimate"], []):
+        assert main(["mark", str(path), "--origin", "lower-left", "--speed", "400", "--prr",
+                     "40", "--passes", "3", "--json", *extra]) == 0
+        out, err = capsys.readouterr()
+        record = json.loads(out)
+        assert "76.2 mm marked" in err                  # three passes
+        assert record["mark_mm"] == pytest.approx(3 * 25.4, abs=0.01)
+        assert record["bounds_mm"] == pytest.approx([0, 0, 25.4, 0])
+        assert record["prr_khz"] == 40 and record["passes"] == 3
+        assert record["speed_mm_s"] == pytest.approx(400, rel=0.02)
+        # The speed is the pitch's: pitch × PRR / pulses per point.
+        assert record["speed_mm_s"] == pytest.approx(
+            record["pitch_um"] / 1000 * 40e3 / record["pulses_per_point"], rel=1e-3)
+        assert record["estimate_s"] > 3 * 25.4 / 400
+
+
 # `python -m galvoscan.cli` with the tests' quick simulated board (8 MHz, 0.5 ms MO lead,
 # VECTOR_BOARD, a 16-segment queue, so the job starts after 16 segments, not 512), and a line
 # on stdout at the first laser pulse: the sign that the job is mid-way with the laser on.

@@ -47,6 +47,14 @@ def _cmd_clean(args):
     if args.estimate or not has_link(args, profile):
         if not args.estimate:
             say("no board given (--port, --spi or --sim): nothing sent")
+        if args.json:
+            print(json.dumps({
+                "pattern": job.pattern, "area_mm": list(args.area),
+                "centre_mm": list(args.centre), "speed_mm_s": round(job.speed_mm_s, 3),
+                "pass_s": round(job.pass_s, 6), "power_percent": power,
+                "power_w": round(job.power_w, 4), "prr_khz": prr,
+                "passes": round(job.passes, 4), "seconds": round(job.seconds, 6),
+                "dose_j_cm2": job.dose_j_cm2}))
         return 0
     registers = dict(job.registers)
     if profile.correction_table() is not None:

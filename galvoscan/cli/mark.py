@@ -111,6 +111,31 @@ def _describe(job, profile, settings_line):
     return lines
 
 
+def _estimate_record(job, profile, power, prr, passes, preview):
+    """The ``--estimate --json`` record (or ``--json`` with no board): the plan, in the units
+    the text gives it in."""
+    pitch, regs = job.pitch, job.registers
+    record = {
+        "segments": len(job.segments), "mark_mm": round(job.mark_mm, 3),
+        "jump_mm": round(job.jump_mm, 3), "bounds_mm": [round(v, 3) for v in job.bounds_mm],
+        "field_mm": profile.field.size_mm, "power_percent": power,
+        "power_w": round(profile.power_w(power), 4), "prr_khz": prr, "passes": passes,
+        "pitch_um": round(pitch.pitch_mm * 1000, 3), "pitch_units": pitch.pitch_units,
+        "pulses_per_point": pitch.pulses_per_point, "speed_mm_s": round(pitch.speed_mm_s, 3),
+        "speed_error": round(pitch.error, 6), "jump_delay_us": regs["jump_delay"],
+        "laser_on_delay_us": regs["laser_on_delay"], "laser_off_delay_us": regs["laser_off_delay"],
+        "mark_delay_us": regs["mark_delay"], "polygon_delay_us": regs["polygon_delay"],
+        "polygon_scaled": bool(regs["polygon_scaled"]), "estimate_s": round(job.estimate_s, 6),
+        "notes": list(job.notes), "preview": preview,
+    }
+    if "wob_shape" in regs:
+        record["wobble_um"] = {
+            "across": round(regs["wob_across"] * profile.mm_per_unit * 1000, 1),
+            "along": round(regs["wob_along"] * profile.mm_per_unit * 1000, 1),
+            "hz": regs["wob_freq"]}
+    return record
+
+
 def _link_warning(job, baud):
     from ..jobs.stream import QUEUE_DEPTH
     from ..jobs.vector_job import link_segments_per_s
@@ -197,7 +222,7 @@ def planned_job(args):
         else print
     for line in _describe(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
                                         f"of {profile.laser.max_power_w:g} W), "
-                                        f"{prr:g} kHz, {args.passes or 1} pass(es)"):
+                                        f"{prr:g} kHz, {args.passes or profile.defaults.passes} pass(es)"):
         say(line)
     if args.preview:
         from ..jobs.preview import preview
@@ -214,6 +239,11 @@ def _cmd_mark(args):
     if args.estimate or not has_link(args, profile):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")
+        if args.json:
+            speed, power, prr = job_settings_values(args, profile)
+            print(json.dumps(_estimate_record(
+                job, profile, power, prr, args.passes or profile.defaults.passes,
+                args.preview)))
         return 0
     baud = args.baud or profile.link.baud
     warning = _link_warning(job, baud)
