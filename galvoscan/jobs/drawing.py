@@ -259,7 +259,9 @@ _SVG_UNITS = {None, "", "px", "mm", "cm", "in", "pt", "pc", "%", "em", "ex"}
 
 def _read_svg(data, tolerance_mm):
     import svgelements as svg
+    from .svg_screen import screen_svg
 
+    data, notes = screen_svg(data)
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
     # svgelements reads a size in a unit it does not know as plain px: the drawing would come
     # out at a scale nobody asked for. Refuse it instead.
@@ -284,4 +286,4 @@ def _read_svg(data, tolerance_mm):
                                                       tolerance_mm / MM_PER_PX):
                 paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
                 closed.append(is_closed)
-    return paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}), []
+    return paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}), notes
