@@ -180,8 +180,6 @@ def test_dxf_skipped_entities_and_hidden_layers(tmp_path):
     msp.add_text("A")
     msp.add_text("B")
     msp.add_mtext("C")
-    hatch = msp.add_hatch()
-    hatch.paths.add_polyline_path([(0, 0), (1, 0), (1, 1)])
     msp.add_point((3, 3))
     doc.layers.add("OFF").off()
     doc.layers.add("FROZEN").freeze()
@@ -189,6 +187,51 @@ def test_dxf_skipped_entities_and_hidden_layers(tmp_path):
     msp.add_circle((0, 0), 3, dxfattribs={"layer": "FROZEN"})
     d = load_dxf(tmp_path, doc)
     assert len(d.paths) == 1
-    assert set(d.skipped) == {"3 text entities (explode text to lines)", "1 HATCH entity",
+    assert set(d.skipped) == {"3 text entities (explode text to lines)",
                               "1 POINT entity", "2 entities on a hidden layer"}
+
+
+def test_dxf_hatch_boundaries_are_closed_shapes(tmp_path):
+    """A HATCH is marked as its boundaries, each a closed shape that --hatch can fill: a
+    polyline boundary as its corners, an arc edge on its circle, a bulge on its arc."""
+    doc, msp = new_dxf()
+    hatch = msp.add_hatch()
+    hatch.paths.add_polyline_path([(0, 0), (10, 0), (10, 10), (0, 10)], is_closed=True)
+    edges = hatch.paths.add_edge_path()
+    edges.add_arc((5, 5), 2, 0, 360)
+    bulged = msp.add_hatch()
+    # A half-disc: from (20, 0) to (30, 0) with a bulge of 1 (a half circle of radius 5).
+    bulged.paths.add_polyline_path([(20, 0, 1), (30, 0, 0)], is_closed=True)
+    tol = 0.01
+    d = load_dxf(tmp_path, doc, tolerance_mm=tol)
+    assert d.closed == (True, True, True)
+    square, circle, half = d.paths
+    assert {tuple(p) for p in np.round(square, 9)} == {(0, 0), (10, 0), (10, 10), (0, 10)}
+    assert np.allclose(np.hypot(*(circle - (5, 5)).T), 2, atol=1e-9)
+    assert np.all(np.hypot(*(chord_midpoints(circle) - (5, 5)).T) >= 2 - tol - 1e-9)
+    on_arc = half[np.abs(half[:, 1]) > 1e-9]
+    assert len(on_arc) > 10 and np.allclose(np.hypot(*(on_arc - (25, 0)).T), 5, atol=1e-9)
+    assert np.all(np.hypot(*(chord_midpoints(half) - (25, 0)).T)[np.abs(
+        chord_midpoints(half)[:, 1]) > 1e-9] >= 5 - tol - 1e-9)
+
+
+def test_dxf_hatch_of_edges_either_way_is_one_closed_shape(tmp_path):
+    """An edge boundary whose edges run either way (a line back, an ellipse, a line) is one
+    closed shape through every edge, the ellipse on the ellipse."""
+    doc, msp = new_dxf()
+    hatch = msp.add_hatch()
+    edges = hatch.paths.add_edge_path()
+    edges.add_line((0, 0), (20, 0))
+    edges.add_line((20, 10), (20, 0))                   # drawn backwards
+    edges.add_ellipse((10, 10), major_axis=(10, 0), ratio=0.5, start_angle=0, end_angle=180)
+    edges.add_line((0, 10), (0, 0))
+    tol = 0.01
+    (shape,) = load_dxf(tmp_path, doc, tolerance_mm=tol).paths
+    corners = {(0, 0), (20, 0), (20, 10), (0, 10)}
+    assert corners <= {tuple(p) for p in np.round(shape, 9)}
+    top = shape[shape[:, 1] > 10 + 1e-9]
+    assert len(top) > 10
+    assert np.allclose(((top[:, 0] - 10) / 10) ** 2 + ((top[:, 1] - 10) / 5) ** 2, 1, atol=1e-9)
+    steps = np.hypot(*np.diff(shape, axis=0).T)
+    assert steps.max() <= 20 + 1e-9                     # no jump across the shape
 

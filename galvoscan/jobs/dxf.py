@@ -86,13 +86,90 @@ def _polyline_points(entity, tolerance):
     return np.concatenate(chained)
 
 
+def _hatch_boundaries(hatch, tolerance):
+    """A HATCH as its boundaries, each a closed shape (the fill is CAD's; ``--hatch`` makes the
+    marking's): ``[(points, True), …]``. Arcs and ellipses are flattened on the curve itself,
+    as the entities are (ezdxf's paths would make them Bézier curves, some 0.03 % of the
+    radius off); a boundary's pieces are joined end to end."""
+    from ezdxf.entities.boundary_paths import EdgePath, PolylinePath
+    ocs, elevation = hatch.ocs(), hatch.dxf.elevation.z
+    found = []
+    for boundary in hatch.paths:
+        if isinstance(boundary, PolylinePath):
+            pieces = _bulge_pieces(boundary.vertices, tolerance)
+        elif isinstance(boundary, EdgePath):
+            pieces = [_edge_points(edge, tolerance) for edge in boundary.edges]
+        else:
+            continue
+        pieces = [piece for piece in pieces if len(piece)]
+        if not pieces:
+            continue
+        points = _joined(pieces)
+        if ocs.transform:
+            points = _xy(ocs.points_to_wcs([(x, y, elevation) for x, y in points]))
+        if len(points) >= 3:
+            found.append((points, True))
+    return found
+
+
+def _bulge_pieces(vertices, tolerance):
+    """A polyline boundary's ``(x, y, bulge)`` vertices as lines and arcs, closed."""
+    from ezdxf.math import ConstructionArc, bulge_to_arc
+    pieces = []
+    for (x0, y0, bulge), (x1, y1, _) in zip(vertices, vertices[1:] + vertices[:1]):
+        if bulge:
+            centre, start, end, radius = bulge_to_arc((x0, y0), (x1, y1), bulge)
+            arc = ConstructionArc(centre, radius, math.degrees(start), math.degrees(end))
+            _round_chords(radius, 4 * math.atan(abs(bulge)), tolerance)
+            pieces.append(_xy(arc.flattening(tolerance)))
+        else:
+            pieces.append(np.array([(x0, y0), (x1, y1)], dtype=float))
+    return pieces
+
+
+def _edge_points(edge, tolerance):
+    """One edge of an edge boundary, flattened."""
+    kind = edge.type.name
+    if kind == "LINE":
+        return _xy([edge.start, edge.end])
+    if kind == "ARC":
+        arc = edge.construction_tool()
+        _round_chords(arc.radius, math.radians(arc.angle_span or 360), tolerance)
+        return _xy(arc.flattening(tolerance))
+    if kind == "ELLIPSE":
+        ellipse = edge.construction_tool()
+        span = (ellipse.end_param - ellipse.start_param) % math.tau or math.tau
+        _round_chords(math.hypot(*ellipse.major_axis), span, tolerance)
+        return _xy(ellipse.flattening(tolerance))
+    return _spline_points(edge.construction_tool(), tolerance)      # SPLINE
+
+
+def _joined(pieces):
+    """Pieces of one boundary end to end, each turned to start where the last ended (edges
+    may run either way)."""
+    def gap(a, b):
+        return np.hypot(*(a - b))
+    first = pieces[0]
+    if len(pieces) > 1:
+        after = pieces[1]
+        if min(gap(first[0], after[0]), gap(first[0], after[-1])) < \
+                min(gap(first[-1], after[0]), gap(first[-1], after[-1])):
+            first = first[::-1]
+    joined = [first]
+    for piece in pieces[1:]:
+        end = joined[-1][-1]
+        joined.append(piece[::-1] if gap(piece[-1], end) < gap(piece[0], end) else piece)
+    return np.concatenate(joined)
+
+
 def _span_degrees(arc):
     """The degrees an ARC entity turns through (0: a whole circle)."""
     return (arc.dxf.end_angle - arc.dxf.start_angle) % 360
 
 
 def _entity_points(entity, tolerance, skipped):
-    """``(points, closed)`` of one entity that is not a block reference, or None."""
+    """``(points, closed)`` of one entity that is not a block reference, a list of them (a
+    HATCH's boundaries), or None."""
     kind = entity.dxftype()
     if kind == "LINE":
         return _xy([entity.dxf.start, entity.dxf.end]), False
@@ -110,6 +187,8 @@ def _entity_points(entity, tolerance, skipped):
         return _xy(entity.flattening(tolerance)), min(span, math.tau - span) < 1e-9
     if kind == "SPLINE":
         return _spline_points(entity.construction_tool(), tolerance), bool(entity.closed)
+    if kind == "HATCH":
+        return _hatch_boundaries(entity, tolerance)
     if kind == "LWPOLYLINE" or (kind == "POLYLINE" and
                                 (entity.is_2d_polyline or entity.is_3d_polyline)):
         return _polyline_points(entity, tolerance), bool(entity.is_closed)
@@ -148,8 +227,7 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
     except Exception as error:              # one broken entity: skip it, say so
         skipped[f"{kind} entity ezdxf cannot evaluate ({_one_line(error)})"] += 1
         return
-    if found is not None:
-        points, closed = found
+    for points, closed in ([found] if isinstance(found, tuple) else found or ()):
         out.append((points if matrix is None else points @ matrix[:2, :2] + matrix[3, :2],
                     closed))
 
