@@ -73,17 +73,17 @@ def distance_to_polygon(p, corners):
                for i in range(len(corners)))
 
 
-# The SVG's shapes with Y up (the drawing's mm as the JSON reports them: y = -y_svg).
-OUTER = [(0.25, -0.25), (1.25, -0.25), (1.25, -1.25), (0.25, -1.25)]
-HOLE = [(0.6, -0.6), (0.9, -0.6), (0.9, -0.9), (0.6, -0.9)]
-CIRCLE = ((1.6, -1.6), 0.3)
+# The SVG's shapes in its own coordinates (mm, Y down), as the JSON's drawing_marks are.
+OUTER = [(0.25, 0.25), (1.25, 0.25), (1.25, 1.25), (0.25, 1.25)]
+HOLE = [(0.6, 0.6), (0.9, 0.6), (0.9, 0.9), (0.6, 0.9)]
+CIRCLE = ((1.6, 1.6), 0.3)
 
 
 def inside_region(p):
     """Even-odd: in the outer square and not in the hole, or in the circle."""
     x, y = p
-    in_outer = 0.25 <= x <= 1.25 and -1.25 <= y <= -0.25
-    in_hole = 0.6 < x < 0.9 and -0.9 < y < -0.6
+    in_outer = 0.25 <= x <= 1.25 and 0.25 <= y <= 1.25
+    in_hole = 0.6 < x < 0.9 and 0.6 < y < 0.9
     (cx, cy), r = CIRCLE
     return (in_outer and not in_hole) or math.hypot(x - cx, y - cy) <= r
 
@@ -127,7 +127,8 @@ def test_the_svg_tests_share_a_worker(request):
 @pytest.mark.slow
 @pytest.mark.xdist_group("svg_job")
 def test_svg_marks_lie_on_the_drawing(svg_result):
-    marks = svg_result["marks"]
+    assert svg_result["drawing_frame"].startswith("the SVG's own")
+    marks = svg_result["drawing_marks"]
     assert len(marks) > 100
     tolerance = HALF_PITCH_MM + CHORD_MM + UNIT_MM
     hatch_ys = []
@@ -153,7 +154,7 @@ def test_svg_marks_lie_on_the_drawing(svg_result):
 @pytest.mark.slow
 @pytest.mark.xdist_group("svg_job")
 def test_svg_corners_hit_speed_and_counters(svg_result):
-    marks = np.array(svg_result["marks"])
+    marks = np.array(svg_result["drawing_marks"])
     for corner in OUTER + HOLE:
         assert np.min(np.hypot(*(marks - corner).T)) <= 1.5 * UNIT_MM, corner
     # The circle is marked all round (every chord's end lies on it, within the tolerance).
@@ -219,7 +220,8 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
                                                                  int(p[0] / 0.05) + 2))),
                        default=9))
 
-    marks = np.array(result["marks"])
+    assert result["drawing_frame"].startswith("the DXF's own")
+    marks = np.array(result["drawing_marks"])
     for p in marks[::7]:                        # every 7th point keeps the test quick
         assert distance(p) <= tolerance, p
     # Every end of every entity and every zigzag vertex is hit.

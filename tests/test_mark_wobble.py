@@ -172,8 +172,8 @@ def test_a_wobbled_line_marked_on_the_simulated_board(line, tmp_path):
                      "5000", "--sim", "--json"]) == 0
     result = json.loads(out.getvalue().strip().splitlines()[-1])
     assert result["errors"] == result["underruns"] == 0
-    marks = result["marks"]                            # the drawing's mm, Y up: the line y = -2
-    across = [abs(y + 2) for _, y in marks]
+    marks = result["drawing_marks"]                    # the SVG's own mm, Y down: y = 2
+    across = [abs(y - 2) for _, y in marks]
     unit_mm = UNIT_UM / 1000
     assert max(across) <= 0.060 + 3 * unit_mm
     assert max(across) >= 0.060 - 3 * unit_mm          # the track's half width is reached

@@ -150,6 +150,12 @@ def _link_warning(job, baud):
     return None
 
 
+#: The frames ``mark --sim --json`` gives the marks in.
+_FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
+_SVG_FRAME = "the SVG's own: mm from its top-left corner, X right, Y down"
+_DXF_FRAME = "the DXF's own, in mm: X right, Y up"
+
+
 def _sim_report(board, job, placement, drawing, profile, report):
     """The ``--json`` record of a simulated job: the marked points off the wires."""
     import numpy as np
@@ -158,8 +164,15 @@ def _sim_report(board, job, placement, drawing, profile, report):
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)
     field_xy = from_galvo(xy, profile.field.size_mm)
+    frames = {"marks_frame": _FIELD_FRAME}
     if placement is not None:
-        field_xy = placement.inverse(field_xy, drawing.bounds())
+        # The drawing's own coordinates too: an SVG's Y runs down (the reader turned it up).
+        own = placement.inverse(field_xy, drawing.bounds())
+        svg = Path(drawing.name).suffix.lower() == ".svg"
+        frames.update({
+            "drawing_marks": [[round(float(x), 4), round(float(-y if svg else y), 4)]
+                              for x, y in own],
+            "drawing_frame": _SVG_FRAME if svg else _DXF_FRAME})
     # The speed on the wires: consecutive marked points of one line, their distance on the
     # XY2-100 wires over the time between their first pulses on the DB25 pins.
     pitch_mm = job.pitch.pitch_mm
@@ -185,6 +198,7 @@ def _sim_report(board, job, placement, drawing, profile, report):
         "segments": report.segments,
         "jumps": sum(1 for op, *_ in job.segments if op == "jump"),
         "marks": [[round(float(x), 4), round(float(y), 4)] for x, y in field_xy],
+        **frames,
         "mark_length_mm": round(job.mark_mm, 4),
         # From the first pulse to the end of the last one's period: the time spent marking.
         "duration_s": round((board.pulses[-1] - board.pulses[0]) / board.clk_freq + 1 / prr_hz,
