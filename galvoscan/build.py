@@ -21,7 +21,7 @@ from .toolchain import tool_env
 
 
 __all__ = ["BOARDS", "DEFAULT_MODES", "PRESETS", "BuildReport", "build_bitstream",
-           "preset_build_options", "preset_top_options"]
+           "preset_build_options", "preset_register_map", "preset_top_options"]
 
 
 #: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory, options for
@@ -61,6 +61,19 @@ def preset_top_options(name):
                                                ("wobble", "interpolation", "delays", "player")
                                                if key in preset})
     return {"modes": preset["modes"], **options}, preset.get("clock") or CRYSTAL_HZ
+
+
+def preset_register_map(name):
+    """The register map of preset ``name``'s bitstream: what its register file takes (a job
+    image for the marker's player is checked against it)."""
+    from .gateware.host.regmap import register_map
+    options, _ = preset_top_options(name)
+    settings = preset_build_options(name).get("settings")
+    return register_map(modes=options["modes"], wobble=options.get("wobble", False),
+                        spiral_interpolation=options.get("spiral_interpolation", True),
+                        vector_delays=options.get("vector_delays", False),
+                        player=options.get("player", False),
+                        resets=settings.register_resets() if settings else None)
 
 
 def preset_build_options(name):

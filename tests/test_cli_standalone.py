@@ -157,6 +157,8 @@ def test_standalone_plays_the_stored_job_and_refuses_a_damaged_one(drawing, tmp_
     assert report["presses"] == ["done", "done"] and report["refused"] == 0
     assert report["pulses"] > 100 and report["pulses_per_point"] >= 1
     assert abs(report["speed_mm_s"] - 500) < 500 * 0.02
+    assert report["underruns"] == report["rejected"] == report["errors"] == 0
+    assert report["marks_frame"].startswith("field") and report["field_mm"] == 110
     # The marks lie on the drawing's lines (6 × 3 mm rectangle and a 6 mm line, centred).
     xs = [x for x, _ in report["marks"]]
     assert max(xs) - min(xs) == pytest.approx(6, abs=0.05)
@@ -175,3 +177,45 @@ def test_standalone_plays_the_stored_job_and_refuses_a_damaged_one(drawing, tmp_
 def test_standalone_needs_sim(tmp_path):
     with pytest.raises(SystemExit, match="give --sim"):
         main(["standalone", "--flash", str(tmp_path / "x.img")])
+
+
+def test_flash_refuses_a_bitstream_without_the_player(drawing, tmp_path, capsys):
+    """With --job, a bitstream whose build record (beside it, as `build` writes it) says it
+    has no job player is refused before any byte: the board would ignore the foot switch."""
+    image_path, bit_path, flash_path = (tmp_path / name for name in
+                                        ("part.img", "top.bin", "flash.bin"))
+    assert main(["store", str(drawing), "-o", str(image_path)]) == 0
+    bit_path.write_bytes(BITSTREAM)
+    record = bit_path.with_suffix(".build.json")
+    record.write_text(json.dumps({"player": False}))
+    with pytest.raises(SystemExit, match="top.bin has no job player"):
+        main(["flash", str(bit_path), "--job", str(image_path), "--to", str(flash_path)])
+    assert not flash_path.exists()
+    record.write_text(json.dumps({"player": True}))
+    capsys.readouterr()
+    assert main(["flash", str(bit_path), "--job", str(image_path), "--to", str(flash_path)]) == 0
+    assert "no build record" not in capsys.readouterr().err
+
+
+def test_store_refuses_the_wobble(drawing, tmp_path):
+    with pytest.raises(SystemExit, match="has no wobble stage"):
+        main(["store", str(drawing), "--wobble", "40", "-o", str(tmp_path / "x.img")])
+    assert not list(tmp_path.glob("*.img"))
+
+
+def test_standalone_plays_a_whole_flash_image(drawing, tmp_path, fast_flash, capsys):
+    """`--flash` takes what `flash --to` wrote (the whole 16 MiB); a file too big for the
+    flash above the bitstream is one line."""
+    image_path, bit_path, flash_path = (tmp_path / name for name in
+                                        ("part.img", "top.bin", "flash.bin"))
+    assert main(["store", str(drawing), "-o", str(image_path)]) == 0
+    bit_path.write_bytes(BITSTREAM)
+    assert main(["flash", str(bit_path), "--job", str(image_path), "--to", str(flash_path)]) == 0
+    capsys.readouterr()
+    assert main(["standalone", "--sim", "--flash", str(flash_path), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["presses"] == ["done"] and report["pulses"] > 100
+    big = tmp_path / "big.img"
+    big.write_bytes(bytes(FLASH_BYTES - JOB_OFFSET + 1))
+    with pytest.raises(SystemExit, match="do not fit the flash above the bitstream"):
+        main(["standalone", "--sim", "--flash", str(big)])

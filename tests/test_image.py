@@ -85,3 +85,32 @@ def test_the_messages():
         read_image(image[:-6])
     with pytest.raises(ImageError, match="header"):
         read_image(image[:10])
+
+
+def _recrc(image):
+    """The image with its CRC field made right again (after a change)."""
+    image = bytearray(image)
+    image[10:14] = bytes(4)
+    image[10:14] = zlib.crc32(image).to_bytes(4, "little")
+    return bytes(image)
+
+
+def test_what_the_marker_refuses_is_refused_here():
+    """Images sound to the player's check (their CRCs are right) that the marker bitstream's
+    register file would refuse, so the player would stop on them at the foot switch: a
+    setting out of range, a segment's op word out of range, a register the marker has not."""
+    from galvoscan.build import preset_register_map
+    marker = preset_register_map("marker")
+    image = bytearray(job_image(JOB, {"laser_prr": 500}))
+    struct.pack_into("<H", image, 20, 0)                # laser_prr = 0 (200 … 2000)
+    with pytest.raises(ImageError, match="laser_prr, 0, is outside 200 … 2000"):
+        read_image(_recrc(image), regmap=marker)
+    image = bytearray(job_image(JOB, {}))
+    struct.pack_into("<H", image, len(image) - 2, 0xFFFF)   # the last vec_op
+    with pytest.raises(ImageError, match="segment 4's vec_op, 65535, is outside"):
+        read_image(_recrc(image), regmap=marker)
+    wobbling = job_image(JOB, {"wob_freq": 500})
+    assert read_image(wobbling).registers == {"wob_freq": 500}     # any bitstream's register
+    with pytest.raises(ImageError, match="sets wob_freq, which the bitstream that plays it "
+                                         "does not have"):
+        read_image(wobbling, regmap=marker)

@@ -94,10 +94,14 @@ def _cmd_build(args):
           f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
           f"system clock")
     print(f"  host link    UART {report.baud:,} baud" +
-          (" (the job player: PMOD1B holds the start input and the PLC's lines)"
-           if report.player else ", SPI"))
+          (" only (no SPI link: PMOD1B holds the start input and the PLC's busy and ready "
+           "lines)" if report.player else ", SPI"))
     print(f"  modes        {', '.join(report.modes)}; correction "
           f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
+    built = [what for what, on in (("RTC delays", args.delays), ("wobble", args.wobble),
+                                   ("spiral interpolation", args.interpolation),
+                                   ("job player", args.player)) if on]
+    print(f"  with         {', '.join(built) if built else 'no build options'}")
     print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
     print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
     print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")

@@ -20,7 +20,7 @@ from .jobargs import (add_job_link_options, add_job_options, board_link, frame_j
 from .machine import add_machine_option, profile_from
 
 
-__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
+__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job", "FIELD_FRAME"]
 
 
 def _hatch(text):
@@ -151,7 +151,7 @@ def _link_warning(job, baud):
 
 
 #: The frames ``mark --sim --json`` gives the marks in.
-_FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
+FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
 _SVG_FRAME = "the SVG's own: mm from its top-left corner, X right, Y down"
 _DXF_FRAME = "the DXF's own, in mm: X right, Y up"
 
@@ -164,7 +164,7 @@ def _sim_report(board, job, placement, drawing, profile, report):
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)
     field_xy = from_galvo(xy, profile.field.size_mm)
-    frames = {"marks_frame": _FIELD_FRAME}
+    frames = {"marks_frame": FIELD_FRAME}
     if placement is not None:
         # The drawing's own coordinates too: an SVG's Y runs down (the reader turned it up).
         own = placement.inverse(field_xy, drawing.bounds())

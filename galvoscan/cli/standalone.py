@@ -13,32 +13,57 @@ from pathlib import Path
 
 from .args import add_backend_option, fail, int_in, output_file, read_bytes
 from .machine import add_machine_option, profile_from
-from .mark import add_drawing_options, add_plan_outputs, planned_job
+from .mark import FIELD_FRAME, add_drawing_options, add_plan_outputs, planned_job
 
 
 __all__ = ["add_parsers"]
 
 
+def _player_map():
+    """The register map of the bitstream that plays images: the marker preset's."""
+    from ..build import preset_register_map
+    return preset_register_map("marker")
+
+
 def _cmd_store(args):
-    from ..jobs.image import ImageError, job_image
+    from ..jobs.image import ImageError, job_image, read_image
     from ..jobs.stream import job_segments
     if not args.output and not args.estimate:
         fail("give -o FILE for the image (or --estimate to plan only)")
-    job, _, _, _, wobble_regs, say = planned_job(args)
+    if args.wobble:
+        fail("the stand-alone bitstream (build --preset marker) has no wobble stage: it does "
+             "not fit beside the job player; store the job without --wobble")
+    job, _, _, _, _, say = planned_job(args)
     try:
         image = job_image(job.segments, job.registers, repeats=args.repeats)
+        read_image(image, regmap=_player_map())     # what the marker's register file takes
     except ImageError as error:
         fail(error)
     if args.estimate:
         say(f"the image would be {len(image):,} bytes; nothing written")
         return 0
     Path(args.output).write_bytes(image)
-    say(f"wrote {args.output}: {len(image):,} bytes, {len(job_segments(job.segments))} "
-        f"segments, "
+    ending = len(job_segments(job.segments)) - len(job.segments)
+    say(f"wrote {args.output}: {len(image):,} bytes, {len(job.segments)} segments"
+        f"{' and the jump, laser off, that ends the job' if ending else ''}, "
         f"{args.repeats} repeat(s) a start; put it on the board with `galvoscan flash --job "
-        f"{args.output}` (a bitstream built with --preset marker plays it"
-        f"{', with the wobble stage' if wobble_regs else ''})")
+        f"{args.output}` (a bitstream built with --preset marker plays it)")
     return 0
+
+
+def _check_plays_jobs(bitstream):
+    """Refuse a bitstream that its build record (beside it) says has no job player."""
+    record = Path(bitstream).with_suffix(".build.json")
+    try:
+        player = json.loads(record.read_text()).get("player")
+    except (OSError, ValueError):
+        print(f"galvoscan: note: no build record beside {bitstream} ({record.name}): cannot "
+              f"tell whether it has the job player (build --preset marker builds one)",
+              file=sys.stderr)
+        return
+    if not player:
+        fail(f"{bitstream} has no job player (its build record {record.name} says so: "
+             f"build it with --preset marker); the board would ignore the start input")
 
 
 def _cmd_flash(args):
@@ -48,8 +73,12 @@ def _cmd_flash(args):
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
     try:
+        if bitstream is not None and job is not None:
+            _check_plays_jobs(args.bitstream)
         if job is not None:
-            read_image(job)             # the player's own checks, before any byte goes out
+            # The player's own checks, and the marker's register file's, before any byte
+            # goes out.
+            read_image(job, regmap=_player_map())
         regions = flash_regions(bitstream, job)
     except (ImageError, FlashingError) as error:
         fail(f"{args.job if isinstance(error, ImageError) else args.bitstream or ''}: "
@@ -92,9 +121,18 @@ def _cmd_standalone(args):
     if not args.sim:
         fail("a real stand-alone board runs on its own: press its start input (this command "
              "simulates one: give --sim)")
+    from ..sim.spi_flash import FLASH_BYTES
+    from ..jobs.image import JOB_OFFSET, image_in_flash
     image = read_bytes(args.flash, "job image")
+    if len(image) == FLASH_BYTES:
+        # A whole flash, as `flash --to` writes it: the job image is at its offset.
+        image = image_in_flash(image)
+    elif len(image) > FLASH_BYTES - JOB_OFFSET:
+        fail(f"{args.flash}: {len(image):,} bytes do not fit the flash above the bitstream "
+             f"({FLASH_BYTES - JOB_OFFSET:,} bytes from {JOB_OFFSET:#x}); give a job image, "
+             f"or a whole {FLASH_BYTES // 2**20} MiB flash image as `flash --to` writes")
     try:
-        planned = read_image(image)
+        planned = read_image(image, regmap=_player_map())
     except ImageError as error:
         planned = None
         print(f"galvoscan: note: {args.flash}: {error}; the board's player will refuse it",
@@ -103,8 +141,6 @@ def _cmd_standalone(args):
     from ..gateware.settings import ScanSettings
     options, clock = preset_top_options("marker")
     options["settings"] = ScanSettings(mode="vector", run=False)
-    if planned is not None and planned.registers.get("wob_shape"):
-        options["wobble"] = True
     board = simulated_board(args, clk_freq=clock, flash=image, **options)
     client = HostClient(SimTransport(board))
     presses = []
@@ -128,6 +164,8 @@ def _cmd_standalone(args):
     board.run_for(1e-3)
     refused = PlayerStatus.from_bits(client.read("player")).refused
     report = _report(board, profile, planned, presses, refused)
+    report.update({name.removeprefix("vec_"): client.read(name) for name in
+                   ("vec_underruns", "vec_stalls", "vec_rejected", "errors")})
     if args.json:
         print(json.dumps(report))
     else:
@@ -155,8 +193,11 @@ def _report(board, profile, planned, presses, refused):
             seconds += (marked[i][5] - marked[i - 1][5]) / board.clk_freq
     return {
         "presses": [result.label for result in presses],
+        # The player's count of images its check refused (a write the register file refused
+        # is a press's "refused", not counted here).
         "refused": int(refused),
         "marks": [[round(float(x), 4), round(float(y), 4)] for x, y in mm],
+        "marks_frame": FIELD_FRAME, "field_mm": profile.field.size_mm,
         "pulses": len(board.pulses),
         "pulses_per_point": registers.get("pulses_per_point"),
         "speed_mm_s": round(distance / seconds, 2) if seconds else None,
@@ -190,11 +231,13 @@ def add_parsers(commands):
     flash.add_argument("bitstream", nargs="?", metavar="BITSTREAM",
                        help="the .bin galvoscan build wrote (default: none, the job only)")
     flash.add_argument("--job", metavar="IMAGE", help="a job image (galvoscan store)")
-    flash.add_argument("--url", default="ftdi://ftdi:2232h/1",
+    where = flash.add_mutually_exclusive_group()
+    where.add_argument("--url", default="ftdi://ftdi:2232h/1",
                        help="pyftdi URL of the board's FTDI (default: ftdi://ftdi:2232h/1)")
-    flash.add_argument("--to", type=output_file, metavar="FILE",
-                       help="write a 16 MiB flash image file instead of a board (for "
-                            "another programmer)")
+    where.add_argument("--to", type=output_file, metavar="FILE",
+                       help="write a 16 MiB flash image file instead of a board (for another "
+                            "programmer; a file that is one already is updated as a board's "
+                            "flash would be: what is not written stays)")
     flash.set_defaults(run=_cmd_flash)
 
     standalone = commands.add_parser(
@@ -204,7 +247,8 @@ def add_parsers(commands):
                     "play the job, and report what the wires and the laser did.")
     standalone.add_argument("--sim", action="store_true", help="the simulated board")
     standalone.add_argument("--flash", required=True, metavar="IMAGE",
-                            help="what its flash holds at 1 MiB (a job image, or anything)")
+                            help="what its flash holds at 1 MiB (a job image, or anything), or "
+                                 "a whole 16 MiB flash image as `flash --to` writes it")
     standalone.add_argument("--presses", type=int_in(1, 100, "presses"), default=1,
                             metavar="N", help="presses of the start input (default 1)")
     standalone.add_argument("--timeout", type=int_in(1, 3600, "timeout"), default=600,

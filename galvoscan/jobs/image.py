@@ -18,7 +18,7 @@ from .corners import corner_frames
 from .stream import check_segment, job_segments, segment_words
 
 
-__all__ = ["ImageError", "JobImage", "job_image", "read_image", "JOB_OFFSET",
+__all__ = ["ImageError", "JobImage", "job_image", "read_image", "image_in_flash", "JOB_OFFSET",
            "MAX_IMAGE_BYTES"]
 
 
@@ -92,9 +92,35 @@ def job_image(segments, registers, *, repeats=1):
     return bytes(image)
 
 
-def read_image(data):
+def image_in_flash(flash):
+    """The job image in a whole flash's bytes (``flash --to`` writes them): from its offset, as
+    long as its header says (at most :data:`MAX_IMAGE_BYTES`), or all of that region when it
+    has no sound length (an erased or damaged image, which the checks then refuse)."""
+    region = bytes(flash[JOB_OFFSET:JOB_OFFSET + MAX_IMAGE_BYTES])
+    if len(region) >= HEADER_BYTES and region[:4] == MAGIC:
+        length = int.from_bytes(region[2 * Word.LENGTH_LOW:2 * Word.LENGTH_LOW + 2], "little") \
+            | int.from_bytes(region[2 * Word.LENGTH_HIGH:2 * Word.LENGTH_HIGH + 2],
+                             "little") << 16
+        if HEADER_BYTES <= length <= len(region):
+            return region[:length]
+    return region
+
+
+def _checked(reg, word, what):
+    """``word`` decoded as register ``reg`` takes it, if its register file takes it."""
+    value = reg.decode(word)
+    if not reg.low <= value <= reg.high:
+        raise ImageError(f"{what} {reg.name}, {value}, is outside {reg.low} … {reg.high}: the "
+                         f"register file refuses that write")
+    return value
+
+
+def read_image(data, *, regmap=None):
     """The :class:`JobImage` in ``data`` (an image file's bytes), checked as the player
-    checks it; :class:`ImageError` (one line) says what is wrong."""
+    checks it, and its settings and segments as the register file of the bitstream that
+    plays it checks them (``regmap``, that bitstream's register map; default: every register
+    galvoscan knows); :class:`ImageError` (one line) says what is wrong."""
+    regmap = BY_NAME if regmap is None else regmap
     data = bytes(data)
     if len(data) < HEADER_BYTES:
         raise ImageError(f"not a job image: {len(data)} bytes, shorter than its "
@@ -130,10 +156,15 @@ def read_image(data):
         reg = BY_ADDRESS.get(address)
         if reg is None or reg.name in PLAYER_OWNED:
             raise ImageError(f"a damaged image: a setting of address {address:#04x}")
-        registers[reg.name] = reg.decode(value)
+        if reg.name not in regmap:
+            raise ImageError(f"it sets {reg.name}, which the bitstream that plays it does not "
+                             f"have: its register file refuses that write")
+        registers[reg.name] = _checked(regmap[reg.name], value, "its setting of")
     segments = []
     rest = body[2 * count:]
     for i in range(0, len(rest), SEGMENT_WORDS):
-        x, y, op_word = rest[i:i + SEGMENT_WORDS]
+        x, y, op_word = (_checked(regmap[name], word, f"segment {i // SEGMENT_WORDS + 1}'s")
+                         for name, word in zip(("vec_x", "vec_y", "vec_op"),
+                                               rest[i:i + SEGMENT_WORDS]))
         segments.append(("mark" if op_word & 1 else "jump", x, y, op_word >> 1))
     return JobImage(registers=registers, repeats=repeats, segments=segments)
