@@ -427,3 +427,22 @@ def test_a_backend_without_sim_is_refused_before_anything(tmp_path, command):
     message = str(stop.value.code)
     assert message == "galvoscan: error: --backend python chooses the simulated board's " \
                       "simulator: it needs --sim"
+
+
+def test_origin_page_keeps_the_drawings_own_coordinates(tmp_path, capsys):
+    """--origin page: a DXF's 0,0 and an SVG's top-left corner land on the offset; the DXF's
+    Y up, the SVG's Y down from its top edge (so its shapes lie below the offset)."""
+    import ezdxf
+    doc = ezdxf.new(units=4)
+    doc.modelspace().add_line((10, 5), (20, 8))
+    dxf = tmp_path / "part.dxf"
+    doc.saveas(dxf)
+    svg = tmp_path / "part.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                   'viewBox="0 0 10 10"><rect x="1" y="2" width="6" height="3" fill="none" '
+                   'stroke="black"/></svg>')
+    for path, offset, bounds in [(dxf, "0,0", [10, 5, 20, 8]), (dxf, "-5,1", [5, 6, 15, 9]),
+                                 (svg, "0,0", [1, -5, 7, -2])]:
+        assert main(["mark", str(path), "--origin", "page", f"--offset={offset}", "--estimate",
+                     "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["bounds_mm"] == pytest.approx(bounds)

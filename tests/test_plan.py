@@ -73,6 +73,11 @@ def test_placement_centre_lower_left_and_turn():
     turned = Placement("lower-left", (5, 5), scale=2, rotate_deg=90).forward(corners, bounds)
     np.testing.assert_allclose(turned, [[85, 5], [5, 45], [45, 25]], atol=1e-12)
     assert Placement("center").origin == "centre"
+    # page: the drawing's own coordinates, its origin on the offset, turned about it.
+    page = Placement("page", (1, 2)).forward(corners, bounds)
+    np.testing.assert_allclose(page, corners + (1, 2))
+    turned_page = Placement("page", (0, 0), scale=2, rotate_deg=90).forward(corners, bounds)
+    np.testing.assert_allclose(turned_page, [[-40, 20], [-120, 60], [-80, 40]], atol=1e-12)
 
 
 @pytest.mark.parametrize("kwargs", [dict(origin="top"), dict(scale=0), dict(scale=-1),
@@ -86,7 +91,7 @@ finite = st.floats(-500, 500, allow_nan=False)
 
 
 @settings(max_examples=200, deadline=None)
-@given(origin=st.sampled_from(["centre", "lower-left"]), offset=st.tuples(finite, finite),
+@given(origin=st.sampled_from(["centre", "lower-left", "page"]), offset=st.tuples(finite, finite),
        scale=st.floats(0.01, 100), turn=st.floats(-720, 720),
        box=st.tuples(finite, finite, st.floats(0.001, 500), st.floats(0.001, 500)),
        points=st.lists(st.tuples(finite, finite), min_size=1, max_size=8))

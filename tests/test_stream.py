@@ -295,12 +295,12 @@ def test_ctrl_c_mid_job_turns_the_laser_pins_off_within_a_frame():
 @pytest.mark.slow
 def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
     """`--frame`: the job's bounding box walked with the guide laser on, never armed."""
-    from galvoscan.jobs.vector_job import frame_segments
+    from galvoscan.jobs.vector_job import box_outline, frame_segments
     from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
     board = SimulatedBoard(**QUICK_SIM_BOARD, **VECTOR_BOARD)
     client = HostClient(SimTransport(board))
     box = (-1.0, -0.5, 1.0, 0.5)                      # mm
-    segments = frame_segments(box, 110, 2)
+    segments = frame_segments(box_outline(box), 110, 2)
     JobStreamer(client, poll_s=0).run_vector(
         segments, {"pitch": 100, "pulses_per_point": 1, "laser_prr": 500, "jump_delay": 1,
                    "laser_power": 0, "guide": 1}, armed=False, timeout_s=1e9)
@@ -316,3 +316,19 @@ def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
     visited = {(x, y) for _, x, y in board.frames}
     assert corners <= visited
     assert not board.pulses
+
+
+def test_the_frame_is_the_jobs_convex_hull():
+    """`mark --frame` walks the convex hull of everything the job marks: an L's outer corners
+    and the diagonal across its notch, not the bounding box's corner in the notch; a line is
+    walked there and back."""
+    import numpy as np
+    from galvoscan.jobs.vector_job import hull_outline
+    ell = [np.array([(0, 0), (4, 0), (4, 1), (1, 1), (1, 3), (0, 3), (0, 0)], dtype=float)]
+    hull = hull_outline(ell)
+    assert np.array_equal(hull[0], hull[-1])                 # closed
+    corners = {tuple(p) for p in hull}
+    assert corners == {(0, 0), (4, 0), (4, 1), (1, 3), (0, 3)}
+    assert (4, 3) not in corners
+    line = hull_outline([np.array([(0, 0), (2, 0)]), np.array([(1, 0), (3, 0)])])
+    assert {tuple(p) for p in line} == {(0, 0), (3, 0)} and len(line) == 3

@@ -65,7 +65,8 @@ def _cmd_clean(args):
         with stopped_in_one_line():
             load_lens_table(client, profile, say)
             if args.frame:
-                frame_job(streamer, profile, job.bounds_mm, args.frame,
+                from ..jobs.vector_job import box_outline
+                frame_job(streamer, profile, box_outline(job.bounds_mm), args.frame,
                           _frame_registers(profile, registers["laser_prr"]),
                           timeout_s=1e4 if args.sim else 60, say=say, what="area")
                 return 0

@@ -122,16 +122,17 @@ def stopped_in_one_line():
         fail(f"job stopped, laser disarm sent: the link failed: {error}")
 
 
-def frame_job(streamer, profile, bounds_mm, times, registers, *, timeout_s, say, what):
-    """Trace ``bounds_mm`` ``times`` times in vector mode with the guide laser on and the
-    laser never armed (``registers``: the vector settings to walk it with)."""
+def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):
+    """Trace ``outline_mm`` (a closed outline) ``times`` times in vector mode with the guide
+    laser on and the laser never armed (``registers``: the vector settings to walk it with)."""
     from ..jobs.vector_job import frame_segments
     if not profile.laser.guide:
         fail("the machine profile says there is no guide laser ([laser] guide)")
-    segments = frame_segments(bounds_mm, profile.field.size_mm, times)
+    segments = frame_segments(outline_mm, profile.field.size_mm, times)
     streamer.run_vector(segments, dict(registers, guide=1, laser_power=0), armed=False,
                         timeout_s=timeout_s)
-    say(f"framed the {what} {times} time(s) with the guide laser; the laser stayed off")
+    say(f"framed the {what}'s outline {times} time(s) with the guide laser; the laser stayed "
+        f"off")
 
 
 def progress_bar(total, unit, *, disable=None):

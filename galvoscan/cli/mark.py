@@ -271,8 +271,9 @@ def _cmd_mark(args):
             with stopped_in_one_line():
                 load_lens_table(client, profile, say)
                 if args.frame:
-                    frame_job(streamer, profile, job.bounds_mm, args.frame, job.registers,
-                              timeout_s=timeout, say=say, what="job")
+                    from ..jobs.vector_job import hull_outline
+                    frame_job(streamer, profile, hull_outline(job.paths_mm), args.frame,
+                              job.registers, timeout_s=timeout, say=say, what="job")
                     return 0
                 report = streamer.run_vector(job.segments, job.registers, timeout_s=timeout,
                                              ready_timeout_s=timeout)
@@ -321,12 +322,15 @@ def add_drawing_options(parser):
     wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, WOBBLE_MAX_HZ), metavar="HZ",
                         help="turns of the figure a second (default: the profile's, 1000)")
     place = parser.add_argument_group("placement")
-    place.add_argument("--origin", choices=["centre", "center", "lower-left"],
-                       default="centre", help="what of the drawing's bounding box goes to "
-                                              "--offset (default: centre)")
+    place.add_argument("--origin", choices=["centre", "center", "lower-left", "page"],
+                       default="centre", help="what of the drawing goes to --offset: its "
+                                              "bounding box's centre (default) or lower-left "
+                                              "corner, or (page) its own origin, the drawing "
+                                              "keeping its own coordinates (a DXF's 0,0; an "
+                                              "SVG's top-left corner)")
     place.add_argument("--offset", type=pair_mm("--offset"), default=(0.0, 0.0),
                        metavar="X,Y", help="where in the field, mm from its centre "
-                                           "(default: 0,0)")
+                                           "(default: 0,0; a negative X as --offset=-5,2)")
     place.add_argument("--scale", type=number_in("scale", 1e-3, 1e3), default=1.0, metavar="K",
                        help="size factor, about the drawing's centre (default: 1)")
     place.add_argument("--rotate", type=number_in("rotate", -360, 360), default=0.0,
@@ -353,8 +357,9 @@ def add_parsers(commands):
     add_plan_outputs(out)
     out.add_argument("--frame", type=int_in(1, 100, "frame"), nargs="?", const=1,
                      default=None, metavar="N",
-                     help="trace the job's bounding box N times (default 1) with the guide "
-                          "laser on and the laser off, to position the part; marks nothing")
+                     help="trace the job's outline, its convex hull, N times (default 1) with "
+                          "the guide laser on and the laser off, to position the part; marks "
+                          "nothing")
     out.add_argument("--json", action="store_true",
                      help="print the result as JSON (with --sim: the marked points, decoded "
                           "off the XY2-100 wires, in the drawing's mm)")

@@ -45,12 +45,15 @@ class Placement:
     bounding-box centre; then moved so that its reference point lands on ``offset_mm``. The
     reference is the bounding-box centre (``"centre"``) or the lower-left corner
     (``"lower-left"``) of the box around the scaled, turned bounding box. For turns that are
-    not multiples of 90° that box is a little larger than the turned drawing's own.
+    not multiples of 90° that box is a little larger than the turned drawing's own. With
+    ``"page"`` the drawing keeps its own coordinates: its origin (a DXF's 0,0; an SVG's
+    top-left corner, its Y turned up) lands on ``offset_mm``, and it is scaled and turned
+    about that origin.
 
     Attributes
     ----------
     origin : str
-        ``"centre"`` (or ``"center"``) or ``"lower-left"``.
+        ``"centre"`` (or ``"center"``), ``"lower-left"`` or ``"page"``.
     offset_mm : tuple of float
         Field mm, (0, 0) the field centre, Y up.
     scale : float
@@ -65,8 +68,8 @@ class Placement:
 
     def __post_init__(self):
         origin = {"center": "centre"}.get(self.origin, self.origin)
-        if origin not in ("centre", "lower-left"):
-            raise PlanError(f"placement origin {self.origin!r}: centre or lower-left")
+        if origin not in ("centre", "lower-left", "page"):
+            raise PlanError(f"placement origin {self.origin!r}: centre, lower-left or page")
         if not (self.scale > 0 and math.isfinite(self.scale)):
             raise PlanError(f"placement scale {self.scale}: must be > 0")
         try:
@@ -87,6 +90,8 @@ class Placement:
         turn = math.radians(self.rotate_deg)
         matrix = self.scale * np.array([[math.cos(turn), -math.sin(turn)],
                                         [math.sin(turn), math.cos(turn)]])
+        if self.origin == "page":
+            return matrix, np.array(self.offset_mm)
         reference = np.zeros(2)             # where the centre goes, before the offset
         if self.origin == "lower-left":
             half = np.array([xmax - xmin, ymax - ymin]) / 2

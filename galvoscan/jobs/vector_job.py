@@ -212,9 +212,25 @@ def plan_vector_job(drawing, placement, settings, profile):
                    list(drawing.notes) + list(drawing.skipped))
 
 
-def frame_segments(bounds_mm, field_mm, times):
-    """The job's bounding box traced ``times`` times (for the guide laser), in galvo units."""
+def box_outline(bounds_mm):
+    """A rectangle ``(xmin, ymin, xmax, ymax)`` as a closed outline, mm."""
     xmin, ymin, xmax, ymax = bounds_mm
-    box = np.array([(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax), (xmin, ymin)])
-    units = to_galvo(box, field_mm)
+    return np.array([(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax), (xmin, ymin)])
+
+
+def hull_outline(paths_mm):
+    """The convex hull of every point of ``paths_mm`` as a closed outline, mm: what a part's
+    fixture must clear (a line's hull is the line there and back, a dot's the dot)."""
+    from shapely.geometry import MultiPoint
+    hull = MultiPoint(np.concatenate([np.asarray(p, dtype=float) for p in paths_mm])).convex_hull
+    if hull.geom_type == "Polygon":
+        return np.asarray(hull.exterior.coords)
+    points = np.asarray(hull.coords)
+    return np.vstack([points, points[::-1][1:]]) if len(points) > 1 else np.vstack([points] * 2)
+
+
+def frame_segments(outline_mm, field_mm, times):
+    """A closed outline (mm, :func:`hull_outline` or :func:`box_outline`) traced ``times``
+    times (for the guide laser), in galvo units."""
+    units = to_galvo(np.asarray(outline_mm, dtype=float), field_mm)
     return segments_from_paths([units]) * times
