@@ -446,3 +446,38 @@ def test_origin_page_keeps_the_drawings_own_coordinates(tmp_path, capsys):
         assert main(["mark", str(path), "--origin", "page", f"--offset={offset}", "--estimate",
                      "--json"]) == 0
         assert json.loads(capsys.readouterr().out)["bounds_mm"] == pytest.approx(bounds)
+
+
+@pytest.mark.slow
+def test_cross_hatch_and_contour_marked_off_the_wires(tmp_path, capsys):
+    """A 1 mm square with two hatch sets (0° and 90°, 0.25 mm) and a contour ring 0.2 mm in,
+    marked on the simulated board: every mark off the wires lies on the outline, the ring, a
+    horizontal or a vertical hatch line, and the lines of both sets are there."""
+    path = tmp_path / "square.svg"
+    path.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="2mm" height="2mm" '
+                    'viewBox="0 0 2 2"><rect x="0.5" y="0.5" width="1" height="1" '
+                    'fill="none" stroke="black"/></svg>')
+    machine = tmp_path / "machine.toml"
+    machine.write_text(PROFILE)
+    with quick_sim_board(**VECTOR_BOARD):
+        result = run_json(["mark", str(path), "--speed", str(SPEED_MM_S), "--prr",
+                           str(PRR_KHZ), "--hatch", "0.25", "--hatch", "0.25,90", "--contour",
+                           "0.2,1", "--machine", str(machine), "--sim", *SIM_TIMEOUT, "--json"],
+                          capsys)
+    assert result["underruns"] == result["errors"] == result["rejected"] == 0
+    marks = np.array(result["drawing_marks"])
+    lines = 0.5 + np.array([0.125, 0.375, 0.625, 0.875])       # each set's four lines
+    slack = HALF_PITCH_MM + UNIT_MM
+    on_outline = np.array([distance_to_polygon(p, [(0.5, 0.5), (1.5, 0.5), (1.5, 1.5),
+                                                   (0.5, 1.5)]) <= slack for p in marks])
+    on_ring = np.array([distance_to_polygon(p, [(0.7, 0.7), (1.3, 0.7), (1.3, 1.3),
+                                                (0.7, 1.3)]) <= slack for p in marks])
+    on_row = np.min(np.abs(marks[:, 1:2] - lines), axis=1) <= 1.5 * UNIT_MM
+    on_column = np.min(np.abs(marks[:, 0:1] - lines), axis=1) <= 1.5 * UNIT_MM
+    assert np.all(on_outline | on_ring | on_row | on_column)
+    inside = (np.abs(marks - 1.0) < 0.45).all(axis=1) & ~on_ring
+    for only, axis in ((on_row & ~on_column, 1), (on_column & ~on_row, 0)):
+        hit = {int(np.argmin(np.abs(v - lines))) for v in marks[inside & only, axis]}
+        assert hit == {0, 1, 2, 3}, (axis, hit)         # every line of both sets
+    assert np.sum(inside & on_row) > 10 and np.sum(inside & on_column) > 10
+    assert np.sum(on_ring & ~on_outline) > 10

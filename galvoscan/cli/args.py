@@ -15,8 +15,7 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
-           "check_backend_needs_sim",
-           "simulated_board"]
+           "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill"]
 
 
 class CLIError(SystemExit):
@@ -318,3 +317,41 @@ def simulated_board(args, **kwargs):
             fail(f"the netlist cannot be simulated: {error}")
         fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
              f"Amaranth's)")
+
+
+def hatch_set(text):
+    """``SPACING[,ANGLE[,STEP[,OFFSET]]]``: mm, degrees, degrees a pass, mm: a
+    :class:`~galvoscan.jobs.fill.HatchSet`."""
+    from ..jobs.fill import HatchSet
+    from ..jobs.plan import PlanError
+    parts = text.replace(" ", "").split(",")
+    try:
+        if not 1 <= len(parts) <= 4:
+            raise ValueError
+        values = [float(part) for part in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--hatch must be SPACING[,ANGLE[,STEP[,OFFSET]]] (mm, "
+                                         f"degrees, degrees a pass, mm), not {text!r}")
+    try:
+        return HatchSet(*values)
+    except PlanError as error:
+        raise argparse.ArgumentTypeError(f"--hatch {text}: {error}")
+
+
+def contour_fill(text):
+    """``SPACING[,COUNT]``: mm, rings: a :class:`~galvoscan.jobs.fill.Contour`."""
+    from ..jobs.fill import Contour
+    from ..jobs.plan import PlanError
+    parts = text.replace(" ", "").split(",")
+    try:
+        if not 1 <= len(parts) <= 2:
+            raise ValueError
+        spacing = float(parts[0])
+        count = int(parts[1]) if len(parts) == 2 else None
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--contour must be SPACING[,COUNT] (mm, rings), not "
+                                         f"{text!r}")
+    try:
+        return Contour(spacing, count)
+    except PlanError as error:
+        raise argparse.ArgumentTypeError(f"--contour {text}: {error}")

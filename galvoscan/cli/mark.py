@@ -6,36 +6,22 @@ opened. ``--sim`` runs the job on the simulated board through the same link code
 ``--json`` reports what the scan head and the laser did.
 """
 
-import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
 from ..gateware.limits import WOBBLE_MAX_HZ
-from .args import check_backend_needs_sim, fail, image_file, int_in, number_in
+from ..jobs.fill import LineOrder
+from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
+                   number_in)
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
+from .job_reports import estimate_record, sim_report
 from .machine import add_machine_option, profile_from
 
 
-__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job", "FIELD_FRAME"]
-
-
-def _hatch(text):
-    """``SPACING[,ANGLE]``: mm, degrees."""
-    parts = text.replace(" ", "").split(",")
-    try:
-        spacing = float(parts[0])
-        angle = float(parts[1]) if len(parts) == 2 else 0.0
-    except (ValueError, IndexError):
-        raise argparse.ArgumentTypeError(f"--hatch must be SPACING[,ANGLE] (mm, degrees), not "
-                                         f"{text!r}")
-    if len(parts) > 2 or not (0.001 <= spacing <= 100) or not math.isfinite(angle):
-        raise argparse.ArgumentTypeError(f"--hatch spacing must be from 0.001 to 100 mm, and "
-                                         f"the angle a number of degrees, not {text!r}")
-    return spacing, angle
+__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
 
 
 def _wobble(args, profile):
@@ -66,9 +52,8 @@ def _plan(args, profile):
     speed, power, prr = job_settings_values(args, profile)
     settings = JobSettings(speed_mm_s=speed, power_percent=power, prr_khz=prr,
                            passes=args.passes or profile.defaults.passes,
-                           hatch_mm=args.hatch[0] if args.hatch else None,
-                           hatch_deg=args.hatch[1] if args.hatch else 0.0,
-                           outline=not args.no_outline)
+                           hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
+                           contour=args.contour, outline=not args.no_outline)
     try:
         if Path(args.file).suffix.lower() == ".job":
             segments = parse_job(read_text(args.file, "job file"), name=args.file)
@@ -111,31 +96,6 @@ def _describe(job, profile, settings_line):
     return lines
 
 
-def _estimate_record(job, profile, power, prr, passes, preview):
-    """The ``--estimate --json`` record (or ``--json`` with no board): the plan, in the units
-    the text gives it in."""
-    pitch, regs = job.pitch, job.registers
-    record = {
-        "segments": len(job.segments), "mark_mm": round(job.mark_mm, 3),
-        "jump_mm": round(job.jump_mm, 3), "bounds_mm": [round(v, 3) for v in job.bounds_mm],
-        "field_mm": profile.field.size_mm, "power_percent": power,
-        "power_w": round(profile.power_w(power), 4), "prr_khz": prr, "passes": passes,
-        "pitch_um": round(pitch.pitch_mm * 1000, 3), "pitch_units": pitch.pitch_units,
-        "pulses_per_point": pitch.pulses_per_point, "speed_mm_s": round(pitch.speed_mm_s, 3),
-        "speed_error": round(pitch.error, 6), "jump_delay_us": regs["jump_delay"],
-        "laser_on_delay_us": regs["laser_on_delay"], "laser_off_delay_us": regs["laser_off_delay"],
-        "mark_delay_us": regs["mark_delay"], "polygon_delay_us": regs["polygon_delay"],
-        "polygon_scaled": bool(regs["polygon_scaled"]), "estimate_s": round(job.estimate_s, 6),
-        "notes": list(job.notes), "preview": preview,
-    }
-    if "wob_shape" in regs:
-        record["wobble_um"] = {
-            "across": round(regs["wob_across"] * profile.mm_per_unit * 1000, 1),
-            "along": round(regs["wob_along"] * profile.mm_per_unit * 1000, 1),
-            "hz": regs["wob_freq"]}
-    return record
-
-
 def _link_warning(job, baud):
     from ..jobs.stream import QUEUE_DEPTH
     from ..jobs.vector_job import link_segments_per_s
@@ -148,70 +108,6 @@ def _link_warning(job, baud):
                 f"{baud:,} baud carries {carried:,.0f}: the queue will run dry and the laser "
                 f"pause (use a lower speed, a coarser --tolerance or a faster --baud build)")
     return None
-
-
-#: The frames ``mark --sim --json`` gives the marks in.
-FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
-_SVG_FRAME = "the SVG's own: mm from its top-left corner, X right, Y down"
-_DXF_FRAME = "the DXF's own, in mm: X right, Y up"
-
-
-def _sim_report(board, job, placement, drawing, profile, report):
-    """The ``--json`` record of a simulated job: the marked points off the wires."""
-    import numpy as np
-    from ..jobs.plan import from_galvo
-    points = board.points()
-    marked = [p for p in points if p[2] > 0]
-    xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)
-    field_xy = from_galvo(xy, profile.field.size_mm)
-    frames = {"marks_frame": FIELD_FRAME}
-    if placement is not None:
-        # The drawing's own coordinates too: an SVG's Y runs down (the reader turned it up).
-        own = placement.inverse(field_xy, drawing.bounds())
-        svg = Path(drawing.name).suffix.lower() == ".svg"
-        frames.update({
-            "drawing_marks": [[round(float(x), 4), round(float(-y if svg else y), 4)]
-                              for x, y in own],
-            "drawing_frame": _SVG_FRAME if svg else _DXF_FRAME})
-    # The speed on the wires: consecutive marked points of one line, their distance on the
-    # XY2-100 wires over the time between their first pulses on the DB25 pins.
-    pitch_mm = job.pitch.pitch_mm
-    # Two figures: the line speed, over steps of a whole pitch (give or take the rounding of
-    # each axis to a galvo unit), which is what --speed sets; and the speed along the whole
-    # path, which is lower on short segments: a segment's last step, onto its end point, is
-    # shorter than a pitch and takes as long (Wan et al.'s DDA starts afresh at every vertex).
-    unit_mm = profile.mm_per_unit
-    line = [0.0, 0.0]
-    path = [0.0, 0.0]
-    wire_mm = from_galvo(xy, profile.field.size_mm)
-    for i in range(1, len(marked)):
-        step = float(np.hypot(*(wire_mm[i] - wire_mm[i - 1])))
-        dt = (marked[i][5] - marked[i - 1][5]) / board.clk_freq
-        if 0 < step <= pitch_mm + 1.5 * unit_mm:
-            path[0] += step
-            path[1] += dt
-            if step >= pitch_mm - 1.5 * unit_mm:
-                line[0] += step
-                line[1] += dt
-    prr_hz = job.registers["laser_prr"] * 100.0
-    return {
-        "segments": report.segments,
-        "jumps": sum(1 for op, *_ in job.segments if op == "jump"),
-        "marks": [[round(float(x), 4), round(float(y), 4)] for x, y in field_xy],
-        **frames,
-        "mark_length_mm": round(job.mark_mm, 4),
-        # From the first pulse to the end of the last one's period: the time spent marking.
-        "duration_s": round((board.pulses[-1] - board.pulses[0]) / board.clk_freq + 1 / prr_hz,
-                            6) if board.pulses else 0.0,
-        "speed_mm_s": round(line[0] / line[1], 2) if line[1] else None,
-        "path_speed_mm_s": round(path[0] / path[1], 2) if path[1] else None,
-        "pulses_per_point": job.pitch.pulses_per_point,
-        "pulses": len(board.pulses),
-        "underruns": report.counters["vec_underruns"],
-        "stalls": report.counters["vec_stalls"],
-        "rejected": report.counters["vec_rejected"],
-        "errors": report.counters["errors"],
-    }
 
 
 def planned_job(args):
@@ -255,9 +151,15 @@ def _cmd_mark(args):
             say("no board given (--port, --spi or --sim): nothing sent")
         if args.json:
             speed, power, prr = job_settings_values(args, profile)
-            print(json.dumps(_estimate_record(
-                job, profile, power, prr, args.passes or profile.defaults.passes,
-                args.preview)))
+            record = estimate_record(job, profile, power, prr,
+                                      args.passes or profile.defaults.passes, args.preview)
+            record["fill"] = {
+                "hatch": [[s.spacing_mm, s.angle_deg, s.step_deg, s.offset_mm]
+                          for s in args.hatch or ()],
+                "hatch_lines": args.hatch_lines,
+                "contour": [args.contour.spacing_mm, args.contour.count] if args.contour
+                else None}
+            print(json.dumps(record))
         return 0
     baud = args.baud or profile.link.baud
     warning = _link_warning(job, baud)
@@ -285,7 +187,7 @@ def _cmd_mark(args):
             f"{counters['vec_stalls']}, rejected {counters['vec_rejected']}, errors "
             f"{counters['errors']}")
         if args.json and board is not None:
-            print(json.dumps(_sim_report(board, job, placement, drawing, profile, report)))
+            print(json.dumps(sim_report(board, job, placement, drawing, profile, report)))
         elif args.json:
             print(json.dumps({"segments": report.segments, "pulses": report.pulses,
                               **report.counters}))
@@ -303,9 +205,20 @@ def add_drawing_options(parser):
     parser.add_argument("--passes", type=int_in(1, 1000, "passes"), default=None,
                         metavar="N", help="times the job is marked (default: the profile's)")
     shape = parser.add_argument_group("drawing")
-    shape.add_argument("--hatch", type=_hatch, metavar="SPACING[,ANGLE]",
+    shape.add_argument("--hatch", type=hatch_set, action="append",
+                       metavar="SPACING[,ANGLE[,STEP[,OFFSET]]]",
                        help="fill closed shapes with lines SPACING mm apart at ANGLE degrees "
-                            "(holes by the even-odd rule)")
+                            "(holes by the even-odd rule), turned STEP degrees more each pass, "
+                            "moved OFFSET mm across; repeat it for more sets (0.05,0 and "
+                            "0.05,90: a cross-hatch)")
+    shape.add_argument("--hatch-lines", choices=[order.value for order in LineOrder],
+                       default=LineOrder.SERPENTINE.value,
+                       help="the hatch's lines each the other way from the last (serpentine, "
+                            "the default), all the same way (oneway), or serpentine and joined "
+                            "inside the shape where they can be (joined: fewer jumps)")
+    shape.add_argument("--contour", type=contour_fill, metavar="SPACING[,COUNT]",
+                       help="fill closed shapes with rings inward from their edges, SPACING mm "
+                            "apart (COUNT of them at most; default: until filled)")
     shape.add_argument("--no-outline", action="store_true",
                        help="mark the hatch only, not the outlines")
     shape.add_argument("--tolerance", type=number_in("tolerance", 0.0005, 1), default=0.01,

@@ -13,7 +13,8 @@ from pathlib import Path
 
 from .args import add_backend_option, fail, int_in, output_file, read_bytes
 from .machine import add_machine_option, profile_from
-from .mark import FIELD_FRAME, add_drawing_options, add_plan_outputs, planned_job
+from .job_reports import FIELD_FRAME
+from .mark import add_drawing_options, add_plan_outputs, planned_job
 
 
 __all__ = ["add_parsers"]

@@ -18,7 +18,8 @@ from ..gateware.points import FIELD_CENTRE, FIELD_MAX
 from .speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
 
 
-__all__ = ["PlanError", "Placement", "place", "hatch", "order_paths", "Pitch", "choose_pitch",
+__all__ = ["PlanError", "Placement", "place", "hatch", "order_paths", "jump_length", "Pitch",
+           "choose_pitch",
            "estimate_seconds", "jump_mark_lengths", "to_galvo", "from_galvo", "field_check"]
 
 
@@ -126,17 +127,21 @@ def place(drawing, placement):
     return replace(drawing, paths=tuple(paths))
 
 
-def hatch(paths, closed, spacing_mm, angle_deg=0.0):
+def hatch(paths, closed, spacing_mm, angle_deg=0.0, *, offset_mm=0.0, with_lines=False):
     """Lines filling the closed paths by the even-odd rule: a shape inside another is a hole,
     a shape inside that is filled again, a self-crossing star has an empty centre.
 
     Lines run at ``angle_deg`` from +X, ``spacing_mm`` apart, centred on the shapes' extent
-    across them (the outermost at most half a spacing in from it). Open paths are not hatched.
+    across them (the outermost at most half a spacing in from it), then moved ``offset_mm``
+    across (to the left of their direction). Open paths are not hatched.
 
     Returns
     -------
     list of numpy.ndarray
-        ``(2, 2)`` arrays, start and end point in mm, all running the same way.
+        ``(2, 2)`` arrays, start and end point in mm, all running the same way, line by line
+        across the shapes and along each line in order.
+    list of int, with ``with_lines``
+        The line each run lies on (0 the first), the same for the runs of one line.
 
     Notes
     -----
@@ -158,16 +163,25 @@ def hatch(paths, closed, spacing_mm, angle_deg=0.0):
             path = path if np.array_equal(path[0], path[-1]) else np.vstack([path, path[:1]])
             rings.append(path @ to_lines.T)
     if not rings:
-        return []
+        return ([], []) if with_lines else []
     a = np.concatenate([r[:-1] for r in rings])
     b = np.concatenate([r[1:] for r in rings])
     if not (np.isfinite(a).all() and np.isfinite(b).all()):
         raise PlanError("hatch: paths with coordinates that are not finite numbers")
     ymin, ymax = min(r[:, 1].min() for r in rings), max(r[:, 1].max() for r in rings)
-    count = max(1, math.ceil((ymax - ymin) / spacing_mm - 1e-9))
+    # (A shape a whole number of spacings across takes that many lines, half a spacing in
+    # from its edges, even with the dust of a unit conversion on its extent: an SVG's mm come
+    # back from svgelements' px some 5e-7 off, which made a line more, on the edges.)
+    count = max(1, math.ceil((ymax - ymin) / spacing_mm - 1e-4))
     if count > 1_000_000:
         raise PlanError(f"hatch spacing {spacing_mm} mm: {count} lines, too many")
     first = ymin + ((ymax - ymin) - (count - 1) * spacing_mm) / 2
+    if offset_mm:
+        # Moved across: one line more, the first a spacing below, so the extent stays covered.
+        if not math.isfinite(offset_mm):
+            raise PlanError(f"hatch offset {offset_mm} mm: must be a finite number")
+        first += math.fmod(offset_mm, spacing_mm) - spacing_mm
+        count += 2
     ys = first + spacing_mm * np.arange(count)
     # The lines each edge may cross (one more each side against rounding), then the exact test.
     low = np.clip(np.floor((np.minimum(a[:, 1], b[:, 1]) - first) / spacing_mm) - 1, 0, count)
@@ -190,12 +204,18 @@ def hatch(paths, closed, spacing_mm, angle_deg=0.0):
     keep = ends - starts > 1e-12                # runs of zero length: a line grazing a vertex
     runs = np.stack([np.column_stack([starts, levels]), np.column_stack([ends, levels])],
                     axis=1)[keep]
-    return list(runs @ to_lines)                # turned back (to_lines is orthonormal)
+    lines = list(runs @ to_lines)               # turned back (to_lines is orthonormal)
+    return (lines, [int(n) for n in line[0::2][keep]]) if with_lines else lines
 
 
 def _rotated(path, k):
     """A closed path started at its vertex ``k``."""
     return np.concatenate([path[k:-1], path[:k], path[k:k + 1]])
+
+
+def jump_length(paths, start=(0.0, 0.0)):
+    """mm jumped from ``start`` through ``paths`` in their order."""
+    return _jumps([np.asarray(p, dtype=float) for p in paths], start)
 
 
 def _jumps(paths, start):

@@ -11,7 +11,8 @@ import numpy as np
 from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
 from ..gateware.sources.dda import SETUP_CLOCKS
 from ..gateware.points import FIELD_CENTRE
-from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, hatch,
+from .fill import Contour, LineOrder, contour_rings, hatch_strokes
+from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_length,
                    jump_mark_lengths, order_paths, place, to_galvo)
 
 
@@ -43,8 +44,9 @@ class JobSettings:
     power_percent: float
     prr_khz: float
     passes: int = 1
-    hatch_mm: float = None          # hatch line spacing, None: no hatch
-    hatch_deg: float = 0.0
+    hatch: tuple = ()               # HatchSets (.fill), each filling the closed shapes
+    hatch_lines: LineOrder = LineOrder.SERPENTINE
+    contour: Contour = None         # rings inward from the shapes' edges, None: none
     outline: bool = True
 
 
@@ -193,23 +195,53 @@ def plan_vector_job(drawing, placement, settings, profile):
     field_mm = profile.field.size_mm
     _machine_settings(settings, profile)        # the speed and PRR first: the cheap checks
     placed = place(drawing, placement)
-    paths, closed = [], []
-    if settings.outline:
-        paths += [np.asarray(p) for p in placed.paths]
-        closed += list(placed.closed)
-    if settings.hatch_mm is not None:
-        lines = hatch(placed.paths, placed.closed, settings.hatch_mm, settings.hatch_deg)
-        paths += [np.asarray(line) for line in lines]
-        closed += [False] * len(lines)
-    if not paths:
+    # A pass's fills differ from the last only where a hatch set turns a step each pass.
+    turning = any(s.step_deg % 360 for s in settings.hatch)
+    planned = [_plan_pass(placed, settings, index) for index in
+               range(settings.passes if turning else 1)]
+    ordered = [path for paths, _, _ in planned for path in paths]
+    if not ordered:
         raise PlanError(f"{drawing.name}: nothing to mark (no outline, and no closed shape "
-                        f"to hatch)")
-    field_check(paths, field_mm)
-    ordered, before, after = order_paths(paths, closed)
-    units = [to_galvo(path, field_mm) for path in ordered]
-    segments = segments_from_paths(units) * settings.passes
+                        f"to fill)")
+    field_check(ordered, field_mm)
+    segments = []
+    for paths, _, _ in planned:
+        segments += segments_from_paths([to_galvo(path, field_mm) for path in paths])
+    if not turning:
+        segments *= settings.passes
+    before, after = planned[0][1], planned[0][2]
     return _finish(segments, ordered, before, after, settings, profile,
                    list(drawing.notes) + list(drawing.skipped))
+
+
+def _plan_pass(placed, settings, index):
+    """``(paths, jumps before, jumps after)`` of pass ``index``: the outlines and contour rings
+    ordered to cut the jumps, then each hatch set's strokes in their own order (the whole set
+    taken from whichever end is nearer)."""
+    free, closed = [], []
+    if settings.outline:
+        free += [np.asarray(p) for p in placed.paths]
+        closed += list(placed.closed)
+    if settings.contour is not None:
+        rings = contour_rings(placed.paths, placed.closed, settings.contour)
+        free += rings
+        closed += [True] * len(rings)
+    blocks = [hatch_strokes(placed.paths, placed.closed, hatch_set, pass_index=index,
+                            order=settings.hatch_lines) for hatch_set in settings.hatch]
+    blocks = [block for block in blocks if block]
+    ordered, before, _ = order_paths(free, closed)
+    in_order = list(free)
+    for block in blocks:
+        here = ordered[-1][-1] if ordered else np.zeros(2)
+        if settings.hatch_lines is LineOrder.ONEWAY:
+            # Every line the same way: the set from its last line back, if that starts nearer.
+            if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
+                block = block[::-1]
+        elif np.hypot(*(block[-1][-1] - here)) < np.hypot(*(block[0][0] - here)):
+            block = [stroke[::-1] for stroke in reversed(block)]
+        ordered += block
+        in_order += block
+    return ordered, jump_length(in_order), jump_length(ordered)
 
 
 def box_outline(bounds_mm):

@@ -1,0 +1,158 @@
+"""Fills of a drawing's closed shapes: hatch sets (cross-hatch, an angle step a pass) and
+contour rings, in the order a marking laser should take them.
+
+EzCad2 gives an object up to three hatch sets, LightBurn cross-hatch and offset fill, meerk40t
+an angle step per loop. Here:
+
+* a :class:`HatchSet` is lines ``spacing_mm`` apart at ``angle_deg``, moved ``offset_mm``
+  across, turned ``step_deg`` more on each pass; several sets fill the same shapes, one after
+  the other (two at 0° and 90°: a cross-hatch);
+* the lines of a set are taken line by line across the shape: ``serpentine`` (each line the
+  other way from the last: the least jumping), ``oneway`` (every line the same way: every
+  line starts cold from the same side, for an even mark where the material cares), or
+  ``joined`` (serpentine, and where the step from one line's end to the next line's start
+  lies inside the shape it is marked, not jumped: one stroke, no jump delay);
+* a contour fill is rings inward from the shapes' edges, ``spacing_mm`` apart, through
+  shapely's ``buffer`` (LightBurn's offset fill).
+
+Shapes are filled by the even-odd rule (:func:`.plan.hatch`); the contour's region is the
+shapes' symmetric difference, the same rule for shapes that do not cross themselves (shapely
+has no fill rule: a self-crossing outline is first made valid, its crossing kept).
+"""
+
+import enum
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .plan import PlanError, hatch
+
+
+__all__ = ["HatchSet", "LineOrder", "Contour", "hatch_strokes", "contour_rings"]
+
+
+#: Rings a contour fill makes at most.
+MAX_RINGS = 10_000
+
+
+class LineOrder(enum.Enum):
+    """How the lines of a hatch set follow each other."""
+    SERPENTINE = "serpentine"
+    ONEWAY = "oneway"
+    JOINED = "joined"
+
+
+@dataclass(frozen=True)
+class HatchSet:
+    """Lines ``spacing_mm`` apart at ``angle_deg`` (from +X, counter-clockwise), moved
+    ``offset_mm`` across, turned ``step_deg`` more on each pass after the first."""
+    spacing_mm: float
+    angle_deg: float = 0.0
+    step_deg: float = 0.0
+    offset_mm: float = 0.0
+
+    def __post_init__(self):
+        if not (math.isfinite(self.spacing_mm) and 0.001 <= self.spacing_mm <= 100):
+            raise PlanError(f"hatch spacing {self.spacing_mm} mm: must be from 0.001 to 100")
+        for name in ("angle_deg", "step_deg", "offset_mm"):
+            if not math.isfinite(getattr(self, name)):
+                raise PlanError(f"hatch {name.split('_')[0]} {getattr(self, name)}: must be a "
+                                f"finite number")
+
+    def angle_on_pass(self, index):
+        """The lines' angle on pass ``index`` (0: the first)."""
+        return (self.angle_deg + index * self.step_deg) % 360
+
+
+@dataclass(frozen=True)
+class Contour:
+    """Rings inward from the shapes' edges, ``spacing_mm`` apart, the first that far in;
+    ``count`` of them at most (None: until the shape is filled)."""
+    spacing_mm: float
+    count: int = None
+
+    def __post_init__(self):
+        if not (math.isfinite(self.spacing_mm) and 0.001 <= self.spacing_mm <= 100):
+            raise PlanError(f"contour spacing {self.spacing_mm} mm: must be from 0.001 to 100")
+        if self.count is not None and not 1 <= self.count <= MAX_RINGS:
+            raise PlanError(f"contour rings {self.count}: must be from 1 to {MAX_RINGS}")
+
+
+def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SERPENTINE):
+    """The hatch lines of one set on one pass, as strokes (open polylines, field mm) in marking
+    order: one stroke a line run, or, ``joined``, runs joined into longer strokes."""
+    order = LineOrder(order)
+    runs, lines = hatch(paths, closed, hatch_set.spacing_mm,
+                        hatch_set.angle_on_pass(pass_index), offset_mm=hatch_set.offset_mm,
+                        with_lines=True)
+    if not runs:
+        return []
+    # Line by line (the runs of a line left to right along it); every other line reversed.
+    by_line, strokes = {}, []
+    for run, line in zip(runs, lines):
+        by_line.setdefault(line, []).append(run)
+    for rank, line in enumerate(sorted(by_line)):
+        line_runs = by_line[line]
+        if order is not LineOrder.ONEWAY and rank % 2:
+            line_runs = [run[::-1] for run in reversed(line_runs)]
+        strokes += line_runs
+    if order is LineOrder.JOINED:
+        strokes = _joined(strokes, paths, closed, hatch_set.spacing_mm)
+    return strokes
+
+
+def _region(paths, closed):
+    """The closed shapes as one shapely area, by the even-odd rule (symmetric difference)."""
+    import shapely
+    from shapely.geometry import Polygon
+    region = None
+    for path, is_closed in zip(paths, closed):
+        if not is_closed or len(path) < 3:
+            continue
+        shape = shapely.make_valid(Polygon(np.asarray(path, dtype=float)))
+        region = shape if region is None else region.symmetric_difference(shape)
+    return region
+
+
+def _joined(strokes, paths, closed, spacing_mm):
+    """Consecutive strokes joined where the step between them is short (at most two spacings)
+    and lies inside the shapes, so it can be marked."""
+    from shapely.geometry import LineString
+    region = _region(paths, closed)
+    if region is None or region.is_empty:
+        return strokes
+    # The step runs along the shape's edge at worst: a little slack for the flattening.
+    inside = region.buffer(spacing_mm * 1e-3)
+    joined = [np.asarray(strokes[0])]
+    for stroke in strokes[1:]:
+        end, start = joined[-1][-1], stroke[0]
+        if np.hypot(*(start - end)) <= 2 * spacing_mm and \
+                inside.covers(LineString([end, start])):
+            joined[-1] = np.vstack([joined[-1], stroke])
+        else:
+            joined.append(np.asarray(stroke))
+    return joined
+
+
+def contour_rings(paths, closed, contour):
+    """The rings of a contour fill (closed polylines, field mm), outermost first."""
+    region = _region(paths, closed)
+    rings = []
+    if region is None or region.is_empty:
+        return rings
+    k = 1
+    while contour.count is None or k <= contour.count:
+        inner = region.buffer(-k * contour.spacing_mm, join_style="mitre", mitre_limit=2.0)
+        if inner.is_empty:
+            break
+        for polygon in getattr(inner, "geoms", [inner]):
+            if polygon.geom_type != "Polygon":
+                continue
+            for ring in [polygon.exterior, *polygon.interiors]:
+                rings.append(np.asarray(ring.coords, dtype=float))
+        if len(rings) > MAX_RINGS:
+            raise PlanError(f"contour spacing {contour.spacing_mm} mm: more than "
+                            f"{MAX_RINGS:,} rings")
+        k += 1
+    return rings
