@@ -60,11 +60,11 @@ def test_a_real_mirror_lags_a_fast_figure():
 
 def test_analyze_wobble_prints_json_and_refuses_a_prr_above_the_frame_rate(capsys, tmp_path):
     assert main(["analyze", "--wobble", "--ideal-galvo", "--no-plots", "--json", "--quiet",
-                 "--prr", "50e3"]) == 0
+                 "--prr", "50"]) == 0
     result = json.loads(capsys.readouterr().out)
     widths = [m["width_mm"] for m in result["amplitudes"]]
     assert widths == sorted(widths) and widths[0] < widths[-1]
     assert {m["hz"] for m in result["frequencies"]} == {500, 1000, 2000, 4000, 8000}
     with pytest.raises(SystemExit) as stop:
-        main(["analyze", "--wobble", "--prr", "200e3", "--no-plots"])
-    assert "at most 100e3" in str(stop.value.code) and "\n" not in str(stop.value.code)
+        main(["analyze", "--wobble", "--prr", "200", "--no-plots"])
+    assert "at most 100 kHz" in str(stop.value.code) and "\n" not in str(stop.value.code)

@@ -49,7 +49,7 @@ def test_sim_vector_job(tmp_path, capsys):
     job.write_text("jump 30000 30000\nmark 30300 30000\nmark 30300 30200\njump 32768 32768\n")
     points_csv = tmp_path / "points.csv"
     with quick_replay_job():
-        code = main(["sim", "--mode", "vector", "--job", str(job), "--prr", "50e3",
+        code = main(["sim", "--mode", "vector", "--job", str(job), "--prr", "50",
                      "--pulses-per-point", "2", "--points-csv", str(points_csv), "--json"])
     report = json.loads(capsys.readouterr().out)
     assert code == 0

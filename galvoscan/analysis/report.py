@@ -126,10 +126,10 @@ def run_analyze(args):
     if args.wobble:
         try:
             head = ScanHead(args.lens_field)
-            laser = Laser(power_w=args.power, prr_hz=args.prr, spot_mm=args.spot)
+            laser = Laser(power_w=args.power, prr_hz=args.prr * 1e3, spot_mm=args.spot)
             if laser.prr_hz > 100e3:
                 raise ValueError("vector mode fires at most one pulse a 10 µs frame: --prr "
-                                 "must be at most 100e3 with --wobble")
+                                 "must be at most 100 kHz with --wobble")
             galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
         except ValueError as error:
             raise SystemExit(f"galvoscan: error: {error}")
@@ -137,9 +137,9 @@ def run_analyze(args):
 
     try:
         head = ScanHead(args.lens_field)
-        laser = Laser(power_w=args.power, prr_hz=args.prr, spot_mm=args.spot)
+        laser = Laser(power_w=args.power, prr_hz=args.prr * 1e3, spot_mm=args.spot)
         galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
-        setup = Setup(head=head, laser=laser, galvo=galvo, speed_m_s=args.speed,
+        setup = Setup(head=head, laser=laser, galvo=galvo, speed_m_s=args.speed / 1e3,
                       line_spacing_mm=args.line_spacing, target_dose_j_cm2=args.target_dose)
         table = SpiralTable(points=args.table_points, sampling=args.sampling, sigma=args.sigma)
         other = SpiralTable(points=args.table_points, sampling="uniform") \
@@ -190,7 +190,7 @@ def run_analyze(args):
 
     setup_summary = {
         "lens_field_mm": head.field_mm, "power_w": laser.power_w, "prr_hz": laser.prr_hz,
-        "spot_mm": laser.spot_mm, "speed_m_s": setup.speed_m_s,
+        "spot_mm": laser.spot_mm, "speed_mm_s": setup.speed_m_s * 1e3,
         "line_spacing_mm": setup.line_spacing_mm, "target_dose_j_cm2": setup.target_dose_j_cm2,
         "galvo": {"omega_n_rad_s": galvo.omega_n, "v_max_units_s": galvo.v_max},
     }
@@ -206,7 +206,7 @@ def run_analyze(args):
         return 0
     print(f"scan head {head.field_mm:g} mm field; laser {laser.power_w:g} W, "
           f"{laser.prr_hz / 1e3:g} kHz, spot {laser.spot_mm:g} mm; axes held to "
-          f"{setup.speed_m_s:g} m/s; target dose {setup.target_dose_j_cm2:.3g} J/cm²; "
+          f"{setup.speed_m_s * 1e3:g} mm/s; target dose {setup.target_dose_j_cm2:.3g} J/cm²; "
           + ("ideal mirror" if args.ideal_galvo else
              f"galvo model: {galvo.omega_n / (2 * math.pi):.0f} Hz, "
              f"{float(head.mm(galvo.v_max)) / 1e3:.1f} m/s top speed"))

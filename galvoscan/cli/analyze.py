@@ -20,7 +20,7 @@ def _cmd_delays(args):
     from ..analysis.galvo import GalvoModel
     galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
     without, chosen = delay_study(galvo=galvo, field_mm=args.lens_field,
-                                  speed_mm_s=args.mark_speed, prr_hz=args.prr,
+                                  speed_mm_s=args.mark_speed, prr_hz=args.prr * 1e3,
                                   spot_mm=args.spot)
     rows = delay_report(without, chosen)
     if args.json:
@@ -58,9 +58,9 @@ def add_parsers(commands):
     job.add_argument("--interp", choices=INTERPOLATIONS, default=None,
                      help="between spiral points: off (held, then a jump) or linear (default: "
                           "the spiral_interp register's reset); the other is printed beside it")
-    job.add_argument("--speed", type=number_in("speed", 0.01, 100), default=5.0,
-                     metavar="M_S", help="per-axis speed limit for the patterns, m/s "
-                                         "(default: 5, the paper's galvo maximum)")
+    job.add_argument("--speed", type=number_in("speed", 10, 100_000), default=5000.0,
+                     metavar="MM_S", help="per-axis speed limit for the patterns, mm/s "
+                                          "(default: 5000, the paper's galvo maximum)")
     job.add_argument("--lens-field", type=number_in("lens field", 1, 2000), default=110.0,
                      metavar="MM", help="scan head field across 65536 units, mm "
                                         "(default: 110)")
@@ -68,8 +68,8 @@ def add_parsers(commands):
                      help="spot 1/e² diameter, mm (default: 0.05)")
     job.add_argument("--power", type=number_in("power", 0.001, 1e5), default=50.0,
                      metavar="W", help="average laser power, W (default: 50)")
-    job.add_argument("--prr", type=number_in("prr", 1, 100e6), default=100e3, metavar="HZ",
-                     help="pulse repetition rate, Hz (default: 100e3)")
+    job.add_argument("--prr", type=number_in("PRR (kHz)", 0.001, 100_000), default=100.0,
+                     metavar="KHZ", help="pulse repetition rate, kHz (default: 100)")
     job.add_argument("--line-spacing", type=number_in("line spacing", 0.0001, 10),
                      default=None, metavar="MM",
                      help="raster line spacing, mm (default: the spot diameter)")

@@ -15,7 +15,8 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
-           "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill"]
+           "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill",
+           "prr_khz"]
 
 
 class CLIError(SystemExit):
@@ -65,6 +66,14 @@ def number_in(what, low, high):
                                              f"{_number(high)}, not {text}")
         return value
     return parse
+
+
+def prr_khz():
+    """``--prr`` of the board's laser, kHz: the ``laser_prr`` register's range (100 Hz
+    steps)."""
+    from ..gateware.host.regmap import BY_NAME
+    reg = BY_NAME["laser_prr"]
+    return number_in("PRR (kHz)", reg.low / 10, reg.high / 10)
 
 
 def register_int(name, what=None):

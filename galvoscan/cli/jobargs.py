@@ -5,7 +5,8 @@ import argparse
 import contextlib
 import sys
 
-from .args import add_backend_option, baud, fail, number_in, open_transport, simulated_board
+from .args import (add_backend_option, baud, fail, number_in, open_transport, prr_khz,
+                   simulated_board)
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -35,8 +36,9 @@ def add_job_options(parser):
                      help="marking speed in mm/s")
     job.add_argument("--power", type=number_in("power", 0, 100), metavar="PERCENT",
                      help="laser power in %% of the laser's maximum")
-    job.add_argument("--prr", type=number_in("PRR", 1, 10_000), metavar="KHZ",
-                     help="pulse repetition rate in kHz (the laser's range, 20 … 200 at most)")
+    job.add_argument("--prr", type=prr_khz(), metavar="KHZ",
+                     help="pulse repetition rate in kHz (the board's 20 … 200; the profile's "
+                          "laser may allow less)")
     return job
 
 

@@ -6,7 +6,7 @@ import sys
 import time
 
 from .args import (INTERPOLATIONS, add_backend_option, add_table_options, fail, image_file,
-                   int_in, number_in, output_file, read_text, register_int, settings_from,
+                   int_in, number_in, output_file, prr_khz, read_text, register_int, settings_from,
                    table_from)
 
 
@@ -75,7 +75,7 @@ def _sim_vector(args):
     start = time.monotonic()
     with _FrameBar() as bar:
         try:
-            result = replay_job(job, correction=correction, prr_hz=args.prr,
+            result = replay_job(job, correction=correction, prr_hz=args.prr * 1e3,
                                 pulses_per_point=args.pulses_per_point, pitch=args.pitch,
                                 jump_delay=args.jump_delay, vcd=args.vcd,
                                 progress=bar.update, backend=_backend(args), say=_say)
@@ -86,7 +86,7 @@ def _sim_vector(args):
     counts = sorted({p[2] for p in marked})
     mm_per_unit = args.lens_field / 65536
     units_per_frame = _marking_speed(result.points, args.pitch)
-    speed = None if units_per_frame is None else units_per_frame * mm_per_unit / 10e-6 / 1e3
+    speed = None if units_per_frame is None else units_per_frame * mm_per_unit / 10e-6
     if args.csv:
         with open(args.csv, "w") as f:
             f.write("frame,x,y,pulses\n")
@@ -100,14 +100,14 @@ def _sim_vector(args):
     if args.png:
         plot_job(args.png, result, title=f"{args.job}: {len(marked)} marked points, "
                                          f"{args.pulses_per_point} pulse(s) each at "
-                                         f"{args.prr / 1e3:g} kHz")
+                                         f"{args.prr:g} kHz")
     summary = {
         "segments": len(job), "frames": len(result.frames), "points": len(result.points),
         "marked_points": len(marked), "pulses_per_marked_point": counts,
         "expected_pulses_per_point": args.pulses_per_point,
-        "line_speed_m_s": None if speed is None else round(speed, 4),
-        "expected_line_speed_m_s": round(args.pitch * mm_per_unit * args.prr
-                                         / args.pulses_per_point / 1e3, 4),
+        "line_speed_mm_s": None if speed is None else round(speed, 2),
+        "expected_line_speed_mm_s": round(args.pitch * mm_per_unit * args.prr * 1e3
+                                          / args.pulses_per_point, 2),
         "sim_seconds": round(seconds, 2), "csv": args.csv, "points_csv": args.points_csv,
         "png": args.png, "vcd": args.vcd,
     }
@@ -119,8 +119,8 @@ def _sim_vector(args):
     print(f"pulses per marked point: {', '.join(map(str, counts)) or '-'} "
           f"(asked {args.pulses_per_point})")
     if speed is not None:
-        print(f"marking speed {speed:.3f} m/s on a {args.lens_field:g} mm field "
-              f"(pitch × PRR / N = {summary['expected_line_speed_m_s']:.3f} m/s)")
+        print(f"marking speed {speed:.1f} mm/s on a {args.lens_field:g} mm field "
+              f"(pitch × PRR / N = {summary['expected_line_speed_mm_s']:.1f} mm/s)")
     for what in ("csv", "points_csv", "png", "vcd"):
         if summary[what]:
             print(f"  {what.replace('_', ' ')}: {summary[what]}")
@@ -249,7 +249,7 @@ def _sim_spiral(args):
 
 
 #: Vector-mode options given no value: the register's reset where there is one.
-VECTOR_DEFAULTS = {"prr": 60e3, "lens_field": 110.0}
+VECTOR_DEFAULTS = {"prr": 60.0, "lens_field": 110.0}
 
 
 def _cmd_sim(args):
@@ -335,9 +335,8 @@ def add_parsers(commands):
     vector = sim.add_argument_group("vector mode")
     vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
     prr = BY_NAME["laser_prr"]       # in 100 Hz steps
-    vector.add_argument("--prr", type=number_in("prr", prr.low * 100, prr.high * 100),
-                        metavar="HZ",
-                        help=f"laser pulse rate, {prr.low * 100:g} … {prr.high * 100:g} Hz "
+    vector.add_argument("--prr", type=prr_khz(), metavar="KHZ",
+                        help=f"laser pulse rate, {prr.low / 10:g} … {prr.high / 10:g} kHz "
                              f"(default: {VECTOR_DEFAULTS['prr']:g}, the speeds of Wan et "
                              f"al.'s table)")
     for name, what in (("pulses_per_point", "pulses on every marked point"),
@@ -348,7 +347,7 @@ def add_parsers(commands):
                             metavar="N", help=f"{what}, {reg.low} … {reg.high} (default: the "
                                               f"register's {reg.reset})")
     vector.add_argument("--lens-field", type=number_in("lens field", 1, 2000), metavar="MM",
-                        help=f"field across 65536 units, for the speed in m/s (default: "
+                        help=f"field across 65536 units, for the speed in mm/s (default: "
                              f"{VECTOR_DEFAULTS['lens_field']:g})")
     vector.add_argument("--points-csv", type=output_file, metavar="FILE",
                         help="write one row per point: x,y,pulses,frames")
