@@ -51,9 +51,12 @@ def test_raster_registers_in_galvo_units():
 
 
 def test_spiral_speed_is_held_to_the_asked_speed():
-    for speed in (500, 2000, 5000):
+    """The dwell is a whole number of frames, the smallest that keeps the axes at or under the
+    speed: the speed built is the asked one to within a dwell's rounding, not a fraction."""
+    for speed in (100, 500, 1000, 2000, 5000):
         job = plan(speed_mm_s=speed)
-        assert job.speed_mm_s <= speed * (1 + 1e-9)
+        dwell = job.registers["dwell"]
+        assert speed * (dwell - 1) / dwell < job.speed_mm_s <= speed * (1 + 1e-9), speed
         assert job.registers["mode"] == 0 and job.registers["dwell"] >= 1
         assert job.registers["center_x"] == 32768 + round(5 * 65536 / 110)
 
@@ -110,3 +113,15 @@ def test_estimate_json_is_one_object_on_stdout(capsys):
     assert record["passes"] == 2 and record["seconds"] == pytest.approx(2 * record["pass_s"])
     assert record["dose_j_cm2"] == pytest.approx(record["power_w"] * record["seconds"] / 1.0,
                                                  rel=1e-3)       # (power_w is rounded)
+
+
+@pytest.mark.parametrize("how, words", [
+    (["--passes", "3"], "3 passes,"),
+    (["--dose", "5"], "whole, then the run stops"),
+])
+def test_the_passes_say_how_the_last_one_ends(how, words, capsys):
+    assert main(["clean", "--area", "10x10", *how, "--estimate", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert words in err
+    record = json.loads(out)
+    assert record["whole_passes"] == math.floor(record["passes"] + 1e-9)

@@ -23,6 +23,16 @@ def _frame_registers(profile, prr_register):
             "jump_delay": profile.jump_delay_register(), **profile.delay_registers()}
 
 
+def _passes(passes):
+    """How many passes, and how the last one ends when it is not whole."""
+    whole = math.floor(passes + 1e-9)
+    part = passes - whole
+    if part < 1e-6:
+        return f"{whole} pass{'es' if whole != 1 else ''}"
+    return (f"{passes:.2f} passes ({whole} whole, then the run stops {part:.0%} of the way "
+            f"through the next: the rest of the area gets one pass less)")
+
+
 def _cmd_clean(args):
     from ..jobs.area import plan_area_job
     from ..jobs.plan import PlanError
@@ -42,7 +52,7 @@ def _cmd_clean(args):
     say = (lambda line: print(line, file=sys.stderr)) if args.json else print
     say(f"{job.pattern} over {args.area[0]:g} x {args.area[1]:g} mm at ({args.centre[0]:g}, "
         f"{args.centre[1]:g}) mm: {job.speed_mm_s:.0f} mm/s, one pass {job.pass_s:.3f} s")
-    say(f"laser {power:g} % ({job.power_w:.3g} W), {prr:g} kHz: {job.passes:.2f} passes, "
+    say(f"laser {power:g} % ({job.power_w:.3g} W), {prr:g} kHz: {_passes(job.passes)}, "
         f"{job.seconds:.3f} s, mean dose {job.dose_j_cm2:.3g} J/cm²")
     if args.estimate or not has_link(args, profile):
         if not args.estimate:
@@ -53,7 +63,8 @@ def _cmd_clean(args):
                 "centre_mm": list(args.centre), "speed_mm_s": round(job.speed_mm_s, 3),
                 "pass_s": round(job.pass_s, 6), "power_percent": power,
                 "power_w": round(job.power_w, 4), "prr_khz": prr,
-                "passes": round(job.passes, 4), "seconds": round(job.seconds, 6),
+                "passes": round(job.passes, 4), "whole_passes": math.floor(job.passes + 1e-9),
+                "seconds": round(job.seconds, 6),
                 "dose_j_cm2": job.dose_j_cm2}))
         return 0
     registers = dict(job.registers)

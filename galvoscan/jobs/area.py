@@ -92,8 +92,11 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
             raise PlanError(f"{speed_mm_s:g} mm/s is too slow for the spiral on this area")
         frames = spiral_frames(table, dwell=dwell, amp=amp,
                                centre=(FIELD_CENTRE + _units(head, cx), FIELD_CENTRE + _units(head, cy)))
-        steps = [max(abs(b - a) for a, b in zip(axis, axis[1:])) for axis in (frames.x, frames.y)]
-        # Each point is held ``dwell`` frames: the axis speed is a step over that time.
+        # Each point is held ``dwell`` frames: the axis speed is the largest step from point to
+        # point over that time (taken between the points, not between frames: an interpolating
+        # build spreads a step over its dwell, which is the same speed, not a dwell-th of it).
+        points = spiral_frames(table, dwell=1, amp=amp, interpolation="off")
+        steps = [max(abs(b - a) for a, b in zip(axis, axis[1:])) for axis in (points.x, points.y)]
         built_speed = float(head.mm(max(steps))) / (dwell * FRAME_PERIOD)
         registers.update(mode=Mode.SPIRAL.value, dwell=dwell, amp_x=amp[0], amp_y=amp[1],
                          center_x=FIELD_CENTRE + _units(head, cx),
