@@ -220,7 +220,7 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
                                                                  int(p[0] / 0.05) + 2))),
                        default=9))
 
-    assert result["drawing_frame"].startswith("the DXF's own")
+    assert result["drawing_frame"].startswith("the drawing's own")
     marks = np.array(result["drawing_marks"])
     for p in marks[::7]:                        # every 7th point keeps the test quick
         assert distance(p) <= tolerance, p

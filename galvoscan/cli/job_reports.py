@@ -36,7 +36,8 @@ def estimate_record(job, profile, power, prr, passes, preview):
 #: The frames ``mark --sim --json`` gives the marks in.
 FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
 SVG_FRAME = "the SVG's own: mm from its top-left corner, X right, Y down"
-DXF_FRAME = "the DXF's own, in mm: X right, Y up"
+DXF_FRAME = ("the drawing's own, in mm, X right, Y up (a DXF's; a code's from its lower-left "
+             "corner)")
 
 
 def sim_report(board, job, placement, drawing, profile, report):

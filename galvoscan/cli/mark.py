@@ -17,6 +17,7 @@ from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
+from .content import add_content_options, content_objects, has_content
 from .job_reports import estimate_record, sim_report
 from .machine import add_machine_option, profile_from
 
@@ -47,21 +48,30 @@ def _plan(args, profile):
     from ..job import JobError, parse_job
     from ..jobs.drawing import DrawingError, load_drawing
     from ..jobs.plan import Placement, PlanError
-    from ..jobs.vector_job import JobSettings, plan_vector_job, plan_job_file
+    from ..jobs.vector_job import JobSettings, MarkObject, plan_job_file, plan_objects
     from .args import read_text
     speed, power, prr = job_settings_values(args, profile)
     settings = JobSettings(speed_mm_s=speed, power_percent=power, prr_khz=prr,
                            passes=args.passes or profile.defaults.passes,
                            hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                            contour=args.contour, outline=not args.no_outline)
+    if args.file is None and not has_content(args):
+        fail("give a drawing (FILE) or something to make (--code)")
     try:
-        if Path(args.file).suffix.lower() == ".job":
+        objects = content_objects(args, settings, profile)
+        if args.file is not None and Path(args.file).suffix.lower() == ".job":
+            if objects:
+                fail("a .job is in galvo units, already placed: mark a code beside a drawing "
+                     "(.svg, .dxf), or alone")
             segments = parse_job(read_text(args.file, "job file"), name=args.file)
             return plan_job_file(segments, settings, profile), None, None
-        placement = Placement(origin=args.origin, offset_mm=args.offset, scale=args.scale,
-                              rotate_deg=args.rotate)
-        drawing = load_drawing(args.file, tolerance_mm=args.tolerance)
-        return plan_vector_job(drawing, placement, settings, profile), placement, drawing
+        if args.file is not None:
+            placement = Placement(origin=args.origin, offset_mm=args.offset, scale=args.scale,
+                                  rotate_deg=args.rotate)
+            drawing = load_drawing(args.file, tolerance_mm=args.tolerance)
+            objects.insert(0, MarkObject(drawing, placement, settings))
+        first = objects[0]
+        return plan_objects(objects, settings, profile), first.placement, first.drawing
     except (DrawingError, PlanError, JobError, ValueError) as error:
         fail(error)
 
@@ -137,7 +147,8 @@ def planned_job(args):
     if args.preview:
         from ..jobs.preview import preview
         preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
-                title=f"{Path(args.file).name}: {job.mark_mm:.1f} mm marked")
+                title=f"{Path(args.file).name if args.file else drawing.name}: "
+                      f"{job.mark_mm:.1f} mm marked")
         say(f"wrote {args.preview}")
     return job, placement, drawing, profile, wobble_regs, say
 
@@ -200,7 +211,9 @@ def _cmd_mark(args):
 def add_drawing_options(parser):
     """The drawing, its placement, hatch, wobble and the job's laser and speed: what ``mark``
     and ``store`` plan a job from."""
-    parser.add_argument("file", metavar="FILE", help="the drawing: .svg, .dxf or .job")
+    parser.add_argument("file", metavar="FILE", nargs="?",
+                        help="the drawing: .svg, .dxf or .job (or none, with --code)")
+    add_content_options(parser)
     add_job_options(parser)
     parser.add_argument("--passes", type=int_in(1, 1000, "passes"), default=None,
                         metavar="N", help="times the job is marked (default: the profile's)")

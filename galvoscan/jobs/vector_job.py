@@ -16,7 +16,8 @@ from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_
                    jump_mark_lengths, order_paths, place, to_galvo)
 
 
-__all__ = ["JobSettings", "VectorJob", "plan_vector_job", "segments_from_paths",
+__all__ = ["JobSettings", "VectorJob", "MarkObject", "plan_vector_job", "plan_objects",
+           "segments_from_paths",
            "link_segments_per_s"]
 
 #: Points a second (PRR / pulses per point) the vector mode steps without stalling at the joint
@@ -189,35 +190,78 @@ def plan_job_file(segments, settings, profile):
                    ["a .job is in galvo units: no placement, hatch or reordering"])
 
 
+@dataclass(frozen=True, eq=False)
+class MarkObject:
+    """One object of a job: a drawing, where it goes, and how it is filled (``fill``'s hatch,
+    hatch_lines, contour and outline; the job's speed, power and passes are the job's), with
+    ``keep_clear_mm`` around its bounds that no other object may reach into (a code's quiet
+    zone)."""
+    drawing: object
+    placement: object
+    fill: JobSettings
+    keep_clear_mm: float = 0.0
+
+
 def plan_vector_job(drawing, placement, settings, profile):
     """Plan ``drawing`` for ``profile``'s machine; raises :class:`~.plan.PlanError` (one line)
     for anything that cannot run, before any link is opened."""
+    return plan_objects([MarkObject(drawing, placement, settings)], settings, profile)
+
+
+def plan_objects(objects, settings, profile):
+    """Plan :class:`MarkObject` s, marked one after the other on each pass, for ``profile``'s
+    machine at ``settings``' speed, power, PRR and passes."""
     field_mm = profile.field.size_mm
     _machine_settings(settings, profile)        # the speed and PRR first: the cheap checks
-    placed = place(drawing, placement)
+    placed = [place(o.drawing, o.placement) for o in objects]
+    _check_clear(objects, placed)
     # A pass's fills differ from the last only where a hatch set turns a step each pass.
-    turning = any(s.step_deg % 360 for s in settings.hatch)
-    planned = [_plan_pass(placed, settings, index) for index in
-               range(settings.passes if turning else 1)]
+    turning = any(s.step_deg % 360 for o in objects for s in o.fill.hatch)
+    planned, here = [], np.zeros(2)
+    for index in range(settings.passes if turning else 1):
+        for o, drawing in zip(objects, placed):
+            paths, before, after = _plan_pass(drawing, o.fill, index, here)
+            if paths:
+                here = paths[-1][-1]
+            planned.append((paths, before, after))
     ordered = [path for paths, _, _ in planned for path in paths]
     if not ordered:
-        raise PlanError(f"{drawing.name}: nothing to mark (no outline, and no closed shape "
-                        f"to fill)")
+        raise PlanError(f"{' and '.join(o.drawing.name for o in objects)}: nothing to mark "
+                        f"(no outline, and no closed shape to fill)")
     field_check(ordered, field_mm)
     segments = []
     for paths, _, _ in planned:
         segments += segments_from_paths([to_galvo(path, field_mm) for path in paths])
     if not turning:
         segments *= settings.passes
-    before, after = planned[0][1], planned[0][2]
-    return _finish(segments, ordered, before, after, settings, profile,
-                   list(drawing.notes) + list(drawing.skipped))
+    one_pass = planned[:len(objects)]
+    before, after = sum(p[1] for p in one_pass), sum(p[2] for p in one_pass)
+    notes = [note for o in objects for note in (*o.drawing.notes, *o.drawing.skipped)]
+    return _finish(segments, ordered, before, after, settings, profile, notes)
 
 
-def _plan_pass(placed, settings, index):
+def _check_clear(objects, placed):
+    """Refuse an object that reaches into another's keep-clear zone (a code's quiet zone)."""
+    for i, (o, drawing) in enumerate(zip(objects, placed)):
+        if not o.keep_clear_mm:
+            continue
+        from shapely.geometry import LineString, Point, box
+        xmin, ymin, xmax, ymax = drawing.bounds()
+        m = o.keep_clear_mm
+        zone = box(xmin - m, ymin - m, xmax + m, ymax + m)
+        for j, other in enumerate(placed):
+            if j == i:
+                continue
+            if any(zone.intersects(LineString(p) if len(p) > 1 and np.ptp(p, axis=0).any()
+                                   else Point(p[0])) for p in other.paths):
+                raise PlanError(f"{objects[j].drawing.name} reaches into the quiet zone of the "
+                                f"{o.drawing.name} ({m:.2f} mm around it): place them apart")
+
+
+def _plan_pass(placed, settings, index, start=(0.0, 0.0)):
     """``(paths, jumps before, jumps after)`` of pass ``index``: the outlines and contour rings
-    ordered to cut the jumps, then each hatch set's strokes in their own order (the whole set
-    taken from whichever end is nearer)."""
+    ordered to cut the jumps (from ``start``), then each hatch set's strokes in their own
+    order (the whole set taken from whichever end is nearer)."""
     free, closed = [], []
     if settings.outline:
         free += [np.asarray(p) for p in placed.paths]
@@ -229,10 +273,10 @@ def _plan_pass(placed, settings, index):
     blocks = [hatch_strokes(placed.paths, placed.closed, hatch_set, pass_index=index,
                             order=settings.hatch_lines) for hatch_set in settings.hatch]
     blocks = [block for block in blocks if block]
-    ordered, before, _ = order_paths(free, closed)
+    ordered, _, _ = order_paths(free, closed, start)
     in_order = list(free)
     for block in blocks:
-        here = ordered[-1][-1] if ordered else np.zeros(2)
+        here = ordered[-1][-1] if ordered else np.asarray(start, dtype=float)
         if settings.hatch_lines is LineOrder.ONEWAY:
             # Every line the same way: the set from its last line back, if that starts nearer.
             if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
@@ -241,7 +285,7 @@ def _plan_pass(placed, settings, index):
             block = [stroke[::-1] for stroke in reversed(block)]
         ordered += block
         in_order += block
-    return ordered, jump_length(in_order), jump_length(ordered)
+    return ordered, jump_length(in_order, start), jump_length(ordered, start)
 
 
 def box_outline(bounds_mm):
