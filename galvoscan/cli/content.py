@@ -1,7 +1,9 @@
-"""The content ``mark`` and ``store`` make themselves, beside or instead of a drawing: codes
-(``--code``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of the job."""
+"""The content ``mark`` and ``store`` make themselves, beside or instead of a drawing: text
+(``--text``) and codes (``--code``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of
+the job."""
 
 from ..jobs.codes import QR_LEVELS, CodeFill, CodeKind
+from ..jobs.text import ALIGNMENTS
 from .args import int_in, number_in
 from .jobargs import pair_mm
 
@@ -10,6 +12,28 @@ __all__ = ["add_content_options", "content_objects", "has_content"]
 
 
 def add_content_options(parser):
+    text = parser.add_argument_group(
+        "text (TrueType/OpenType outlines, filled; or Hershey single-line fonts)")
+    text.add_argument("--text", metavar="TEXT",
+                      help="mark this text (\\n starts a new line; {date:%%Y-%%m-%%d} and "
+                           "{time:%%H:%%M} are the time of marking)")
+    text.add_argument("--font", metavar="NAME|FILE",
+                      help="a font family (default: DejaVu Sans), a .ttf/.otf file, or "
+                           "hershey[:NAME] for a single-line font (futural, scripts, "
+                           "timesr, …)")
+    text.add_argument("--height", type=number_in("height", 0.1, 500), default=None,
+                      metavar="MM", help="capital height, mm (default: 5)")
+    text.add_argument("--text-at", type=pair_mm("--text-at"), default=(0.0, 0.0),
+                      metavar="X,Y", help="where the first line's baseline starts (left), is "
+                                          "centred (centre) or ends (right), field mm "
+                                          "(default: 0,0)")
+    text.add_argument("--align", choices=[*ALIGNMENTS, "center"], default="left",
+                      help="each line's left end, centre or right end at --text-at")
+    text.add_argument("--letter-spacing", type=number_in("letter spacing", -100, 1000),
+                      default=0.0, metavar="MM", help="added between letters, mm (default 0: "
+                                                      "the font's own, kerning kept)")
+    text.add_argument("--line-spacing", type=number_in("line spacing", 0.5, 10), default=1.4,
+                      metavar="K", help="baseline to baseline, times the height (default 1.4)")
     code = parser.add_argument_group(
         "codes (QR, DataMatrix, Code 128, made by zxing-cpp; with FILE or alone)")
     code.add_argument("--code", choices=[kind.value for kind in CodeKind],
@@ -37,7 +61,7 @@ def add_content_options(parser):
 
 
 def has_content(args):
-    return getattr(args, "code", None) is not None
+    return getattr(args, "code", None) is not None or getattr(args, "text", None) is not None
 
 
 def content_objects(args, settings, profile):
@@ -46,6 +70,12 @@ def content_objects(args, settings, profile):
     from ..jobs.codes import CodeSpec, code_object
     from ..jobs.plan import PlanError
     objects = []
+    if args.text is not None:
+        objects.append(_text_object(args, settings, profile))
+    else:
+        given = [name for name in ("font", "height") if getattr(args, name) is not None]
+        if given:
+            raise PlanError(f"--{given[0]} is for --text")
     given = [name for name in ("data", "size", "code_ec", "code_quiet", "code_height")
              if getattr(args, name) is not None]
     if args.code is None:
@@ -60,3 +90,30 @@ def content_objects(args, settings, profile):
     objects.append(code_object(spec, settings, centre_mm=args.code_at,
                                spot_mm=profile.laser.spot_mm))
     return objects
+
+
+def _text_object(args, settings, profile):
+    """``--text`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`: an outline font's
+    glyphs filled by the job's hatch sets (or, none given, lines at most half the spot apart)
+    and outlined; a Hershey font's strokes marked once."""
+    from dataclasses import replace
+    from datetime import datetime
+    from ..jobs.fill import HatchSet
+    from ..jobs.plan import Placement, PlanError
+    from ..jobs.text import TextSpec, text_drawing
+    from ..jobs.vector_job import MarkObject
+    now = datetime.now()
+    try:
+        text = args.text.replace("\\n", "\n").format(date=now, time=now)
+    except (KeyError, IndexError, ValueError, AttributeError) as error:
+        raise PlanError(f"--text {args.text!r}: {error!r} is not a field it knows (date, "
+                        f"time; braces as {{{{ and }}}})") from None
+    spec = TextSpec(text, args.height or 5.0, font=args.font, align=args.align,
+                    letter_spacing_mm=args.letter_spacing, line_spacing=args.line_spacing)
+    drawing = text_drawing(spec, tolerance_mm=getattr(args, "tolerance", 0.01))
+    if spec.hershey:
+        fill = replace(settings, hatch=(), contour=None, outline=True)
+    else:
+        fill = settings if settings.hatch or settings.contour else replace(
+            settings, hatch=(HatchSet(profile.laser.spot_mm / 2),), outline=True)
+    return MarkObject(drawing, Placement(origin="page", offset_mm=tuple(args.text_at)), fill)

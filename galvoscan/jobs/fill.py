@@ -79,9 +79,51 @@ class Contour:
             raise PlanError(f"contour rings {self.count}: must be from 1 to {MAX_RINGS}")
 
 
-def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SERPENTINE):
+def shapes(paths, closed):
+    """The closed paths grouped into shapes: each outline with the holes inside it (by the
+    even-odd rule: a ring inside an odd number of others is a hole of the smallest of them
+    that is inside an even number). Lists of indices into ``paths``, one a shape."""
+    import shapely
+    from shapely.geometry import Polygon
+    rings = [i for i, (p, c) in enumerate(zip(paths, closed)) if c and len(p) >= 4]
+    polygons = [shapely.make_valid(Polygon(np.asarray(paths[i], dtype=float)))
+                for i in rings]
+    tree = shapely.STRtree(polygons)
+    inside = []                         # for each ring, the rings that contain it
+    for k, polygon in enumerate(polygons):
+        point = polygon.representative_point() if not polygon.is_empty else None
+        around = [] if point is None else [j for j in tree.query(point, "intersects")
+                                           if j != k and polygons[j].area > polygon.area and
+                                           polygons[j].contains(polygon)]
+        inside.append(around)
+    groups, owner = {}, {}
+    for k in range(len(rings)):
+        if len(inside[k]) % 2 == 0:
+            groups[k] = [rings[k]]
+            owner[k] = k
+    for k in range(len(rings)):
+        if len(inside[k]) % 2:
+            outer = [j for j in inside[k] if len(inside[j]) == len(inside[k]) - 1]
+            if outer:
+                groups[min(outer, key=lambda j: polygons[j].area)].append(rings[k])
+    return list(groups.values())
+
+
+def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SERPENTINE,
+                  per_shape=True):
     """The hatch lines of one set on one pass, as strokes (open polylines, field mm) in marking
-    order: one stroke a line run, or, ``joined``, runs joined into longer strokes."""
+    order: one stroke a line run, or, ``joined``, runs joined into longer strokes.
+
+    ``per_shape``: each shape (:func:`shapes`: an outline and its holes) hatched whole before
+    the next, the nearest next (a line of text jumps letter to letter, not across every letter
+    on each line); else the lines run across all of them."""
+    if per_shape:
+        groups = shapes(paths, closed)
+        if len(groups) > 1:
+            blocks = [hatch_strokes([paths[i] for i in group], [True] * len(group), hatch_set,
+                                    pass_index=pass_index, order=order, per_shape=False)
+                      for group in groups]
+            return _nearest_blocks([b for b in blocks if b], LineOrder(order))
     order = LineOrder(order)
     runs, lines = hatch(paths, closed, hatch_set.spacing_mm,
                         hatch_set.angle_on_pass(pass_index), offset_mm=hatch_set.offset_mm,
@@ -99,6 +141,28 @@ def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SER
         strokes += line_runs
     if order is LineOrder.JOINED:
         strokes = _joined(strokes, paths, closed, hatch_set.spacing_mm)
+    return strokes
+
+
+def _nearest_blocks(blocks, order, start=(0.0, 0.0)):
+    """Blocks of strokes one after the other, each the nearest to where the last ended, taken
+    from its nearer end (oneway: its lines' order reversed, their directions kept)."""
+    here, strokes = np.asarray(start, dtype=float), []
+    todo = list(blocks)
+    while todo:
+        def cost(block):
+            first = np.hypot(*(block[0][0] - here))
+            last = np.hypot(*((block[-1][0] if order is LineOrder.ONEWAY else block[-1][-1])
+                              - here))
+            return min(first, last)
+        block = todo.pop(min(range(len(todo)), key=lambda k: cost(todo[k])))
+        if order is LineOrder.ONEWAY:
+            if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
+                block = block[::-1]
+        elif np.hypot(*(block[-1][-1] - here)) < np.hypot(*(block[0][0] - here)):
+            block = [stroke[::-1] for stroke in reversed(block)]
+        strokes += block
+        here = strokes[-1][-1]
     return strokes
 
 

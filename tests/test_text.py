@@ -1,0 +1,128 @@
+"""Text (galvoscan/jobs/text.py, `mark --text`): capital height, alignment, spacing and lines
+measured on the shapes; the marks off the simulated board's wires against matplotlib's own
+rendering of the same font (Agg fills the glyph curves itself: none of our flattening,
+hatching, placement or board is in it)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from galvoscan.cli import main
+from galvoscan.jobs.plan import PlanError
+from galvoscan.jobs.text import TextSpec, text_drawing
+
+from sim_board import VECTOR_BOARD, quick_sim_board
+
+
+@pytest.mark.parametrize("font", [None, "hershey", "hershey:timesr"])
+def test_capital_height_alignment_spacing_and_lines(font):
+    h = text_drawing(TextSpec("H", 5, font=font)).bounds()
+    assert h[1] == pytest.approx(0, abs=1e-9) and h[3] == pytest.approx(5, abs=1e-9)
+    left = text_drawing(TextSpec("MARK", 4, font=font)).bounds()
+    right = text_drawing(TextSpec("MARK", 4, font=font, align="right")).bounds()
+    centre = text_drawing(TextSpec("MARK", 4, font=font, align="centre")).bounds()
+    assert left[0] == pytest.approx(0, abs=1e-9) and right[2] == pytest.approx(0, abs=1e-9)
+    assert right[2] - right[0] == pytest.approx(left[2] - left[0])
+    assert centre[0] + centre[2] == pytest.approx(0, abs=1e-9)
+    wide = text_drawing(TextSpec("MARK", 4, font=font, letter_spacing_mm=1)).bounds()
+    assert (wide[2] - wide[0]) - (left[2] - left[0]) == pytest.approx(3, abs=0.05)
+    two = text_drawing(TextSpec("H\nH", 5, font=font, line_spacing=1.5)).bounds()
+    assert two[1] == pytest.approx(-7.5, abs=1e-9) and two[3] == pytest.approx(5, abs=1e-9)
+
+
+def test_outlines_are_closed_and_strokes_open():
+    outline = text_drawing(TextSpec("O", 5))
+    assert outline.closed == (True, True)                 # the O and its counter
+    strokes = text_drawing(TextSpec("O", 5, font="hershey"))
+    assert not any(strokes.closed)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(text="  ", height_mm=5), "empty"),
+    (dict(text="x", height_mm=0), "from 0.1 to 500"),
+    (dict(text="x", height_mm=5, align="top"), "left, centre or right"),
+    (dict(text="x", height_mm=5, font="/nonexistent/font.ttf"), "not found"),
+    (dict(text="x", height_mm=5, font="No Such Font Family"), "is not installed"),
+    (dict(text="x", height_mm=5, font="hershey:nonesuch"), "Hershey font 'nonesuch'"),
+])
+def test_impossible_text_is_one_line(kwargs, words):
+    with pytest.raises(PlanError, match=words):
+        text_drawing(TextSpec(**kwargs))
+
+
+def test_the_fields_and_their_refusal(capsys):
+    assert main(["mark", "--text", "made {date:%Y}", "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["segments"] > 10
+    with pytest.raises(SystemExit, match="is not a field it knows"):
+        main(["mark", "--text", "SN {nope}", "--estimate"])
+    with pytest.raises(SystemExit, match="--font is for --text"):
+        main(["mark", "--code", "qr", "--data", "x", "--size", "5", "--font", "hershey",
+              "--estimate"])
+
+
+def _image(marks, bounds, *, radius_mm, px_mm=0.02):
+    x0, y0, x1, y1 = bounds
+    w, h = int((x1 - x0) / px_mm) + 1, int((y1 - y0) / px_mm) + 1
+    image = np.zeros((h, w), bool)
+    yy, xx = np.mgrid[0:h, 0:w]
+    r = radius_mm / px_mm
+    for x, y in marks:
+        cx, cy = (x - x0) / px_mm, (y1 - y) / px_mm
+        box = (slice(max(0, int(cy - r - 1)), int(cy + r + 2)),
+               slice(max(0, int(cx - r - 1)), int(cx + r + 2)))
+        image[box] |= (xx[box] - cx) ** 2 + (yy[box] - cy) ** 2 <= r * r
+    return image
+
+
+def _rendered(text, height, bounds, px_mm=0.02):
+    """matplotlib's Agg rendering of the text's glyphs at ``height`` mm capitals, its own
+    curves, on the same pixels (left-aligned by the ink, as `mark` sets a line)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.patches import PathPatch
+    from matplotlib.textpath import TextPath
+    from matplotlib.font_manager import FontProperties
+    prop = FontProperties(family="DejaVu Sans", size=100)
+    cap = TextPath((0, 0), "H", prop=prop).get_extents().height
+    ink = TextPath((0, 0), text, prop=prop).get_extents()
+    path = TextPath((-ink.x0, 0), text, prop=prop)          # its ink from x = 0, as marked
+    x0, y0, x1, y1 = bounds
+    w, h = int((x1 - x0) / px_mm) + 1, int((y1 - y0) / px_mm) + 1
+    figure = Figure(figsize=(w / 100, h / 100), dpi=100)
+    FigureCanvasAgg(figure)
+    axes = figure.add_axes((0, 0, 1, 1))
+    axes.set_xlim(x0 * cap / height, x1 * cap / height)
+    axes.set_ylim(y0 * cap / height, y1 * cap / height)
+    axes.axis("off")
+    axes.add_patch(PathPatch(path, facecolor="black", edgecolor="none"))
+    figure.canvas.draw()
+    pixels = np.asarray(figure.canvas.buffer_rgba())[..., 0]
+    return pixels[:h, :w] < 128
+
+
+@pytest.mark.slow
+def test_marked_text_covers_the_glyphs_off_the_wires(tmp_path, capsys):
+    """ "LOT 7" in DejaVu Sans at 2 mm, marked on the simulated board: the spot's discs on
+    the marks off the wires fill matplotlib's own rendering of the glyphs and go no further
+    than the spot reaches past their edges."""
+    machine = tmp_path / "machine.toml"
+    machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 100\n")
+    with quick_sim_board(**VECTOR_BOARD):
+        assert main(["mark", "--text", "LOT 7", "--height", "2", "--speed", "2000", "--prr",
+                     "50", "--machine", str(machine), "--sim", "--timeout", "600",
+                     "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["errors"] == result["underruns"] == 0
+    marks = np.array(result["drawing_marks"])
+    bounds = (-0.5, -1.0, 8.0, 3.0)
+    marked = _image(marks, bounds, radius_mm=0.05)          # the 0.1 mm spot on each mark
+    glyphs = _rendered("LOT 7", 2, bounds)
+    # The outline is marked on the glyphs' edges: the burn reaches half a spot past them.
+    from skimage.morphology import dilation, disk
+    reach = dilation(glyphs, disk(3))                        # 0.06 mm
+    assert (marked & reach).sum() / marked.sum() > 0.99      # nothing marked off the glyphs
+    assert (marked & glyphs).sum() / glyphs.sum() > 0.98     # the glyphs filled
