@@ -8,7 +8,7 @@ from .args import int_in, number_in
 from .jobargs import pair_mm
 
 
-__all__ = ["add_content_options", "content_objects", "has_content"]
+__all__ = ["add_content_options", "content_objects", "has_content", "fields", "part_serials"]
 
 
 def add_content_options(parser):
@@ -34,6 +34,17 @@ def add_content_options(parser):
                                                       "the font's own, kerning kept)")
     text.add_argument("--line-spacing", type=number_in("line spacing", 0.5, 10), default=1.4,
                       metavar="K", help="baseline to baseline, times the height (default 1.4)")
+    serial = parser.add_argument_group(
+        "serial numbers ({serial} in --text and --data, e.g. {serial:04d}; kept beside the "
+        "machine profile, advanced only when a part has been marked to its end)")
+    serial.add_argument("--serial-start", type=int_in(0, 10 ** 12 - 1, "serial start"),
+                        default=None, metavar="N", help="the next part's number (replaces the "
+                                                        "kept one)")
+    serial.add_argument("--serial-step", type=int_in(1, 10 ** 6, "serial step"), default=None,
+                        metavar="K", help="added for each part (default: the kept one, 1)")
+    serial.add_argument("--repeat", type=int_in(1, 100_000, "repeat"), default=1, metavar="N",
+                        help="mark N parts one after the other, the serial advancing each "
+                             "time (default 1)")
     code = parser.add_argument_group(
         "codes (QR, DataMatrix, Code 128, made by zxing-cpp; with FILE or alone)")
     code.add_argument("--code", choices=[kind.value for kind in CodeKind],
@@ -64,14 +75,31 @@ def has_content(args):
     return getattr(args, "code", None) is not None or getattr(args, "text", None) is not None
 
 
-def content_objects(args, settings, profile):
-    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s the options ask for (raises
-    :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
+def fields(text, *, serial=None, what="--text"):
+    """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
+    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`) for a field it does not know."""
+    from datetime import datetime
+    from ..jobs.plan import PlanError
+    now = datetime.now()
+    values = {"date": now, "time": now}
+    if serial is not None:
+        values["serial"] = serial
+    try:
+        return text.replace("\\n", "\n").format(**values)
+    except (KeyError, IndexError, ValueError, AttributeError) as error:
+        known = ", ".join(values)
+        raise PlanError(f"{what} {text!r}: {' '.join(str(error).split())} is not a field it "
+                        f"knows ({known}; braces as {{{{ and }}}})") from None
+
+
+def content_objects(args, settings, profile, *, serial=None):
+    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s the options ask for, ``serial``
+    the part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
     from ..jobs.codes import CodeSpec, code_object
     from ..jobs.plan import PlanError
     objects = []
     if args.text is not None:
-        objects.append(_text_object(args, settings, profile))
+        objects.append(_text_object(args, settings, profile, serial))
     else:
         given = [name for name in ("font", "height") if getattr(args, name) is not None]
         if given:
@@ -84,7 +112,8 @@ def content_objects(args, settings, profile):
         return objects
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
-    spec = CodeSpec(CodeKind(args.code), args.data, args.size, ec_level=args.code_ec,
+    spec = CodeSpec(CodeKind(args.code), fields(args.data, serial=serial, what="--data"),
+                    args.size, ec_level=args.code_ec,
                     fill=CodeFill(args.code_fill), quiet_modules=args.code_quiet,
                     height_mm=args.code_height)
     objects.append(code_object(spec, settings, centre_mm=args.code_at,
@@ -92,22 +121,16 @@ def content_objects(args, settings, profile):
     return objects
 
 
-def _text_object(args, settings, profile):
+def _text_object(args, settings, profile, serial):
     """``--text`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`: an outline font's
     glyphs filled by the job's hatch sets (or, none given, lines at most half the spot apart)
     and outlined; a Hershey font's strokes marked once."""
     from dataclasses import replace
-    from datetime import datetime
     from ..jobs.fill import HatchSet
-    from ..jobs.plan import Placement, PlanError
+    from ..jobs.plan import Placement
     from ..jobs.text import TextSpec, text_drawing
     from ..jobs.vector_job import MarkObject
-    now = datetime.now()
-    try:
-        text = args.text.replace("\\n", "\n").format(date=now, time=now)
-    except (KeyError, IndexError, ValueError, AttributeError) as error:
-        raise PlanError(f"--text {args.text!r}: {error!r} is not a field it knows (date, "
-                        f"time; braces as {{{{ and }}}})") from None
+    text = fields(args.text, serial=serial)
     spec = TextSpec(text, args.height or 5.0, font=args.font, align=args.align,
                     letter_spacing_mm=args.letter_spacing, line_spacing=args.line_spacing)
     drawing = text_drawing(spec, tolerance_mm=getattr(args, "tolerance", 0.01))
@@ -117,3 +140,24 @@ def _text_object(args, settings, profile):
         fill = settings if settings.hatch or settings.contour else replace(
             settings, hatch=(HatchSet(profile.laser.spot_mm / 2),), outline=True)
     return MarkObject(drawing, Placement(origin="page", offset_mm=tuple(args.text_at)), fill)
+
+
+def part_serials(args, profile):
+    """``(counter, serials)``: the serial counter and each part's number, when ``--text`` or
+    ``--data`` holds ``{serial}`` (else ``(None, [None] × parts)``); one line for a damaged
+    counter."""
+    from ..jobs.serial import load_counter, uses_serial
+    parts = getattr(args, "repeat", 1) or 1
+    if not uses_serial(getattr(args, "text", None), getattr(args, "data", None)):
+        if getattr(args, "serial_start", None) is not None or \
+                getattr(args, "serial_step", None) is not None:
+            raise_line("--serial-start and --serial-step are for a {serial} field in --text "
+                       "or --data")
+        return None, [None] * parts
+    counter = load_counter(profile.source, start=args.serial_start, step=args.serial_step)
+    return counter, counter.numbers(parts)
+
+
+def raise_line(message):
+    from ..jobs.plan import PlanError
+    raise PlanError(message)

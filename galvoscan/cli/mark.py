@@ -17,7 +17,7 @@ from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
-from .content import add_content_options, content_objects, has_content
+from .content import add_content_options, content_objects, has_content, part_serials
 from .job_reports import estimate_record, sim_report
 from .machine import add_machine_option, profile_from
 
@@ -42,7 +42,7 @@ def _wobble(args, profile):
         fail(error)
 
 
-def _plan(args, profile):
+def _plan(args, profile, serial=None):
     """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` and the placement, or one
     line and exit."""
     from ..job import JobError, parse_job
@@ -58,7 +58,7 @@ def _plan(args, profile):
     if args.file is None and not has_content(args):
         fail("give a drawing (FILE) or something to make (--code)")
     try:
-        objects = content_objects(args, settings, profile)
+        objects = content_objects(args, settings, profile, serial=serial)
         if args.file is not None and Path(args.file).suffix.lower() == ".job":
             if objects:
                 fail("a .job is in galvo units, already placed: mark a code beside a drawing "
@@ -120,13 +120,14 @@ def _link_warning(job, baud):
     return None
 
 
-def planned_job(args):
+def planned_job(args, *, profile=None, serial=None, quiet=False):
     """What ``mark`` and ``store`` do before any board: the profile, the job planned and
-    checked (the wobble's reach too), its description said, the preview drawn. Returns
-    ``(job, placement, drawing, profile, wobble_regs, say)``; one line and exit on a fault."""
-    profile = profile_from(args)
+    checked (the wobble's reach too), its description said (not ``quiet``), the preview drawn.
+    ``serial``: the part's number, for a ``{serial}`` field. Returns ``(job, placement,
+    drawing, profile, wobble_regs, say)``; one line and exit on a fault."""
+    profile = profile or profile_from(args)
     wobble, wobble_regs = _wobble(args, profile)
-    job, placement, drawing = _plan(args, profile)
+    job, placement, drawing = _plan(args, profile, serial)
     if wobble_regs:
         # The figure reaches past the lines by its larger amplitude: that too must be in the
         # field (the board would clamp it at the edge).
@@ -140,6 +141,8 @@ def planned_job(args):
     speed, power, prr = job_settings_values(args, profile)
     say = (lambda line: print(line, file=sys.stderr)) if getattr(args, "json", False) \
         else print
+    if quiet:
+        return job, placement, drawing, profile, wobble_regs, say
     for line in _describe(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
                                         f"of {profile.laser.max_power_w:g} W), "
                                         f"{prr:g} kHz, {args.passes or profile.defaults.passes} pass(es)"):
@@ -154,9 +157,22 @@ def planned_job(args):
 
 
 def _cmd_mark(args):
+    from ..jobs.plan import PlanError
     from ..jobs.stream import JobStreamer
     check_backend_needs_sim(args)
-    job, placement, drawing, profile, wobble_regs, say = planned_job(args)
+    profile = profile_from(args)
+    try:
+        counter, serials = part_serials(args, profile)
+    except PlanError as error:
+        fail(error)
+    # Every part planned (and refused, if it must be) before the link is opened.
+    parts = [planned_job(args, profile=profile, serial=serial, quiet=k > 0)
+             for k, serial in enumerate(serials)]
+    job, placement, drawing, profile, wobble_regs, say = parts[0]
+    if counter is not None:
+        say(f"serials {serials[0]}" + (f" … {serials[-1]}" if len(serials) > 1 else "") +
+            f" (kept in {counter.path}; advanced when a part has been marked"
+            f"{', not by a simulation' if args.sim else ''})")
     if args.estimate or not has_link(args, profile):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")
@@ -178,33 +194,46 @@ def _cmd_mark(args):
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     with board_link(args, profile, wobble=bool(wobble_regs)) as (client, board):
-        bar = progress_bar(None if args.frame else len(job.segments), "seg")
-        streamer = JobStreamer(client, progress=bar.update)
-        try:
-            with stopped_in_one_line():
-                load_lens_table(client, profile, say)
-                if args.frame:
-                    from ..jobs.vector_job import hull_outline
-                    frame_job(streamer, profile, hull_outline(job.paths_mm), args.frame,
-                              job.registers, timeout_s=timeout, say=say, what="job")
-                    return 0
-                report = streamer.run_vector(job.segments, job.registers, timeout_s=timeout,
-                                             ready_timeout_s=timeout)
-        finally:
-            bar.close()
-        counters = report.counters
-        say(f"marked {report.segments} segments in {report.seconds:.1f} s (host time); "
-            f"{report.pulses} pulses; underruns {counters['vec_underruns']}, stalls "
-            f"{counters['vec_stalls']}, rejected {counters['vec_rejected']}, errors "
-            f"{counters['errors']}")
+        for number, (part, *_) in enumerate(parts):
+            serial = serials[number]
+            bar = progress_bar(None if args.frame else len(part.segments), "seg")
+            streamer = JobStreamer(client, progress=bar.update)
+            try:
+                with stopped_in_one_line():
+                    if number == 0:
+                        load_lens_table(client, profile, say)
+                    if args.frame:
+                        from ..jobs.vector_job import hull_outline
+                        frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
+                                  part.registers, timeout_s=timeout, say=say, what="job")
+                        return 0
+                    report = streamer.run_vector(part.segments, part.registers,
+                                                 timeout_s=timeout, ready_timeout_s=timeout)
+            finally:
+                bar.close()
+            counters = report.counters
+            which = (f"part {number + 1} of {len(parts)}" if len(parts) > 1 else "") + \
+                (f"{', ' if len(parts) > 1 else ''}serial {serial}" if serial is not None
+                 else "")
+            say(f"{which + ': ' if which else ''}marked {report.segments} segments in "
+                f"{report.seconds:.1f} s (host time); {report.pulses} pulses; underruns "
+                f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
+                f"{counters['vec_rejected']}, errors {counters['errors']}")
+            if not report.clean:
+                fail("the board refused frames or the queue ran dry: the job was not marked "
+                     "as planned (see the counts above)" +
+                     ("; the serial was not advanced" if serial is not None else ""))
+            if counter is not None and not args.sim:
+                counter.advance()           # this part is marked: its number is taken
         if args.json and board is not None:
-            print(json.dumps(sim_report(board, job, placement, drawing, profile, report)))
+            record = sim_report(board, part, placement, drawing, profile, report)
+            record.update(parts=len(parts), serials=[s for s in serials if s is not None])
+            print(json.dumps(record))
         elif args.json:
             print(json.dumps({"segments": report.segments, "pulses": report.pulses,
+                              "parts": len(parts),
+                              "serials": [s for s in serials if s is not None],
                               **report.counters}))
-    if not report.clean:
-        fail("the board refused frames or the queue ran dry: the job was not marked as "
-             "planned (see the counts above)")
     return 0
 
 

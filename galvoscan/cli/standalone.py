@@ -34,7 +34,20 @@ def _cmd_store(args):
     if args.wobble:
         fail("the stand-alone bitstream (build --preset marker) has no wobble stage: it does "
              "not fit beside the job player; store the job without --wobble")
-    job, _, _, _, _, say = planned_job(args)
+    from ..jobs.plan import PlanError
+    from .content import part_serials
+    if args.repeat != 1:
+        fail("an image holds one part: --repeats N plays it N times a start (the same serial "
+             "each time)")
+    profile = profile_from(args)
+    try:
+        _, (serial,) = part_serials(args, profile)
+    except PlanError as error:
+        fail(error)
+    job, _, _, _, _, say = planned_job(args, profile=profile, serial=serial)
+    if serial is not None:
+        say(f"the image marks serial {serial} at every start (the player does not count; the "
+            f"counter beside the profile is left as it is)")
     try:
         image = job_image(job.segments, job.registers, repeats=args.repeats)
         read_image(image, regmap=_player_map())     # what the marker's register file takes

@@ -1,0 +1,100 @@
+"""Serial numbers (galvoscan/jobs/serial.py; `{serial}` in `mark --text` and `--data`): the
+counter file beside the profile, read, refused when damaged, advanced only for a part marked
+to its end, through the real serial link into a served simulated board."""
+
+import json
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from galvoscan.cli import main
+from galvoscan.jobs.plan import PlanError
+from galvoscan.jobs.serial import counter_path, load_counter, uses_serial
+
+
+def test_the_counter_beside_the_profile(tmp_path):
+    profile = tmp_path / "station.toml"
+    assert counter_path(profile) == tmp_path / "station.serial.toml"
+    counter = load_counter(profile)
+    assert (counter.next, counter.step) == (1, 1) and not counter.path.exists()
+    counter = load_counter(profile, start=40, step=5)
+    assert counter.numbers(3) == [40, 45, 50]
+    counter.advance()
+    again = load_counter(profile)
+    assert (again.next, again.step) == (45, 5)
+    assert not list(tmp_path.glob("*.new"))          # written whole, then moved over
+
+
+@pytest.mark.parametrize("text, words", [
+    ("next = 'seven'\n", "is not a whole number"),
+    ("next = -1\n", "is not a whole number"),
+    ("next = 3\ncolour = 1\n", "unknown key 'colour'"),
+    ("next = [\n", "not a serial counter"),
+])
+def test_a_damaged_counter_is_one_line(tmp_path, text, words):
+    profile = tmp_path / "station.toml"
+    counter_path(profile).write_text(text)
+    with pytest.raises(PlanError, match=words):
+        load_counter(profile)
+
+
+def test_which_texts_hold_a_serial():
+    assert uses_serial("SN {serial:04d}") and uses_serial(None, "{serial}")
+    assert not uses_serial("{date:%Y}", None) and not uses_serial("{{serial}}")
+
+
+def test_serials_in_the_plan_and_their_refusals(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["mark", "--text", "SN {serial:04d}", "--serial-start", "41", "--repeat", "3",
+                 "--estimate"]) == 0
+    out = capsys.readouterr().out
+    assert "serials 41 … 43" in out
+    assert not (tmp_path / "galvoscan.serial.toml").exists()     # a plan takes no number
+    with pytest.raises(SystemExit, match="are for a {serial} field"):
+        main(["mark", "--text", "SN", "--serial-start", "4", "--estimate"])
+    with pytest.raises(SystemExit, match="an image holds one part"):
+        main(["store", "--text", "SN {serial}", "--repeat", "2", "-o", "x.img"])
+
+
+# `python -m galvoscan.cli ARGS --port PORT`, the port read from stdin (as tests/test_board.py).
+CLIENT = """
+import runpy, sys
+import galvoscan.cli, galvoscan.client, galvoscan.gateware.host.regmap, serial
+sys.argv = ["galvoscan", *sys.argv[1:], "--port", sys.stdin.readline().strip()]
+runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
+"""
+BOARD = """
+import runpy, signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)
+sys.argv[0] = "galvoscan"
+runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
+"""
+
+
+@pytest.mark.slow
+def test_each_part_marked_on_a_board_takes_its_number(tmp_path):
+    """Two parts marked through the serial link into a served simulated board: each says its
+    serial, and the counter beside the profile has advanced by two."""
+    profile = tmp_path / "station.toml"
+    profile.write_text("[laser]\nspot_mm = 0.2\n[galvo]\njump_delay_us = 100\n")
+    mark = subprocess.Popen(
+        [sys.executable, "-c", CLIENT, "mark", "--text", "{serial}", "--font", "hershey",
+         "--height", "0.5", "--serial-start", "7", "--repeat", "2", "--speed", "2000",
+         "--machine", str(profile), "--timeout", "120"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    board = subprocess.Popen([sys.executable, "-c", BOARD, "board", "--sim"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        port = board.stdout.readline().rsplit(" on ", 1)[1].strip()
+        out, err = mark.communicate(port + "\n", timeout=600)
+        assert mark.returncode == 0, err
+        assert "part 1 of 2, serial 7: marked" in out and "part 2 of 2, serial 8: marked" in out
+        assert load_counter(profile).next == 9
+    finally:
+        if mark.poll() is None:
+            mark.kill()
+            mark.communicate()
+        board.send_signal(signal.SIGINT)
+        board.communicate(timeout=600)
