@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .plan import PlanError, hatch
+from .plan import PlanError, hatch, hatch_extent
 
 
 __all__ = ["HatchSet", "LineOrder", "Contour", "hatch_strokes", "contour_rings"]
@@ -110,24 +110,27 @@ def shapes(paths, closed):
 
 
 def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SERPENTINE,
-                  per_shape=True):
+                  per_shape=True, across=None):
     """The hatch lines of one set on one pass, as strokes (open polylines, field mm) in marking
     order: one stroke a line run, or, ``joined``, runs joined into longer strokes.
 
     ``per_shape``: each shape (:func:`shapes`: an outline and its holes) hatched whole before
     the next, the nearest next (a line of text jumps letter to letter, not across every letter
-    on each line); else the lines run across all of them."""
+    on each line), on the one grid of lines the whole drawing's would be on; else the lines
+    run across all of them."""
     if per_shape:
         groups = shapes(paths, closed)
         if len(groups) > 1:
+            extent = hatch_extent(paths, closed, hatch_set.angle_on_pass(pass_index))
             blocks = [hatch_strokes([paths[i] for i in group], [True] * len(group), hatch_set,
-                                    pass_index=pass_index, order=order, per_shape=False)
+                                    pass_index=pass_index, order=order, per_shape=False,
+                                    across=extent)
                       for group in groups]
             return _nearest_blocks([b for b in blocks if b], LineOrder(order))
     order = LineOrder(order)
     runs, lines = hatch(paths, closed, hatch_set.spacing_mm,
                         hatch_set.angle_on_pass(pass_index), offset_mm=hatch_set.offset_mm,
-                        with_lines=True)
+                        with_lines=True, across=across)
     if not runs:
         return []
     # Line by line (the runs of a line left to right along it); every other line reversed.

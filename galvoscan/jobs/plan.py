@@ -18,7 +18,8 @@ from ..gateware.points import FIELD_CENTRE, FIELD_MAX
 from .speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
 
 
-__all__ = ["PlanError", "Placement", "place", "hatch", "order_paths", "jump_length", "Pitch",
+__all__ = ["PlanError", "Placement", "place", "hatch", "hatch_extent", "order_paths",
+           "jump_length", "Pitch",
            "choose_pitch",
            "estimate_seconds", "jump_mark_lengths", "to_galvo", "from_galvo", "field_check"]
 
@@ -127,13 +128,17 @@ def place(drawing, placement):
     return replace(drawing, paths=tuple(paths))
 
 
-def hatch(paths, closed, spacing_mm, angle_deg=0.0, *, offset_mm=0.0, with_lines=False):
+def hatch(paths, closed, spacing_mm, angle_deg=0.0, *, offset_mm=0.0, with_lines=False,
+          across=None):
     """Lines filling the closed paths by the even-odd rule: a shape inside another is a hole,
     a shape inside that is filled again, a self-crossing star has an empty centre.
 
     Lines run at ``angle_deg`` from +X, ``spacing_mm`` apart, centred on the shapes' extent
     across them (the outermost at most half a spacing in from it), then moved ``offset_mm``
-    across (to the left of their direction). Open paths are not hatched.
+    across (to the left of their direction). Open paths are not hatched. ``across``: the
+    ``(low, high)`` extent (mm across the lines, in the lines' own frame, as
+    :func:`hatch_extent` gives it) to centre the lines on instead, so that shapes hatched one
+    by one share one grid of lines.
 
     Returns
     -------
@@ -168,7 +173,8 @@ def hatch(paths, closed, spacing_mm, angle_deg=0.0, *, offset_mm=0.0, with_lines
     b = np.concatenate([r[1:] for r in rings])
     if not (np.isfinite(a).all() and np.isfinite(b).all()):
         raise PlanError("hatch: paths with coordinates that are not finite numbers")
-    ymin, ymax = min(r[:, 1].min() for r in rings), max(r[:, 1].max() for r in rings)
+    ymin, ymax = across if across is not None else \
+        (min(r[:, 1].min() for r in rings), max(r[:, 1].max() for r in rings))
     # (A shape a whole number of spacings across takes that many lines, half a spacing in
     # from its edges, even with the dust of a unit conversion on its extent: an SVG's mm come
     # back from svgelements' px some 5e-7 off, which made a line more, on the edges.)
@@ -206,6 +212,18 @@ def hatch(paths, closed, spacing_mm, angle_deg=0.0, *, offset_mm=0.0, with_lines
                     axis=1)[keep]
     lines = list(runs @ to_lines)               # turned back (to_lines is orthonormal)
     return (lines, [int(n) for n in line[0::2][keep]]) if with_lines else lines
+
+
+def hatch_extent(paths, closed, angle_deg):
+    """``(low, high)``: the closed paths' extent across lines at ``angle_deg``, in the lines'
+    frame (what :func:`hatch` centres its lines on), or None if there is none."""
+    turn = math.radians(angle_deg)
+    across = np.array([-math.sin(turn), math.cos(turn)])
+    values = [np.asarray(p, dtype=float) @ across for p, c in zip(paths, closed)
+              if c and len(p) >= 3]
+    if not values:
+        return None
+    return float(min(v.min() for v in values)), float(max(v.max() for v in values))
 
 
 def _rotated(path, k):
