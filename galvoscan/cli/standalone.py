@@ -87,13 +87,13 @@ def _cmd_flash(args):
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
     try:
-        if bitstream is not None and job is not None:
-            _check_plays_jobs(args.bitstream)
+        regions = flash_regions(bitstream, job)     # (a file that is no bitstream: first)
         if job is not None:
             # The player's own checks, and the marker's register file's, before any byte
             # goes out.
             read_image(job, regmap=_player_map())
-        regions = flash_regions(bitstream, job)
+        if bitstream is not None and job is not None:
+            _check_plays_jobs(args.bitstream)
     except (ImageError, FlashingError) as error:
         fail(f"{args.job if isinstance(error, ImageError) else args.bitstream or ''}: "
              f"{error}".lstrip(": "))
