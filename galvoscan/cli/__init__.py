@@ -4,7 +4,8 @@ One module per command group, each adding its own parsers (``add_parsers(command
 :mod:`.sim` (``rom``, ``sim``), :mod:`.build` (``build``, ``export``), :mod:`.prove`,
 :mod:`.link` (``regs``, ``encode``, ``send``, ``read``), :mod:`.analyze`, :mod:`.correct`,
 :mod:`.bench`, :mod:`.machine` (``machine init``, ``machine show``), :mod:`.mark`,
-:mod:`.clean`, :mod:`.standalone` (``store``, ``flash``, ``standalone``), :mod:`.board`
+:mod:`.clean`, :mod:`.testgrid` (``test-grid``), :mod:`.standalone` (``store``, ``flash``,
+``standalone``), :mod:`.board`
 (``board --sim``); :mod:`.args` and :mod:`.jobargs` hold what
 they share.
 """
@@ -13,15 +14,15 @@ import argparse
 import sys
 
 from . import (analyze, bench, board, build, clean, correct, link, machine, mark, prove, sim,
-               standalone)
+               standalone, testgrid)
 
 
 __all__ = ["main", "parser"]
 
 
 #: The command groups, in the order ``--help`` lists them.
-GROUPS = (machine, mark, clean, standalone, board, link, sim, build, prove, analyze, correct,
-          bench)
+GROUPS = (machine, mark, testgrid, clean, standalone, board, link, sim, build, prove, analyze,
+          correct, bench)
 
 
 def _version():

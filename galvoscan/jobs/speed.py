@@ -38,7 +38,7 @@ class Pitch:
 
 
 def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
-                 max_prr_per_point_hz=100e3):
+                 max_prr_per_point_hz=100e3, strict=True):
     """The pitch and pulses per point closest to a marking speed.
 
     ``v = pitch_units / units_per_mm * prr_hz / N`` mm/s, with N (pulses per point) in
@@ -49,7 +49,8 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     Raises
     ------
     PlanError
-        When nothing comes within 2 % of the speed; the message gives the reachable range.
+        When nothing comes within 2 % of the speed (``strict``; else the closest is taken);
+        the message gives the reachable range, or the two speeds either side.
     """
     from .plan import PlanError             # here: .plan imports this module
 
@@ -72,8 +73,15 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     best = np.lexsort((candidates[row, column], column))[0]       # smallest N, then pitch
     pitch, pulses = int(candidates[row[best], column[best]]), int(n[column[best]])
     speed = pitch / units_per_mm * prr_hz / pulses
-    if abs(speed - speed_mm_s) / speed_mm_s > 0.02:
+    if strict and abs(speed - speed_mm_s) / speed_mm_s > 0.02:
         slowest, fastest = prr_hz / units_per_mm / 255, top / units_per_mm * prr_hz / low_n
+        if slowest <= speed_mm_s <= fastest:
+            # Inside the range, between two speeds whole pitches and pulses make.
+            below, above = speeds[speeds <= speed_mm_s].max(), speeds[speeds >= speed_mm_s].min()
+            raise PlanError(f"{speed_mm_s:g} mm/s falls between the speeds whole galvo units "
+                            f"and pulses make at {prr_hz / 1e3:g} kHz (pitch ≤ "
+                            f"{max_pitch_mm:g} mm): {below:.4g} or {above:.4g} mm/s, or "
+                            f"another PRR")
         raise PlanError(f"{speed_mm_s:g} mm/s is out of reach at {prr_hz / 1e3:g} kHz: "
                         f"{slowest:.3g} … {fastest:.4g} mm/s (pitch ≤ {max_pitch_mm:g} mm, "
                         f"{low_n} … 255 pulses per point)")
