@@ -7,9 +7,8 @@ import json
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.plan import PlanError
 from galvoscan.jobs.profile import default_profile
-from galvoscan.jobs.test_grid import axis_values, plan_test_grid
+from galvoscan.jobs.test_grid import plan_test_grid
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 
