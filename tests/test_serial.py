@@ -2,7 +2,6 @@
 counter file beside the profile, read, refused when damaged, advanced only for a part marked
 to its end, through the real serial link into a served simulated board."""
 
-import json
 import signal
 import subprocess
 import sys
@@ -12,6 +11,8 @@ import pytest
 from galvoscan.cli import main
 from galvoscan.jobs.plan import PlanError
 from galvoscan.jobs.serial import counter_path, load_counter, uses_serial
+
+from test_board import BOARD, CLIENT      # a command through a served simulated board
 
 
 def test_the_counter_beside_the_profile(tmp_path):
@@ -56,21 +57,6 @@ def test_serials_in_the_plan_and_their_refusals(tmp_path, capsys, monkeypatch):
         main(["mark", "--text", "SN", "--serial-start", "4", "--estimate"])
     with pytest.raises(SystemExit, match="an image holds one part"):
         main(["store", "--text", "SN {serial}", "--repeat", "2", "-o", "x.img"])
-
-
-# `python -m galvoscan.cli ARGS --port PORT`, the port read from stdin (as tests/test_board.py).
-CLIENT = """
-import runpy, sys
-import galvoscan.cli, galvoscan.client, galvoscan.gateware.host.regmap, serial
-sys.argv = ["galvoscan", *sys.argv[1:], "--port", sys.stdin.readline().strip()]
-runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
-"""
-BOARD = """
-import runpy, signal, sys
-signal.signal(signal.SIGINT, signal.default_int_handler)
-sys.argv[0] = "galvoscan"
-runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
-"""
 
 
 @pytest.mark.slow

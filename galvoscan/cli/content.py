@@ -151,13 +151,10 @@ def part_serials(args, profile):
     if not uses_serial(getattr(args, "text", None), getattr(args, "data", None)):
         if getattr(args, "serial_start", None) is not None or \
                 getattr(args, "serial_step", None) is not None:
-            raise_line("--serial-start and --serial-step are for a {serial} field in --text "
-                       "or --data")
+            from ..jobs.plan import PlanError
+            raise PlanError("--serial-start and --serial-step are for a {serial} field in "
+                            "--text or --data")
         return None, [None] * parts
     counter = load_counter(profile.source, start=args.serial_start, step=args.serial_step)
     return counter, counter.numbers(parts)
 
-
-def raise_line(message):
-    from ..jobs.plan import PlanError
-    raise PlanError(message)

@@ -29,7 +29,7 @@ import numpy as np
 from .plan import PlanError, hatch, hatch_extent
 
 
-__all__ = ["HatchSet", "LineOrder", "Contour", "hatch_strokes", "contour_rings"]
+__all__ = ["HatchSet", "LineOrder", "Contour", "hatch_strokes", "contour_rings", "oriented"]
 
 
 #: Rings a contour fill makes at most.
@@ -159,14 +159,20 @@ def _nearest_blocks(blocks, order, start=(0.0, 0.0)):
                               - here))
             return min(first, last)
         block = todo.pop(min(range(len(todo)), key=lambda k: cost(todo[k])))
-        if order is LineOrder.ONEWAY:
-            if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
-                block = block[::-1]
-        elif np.hypot(*(block[-1][-1] - here)) < np.hypot(*(block[0][0] - here)):
-            block = [stroke[::-1] for stroke in reversed(block)]
-        strokes += block
+        strokes += oriented(block, here, order)
         here = strokes[-1][-1]
     return strokes
+
+
+def oriented(block, here, order):
+    """A set's strokes taken from whichever end is nearer ``here``: reversed whole
+    (serpentine, joined), or, oneway, its lines' order reversed and their directions kept."""
+    if order is LineOrder.ONEWAY:
+        if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
+            return block[::-1]
+    elif np.hypot(*(block[-1][-1] - here)) < np.hypot(*(block[0][0] - here)):
+        return [stroke[::-1] for stroke in reversed(block)]
+    return block
 
 
 def _region(paths, closed):

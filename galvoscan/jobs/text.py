@@ -77,10 +77,12 @@ def text_drawing(spec, *, tolerance_mm=0.01):
     if spec.hershey:
         pieces = [_hershey_line(line, spec) for line in lines]
         closed_default = False
+        font = f"Hershey {spec.hershey}"
     else:
         prop = _font(spec.font)
         pieces = [_outline_line(line, spec, prop, tolerance_mm) for line in lines]
         closed_default = True
+        font = Path(prop.get_file()).name
     paths, closed = [], []
     for number, line_paths in enumerate(pieces):
         # Aligned by the ink: the line's marks start, are centred or end at x = 0.
@@ -100,7 +102,6 @@ def text_drawing(spec, *, tolerance_mm=0.01):
     if not paths:
         raise PlanError(f"the text {spec.text[:30]!r} has nothing to mark in this font")
     name = f"text {spec.text[:20]!r}"
-    font = f"Hershey {spec.hershey}" if spec.hershey else Path(_font(spec.font).get_file()).name
     return Drawing(name=name, paths=tuple(paths), closed=tuple(closed),
                    notes=(f"{name}: {font}, {spec.height_mm:g} mm capitals",))
 
@@ -108,12 +109,13 @@ def text_drawing(spec, *, tolerance_mm=0.01):
 # --- outline fonts --------------------------------------------------------------------------
 
 def _font(font):
-    """matplotlib's FontProperties for a family name or a font file; one line if missing."""
+    """matplotlib's FontProperties of a family name or a font file, by its file (the family's
+    found here, once); one line if missing."""
     from matplotlib.font_manager import FontProperties, findfont
     if font and (os.sep in font or font.lower().endswith((".ttf", ".otf", ".ttc"))):
         if not Path(font).is_file():
             raise PlanError(f"font file {font}: not found")
-        return _Font(FontProperties(fname=font), font)
+        return FontProperties(fname=font)
     family = font or "DejaVu Sans"
     prop = FontProperties(family=family)
     import logging
@@ -126,21 +128,13 @@ def _font(font):
                         f"hershey for a single-line font)") from None
     finally:
         logger.level = level
-    return _Font(prop, found)
-
-
-class _Font:
-    def __init__(self, prop, file):
-        self.prop, self.file = prop, file
-
-    def get_file(self):
-        return self.file
+    return FontProperties(fname=found)
 
 
 def _outline_line(line, spec, font, tolerance_mm):
     """One line's glyph outlines, baseline at y = 0, from x = 0."""
     from matplotlib.textpath import TextPath
-    prop = font.prop.copy()
+    prop = font.copy()
     prop.set_size(100)              # laid out at 100 units an em, scaled to the cap height
     try:
         cap = TextPath((0, 0), "H", prop=prop).get_extents().height

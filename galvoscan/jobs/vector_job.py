@@ -11,7 +11,7 @@ import numpy as np
 from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
 from ..gateware.sources.dda import SETUP_CLOCKS
 from ..gateware.points import FIELD_CENTRE
-from .fill import Contour, LineOrder, contour_rings, hatch_strokes
+from .fill import Contour, LineOrder, contour_rings, hatch_strokes, oriented
 from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_length,
                    jump_mark_lengths, order_paths, place, to_galvo)
 
@@ -277,12 +277,7 @@ def _plan_pass(placed, settings, index, start=(0.0, 0.0)):
     in_order = list(free)
     for block in blocks:
         here = ordered[-1][-1] if ordered else np.asarray(start, dtype=float)
-        if settings.hatch_lines is LineOrder.ONEWAY:
-            # Every line the same way: the set from its last line back, if that starts nearer.
-            if np.hypot(*(block[-1][0] - here)) < np.hypot(*(block[0][0] - here)):
-                block = block[::-1]
-        elif np.hypot(*(block[-1][-1] - here)) < np.hypot(*(block[0][0] - here)):
-            block = [stroke[::-1] for stroke in reversed(block)]
+        block = oriented(block, here, settings.hatch_lines)
         ordered += block
         in_order += block
     return ordered, jump_length(in_order, start), jump_length(ordered, start)
