@@ -1,8 +1,9 @@
 """The content ``mark`` and ``store`` make themselves, beside or instead of a drawing: text
-(``--text``) and codes (``--code``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of
+(``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of
 the job."""
 
 from ..jobs.codes import QR_LEVELS, CodeFill, CodeKind
+from ..jobs.photo import Dither
 from ..jobs.text import ALIGNMENTS
 from .args import int_in, number_in
 from .jobargs import pair_mm
@@ -32,7 +33,7 @@ def add_content_options(parser):
     text.add_argument("--letter-spacing", type=number_in("letter spacing", -100, 1000),
                       default=0.0, metavar="MM", help="added between letters, mm (default 0: "
                                                       "the font's own, kerning kept)")
-    text.add_argument("--line-spacing", type=number_in("line spacing", 0.5, 10), default=1.4,
+    text.add_argument("--line-height", type=number_in("line height", 0.5, 10), default=1.4,
                       metavar="K", help="baseline to baseline, times the height (default 1.4)")
     serial = parser.add_argument_group(
         "serial numbers ({serial} in --text and --data, e.g. {serial:04d}; kept beside the "
@@ -71,8 +72,32 @@ def add_content_options(parser):
                       help="Code 128's bar height, mm (default: a quarter of its width)")
 
 
+    image = parser.add_argument_group(
+        "images (PNG, JPEG: engraved as dithered scan lines, each run of dark pixels a mark)")
+    image.add_argument("--image", metavar="FILE", help="engrave this picture, --width mm wide")
+    image.add_argument("--width", type=number_in("width", 0.1, 1000), metavar="MM",
+                       help="the picture's width, mm (its height by its aspect)")
+    image.add_argument("--dither", choices=[d.value for d in Dither], default=None,
+                       help="grey as dark and light cells: floyd (Floyd-Steinberg, the "
+                            "default), ordered (a Bayer screen) or threshold (none: line art)")
+    image.add_argument("--line-spacing", type=number_in("line spacing", 0.001, 10),
+                       default=None, metavar="MM", help="scan line spacing and cell width, mm "
+                                                        "(default: the spot's diameter)")
+    image.add_argument("--image-at", type=pair_mm("--image-at"), default=None, metavar="X,Y",
+                       help="the picture's centre, field mm (default: 0,0)")
+    image.add_argument("--one-way", action="store_true",
+                       help="every scan line left to right (default: each the other way from "
+                            "the last)")
+
+
+#: The options of each kind of content, past the one that asks for it.
+_OPTIONS = {"text": ("font", "height"),
+            "code": ("data", "size", "code_ec", "code_quiet", "code_height"),
+            "image": ("width", "dither", "line_spacing", "image_at")}
+
+
 def has_content(args):
-    return getattr(args, "code", None) is not None or getattr(args, "text", None) is not None
+    return any(getattr(args, kind, None) is not None for kind in _OPTIONS)
 
 
 def fields(text, *, serial=None, what="--text"):
@@ -98,17 +123,17 @@ def content_objects(args, settings, profile, *, serial=None):
     from ..jobs.codes import CodeSpec, code_object
     from ..jobs.plan import PlanError
     objects = []
+    for kind, options in _OPTIONS.items():
+        given = [name for name in options if getattr(args, name, None) is not None]
+        if getattr(args, kind, None) is None and given:
+            raise PlanError(f"--{given[0].replace('_', '-')} is for --{kind}")
+    if getattr(args, "one_way", False) and args.image is None:
+        raise PlanError("--one-way is for --image")
     if args.text is not None:
         objects.append(_text_object(args, settings, profile, serial))
-    else:
-        given = [name for name in ("font", "height") if getattr(args, name) is not None]
-        if given:
-            raise PlanError(f"--{given[0]} is for --text")
-    given = [name for name in ("data", "size", "code_ec", "code_quiet", "code_height")
-             if getattr(args, name) is not None]
+    if args.image is not None:
+        objects.append(_image_object(args, settings, profile))
     if args.code is None:
-        if given:
-            raise PlanError(f"--{given[0].replace('_', '-')} is for --code")
         return objects
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
@@ -119,6 +144,18 @@ def content_objects(args, settings, profile, *, serial=None):
     objects.append(code_object(spec, settings, centre_mm=args.code_at,
                                spot_mm=profile.laser.spot_mm))
     return objects
+
+
+def _image_object(args, settings, profile):
+    """``--image`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`."""
+    from ..jobs.photo import PhotoSpec, photo_object
+    from ..jobs.plan import PlanError
+    if args.width is None:
+        raise PlanError("--image needs --width MM")
+    spec = PhotoSpec(args.image, args.width, args.line_spacing or profile.laser.spot_mm,
+                     dither=Dither(args.dither or Dither.FLOYD.value),
+                     bidirectional=not args.one_way)
+    return photo_object(spec, settings, centre_mm=tuple(args.image_at or (0.0, 0.0)))
 
 
 def _text_object(args, settings, profile, serial):
@@ -132,7 +169,7 @@ def _text_object(args, settings, profile, serial):
     from ..jobs.vector_job import MarkObject
     text = fields(args.text, serial=serial)
     spec = TextSpec(text, args.height or 5.0, font=args.font, align=args.align,
-                    letter_spacing_mm=args.letter_spacing, line_spacing=args.line_spacing)
+                    letter_spacing_mm=args.letter_spacing, line_spacing=args.line_height)
     drawing = text_drawing(spec, tolerance_mm=getattr(args, "tolerance", 0.01))
     if spec.hershey:
         fill = replace(settings, hatch=(), contour=None, outline=True)

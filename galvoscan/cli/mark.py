@@ -56,7 +56,7 @@ def _plan(args, profile, serial=None):
                            hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                            contour=args.contour, outline=not args.no_outline)
     if args.file is None and not has_content(args):
-        fail("give a drawing (FILE) or something to make (--code)")
+        fail("give a drawing (FILE) or something to make (--text, --code, --image)")
     try:
         objects = content_objects(args, settings, profile, serial=serial)
         if args.file is not None and Path(args.file).suffix.lower() == ".job":

@@ -195,11 +195,13 @@ class MarkObject:
     """One object of a job: a drawing, where it goes, and how it is filled (``fill``'s hatch,
     hatch_lines, contour and outline; the job's speed, power and passes are the job's), with
     ``keep_clear_mm`` around its bounds that no other object may reach into (a code's quiet
-    zone)."""
+    zone); ``keep_order``: its paths marked in the drawing's own order (a photo's scan lines),
+    not re-ordered to cut jumps."""
     drawing: object
     placement: object
     fill: JobSettings
     keep_clear_mm: float = 0.0
+    keep_order: bool = False
 
 
 def plan_vector_job(drawing, placement, settings, profile):
@@ -220,7 +222,8 @@ def plan_objects(objects, settings, profile):
     planned, here = [], np.zeros(2)
     for index in range(settings.passes if turning else 1):
         for o, drawing in zip(objects, placed):
-            paths, before, after = _plan_pass(drawing, o.fill, index, here)
+            paths, before, after = _plan_pass(drawing, o.fill, index, here,
+                                              keep_order=o.keep_order)
             if paths:
                 here = paths[-1][-1]
             planned.append((paths, before, after))
@@ -258,10 +261,11 @@ def _check_clear(objects, placed):
                                 f"{o.drawing.name} ({m:.2f} mm around it): place them apart")
 
 
-def _plan_pass(placed, settings, index, start=(0.0, 0.0)):
+def _plan_pass(placed, settings, index, start=(0.0, 0.0), *, keep_order=False):
     """``(paths, jumps before, jumps after)`` of pass ``index``: the outlines and contour rings
-    ordered to cut the jumps (from ``start``), then each hatch set's strokes in their own
-    order (the whole set taken from whichever end is nearer)."""
+    ordered to cut the jumps from ``start`` (``keep_order``: in the drawing's order), then
+    each hatch set's strokes in their own order (the whole set taken from whichever end is
+    nearer)."""
     free, closed = [], []
     if settings.outline:
         free += [np.asarray(p) for p in placed.paths]
@@ -273,7 +277,7 @@ def _plan_pass(placed, settings, index, start=(0.0, 0.0)):
     blocks = [hatch_strokes(placed.paths, placed.closed, hatch_set, pass_index=index,
                             order=settings.hatch_lines) for hatch_set in settings.hatch]
     blocks = [block for block in blocks if block]
-    ordered, _, _ = order_paths(free, closed, start)
+    ordered = list(free) if keep_order else order_paths(free, closed, start)[0]
     in_order = list(free)
     for block in blocks:
         here = ordered[-1][-1] if ordered else np.asarray(start, dtype=float)
