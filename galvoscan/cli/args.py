@@ -76,6 +76,20 @@ def prr_khz():
     return number_in("PRR (kHz)", reg.low / 10, reg.high / 10)
 
 
+#: A job's marking speed (mm/s), power (% of the laser's maximum) and passes: the types of
+#: ``mark``'s options and of a layer's settings alike.
+def speed_mm_s(text):
+    return number_in("speed", 0.1, 100_000)(text)
+
+
+def power_percent(text):
+    return number_in("power", 0, 100)(text)
+
+
+def passes(text):
+    return int_in(1, 1000, "passes")(text)
+
+
 def register_int(name, what=None):
     """An integer in the writable range of register ``name``, as the register map declares it."""
     from ..gateware.host.regmap import BY_NAME

@@ -5,7 +5,45 @@ the marks' frame."""
 from pathlib import Path
 
 
-__all__ = ["estimate_record", "sim_report", "FIELD_FRAME", "SVG_FRAME", "DXF_FRAME"]
+__all__ = ["describe_job", "estimate_record", "sim_report", "FIELD_FRAME", "SVG_FRAME", "DXF_FRAME"]
+
+
+def describe_job(job, profile, settings_line):
+    """The plan as lines: segments, bounds, settings, speed, delays, time, wobble, notes."""
+    pitch = job.pitch
+    regs = job.registers
+    lines = [
+        f"{len(job.segments)} segments: {job.mark_mm:.1f} mm marked, {job.jump_mm:.1f} mm "
+        f"jumped (one pass: jumps {job.jump_before_mm:.1f} mm in the drawing's order, "
+        f"{job.jump_after_mm:.1f} mm as ordered)",
+        f"bounds X {job.bounds_mm[0]:.2f} … {job.bounds_mm[2]:.2f} mm, "
+        f"Y {job.bounds_mm[1]:.2f} … {job.bounds_mm[3]:.2f} mm in the "
+        f"{profile.field.size_mm:g} mm field",
+    ]
+    if job.layers:
+        # Each layer has its own settings: they are said a layer a line (describe_layers).
+        lines.append(f"{len(job.layers)} layers, each marked as a job of its own; estimated "
+                     f"time {job.estimate_s:.3f} s")
+        return lines + [f"note: {note}" for note in job.notes]
+    lines += [
+        settings_line,
+        f"speed: pitch {pitch.pitch_mm * 1000:.1f} µm ({pitch.pitch_units} units) × "
+        f"{regs['laser_prr'] / 10:g} kHz / {pitch.pulses_per_point} pulse"
+        f"{'s' if pitch.pulses_per_point > 1 else ''} per point = {pitch.speed_mm_s:.1f} mm/s "
+        f"({pitch.error:+.2%})",
+        f"jump delay {regs['jump_delay']} µs; laser on/off delay {regs['laser_on_delay']} / "
+        f"{regs['laser_off_delay']} µs; mark/polygon delay {regs['mark_delay']} / "
+        f"{regs['polygon_delay']} µs{' × (1 - cos φ)' if regs['polygon_scaled'] else ''}; "
+        f"estimated time {job.estimate_s:.3f} s",
+    ]
+    if regs.get("wob_shape"):
+        lines.append(f"wobble: ±{regs['wob_across'] * profile.mm_per_unit * 1000:.0f} µm across "
+                     f"× ±{regs['wob_along'] * profile.mm_per_unit * 1000:.0f} µm along "
+                     f"({regs['wob_across']} × {regs['wob_along']} units) at "
+                     f"{regs['wob_freq']} Hz: a turn every "
+                     f"{pitch.speed_mm_s / regs['wob_freq'] * 1000:.0f} µm of line")
+    lines += [f"note: {note}" for note in job.notes]
+    return lines
 
 
 def estimate_record(job, profile, power, prr, passes, preview):
@@ -25,7 +63,7 @@ def estimate_record(job, profile, power, prr, passes, preview):
         "polygon_scaled": bool(regs["polygon_scaled"]), "estimate_s": round(job.estimate_s, 6),
         "notes": list(job.notes), "preview": preview,
     }
-    if "wob_shape" in regs:
+    if regs.get("wob_shape"):
         record["wobble_um"] = {
             "across": round(regs["wob_across"] * profile.mm_per_unit * 1000, 1),
             "along": round(regs["wob_along"] * profile.mm_per_unit * 1000, 1),
@@ -40,8 +78,58 @@ DXF_FRAME = ("the drawing's own, in mm, X right, Y up (a DXF's; a code's from it
              "corner)")
 
 
-def sim_report(board, job, placement, drawing, profile, report):
-    """The ``--json`` record of a simulated job: the marked points off the wires."""
+def _wire_speeds(marked, wire_mm, pitch_mm, unit_mm, clk_freq):
+    """``(line, path)`` speeds (mm/s, None without a step) of marked points off the wires:
+    consecutive points of one line, their distance on the XY2-100 wires over the time
+    between their first pulses on the DB25 pins.
+
+    Two figures: the line speed, over steps of a whole pitch (give or take the rounding of
+    each axis to a galvo unit), which is what --speed sets; and the speed along the whole
+    path, which is lower on short segments: a segment's last step, onto its end point, is
+    shorter than a pitch and takes as long (Wan et al.'s DDA starts afresh at every vertex).
+    """
+    import numpy as np
+    line, path = [0.0, 0.0], [0.0, 0.0]
+    for i in range(1, len(marked)):
+        step = float(np.hypot(*(wire_mm[i] - wire_mm[i - 1])))
+        dt = (marked[i][5] - marked[i - 1][5]) / clk_freq
+        if 0 < step <= pitch_mm + 1.5 * unit_mm:
+            path[0] += step
+            path[1] += dt
+            if step >= pitch_mm - 1.5 * unit_mm:
+                line[0] += step
+                line[1] += dt
+    return tuple(round(d / t, 2) if t else None for d, t in (line, path))
+
+
+def _layer_reports(board, job, marked, wire_mm, profile, layer_starts):
+    """Each layer's speed and pulses per point as planned and as measured on the wires (its
+    points: those whose first pulse came after the layer's first)."""
+    from collections import Counter
+    import numpy as np
+    edges = [board.pulses[i] if i < len(board.pulses) else float("inf")
+             for i in layer_starts] + [float("inf")]
+    firsts = np.array([p[5] for p in marked], dtype=float)
+    out = []
+    for k, lj in enumerate(job.layers):
+        chosen = np.flatnonzero((firsts >= edges[k]) & (firsts < edges[k + 1]))
+        points = [marked[i] for i in chosen]
+        speed, _ = _wire_speeds(points, wire_mm[chosen], lj.job.pitch.pitch_mm,
+                                profile.mm_per_unit, board.clk_freq)
+        counts = Counter(p[2] for p in points)
+        out.append({"match": lj.label, "points": len(points),
+                    "speed_mm_s": speed, "planned_speed_mm_s": round(lj.job.pitch.speed_mm_s, 2),
+                    "pulses_per_point": counts.most_common(1)[0][0] if counts else None,
+                    "planned_pulses_per_point": lj.job.pitch.pulses_per_point,
+                    "power_percent": lj.settings.power_percent, "prr_khz": lj.settings.prr_khz,
+                    "passes": lj.settings.passes})
+    return out
+
+
+def sim_report(board, job, placement, drawing, profile, report, *, layer_starts=None):
+    """The ``--json`` record of a simulated job: the marked points off the wires (and, for a
+    job of layers, each layer's speed and pulses per point on them; ``layer_starts``: the
+    index of each layer's first pulse)."""
     import numpy as np
     from ..jobs.plan import from_galvo
     points = board.points()
@@ -57,26 +145,10 @@ def sim_report(board, job, placement, drawing, profile, report):
             "drawing_marks": [[round(float(x), 4), round(float(-y if svg else y), 4)]
                               for x, y in own],
             "drawing_frame": SVG_FRAME if svg else DXF_FRAME})
-    # The speed on the wires: consecutive marked points of one line, their distance on the
-    # XY2-100 wires over the time between their first pulses on the DB25 pins.
-    pitch_mm = job.pitch.pitch_mm
-    # Two figures: the line speed, over steps of a whole pitch (give or take the rounding of
-    # each axis to a galvo unit), which is what --speed sets; and the speed along the whole
-    # path, which is lower on short segments: a segment's last step, onto its end point, is
-    # shorter than a pitch and takes as long (Wan et al.'s DDA starts afresh at every vertex).
-    unit_mm = profile.mm_per_unit
-    line = [0.0, 0.0]
-    path = [0.0, 0.0]
-    wire_mm = from_galvo(xy, profile.field.size_mm)
-    for i in range(1, len(marked)):
-        step = float(np.hypot(*(wire_mm[i] - wire_mm[i - 1])))
-        dt = (marked[i][5] - marked[i - 1][5]) / board.clk_freq
-        if 0 < step <= pitch_mm + 1.5 * unit_mm:
-            path[0] += step
-            path[1] += dt
-            if step >= pitch_mm - 1.5 * unit_mm:
-                line[0] += step
-                line[1] += dt
+    if job.layers:
+        frames["layers"] = _layer_reports(board, job, marked, field_xy, profile, layer_starts)
+    line_speed, path_speed = _wire_speeds(marked, field_xy, job.pitch.pitch_mm,
+                                          profile.mm_per_unit, board.clk_freq)
     prr_hz = job.registers["laser_prr"] * 100.0
     return {
         "segments": report.segments,
@@ -87,8 +159,8 @@ def sim_report(board, job, placement, drawing, profile, report):
         # From the first pulse to the end of the last one's period: the time spent marking.
         "duration_s": round((board.pulses[-1] - board.pulses[0]) / board.clk_freq + 1 / prr_hz,
                             6) if board.pulses else 0.0,
-        "speed_mm_s": round(line[0] / line[1], 2) if line[1] else None,
-        "path_speed_mm_s": round(path[0] / path[1], 2) if path[1] else None,
+        "speed_mm_s": line_speed,
+        "path_speed_mm_s": path_speed,
         "pulses_per_point": job.pitch.pulses_per_point,
         "pulses": len(board.pulses),
         "underruns": report.counters["vec_underruns"],

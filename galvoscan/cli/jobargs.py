@@ -5,8 +5,8 @@ import argparse
 import contextlib
 import sys
 
-from .args import (add_backend_option, baud, fail, number_in, open_transport, prr_khz,
-                   simulated_board)
+from .args import (add_backend_option, baud, fail, number_in, open_transport, power_percent,
+                   prr_khz, simulated_board, speed_mm_s)
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -32,9 +32,9 @@ def pair_mm(what):
 def add_job_options(parser):
     """``--speed``, ``--power``, ``--prr``, ``--passes`` (defaults from the machine profile)."""
     job = parser.add_argument_group("laser and speed (defaults: the machine profile's)")
-    job.add_argument("--speed", type=number_in("speed", 0.1, 100_000), metavar="MM_S",
+    job.add_argument("--speed", type=speed_mm_s, metavar="MM_S",
                      help="marking speed in mm/s")
-    job.add_argument("--power", type=number_in("power", 0, 100), metavar="PERCENT",
+    job.add_argument("--power", type=power_percent, metavar="PERCENT",
                      help="laser power in %% of the laser's maximum")
     job.add_argument("--prr", type=prr_khz(), metavar="KHZ",
                      help="pulse repetition rate in kHz (the board's 20 … 200; the profile's "

@@ -13,12 +13,13 @@ from pathlib import Path
 from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
 from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
-                   number_in)
+                   number_in, passes)
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
 from .content import add_content_options, content_objects, has_content, part_serials
 from .job_reports import estimate_record, sim_report
+from .layers import add_layer_option
 from .machine import add_machine_option, profile_from
 
 
@@ -26,29 +27,25 @@ __all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_jo
 
 
 def _wobble(args, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings` (the command line's, else the
-    profile's [wobble]) and its ``wob_*`` registers (empty: no wobble), or one line and exit."""
-    from ..jobs.plan import PlanError
-    from ..jobs.wobble import WobbleSettings, wobble_registers
+    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
+    profile's [wobble]."""
+    from ..jobs.wobble import WobbleSettings
     section = profile.wobble
     across = args.wobble if args.wobble is not None else section.across_um
     along = args.wobble_along if args.wobble_along is not None else \
         (args.wobble if args.wobble is not None else section.along_um)
     hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
-    wobble = WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
-    try:
-        return wobble, wobble_registers(wobble, profile)
-    except PlanError as error:
-        fail(error)
+    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
 
 
 def _plan(args, profile, serial=None):
-    """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` and the placement, or one
-    line and exit."""
+    """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` (of layers, when ``--layer``
+    gives them) and the placement, or one line and exit."""
     from ..job import JobError, parse_job
     from ..jobs.drawing import DrawingError, load_drawing
+    from ..jobs.layers import merged, plan_layers
     from ..jobs.plan import Placement, PlanError
-    from ..jobs.vector_job import JobSettings, MarkObject, plan_job_file, plan_objects
+    from ..jobs.vector_job import JobSettings, MarkObject, plan_job_file
     from .args import read_text
     speed, power, prr = job_settings_values(args, profile)
     settings = JobSettings(speed_mm_s=speed, power_percent=power, prr_khz=prr,
@@ -60,9 +57,9 @@ def _plan(args, profile, serial=None):
     try:
         objects = content_objects(args, settings, profile, serial=serial)
         if args.file is not None and Path(args.file).suffix.lower() == ".job":
-            if objects:
-                fail("a .job is in galvo units, already placed: mark a code beside a drawing "
-                     "(.svg, .dxf), or alone")
+            if objects or args.layers:
+                fail("a .job is in galvo units, already placed, at one setting: mark text, a "
+                     "code or layers with a drawing (.svg, .dxf), or alone")
             segments = parse_job(read_text(args.file, "job file"), name=args.file)
             return plan_job_file(segments, settings, profile), None, None
         if args.file is not None:
@@ -71,39 +68,44 @@ def _plan(args, profile, serial=None):
             drawing = load_drawing(args.file, tolerance_mm=args.tolerance)
             objects.insert(0, MarkObject(drawing, placement, settings))
         first = objects[0]
-        return plan_objects(objects, settings, profile), first.placement, first.drawing
+        job = merged(plan_layers(objects, args.layers, settings, profile))
+        return job, first.placement, first.drawing
     except (DrawingError, PlanError, JobError, ValueError) as error:
         fail(error)
 
 
-def _describe(job, profile, settings_line):
-    pitch = job.pitch
-    regs = job.registers
-    lines = [
-        f"{len(job.segments)} segments: {job.mark_mm:.1f} mm marked, {job.jump_mm:.1f} mm "
-        f"jumped (one pass: jumps {job.jump_before_mm:.1f} mm in the drawing's order, "
-        f"{job.jump_after_mm:.1f} mm as ordered)",
-        f"bounds X {job.bounds_mm[0]:.2f} … {job.bounds_mm[2]:.2f} mm, "
-        f"Y {job.bounds_mm[1]:.2f} … {job.bounds_mm[3]:.2f} mm in the "
-        f"{profile.field.size_mm:g} mm field",
-        settings_line,
-        f"speed: pitch {pitch.pitch_mm * 1000:.1f} µm ({pitch.pitch_units} units) × "
-        f"{regs['laser_prr'] / 10:g} kHz / {pitch.pulses_per_point} pulse"
-        f"{'s' if pitch.pulses_per_point > 1 else ''} per point = {pitch.speed_mm_s:.1f} mm/s "
-        f"({pitch.error:+.2%})",
-        f"jump delay {regs['jump_delay']} µs; laser on/off delay {regs['laser_on_delay']} / "
-        f"{regs['laser_off_delay']} µs; mark/polygon delay {regs['mark_delay']} / "
-        f"{regs['polygon_delay']} µs{' × (1 - cos φ)' if regs['polygon_scaled'] else ''}; "
-        f"estimated time {job.estimate_s:.3f} s",
-    ]
-    if "wob_shape" in regs:
-        lines.append(f"wobble: ±{regs['wob_across'] * profile.mm_per_unit * 1000:.0f} µm across "
-                     f"× ±{regs['wob_along'] * profile.mm_per_unit * 1000:.0f} µm along "
-                     f"({regs['wob_across']} × {regs['wob_along']} units) at "
-                     f"{regs['wob_freq']} Hz: a turn every "
-                     f"{pitch.speed_mm_s / regs['wob_freq'] * 1000:.0f} µm of line")
-    lines += [f"note: {note}" for note in job.notes]
-    return lines
+def _add_wobble(job, args, profile):
+    """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
+    place) into its registers, its reach checked against the field; a layer that does not
+    wobble among ones that do turns it off. Returns whether anything wobbles."""
+    from ..gateware.host.fields import WobbleShape
+    from ..jobs.plan import PlanError
+    from ..jobs.wobble import wobble_registers
+    from .layers import layer_wobble
+    base = _wobble(args, profile)
+    parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
+    try:
+        found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+    except PlanError as error:
+        fail(error)
+    if not any(found):
+        return False
+    for (layer, part), regs in zip(parts, found):
+        if not regs:
+            part.registers["wob_shape"] = WobbleShape.OFF.value
+            continue
+        # The figure reaches past the lines by its larger amplitude: that too must be in the
+        # field (the board would clamp it at the edge).
+        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
+        half = profile.field.size_mm / 2
+        xmin, ymin, xmax, ymax = part.bounds_mm
+        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
+            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
+                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
+        part.registers.update(regs)
+    if job.layers:
+        job.registers.update(job.layers[0].job.registers)
+    return True
 
 
 def _link_warning(job, baud):
@@ -124,36 +126,36 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     """What ``mark`` and ``store`` do before any board: the profile, the job planned and
     checked (the wobble's reach too), its description said (not ``quiet``), the preview drawn.
     ``serial``: the part's number, for a ``{serial}`` field. Returns ``(job, placement,
-    drawing, profile, wobble_regs, say)``; one line and exit on a fault."""
+    drawing, profile, wobbles, say)``; one line and exit on a fault."""
+    from .job_reports import describe_job
+    from .layers import describe_layers
     profile = profile or profile_from(args)
-    wobble, wobble_regs = _wobble(args, profile)
     job, placement, drawing = _plan(args, profile, serial)
-    if wobble_regs:
-        # The figure reaches past the lines by its larger amplitude: that too must be in the
-        # field (the board would clamp it at the edge).
-        reach = max(wobble_regs["wob_across"], wobble_regs["wob_along"]) * profile.mm_per_unit
-        half = profile.field.size_mm / 2
-        xmin, ymin, xmax, ymax = job.bounds_mm
-        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
-            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
-                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
-        job.registers.update(wobble_regs)
+    wobbles = _add_wobble(job, args, profile)
     speed, power, prr = job_settings_values(args, profile)
     say = (lambda line: print(line, file=sys.stderr)) if getattr(args, "json", False) \
         else print
     if quiet:
-        return job, placement, drawing, profile, wobble_regs, say
-    for line in _describe(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
-                                        f"of {profile.laser.max_power_w:g} W), "
-                                        f"{prr:g} kHz, {args.passes or profile.defaults.passes} pass(es)"):
+        return job, placement, drawing, profile, wobbles, say
+    for line in describe_job(job, profile, f"laser {power:g} % ({profile.power_w(power):.3g} W "
+                                           f"of {profile.laser.max_power_w:g} W), {prr:g} kHz, "
+                                           f"{args.passes or profile.defaults.passes} pass(es)"):
         say(line)
+    if job.layers:
+        for line in describe_layers(job, profile):
+            say(line)
     if args.preview:
         from ..jobs.preview import preview
-        preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
-                title=f"{Path(args.file).name if args.file else drawing.name}: "
-                      f"{job.mark_mm:.1f} mm marked")
+        title = f"{Path(args.file).name if args.file else drawing.name}: " \
+                f"{job.mark_mm:.1f} mm marked"
+        if job.layers:
+            preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
+                    groups=[(f"{lj.label}: {lj.job.mark_mm:.1f} mm", lj.colour, lj.job.paths_mm)
+                            for lj in job.layers])
+        else:
+            preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title)
         say(f"wrote {args.preview}")
-    return job, placement, drawing, profile, wobble_regs, say
+    return job, placement, drawing, profile, wobbles, say
 
 
 def _cmd_mark(args):
@@ -168,7 +170,7 @@ def _cmd_mark(args):
     # Every part planned (and refused, if it must be) before the link is opened.
     parts = [planned_job(args, profile=profile, serial=serial, quiet=k > 0)
              for k, serial in enumerate(serials)]
-    job, placement, drawing, profile, wobble_regs, say = parts[0]
+    job, placement, drawing, profile, wobbles, say = parts[0]
     if counter is not None:
         say(f"serials {serials[0]}" + (f" … {serials[-1]}" if len(serials) > 1 else "") +
             f" (kept in {counter.path}; advanced when a part has been marked"
@@ -180,6 +182,16 @@ def _cmd_mark(args):
             speed, power, prr = job_settings_values(args, profile)
             record = estimate_record(job, profile, power, prr,
                                       args.passes or profile.defaults.passes, args.preview)
+            if job.layers:
+                # Each layer's settings are its own: the top level keeps the totals only.
+                record = {key: record[key] for key in ("segments", "mark_mm", "jump_mm",
+                                                        "bounds_mm", "field_mm", "estimate_s",
+                                                        "notes", "preview")}
+                record["layers"] = [
+                    {"match": lj.label, "sets": lj.layer.changes() if lj.layer else None,
+                     **estimate_record(lj.job, profile, lj.settings.power_percent,
+                                       lj.settings.prr_khz, lj.settings.passes, None)}
+                    for lj in job.layers]
             record["fill"] = {
                 "hatch": [[s.spacing_mm, s.angle_deg, s.step_deg, s.offset_mm]
                           for s in args.hatch or ()],
@@ -193,7 +205,7 @@ def _cmd_mark(args):
     if warning:
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
-    with board_link(args, profile, wobble=bool(wobble_regs)) as (client, board):
+    with board_link(args, profile, wobble=wobbles) as (client, board):
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]
             bar = progress_bar(None if args.frame else len(part.segments), "seg")
@@ -207,8 +219,7 @@ def _cmd_mark(args):
                         frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
-                    report = streamer.run_vector(part.segments, part.registers,
-                                                 timeout_s=timeout, ready_timeout_s=timeout)
+                    report, layer_starts = _run_layers(streamer, part, board, timeout)
             finally:
                 bar.close()
             counters = report.counters
@@ -226,7 +237,8 @@ def _cmd_mark(args):
             if counter is not None and not args.sim:
                 counter.advance()           # this part is marked: its number is taken
         if args.json and board is not None:
-            record = sim_report(board, part, placement, drawing, profile, report)
+            record = sim_report(board, part, placement, drawing, profile, report,
+                                layer_starts=layer_starts)
             record.update(parts=len(parts), serials=[s for s in serials if s is not None])
             print(json.dumps(record))
         elif args.json:
@@ -237,6 +249,25 @@ def _cmd_mark(args):
     return 0
 
 
+def _run_layers(streamer, job, board, timeout):
+    """Run ``job`` (its layers one after the other, each at its own settings): the reports
+    summed into one, and (on a simulated board) the index of each layer's first pulse."""
+    from ..jobs.stream import StreamReport
+    total, starts = StreamReport(), []
+    for part in [lj.job for lj in job.layers] if job.layers else [job]:
+        starts.append(len(board.pulses) if board is not None else None)
+        report = streamer.run_vector(part.segments, part.registers, timeout_s=timeout,
+                                     ready_timeout_s=timeout)
+        total.segments += report.segments
+        total.pulses += report.pulses
+        total.seconds += report.seconds
+        for name, value in report.counters.items():
+            total.counters[name] = total.counters.get(name, 0) + value
+        if not report.clean:
+            break                           # said, and refused, by the caller
+    return total, starts
+
+
 def add_drawing_options(parser):
     """The drawing, its placement, hatch, wobble and the job's laser and speed: what ``mark``
     and ``store`` plan a job from."""
@@ -244,9 +275,10 @@ def add_drawing_options(parser):
                         help="the drawing: .svg, .dxf or .job (or none, with --code)")
     add_content_options(parser)
     add_job_options(parser)
-    parser.add_argument("--passes", type=int_in(1, 1000, "passes"), default=None,
+    parser.add_argument("--passes", type=passes, default=None,
                         metavar="N", help="times the job is marked (default: the profile's)")
     shape = parser.add_argument_group("drawing")
+    add_layer_option(shape)
     shape.add_argument("--hatch", type=hatch_set, action="append",
                        metavar="SPACING[,ANGLE[,STEP[,OFFSET]]]",
                        help="fill closed shapes with lines SPACING mm apart at ANGLE degrees "

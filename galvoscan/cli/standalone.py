@@ -45,6 +45,10 @@ def _cmd_store(args):
     except PlanError as error:
         fail(error)
     job, _, _, _, _, say = planned_job(args, profile=profile, serial=serial)
+    if job.layers and len(job.layers) > 1:
+        fail(f"the job has {len(job.layers)} layers, each at its own settings; an image holds "
+             f"one set (the player sets the registers once): mark it from the PC, or store "
+             f"each layer's drawing as an image of its own")
     if serial is not None:
         say(f"the image marks serial {serial} at every start (the player does not count; the "
             f"counter beside the profile is left as it is)")

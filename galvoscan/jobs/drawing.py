@@ -57,12 +57,16 @@ class Drawing:
         paths)"``.
     notes : tuple of str
         How the file was read, e.g. ``"DXF has no units ($INSUNITS 0): taken as mm"``.
+    styles : tuple of :class:`~.layers.PathStyle`
+        One per path (or none at all): its colour and layer, what a :class:`~.layers.Layer`
+        picks it by.
     """
     name: str
     paths: tuple
     closed: tuple
     skipped: tuple = ()
     notes: tuple = ()
+    styles: tuple = ()
 
     def bounds(self):
         """``(xmin, ymin, xmax, ymax)`` in mm."""
@@ -125,19 +129,19 @@ def load_drawing(path, *, tolerance_mm=0.01):
         else:
             from .dxf import _read_dxf      # here: .dxf imports this module
             reader = _read_dxf
-        raw, closed, skipped, notes = reader(data, tolerance_mm)
+        raw, closed, skipped, notes, styles = reader(data, tolerance_mm)
     except DrawingError as error:
         raise DrawingError(f"{path}: {error}") from None
     except Exception as error:              # the libraries raise many types on bad input
         kind = suffix[1:].upper()
         raise DrawingError(f"{path}: not a readable {kind} file ({_one_line(error)})") from None
-    return _finish(path, raw, closed, skipped, notes, tolerance_mm)
+    return _finish(path, raw, closed, skipped, notes, tolerance_mm, styles)
 
 
-def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm):
+def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles):
     """Clean the polylines up and check them: one rule set for both formats."""
-    paths, closed, degenerate = [], [], 0
-    for points, is_closed in zip(raw, closed_flags):
+    paths, closed, kept, degenerate = [], [], [], 0
+    for points, is_closed, style in zip(raw, closed_flags, styles):
         points = np.array(points, dtype=float).reshape(-1, 2)
         if not np.isfinite(points).all():
             raise DrawingError(f"{path}: coordinates that are not finite numbers")
@@ -155,12 +159,14 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm):
         points.flags.writeable = False
         paths.append(points)
         closed.append(bool(is_closed and len(points) > 2))
+        kept.append(style)
     skipped = list(skipped) + _counted({"zero-length path": degenerate})
     if not paths:
         # (What was left out may be why: say it, so the reason is not lost.)
         why = f" (left out: {'; '.join(skipped)})" if skipped else ""
         raise DrawingError(f"{path}: no lines or curves to mark{why}")
-    drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes))
+    drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes),
+                      tuple(kept))
     xmin, ymin, xmax, ymax = drawing.bounds()
     if max(xmax - xmin, ymax - ymin) > MAX_EXTENT_MM:
         raise DrawingError(f"{path}: {xmax - xmin:.6g} × {ymax - ymin:.6g} mm, more than "
@@ -259,7 +265,7 @@ _SVG_UNITS = {None, "", "px", "mm", "cm", "in", "pt", "pc", "%", "em", "ex"}
 
 def _read_svg(data, tolerance_mm):
     import svgelements as svg
-    from .svg_screen import screen_svg
+    from .svg_screen import LAYER_ATTRIBUTE, screen_svg
 
     data, notes = screen_svg(data)
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
@@ -270,7 +276,8 @@ def _read_svg(data, tolerance_mm):
         if text is not None and svg.Length(text).units not in _SVG_UNITS:
             raise DrawingError(f"the SVG's {name} {str(text)[:30]!r} is in a unit galvoscan "
                                f"does not know (mm, cm, in, pt, pc, px or none)")
-    paths, closed, skipped = [], [], Counter()
+    from .layers import PathStyle
+    paths, closed, styles, skipped = [], [], [], Counter()
     for element in document.elements():
         if not isinstance(element, (svg.Shape, svg.Text, svg.Image)):
             continue                        # groups, the document, <use> (its copy follows)
@@ -281,9 +288,20 @@ def _read_svg(data, tolerance_mm):
         elif isinstance(element, svg.Image):
             skipped["image element"] += 1
         else:
+            style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
             # Path(shape) keeps the shape's own transform aside: abs() applies it.
             for points_px, is_closed in _svg_subpaths(abs(svg.Path(element)),
                                                       tolerance_mm / MM_PER_PX):
                 paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
                 closed.append(is_closed)
-    return paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}), notes
+                styles.append(style)
+    return (paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}),
+            notes, styles)
+
+
+def _svg_colour(element):
+    """The element's stroke colour as ``#rrggbb``, else its fill's; None for neither."""
+    for paint in (element.stroke, element.fill):
+        if paint is not None and paint.value is not None and paint.alpha != 0:
+            return paint.hexrgb.lower()
+    return None

@@ -274,7 +274,8 @@ def _read_dxf(data, tolerance_mm):
             factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
         except (TypeError, ValueError):
             raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm") from None
-    out, skipped = [], Counter()
+    from .layers import PathStyle
+    out, styles, skipped = [], [], Counter()
     hidden = {layer.dxf.name.lower() for layer in document.layers
               if layer.is_off() or layer.is_frozen()}
     for entity in document.modelspace():
@@ -282,6 +283,9 @@ def _read_dxf(data, tolerance_mm):
         if str(entity.dxf.get("layer", "0")).lower() in hidden or entity.dxf.get("invisible", 0):
             skipped["entity on a hidden layer"] += 1
         else:                               # flattened in the drawing's own units
+            before = len(out)
             _dxf_entity(entity, tolerance_mm / factor, out, skipped)
+            # A block's entities go with the reference's layer (as CAD's layer 0 does).
+            styles += [PathStyle(layer=str(entity.dxf.get("layer", "0")))] * (len(out) - before)
     skipped = _counted(skipped, {"text entity": " (explode text to lines)"})
-    return [p * factor for p, _ in out], [c for _, c in out], skipped, notes
+    return [p * factor for p, _ in out], [c for _, c in out], skipped, notes, styles

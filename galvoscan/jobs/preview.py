@@ -18,7 +18,31 @@ def _jump_lines(paths):
     return [np.array([end, p[0]]) for end, p in zip(ends, paths)]
 
 
-def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
+#: Pixels apart below which marked lines run together in a panel: there, a detail panel.
+_MERGED_PX = 4
+#: Lines across a detail panel (its side, in the lines' own spacing).
+_DETAIL_LINES = 30
+
+
+def _detail_window(paths, bounds, px_per_mm):
+    """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
+    tell apart at ``px_per_mm`` (their mean spacing, the area they cover over their length,
+    under :data:`_MERGED_PX`); None where they are not."""
+    x0, y0, x1, y1 = bounds
+    mark_mm = _length_mm(paths)
+    if mark_mm <= 0:
+        return None
+    spacing = (x1 - x0) * (y1 - y0) / mark_mm
+    if not 0 < spacing * px_per_mm < _MERGED_PX:
+        return None
+    # On the marked point nearest the drawing's centre, so the window holds marks.
+    points = np.concatenate(paths)
+    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
+    cx, cy = points[np.argmin(np.hypot(*(points - centre).T))]
+    return cx, cy, max(_DETAIL_LINES * spacing, 1e-3)
+
+
+def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
     """Write the picture of a job.
 
     Parameters
@@ -33,6 +57,10 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
         The field's size (the lens's): its square is outlined.
     title : str
         Above the picture.
+    groups : sequence of (str, colour, paths), optional
+        The marks in parts of their own colour (a job's layers): each ``(label, colour,
+        paths)``, drawn in its colour and named in the legend; ``paths_mm`` then is all of
+        them, in marking order, for the jumps.
 
     Returns
     -------
@@ -59,13 +87,26 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
     if paths:
         points = np.concatenate(paths)
         bounds = (*points.min(axis=0), *points.max(axis=0))
-    # A drawing much smaller than the field gets a second panel, zoomed in on it.
-    zoom = bounds is not None and max(bounds[2] - bounds[0], bounds[3] - bounds[1]) < field_mm / 4
-    figure = Figure(figsize=(12.5, 7.4) if zoom else (7, 7.6), dpi=110, layout="constrained")
+    if groups is None:
+        groups = [(f"marks {mark_mm:.1f} mm ({len(paths)} paths)", "black", paths)]
+    else:
+        groups = [(label, colour, [np.asarray(p, dtype=float).reshape(-1, 2) for p in part])
+                  for label, colour, part in groups]
+    # A drawing much smaller than the field gets a second panel, zoomed in on it; marks too
+    # close together to tell apart there (a fine hatch) a third, on a detail of them.
+    size = max(bounds[2] - bounds[0], bounds[3] - bounds[1]) if bounds else field_mm
+    zoom = bounds is not None and size < field_mm / 2
+    panel_px = 5.3 * 110                            # a panel's width, about, in pixels
+    detail = _detail_window(paths, bounds, panel_px / (size * 1.15 if zoom else field_mm)) \
+        if bounds is not None else None
+    count = 1 + zoom + (detail is not None)
+    figure = Figure(figsize=(6.2 * count, 7.4) if count > 1 else (7, 7.6), dpi=110,
+                    layout="constrained")
     FigureCanvasAgg(figure)
-    axes = figure.subplots(1, 2) if zoom else [figure.add_subplot()]
+    axes = list(figure.subplots(1, count)) if count > 1 else [figure.add_subplot()]
+    kinds = ["field"] + (["zoom"] if zoom else []) + (["detail"] if detail else [])
     handles = []
-    for index, ax in enumerate(axes):
+    for index, (ax, kind) in enumerate(zip(axes, kinds)):
         first = index == 0
 
         def keep(handle):
@@ -81,9 +122,9 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
             keep(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
                         label=f"jumps {jump_mm:.1f} mm"))
         if paths:
-            ax.add_collection(LineCollection(paths, colors="black", linewidths=0.7, zorder=2))
-            keep(Line2D([], [], color="black", linewidth=0.7,
-                        label=f"marks {mark_mm:.1f} mm ({len(paths)} paths)"))
+            for label, colour, part in groups:
+                ax.add_collection(LineCollection(part, colors=colour, linewidths=0.7, zorder=2))
+                keep(Line2D([], [], color=colour, linewidth=0.7, label=label))
             x0, y0, x1, y1 = bounds
             ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
                     linewidth=0.6, linestyle=":")
@@ -95,6 +136,11 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title=""):
             margin = 0.04 * reach
             ax.set_xlim(-reach - margin, reach + margin)
             ax.set_ylim(-reach - margin, reach + margin)
+        elif kind == "detail":
+            cx, cy, side = detail
+            ax.set_xlim(cx - side / 2, cx + side / 2)
+            ax.set_ylim(cy - side / 2, cy + side / 2)
+            ax.set_title(f"a detail, {side:.2g} mm wide", fontsize=9)
         else:
             x0, y0, x1, y1 = bounds
             side = max(x1 - x0, y1 - y0, 1e-3) * 1.15

@@ -38,13 +38,14 @@ class Pitch:
 
 
 def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
-                 max_prr_per_point_hz=100e3, strict=True):
+                 max_prr_per_point_hz=100e3, strict=True, pulses_per_point=None):
     """The pitch and pulses per point closest to a marking speed.
 
     ``v = pitch_units / units_per_mm * prr_hz / N`` mm/s, with N (pulses per point) in
     1 … 255, at least ``prr_hz / max_prr_per_point_hz`` (the most points a second the galvo
     link takes: one per 10 µs frame), and the pitch 1 … 65535 units, at most ``max_pitch_mm``.
     The closest speed wins; of equal ones, the smallest N (the finest pitch).
+    ``pulses_per_point``: N is that (a layer's), only the pitch chosen.
 
     Raises
     ------
@@ -63,7 +64,13 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     if top < 1 or low_n > 255:
         raise PlanError(f"no pitch fits: {max_pitch_mm} mm is under one galvo unit, or "
                         f"{prr_hz:g} Hz needs more than 255 pulses per point")
-    n = np.arange(low_n, 256)
+    high_n = 255
+    if pulses_per_point is not None:
+        if not low_n <= pulses_per_point <= 255:
+            raise PlanError(f"{pulses_per_point} pulses per point: at {prr_hz / 1e3:g} kHz "
+                            f"from {low_n} to 255 (a point a 10 µs frame at most)")
+        low_n = high_n = int(pulses_per_point)
+    n = np.arange(low_n, high_n + 1)
     ideal = speed_mm_s * n * units_per_mm / prr_hz
     candidates = np.clip(np.stack([np.floor(ideal), np.ceil(ideal)]), 1, top)
     speeds = candidates / units_per_mm * prr_hz / n
@@ -74,7 +81,7 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     pitch, pulses = int(candidates[row[best], column[best]]), int(n[column[best]])
     speed = pitch / units_per_mm * prr_hz / pulses
     if strict and abs(speed - speed_mm_s) / speed_mm_s > 0.02:
-        slowest, fastest = prr_hz / units_per_mm / 255, top / units_per_mm * prr_hz / low_n
+        slowest, fastest = prr_hz / units_per_mm / high_n, top / units_per_mm * prr_hz / low_n
         if slowest <= speed_mm_s <= fastest:
             # Inside the range, between two speeds whole pitches and pulses make.
             below, above = speeds[speeds <= speed_mm_s].max(), speeds[speeds >= speed_mm_s].min()
@@ -84,7 +91,8 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
                             f"another PRR")
         raise PlanError(f"{speed_mm_s:g} mm/s is out of reach at {prr_hz / 1e3:g} kHz: "
                         f"{slowest:.3g} … {fastest:.4g} mm/s (pitch ≤ {max_pitch_mm:g} mm, "
-                        f"{low_n} … 255 pulses per point)")
+                        f"{low_n}{'' if low_n == high_n else f' … {high_n}'} "
+                        f"pulse{'' if low_n == high_n == 1 else 's'} per point)")
     return Pitch(pitch, pulses, speed, pitch / units_per_mm, (speed - speed_mm_s) / speed_mm_s)
 
 

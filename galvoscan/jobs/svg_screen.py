@@ -10,13 +10,21 @@ Two kinds, both errors by the SVG specification, which a browser renders around:
   §5.6.1: a circular reference is an error; the element is not rendered). svgelements follows
   it until Python's recursion limit.
 
-Everything else is left to svgelements: the file is rewritten only when something is left out.
+Everything else is left to svgelements: the file is rewritten only when something is left out,
+or to name the Inkscape layers: each ``<g inkscape:groupmode="layer">`` is given
+:data:`LAYER_ATTRIBUTE`, its label (else its id), which svgelements hands down to everything
+inside it (an inner layer's own in place of its parent's), so each shape knows its layer.
 """
 
 import xml.etree.ElementTree as ElementTree
 
 
-__all__ = ["screen_svg"]
+__all__ = ["screen_svg", "LAYER_ATTRIBUTE"]
+
+#: The attribute each Inkscape layer group is given, its label: what a shape's layer is read
+#: from (as an attribute the SVG's own styling cannot have set).
+LAYER_ATTRIBUTE = "data-galvoscan-layer"
+_INKSCAPE = "{http://www.inkscape.org/namespaces/inkscape}"
 
 
 _XLINK_HREF = "{http://www.w3.org/1999/xlink}href"
@@ -64,8 +72,8 @@ def _circular_uses(root):
 
 
 def screen_svg(data):
-    """``(data, notes)``: the SVG's bytes with the elements above left out, and a note for
-    each. A file that is not well-formed XML is handed on as it is, for svgelements to say
+    """``(data, notes)``: the SVG's bytes with the elements above left out (a note for
+    each) and its layers named. A file that is not well-formed XML is handed on as it is, for svgelements to say
     what is wrong with it."""
     try:
         root = ElementTree.fromstring(data)
@@ -86,7 +94,12 @@ def screen_svg(data):
         notes.append(f"{_named(use, 'use', uses.index(use) + 1)} refers to itself (directly "
                      f"or through other <use> elements): left out, as a browser draws none "
                      f"of it")
-    if not left_out:
+    layers = [g for g in root.iter() if _kind(g) == "g" and
+              g.get(_INKSCAPE + "groupmode") == "layer"]
+    for number, group in enumerate(layers, 1):
+        group.set(LAYER_ATTRIBUTE, group.get(_INKSCAPE + "label") or group.get("id") or
+                  f"layer {number}")
+    if not left_out and not layers:
         return data, []
     for element in left_out:
         if element in parents:

@@ -17,6 +17,7 @@ from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_
 
 
 __all__ = ["JobSettings", "VectorJob", "MarkObject", "plan_vector_job", "plan_objects",
+           "check_clear",
            "segments_from_paths",
            "link_segments_per_s"]
 
@@ -49,6 +50,8 @@ class JobSettings:
     hatch_lines: LineOrder = LineOrder.SERPENTINE
     contour: Contour = None         # rings inward from the shapes' edges, None: none
     outline: bool = True
+    pulses_per_point: int = None    # None: chosen with the pitch for the speed
+    delays_us: tuple = ()           # (register, µs) pairs in place of the profile's delays
 
 
 @dataclass
@@ -83,6 +86,7 @@ class VectorJob:
     jump_mm: float
     bounds_mm: tuple
     notes: list = field(default_factory=list)
+    layers: list = None             # a job of layers: its LayerJobs (.layers), run in turn
 
 
 def segments_from_paths(paths_units):
@@ -120,7 +124,8 @@ def _machine_settings(settings, profile):
                         f"{profile.galvo.max_speed_mm_s:g} mm/s ([galvo] max_speed_mm_s)")
     # A pitch of at most half the spot keeps the marked points overlapping.
     pitch = choose_pitch(settings.speed_mm_s, prr_hz, profile.units_per_mm,
-                         max_pitch_mm=profile.laser.spot_mm / 2)
+                         max_pitch_mm=profile.laser.spot_mm / 2,
+                         pulses_per_point=settings.pulses_per_point)
     return prr_register, prr_hz, pitch
 
 
@@ -146,6 +151,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
         "laser_prr": prr_register,
         "laser_power": profile.power_register(settings.power_percent),
         **profile.delay_registers(),
+        **dict(settings.delays_us),
     }
     if table is not None:
         registers["cor_enable"] = 1
@@ -202,6 +208,7 @@ class MarkObject:
     fill: JobSettings
     keep_clear_mm: float = 0.0
     keep_order: bool = False
+    layer: str = None               # the layer (by name) it takes its settings from
 
 
 def plan_vector_job(drawing, placement, settings, profile):
@@ -243,8 +250,13 @@ def plan_objects(objects, settings, profile):
     return _finish(segments, ordered, before, after, settings, profile, notes)
 
 
-def _check_clear(objects, placed):
+def check_clear(objects):
     """Refuse an object that reaches into another's keep-clear zone (a code's quiet zone)."""
+    if any(o.keep_clear_mm for o in objects):
+        _check_clear(objects, [place(o.drawing, o.placement) for o in objects])
+
+
+def _check_clear(objects, placed):
     for i, (o, drawing) in enumerate(zip(objects, placed)):
         if not o.keep_clear_mm:
             continue

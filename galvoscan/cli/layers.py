@@ -1,0 +1,182 @@
+"""Layers on the command line (``--layer MATCH KEY=VALUE …``) and in job files (``[[layer]]``
+tables): one key table for both, each value read by the same type as the ``mark`` option it
+stands for (so its range and its words are the option's), and the layered job's plan said a
+layer a line."""
+
+import argparse
+
+from ..gateware.host.regmap import BY_NAME
+from ..gateware.limits import WOBBLE_MAX_HZ
+from ..jobs.fill import LineOrder
+from ..jobs.profile_keys import DELAY_KEYS
+from .args import (contour_fill, hatch_set, number_in, passes, power_percent, prr_khz,
+                   register_int, speed_mm_s)
+
+
+__all__ = ["add_layer_option", "layer_from_words", "layer_from_table", "LAYER_KEYS",
+           "layer_wobble", "describe_layers"]
+
+
+def _yes_no(text):
+    word = str(text).strip().lower()
+    if word in ("yes", "true", "1", "on"):
+        return True
+    if word in ("no", "false", "0", "off"):
+        return False
+    raise argparse.ArgumentTypeError(f"must be yes or no, not {text!r}")
+
+
+def _hatch_lines(text):
+    try:
+        return LineOrder(str(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be {', '.join(o.value for o in LineOrder)}, not {text!r}") from None
+
+
+def _hatch(text):
+    """A hatch set, or ``none`` (no hatch in this layer)."""
+    return None if str(text).strip().lower() == "none" else hatch_set(str(text))
+
+
+#: key → (Layer field, the type that reads it, what it is). Delays are registers, their
+#: ranges the register map's.
+LAYER_KEYS = {
+    "speed": ("speed_mm_s", speed_mm_s, "mm/s"),
+    "power": ("power_percent", power_percent, "% of the laser's maximum"),
+    "prr": ("prr_khz", prr_khz(), "kHz"),
+    "passes": ("passes", passes, "times the layer is marked"),
+    "pulses": ("pulses_per_point", register_int("pulses_per_point", "pulses per point"),
+               "laser pulses a point (the pitch then follows the speed)"),
+    "hatch": ("hatch", _hatch, "SPACING[,ANGLE[,STEP[,OFFSET]]], repeated for more sets; "
+                               "none: no hatch"),
+    "hatch_lines": ("hatch_lines", _hatch_lines, "serpentine, oneway or joined"),
+    "contour": ("contour", contour_fill, "SPACING[,COUNT]"),
+    "outline": ("outline", _yes_no, "yes or no"),
+    "wobble": ("wobble_um", number_in("wobble", 0, 10_000), "µm across (0: none)"),
+    "wobble_along": ("wobble_along_um", number_in("wobble along", 0, 10_000), "µm"),
+    "wobble_hz": ("wobble_hz", number_in("wobble hz", 1, WOBBLE_MAX_HZ), "Hz"),
+    **{register: (register, register_int(register, register.replace("_", " ")),
+                  BY_NAME[register].unit) for register in DELAY_KEYS.values()},
+}
+
+
+def _layer(match, pairs, where):
+    """A :class:`~galvoscan.jobs.layers.Layer` from ``(key, value)`` pairs (values as text or
+    TOML gives them); ValueError, one line naming ``where`` and the key."""
+    import difflib
+    from ..jobs.layers import Layer
+    from ..jobs.plan import PlanError
+    fields, hatch, delays = {}, [], []
+    for key, value in pairs:
+        if key not in LAYER_KEYS:
+            near = difflib.get_close_matches(key, LAYER_KEYS, n=1)
+            raise ValueError(f"{where}: {key!r} is not a layer setting"
+                             f"{f' (did you mean {near[0]!r}?)' if near else ''}; the "
+                             f"settings: {', '.join(LAYER_KEYS)}")
+        name, read, _ = LAYER_KEYS[key]
+        if isinstance(value, bool) and key != "outline" or isinstance(value, (list, dict)):
+            raise ValueError(f"{where}: {key} must be one value, not {value!r}")
+        try:
+            parsed = read(str(value).lower() if isinstance(value, bool) else str(value))
+        except argparse.ArgumentTypeError as error:
+            raise ValueError(f"{where}: {key}: {error}") from None
+        if key == "hatch":
+            hatch.append(parsed)
+        elif name in DELAY_KEYS.values():
+            delays.append((name, parsed))
+        elif name in fields:
+            raise ValueError(f"{where}: {key} is given twice")
+        else:
+            fields[name] = parsed
+    if hatch:
+        fields["hatch"] = tuple(h for h in hatch if h is not None)
+    try:
+        return Layer(match, delays_us=tuple(delays), **fields)
+    except PlanError as error:
+        raise ValueError(f"{where}: {error}") from None
+
+
+def layer_from_words(words):
+    """``MATCH KEY=VALUE …`` (the words of one ``--layer``) as a Layer; ValueError."""
+    match, *rest = words
+    pairs = []
+    for word in rest:
+        key, equals, value = word.partition("=")
+        if not equals or not key:
+            raise ValueError(f"--layer {match}: {word!r} is not KEY=VALUE (a drawing goes "
+                             f"before --layer, or after --)")
+        pairs.append((key.strip().lower().replace("-", "_"), value.strip()))
+    return _layer(match, pairs, f"--layer {match}")
+
+
+def layer_from_table(table, where):
+    """A ``[[layer]]`` table of a job file as a Layer (``match`` and the keys above; a list
+    of hatch sets as ``hatch = ["0.05,0", "0.05,90"]``); ValueError naming ``where``."""
+    if not isinstance(table, dict) or not isinstance(table.get("match"), str):
+        raise ValueError(f"{where}: a layer needs match = \"#rrggbb\" or a layer's name")
+    pairs = []
+    for key, value in table.items():
+        if key == "match":
+            continue
+        values = value if key == "hatch" and isinstance(value, list) else [value]
+        pairs += [(key, v) for v in values]
+    return _layer(table["match"], pairs, f"{where} ({table['match']!r})")
+
+
+class _LayerAction(argparse.Action):
+    def __call__(self, parser, namespace, values, option_string=None):
+        try:
+            layer = layer_from_words(values)
+        except ValueError as error:
+            parser.error(str(error))
+        getattr(namespace, self.dest).append(layer)
+
+
+def add_layer_option(group):
+    group.add_argument(
+        "--layer", nargs="+", action=_LayerAction, default=[], dest="layers",
+        metavar="MATCH [KEY=VALUE", help="settings of their own for the paths of one colour "
+        "(an SVG stroke, else fill: \"#ff0000\"; quote it) or one layer (an Inkscape layer's "
+        "label, a DXF layer's name); repeat it for more layers, run in that order, what none "
+        "matches last; keys: " + ", ".join(f"{key} ({unit})" for key, (_, _, unit) in
+                                            LAYER_KEYS.items()).replace("%", "%%"))
+
+
+def layer_wobble(layer, base):
+    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
+    amplitudes and frequency in place of ``base``'s where it gives them."""
+    from dataclasses import replace
+    if layer is None:
+        return base
+    across = layer.wobble_um if layer.wobble_um is not None else base.across_um
+    along = layer.wobble_along_um if layer.wobble_along_um is not None else \
+        (layer.wobble_um if layer.wobble_um is not None else base.along_um)
+    hz = layer.wobble_hz if layer.wobble_hz is not None else base.freq_hz
+    return replace(base, across_um=across, along_um=along, freq_hz=hz)
+
+
+def _wobble_words(registers, profile):
+    if not registers.get("wob_shape"):
+        return ""
+    um = profile.mm_per_unit * 1000
+    return (f", wobble ±{registers['wob_across'] * um:.0f} × ±{registers['wob_along'] * um:.0f} "
+            f"µm at {registers['wob_freq']} Hz")
+
+
+def describe_layers(job, profile):
+    """A line a layer: what it matches, its settings, its plan and time."""
+    lines = []
+    for number, lj in enumerate(job.layers, 1):
+        s, part = lj.settings, lj.job
+        pitch = part.pitch
+        sets = lj.layer.changes() if lj.layer else "the job's settings"
+        lines.append(
+            f"layer {number} {lj.label!r} ({sets}): "
+            f"{len(part.segments)} segments, {part.mark_mm:.1f} mm marked at "
+            f"{pitch.speed_mm_s:.1f} mm/s (pitch {pitch.pitch_mm * 1000:.1f} µm × "
+            f"{pitch.pulses_per_point} pulse{'s' if pitch.pulses_per_point > 1 else ''}), "
+            f"{s.power_percent:g} % ({profile.power_w(s.power_percent):.3g} W), "
+            f"{s.prr_khz:g} kHz, {s.passes} pass(es)" + _wobble_words(part.registers, profile) +
+            f"; {part.estimate_s:.3f} s")
+    return lines

@@ -1,0 +1,158 @@
+"""Layers (galvoscan/jobs/layers.py, cli/layers.py, `mark --layer`): paths picked by SVG colour,
+Inkscape layer and DXF layer; the layer options' one-line refusals; and, on the simulated
+board, each layer's speed and pulses per point measured on the XY2-100 and DB25 wires."""
+
+import json
+
+import numpy as np
+import pytest
+
+from galvoscan.cli import main
+from galvoscan.jobs.drawing import load_drawing
+from galvoscan.jobs.layers import Layer, PathStyle, split_by_layer
+
+from sim_board import VECTOR_BOARD, quick_sim_board
+
+
+INKSCAPE = 'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"'
+
+LAYERED_SVG = f"""<svg xmlns="http://www.w3.org/2000/svg" {INKSCAPE} width="30mm" height="30mm"
+  viewBox="0 0 30 30">
+ <g inkscape:groupmode="layer" inkscape:label="Engrave">
+  <rect id="a" x="1" y="1" width="5" height="5" fill="none" stroke="#FF0000"/>
+  <g inkscape:label="a plain group"><circle id="b" cx="12" cy="4" r="2" fill="#00f"/></g>
+  <g inkscape:groupmode="layer" inkscape:label="Inner">
+   <rect id="c" x="20" y="1" width="4" height="4" fill="none" stroke="green"/></g>
+ </g>
+ <rect id="d" x="1" y="20" width="5" height="5" style="fill:none;stroke:#ff0000"/>
+ <path id="e" d="M 10 20 L 15 25" stroke="black" fill="none"/>
+</svg>"""
+
+
+def test_svg_paths_know_their_colour_and_layer(tmp_path):
+    """A stroke's colour, else the fill's, as #rrggbb; the innermost Inkscape layer's label
+    (a group that is not a layer does not count); none outside every layer."""
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    drawing = load_drawing(svg)
+    # Paths come in document order, one per shape here.
+    assert drawing.styles == (PathStyle("#ff0000", "Engrave"), PathStyle("#0000ff", "Engrave"),
+                              PathStyle("#008000", "Inner"), PathStyle("#ff0000", None),
+                              PathStyle("#000000", None))
+
+
+def test_first_matching_layer_takes_a_path(tmp_path):
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    drawing = load_drawing(svg)
+    parts, rest = split_by_layer(drawing, [Layer("#F00"), Layer("engrave")])
+    red, engrave = parts
+    assert [s.colour for s in red.styles] == ["#ff0000", "#ff0000"]         # a and d
+    assert engrave.styles == (PathStyle("#0000ff", "Engrave"),)              # b: a isn't here
+    assert rest.styles == (PathStyle("#008000", "Inner"), PathStyle("#000000", None))
+    assert sum(len(p.paths) for p in (red, engrave, rest)) == len(drawing.paths)
+    parts, rest = split_by_layer(drawing, [Layer("Inner")])
+    assert len(parts[0].paths) == 1 and len(rest.paths) == 4
+
+
+def test_dxf_layers_by_name(tmp_path):
+    """Each entity on its own layer; a block's entities on the reference's."""
+    import ezdxf
+    document = ezdxf.new(units=4)                    # mm
+    document.layers.add("CUT")
+    document.layers.add("MARK")
+    space = document.modelspace()
+    space.add_line((0, 0), (10, 0), dxfattribs={"layer": "CUT"})
+    space.add_circle((5, 5), 2, dxfattribs={"layer": "MARK"})
+    block = document.blocks.new("TAG")
+    block.add_line((0, 0), (1, 1))
+    space.add_blockref("TAG", (20, 0), dxfattribs={"layer": "MARK"})
+    document.saveas(tmp_path / "layers.dxf")
+    drawing = load_drawing(tmp_path / "layers.dxf")
+    assert [s.layer for s in drawing.styles] == ["CUT", "MARK", "MARK"]
+    parts, rest = split_by_layer(drawing, [Layer("mark")])
+    assert len(parts[0].paths) == 2 and len(rest.paths) == 1
+
+
+@pytest.mark.parametrize("layer, words", [
+    (["#ff0000", "sped=300"], "'sped' is not a layer setting \\(did you mean 'speed'\\?\\)"),
+    (["#ff0000", "speed=0"], "--layer #ff0000: speed: speed must be from 0.1"),
+    (["#ff0000", "pulses=300"], "pulses per point must be from 1 to 255"),
+    (["#ff0000", "hatch=x"], "--hatch must be SPACING"),
+    (["#ff0000", "outline=maybe"], "must be yes or no"),
+    (["#ff0000", "speed"], "'speed' is not KEY=VALUE"),
+    (["#ff0000", "speed=500", "speed=600"], "speed is given twice"),
+    (["#123456", "speed=1007.1"], "layer '#123456' matches nothing in the job \\(its colours: "
+                                  "#000000, #0000ff, #008000, #ff0000; its layers: 'Engrave', "
+                                  "'Inner'\\)"),
+])
+def test_bad_layers_are_one_line(tmp_path, capsys, layer, words):
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    with pytest.raises(SystemExit) as stopped:
+        main(["mark", str(svg), "--layer", *layer, "--estimate"])
+    said = capsys.readouterr().err + str(stopped.value.code)
+    assert len([line for line in said.splitlines() if "error" in line]) == 1
+    import re
+    assert re.search(words, said), said
+
+
+def test_layer_estimate_json(tmp_path, capsys):
+    """--estimate --json: the totals, and each layer's own settings and time, in the order
+    they run (the rest last)."""
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    assert main(["mark", str(svg), "--layer", "Inner", "speed=335.7", "power=40", "pulses=2",
+                 "passes=3", "--layer", "#ff0000", "prr=100", "hatch=0.1,45", "hatch=0.1,135",
+                 "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    layers = record["layers"]
+    assert [entry["match"] for entry in layers] == ["Inner", "#ff0000", "the rest"]
+    inner, red, rest = layers
+    assert inner["pulses_per_point"] == 2 and inner["passes"] == 3
+    assert inner["speed_mm_s"] == pytest.approx(335.7, rel=0.02) and inner["power_percent"] == 40
+    assert red["prr_khz"] == 100 and red["mark_mm"] > 2 * rest["mark_mm"]     # hatched
+    assert record["estimate_s"] == pytest.approx(sum(e["estimate_s"] for e in layers))
+    assert record["segments"] == sum(e["segments"] for e in layers)
+
+
+PROFILE = "[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 50\n"
+
+
+@pytest.mark.slow
+def test_each_layer_runs_at_its_own_speed_on_the_wires(tmp_path, capsys):
+    """Three layers, each at its own speed and pulses per point: on the wires, each layer's
+    points step at its speed (within 2 %) and are held for its pulses, and the layers run in
+    the order given."""
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    machine = tmp_path / "machine.toml"
+    machine.write_text(PROFILE)
+    with quick_sim_board(**VECTOR_BOARD):
+        assert main(["mark", str(svg), "--layer", "Inner", "speed=391.6", "pulses=3",
+                     "--layer", "#ff0000", "speed=1500", "pulses=1", "--speed", "800",
+                     "--prr", "50", "--machine", str(machine), "--sim", "--timeout", "600",
+                     "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["errors"] == result["underruns"] == result["rejected"] == 0
+    inner, red, rest = result["layers"]
+    assert [inner["match"], red["match"], rest["match"]] == ["Inner", "#ff0000", "the rest"]
+    for entry, speed, pulses in [(inner, 391.6, 3), (red, 1500, 1), (rest, 800, None)]:
+        assert entry["speed_mm_s"] == pytest.approx(speed, rel=0.02), entry
+        if pulses is not None:
+            assert entry["pulses_per_point"] == entry["planned_pulses_per_point"] == pulses
+        assert entry["points"] > 10
+    assert sum(e["points"] for e in result["layers"]) == len(result["marks"])
+    # The Inner square's points (x 20…24 mm in the drawing) come first, then the red ones.
+    marks = np.array(result["drawing_marks"])
+    first = marks[:inner["points"]]
+    assert (first[:, 0] > 19.9).all() and (first[:, 0] < 24.1).all()
+
+
+def test_an_image_of_layers_is_refused(tmp_path):
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    with pytest.raises(SystemExit, match="the job has 2 layers, each at its own settings"):
+        main(["store", str(svg), "--layer", "Inner", "power=40", "-o",
+              str(tmp_path / "job.img")])
+    assert not (tmp_path / "job.img").exists()
