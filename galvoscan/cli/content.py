@@ -9,7 +9,8 @@ from .args import int_in, number_in
 from .jobargs import pair_mm
 
 
-__all__ = ["add_content_options", "content_objects", "has_content", "fields", "part_serials"]
+__all__ = ["add_content_options", "check_content_options", "content_objects", "has_content",
+           "fields", "part_serials"]
 
 
 def add_content_options(parser):
@@ -117,36 +118,48 @@ def fields(text, *, serial=None, what="--text"):
                         f"knows ({known}; braces as {{{{ and }}}})") from None
 
 
-def content_objects(args, settings, profile, *, serial=None):
-    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s the options ask for, ``serial``
-    the part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
-    from ..jobs.codes import CodeSpec, code_object
+def check_content_options(args):
+    """Refuse an option of one kind of content given without it (``--font`` without
+    ``--text``); one line (:class:`~galvoscan.jobs.plan.PlanError`)."""
     from ..jobs.plan import PlanError
-    objects = []
     for kind, options in _OPTIONS.items():
         given = [name for name in options if getattr(args, name, None) is not None]
         if getattr(args, kind, None) is None and given:
             raise PlanError(f"--{given[0].replace('_', '-')} is for --{kind}")
     if getattr(args, "one_way", False) and args.image is None:
         raise PlanError("--one-way is for --image")
-    if args.text is not None:
-        objects.append(_text_object(args, settings, profile, serial))
-    if args.image is not None:
-        objects.append(_image_object(args, settings, profile))
-    if args.code is None:
-        return objects
+
+
+def content_objects(args, settings, profile, *, serial=None):
+    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s of ``args.entries``' text, codes
+    and photos (each entry the options of one object, over ``args``' own), ``serial`` the
+    part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
+    import argparse
+    from dataclasses import replace
+    objects = []
+    for kind, make in (("text", _text_object), ("image", _image_object),
+                       ("code", _code_object)):
+        for entry in args.entries.get(kind, ()):
+            one = argparse.Namespace(**{**vars(args), **entry})
+            made = make(one, settings, profile, serial)
+            objects.append(replace(made, layer=entry["layer"]) if entry.get("layer") else made)
+    return objects
+
+
+def _code_object(args, settings, profile, serial):
+    """``--code`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`."""
+    from ..jobs.codes import CodeSpec, code_object
+    from ..jobs.plan import PlanError
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
     spec = CodeSpec(CodeKind(args.code), fields(args.data, serial=serial, what="--data"),
                     args.size, ec_level=args.code_ec,
                     fill=CodeFill(args.code_fill), quiet_modules=args.code_quiet,
                     height_mm=args.code_height)
-    objects.append(code_object(spec, settings, centre_mm=args.code_at,
-                               spot_mm=profile.laser.spot_mm))
-    return objects
+    return code_object(spec, settings, centre_mm=args.code_at, spot_mm=profile.laser.spot_mm)
 
 
-def _image_object(args, settings, profile):
+def _image_object(args, settings, profile, serial=None):
     """``--image`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`."""
     from ..jobs.photo import PhotoSpec, photo_object
     from ..jobs.plan import PlanError
@@ -185,7 +198,10 @@ def part_serials(args, profile):
     counter."""
     from ..jobs.serial import load_counter, uses_serial
     parts = getattr(args, "repeat", 1) or 1
-    if not uses_serial(getattr(args, "text", None), getattr(args, "data", None)):
+    entries = getattr(args, "entries", None)
+    texts = [getattr(args, "text", None), getattr(args, "data", None)] if entries is None else \
+        [e.get("text") for e in entries["text"]] + [e.get("data") for e in entries["code"]]
+    if not uses_serial(*texts):
         if getattr(args, "serial_start", None) is not None or \
                 getattr(args, "serial_step", None) is not None:
             from ..jobs.plan import PlanError

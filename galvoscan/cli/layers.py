@@ -124,6 +124,15 @@ def layer_from_table(table, where):
     return _layer(table["match"], pairs, f"{where} ({table['match']!r})")
 
 
+def _number_or_text(text):
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return {"yes": True, "no": False}.get(text.lower(), text)
+
+
 class _LayerAction(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None):
         try:
@@ -131,6 +140,19 @@ class _LayerAction(argparse.Action):
         except ValueError as error:
             parser.error(str(error))
         getattr(namespace, self.dest).append(layer)
+        # As a job file's [[layer]] table, for --save: numbers as numbers.
+        table = {"match": values[0]}
+        for word in values[1:]:
+            key, _, value = word.partition("=")
+            key = key.strip().lower().replace("-", "_")
+            value = _number_or_text(value.strip())
+            if key == "hatch":
+                table.setdefault("hatch", []).append(value)
+            else:
+                table[key] = value
+        if getattr(namespace, "layer_tables", None) is None:
+            namespace.layer_tables = []
+        namespace.layer_tables.append(table)
 
 
 def add_layer_option(group):

@@ -17,7 +17,8 @@ from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
-from .content import add_content_options, content_objects, has_content, part_serials
+from .content import (add_content_options, check_content_options, content_objects,
+                      part_serials)
 from .job_reports import estimate_record, sim_report
 from .layers import add_layer_option
 from .machine import add_machine_option, profile_from
@@ -52,9 +53,11 @@ def _plan(args, profile, serial=None):
                            passes=args.passes or profile.defaults.passes,
                            hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                            contour=args.contour, outline=not args.no_outline)
-    if args.file is None and not has_content(args):
+    entries = args.entries
+    if not any(entries[kind] for kind in ("drawing", "text", "code", "image")):
         fail("give a drawing (FILE) or something to make (--text, --code, --image)")
     try:
+        check_content_options(args)
         objects = content_objects(args, settings, profile, serial=serial)
         if args.file is not None and Path(args.file).suffix.lower() == ".job":
             if objects or args.layers:
@@ -62,11 +65,13 @@ def _plan(args, profile, serial=None):
                      "code or layers with a drawing (.svg, .dxf), or alone")
             segments = parse_job(read_text(args.file, "job file"), name=args.file)
             return plan_job_file(segments, settings, profile), None, None
-        if args.file is not None:
-            placement = Placement(origin=args.origin, offset_mm=args.offset, scale=args.scale,
-                                  rotate_deg=args.rotate)
-            drawing = load_drawing(args.file, tolerance_mm=args.tolerance)
-            objects.insert(0, MarkObject(drawing, placement, settings))
+        drawings = []
+        for entry in entries["drawing"]:
+            placement = Placement(origin=entry["origin"], offset_mm=entry["offset"],
+                                  scale=entry["scale"], rotate_deg=entry["rotate"])
+            drawing = load_drawing(entry["file"], tolerance_mm=args.tolerance)
+            drawings.append(MarkObject(drawing, placement, settings))
+        objects[:0] = drawings
         first = objects[0]
         job = merged(plan_layers(objects, args.layers, settings, profile))
         return job, first.placement, first.drawing
@@ -146,7 +151,8 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
             say(line)
     if args.preview:
         from ..jobs.preview import preview
-        title = f"{Path(args.file).name if args.file else drawing.name}: " \
+        source = args.file or getattr(args, "job_file", None)
+        title = f"{Path(source).name if source else drawing.name}: " \
                 f"{job.mark_mm:.1f} mm marked"
         if job.layers:
             preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
@@ -161,7 +167,9 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
 def _cmd_mark(args):
     from ..jobs.plan import PlanError
     from ..jobs.stream import JobStreamer
+    from .jobfile import use_job_file
     check_backend_needs_sim(args)
+    use_job_file(args)
     profile = profile_from(args)
     try:
         counter, serials = part_serials(args, profile)
@@ -171,6 +179,10 @@ def _cmd_mark(args):
     parts = [planned_job(args, profile=profile, serial=serial, quiet=k > 0)
              for k, serial in enumerate(serials)]
     job, placement, drawing, profile, wobbles, say = parts[0]
+    if args.save:
+        from .jobfile import save_job_file
+        save_job_file(args, args.save)
+        say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
     if counter is not None:
         say(f"serials {serials[0]}" + (f" … {serials[-1]}" if len(serials) > 1 else "") +
             f" (kept in {counter.path}; advanced when a part has been marked"
@@ -268,11 +280,19 @@ def _run_layers(streamer, job, board, timeout):
     return total, starts
 
 
+def _job_file_path(text):
+    import argparse
+    if not text.lower().endswith(".toml"):
+        raise argparse.ArgumentTypeError(f"a job file ends in .toml, not {text!r}")
+    return text
+
+
 def add_drawing_options(parser):
     """The drawing, its placement, hatch, wobble and the job's laser and speed: what ``mark``
     and ``store`` plan a job from."""
     parser.add_argument("file", metavar="FILE", nargs="?",
-                        help="the drawing: .svg, .dxf or .job (or none, with --code)")
+                        help="the drawing (.svg, .dxf, or a .job in galvo units) or a job file "
+                             "(.toml, as --save writes); none, with --text, --code or --image")
     add_content_options(parser)
     add_job_options(parser)
     parser.add_argument("--passes", type=passes, default=None,
@@ -342,6 +362,9 @@ def add_parsers(commands):
     add_drawing_options(mark)
     out = mark.add_argument_group("output")
     add_plan_outputs(out)
+    out.add_argument("--save", type=_job_file_path, metavar="JOB.toml",
+                     help="write the job, with its settings, drawings, text, codes, photos and "
+                          "layers, to a job file that `mark JOB.toml` runs again")
     out.add_argument("--frame", type=int_in(1, 100, "frame"), nargs="?", const=1,
                      default=None, metavar="N",
                      help="trace the job's outline, its convex hull, N times (default 1) with "

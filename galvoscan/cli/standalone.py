@@ -29,6 +29,8 @@ def _player_map():
 def _cmd_store(args):
     from ..jobs.image import ImageError, job_image, read_image
     from ..jobs.stream import job_segments
+    from .jobfile import use_job_file
+    use_job_file(args)
     if not args.output and not args.estimate:
         fail("give -o FILE for the image (or --estimate to plan only)")
     if args.wobble:

@@ -1,0 +1,308 @@
+"""Job files: a job saved with its settings (``mark … --save job.toml``) and run again
+(``mark job.toml``): its drawings and their placement, its text, codes and photos, its layers
+and the job's own settings, in TOML.
+
+The file holds what the command line gives, under the same names: each key stands for one
+``mark`` option and is read by that option's own type (so its range, its words and its
+one-line refusal are the option's), a key that is not one named with the nearest that is.
+Paths are relative to the job file's folder. The board, the machine profile, serial numbers
+and ``--repeat`` are the command line's: they belong to a run, not to the job::
+
+    [job]
+    speed = 1000
+    power = 30
+    hatch = ["0.05,45", "0.05,135"]
+
+    [[drawing]]
+    file = "logo.svg"
+    offset = [0, 8]
+
+    [[text]]
+    text = "SN {serial:04d}"
+    font = "hershey"
+    height = 3
+    at = [-12, -10]
+    layer = "Text"
+
+    [[code]]
+    kind = "qr"
+    data = "https://example.com/{serial}"
+    size = 8
+    at = [14, -9]
+
+    [[layer]]
+    match = "Text"
+    speed = 2000
+"""
+
+import argparse
+import difflib
+import os
+from pathlib import Path
+
+from .args import fail
+
+
+__all__ = ["is_job_file", "use_job_file", "save_job_file", "content_entries", "SECTIONS"]
+
+
+#: Each table's keys → the ``mark`` option (its ``dest``) they stand for; ``not`` before a dest:
+#: the option is the key's opposite (``outline = false`` is ``--no-outline``).
+SECTIONS = {
+    "job": {"speed": "speed", "power": "power", "prr": "prr", "passes": "passes",
+            "hatch": "hatch", "hatch_lines": "hatch_lines", "contour": "contour",
+            "outline": "not no_outline", "tolerance": "tolerance", "wobble": "wobble",
+            "wobble_along": "wobble_along", "wobble_hz": "wobble_hz"},
+    "drawing": {"file": "file", "origin": "origin", "offset": "offset", "scale": "scale",
+                "rotate": "rotate"},
+    "text": {"text": "text", "font": "font", "height": "height", "at": "text_at",
+             "align": "align", "letter_spacing": "letter_spacing",
+             "line_height": "line_height", "layer": "layer"},
+    "code": {"kind": "code", "data": "data", "size": "size", "at": "code_at", "ec": "code_ec",
+             "fill": "code_fill", "quiet": "code_quiet", "height": "code_height",
+             "layer": "layer"},
+    "image": {"file": "image", "width": "width", "at": "image_at", "dither": "dither",
+              "line_spacing": "line_spacing", "one_way": "one_way", "layer": "layer"},
+}
+#: Tables that may come more than once (``[[text]]``); ``[job]`` once.
+_LISTS = ("drawing", "text", "code", "image", "layer")
+#: The options whose values are paths, relative to the job file.
+_PATHS = ("file", "image")
+#: Job files are small: more is not one.
+_MAX_BYTES = 1 << 20
+
+
+def is_job_file(path):
+    return path is not None and Path(path).suffix.lower() == ".toml"
+
+
+def _actions():
+    """``mark``'s options by dest, and their defaults (a parser of the drawing options)."""
+    from .mark import add_drawing_options
+    parser = argparse.ArgumentParser(prog="galvoscan mark")
+    add_drawing_options(parser)
+    return {a.dest: a for a in parser._actions}, parser.parse_args([])
+
+
+def _read(dest, value, action, where):
+    """A TOML value as the option ``dest`` reads it; ValueError naming ``where``."""
+    if action.nargs == 0:                           # a flag: true or false
+        if not isinstance(value, bool):
+            raise ValueError(f"{where} must be true or false, not {value!r}")
+        return value
+    if isinstance(value, bool) or isinstance(value, dict):
+        raise ValueError(f"{where} must be a {'list' if dest == 'hatch' else 'value'}, not "
+                         f"{value!r}")
+    if isinstance(value, list):
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+            raise ValueError(f"{where} must be numbers, as [x, y], not {value!r}")
+        value = ",".join(repr(float(v)) for v in value)
+    text = str(value)
+    try:
+        parsed = action.type(text) if action.type else text
+    except argparse.ArgumentTypeError as error:
+        raise ValueError(f"{where}: {error}") from None
+    if action.choices is not None and parsed not in action.choices:
+        raise ValueError(f"{where} must be one of {', '.join(map(str, action.choices))}, not "
+                         f"{value!r}")
+    return parsed
+
+
+def _entry(section, table, actions, folder, where, defaults):
+    """A table as ``{dest: value}``, the options it leaves out at their defaults."""
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be a table of settings")
+    keys = SECTIONS[section]
+    entry = {} if section == "job" else {
+        dest.removeprefix("not "): getattr(defaults, dest.removeprefix("not "), None)
+        for dest in keys.values() if dest != "layer"}
+    for key, value in table.items():
+        if key not in keys:
+            near = difflib.get_close_matches(key, keys, n=1)
+            raise ValueError(f"{where}: {key!r} is not a setting of [{section}]"
+                             f"{f' (did you mean {near[0]!r}?)' if near else ''}; its "
+                             f"settings: {', '.join(keys)}")
+        dest = keys[key]
+        if dest == "layer":
+            if not isinstance(value, str) or not value.strip():
+                raise ValueError(f"{where}.layer must be a layer's name")
+            entry["layer"] = value
+            continue
+        if dest == "hatch":
+            values = value if isinstance(value, list) and value and \
+                isinstance(value[0], str) else [value]
+            entry["hatch"] = [_read(dest, v, actions[dest], f"{where}.hatch") for v in values]
+            continue
+        inverted = dest.startswith("not ")
+        dest = dest.removeprefix("not ")
+        parsed = _read(dest, value, actions[dest], f"{where}.{key}")
+        if dest in _PATHS:
+            parsed = str(folder / parsed)
+        entry[dest] = (not parsed) if inverted else parsed
+    return entry
+
+
+def load_job_file(path):
+    """``(job, entries, layers)``: the ``[job]`` settings and every other table, by
+    section, as ``{dest: value}``; the layers as :class:`~galvoscan.jobs.layers.Layer` s
+    and their tables. One line (and exit) for anything wrong."""
+    import tomllib
+    from .layers import layer_from_table
+    path = Path(path)
+    try:
+        if path.stat().st_size > _MAX_BYTES:
+            fail(f"{path}: {path.stat().st_size:,} bytes: not a job file (1 MiB at most)")
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        fail(f"{path}: no such file")
+    except IsADirectoryError:
+        fail(f"{path}: a folder, not a job file")
+    except UnicodeDecodeError:
+        fail(f"{path}: not a text file (a job file is TOML, UTF-8)")
+    except OSError as error:
+        fail(f"{path}: cannot read ({error.strerror})")
+    except tomllib.TOMLDecodeError as error:
+        fail(f"{path}: not valid TOML ({error})")
+    actions, defaults = _actions()
+    folder = path.parent
+    entries, layers, tables = {section: [] for section in _LISTS}, [], []
+    job = {}
+    try:
+        for section, value in data.items():
+            if section not in SECTIONS and section != "layer":
+                near = difflib.get_close_matches(section, [*SECTIONS, "layer"], n=1)
+                shown = section if section.isidentifier() else repr(section)
+                raise ValueError(f"[{shown}] is not a section of a job file"
+                                 f"{f' (did you mean [{near[0]}]?)' if near else ''}; its "
+                                 f"sections: {', '.join([*SECTIONS, 'layer'])}")
+            if section == "job":
+                job = _entry("job", value, actions, folder, "[job]", defaults)
+                continue
+            tables_here = value if isinstance(value, list) else [value]
+            for k, table in enumerate(tables_here, 1):
+                where = f"[[{section}]] {k}"
+                if section == "layer":
+                    layers.append(layer_from_table(table, where))
+                    tables.append(table)
+                else:
+                    entries[section].append(_entry(section, table, actions, folder, where,
+                                                   defaults))
+    except ValueError as error:
+        fail(f"{path}: {error}")
+    if not any(entries[s] for s in ("drawing", "text", "code", "image")):
+        fail(f"{path}: nothing to mark: no [[drawing]], [[text]], [[code]] or [[image]]")
+    return job, entries, layers, tables
+
+
+#: What a job file holds: with one, these options are the file's, not the command line's.
+_FILE_ONLY = ("origin", "offset", "scale", "rotate", "text", "font", "height", "text_at",
+              "align", "letter_spacing", "line_height", "code", "data", "size", "code_at",
+              "code_ec", "code_fill", "code_quiet", "code_height", "image", "width",
+              "image_at", "dither", "line_spacing", "one_way", "layers")
+
+
+def use_job_file(args):
+    """When FILE is a job file: its settings into ``args`` (the command line's ``--speed``,
+    ``--power``, ``--prr`` and ``--passes`` still win: a run's own choice) and its objects as
+    ``args.entries``; else ``args.entries`` from the command line. One line for an option
+    that belongs to the file."""
+    if not is_job_file(getattr(args, "file", None)):
+        args.entries = content_entries(args)
+        return
+    actions, defaults = _actions()
+    given = [d for d in _FILE_ONLY if getattr(args, d, None) != getattr(defaults, d, None)]
+    if given:
+        fail(f"--{given[0].replace('_', '-')} is the job file's: put it in {args.file}")
+    job, entries, layers, tables = load_job_file(args.file)
+    for dest, value in job.items():
+        if dest in ("speed", "power", "prr", "passes") and getattr(args, dest) is not None:
+            continue
+        if getattr(args, dest, None) == getattr(defaults, dest, None):
+            setattr(args, dest, value)
+    args.job_file, args.file = args.file, None
+    args.layers, args.layer_tables = layers, tables
+    args.entries = entries
+
+
+def content_entries(args):
+    """The command line's drawing, text, code and photo as job-file entries."""
+    def pick(section, first):
+        if getattr(args, first, None) is None:
+            return []
+        dests = [d.removeprefix("not ") for d in SECTIONS[section].values() if d != "layer"]
+        return [{d: getattr(args, d) for d in dests if hasattr(args, d)}]
+    return {"drawing": pick("drawing", "file"), "text": pick("text", "text"),
+            "code": pick("code", "code"), "image": pick("image", "image")}
+
+
+def _toml(dest, value, folder):
+    """An option's value as the job file writes it."""
+    from enum import Enum
+    from ..jobs.fill import Contour, HatchSet
+    if isinstance(value, HatchSet):
+        parts = [value.spacing_mm, value.angle_deg, value.step_deg, value.offset_mm]
+        while len(parts) > 1 and parts[-1] == 0:
+            parts.pop()                     # the defaults left off, as a person writes it
+        return ",".join(f"{v:g}" for v in parts)
+    if isinstance(value, Contour):
+        return f"{value.spacing_mm:g}" + (f",{value.count}" if value.count else "")
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, tuple):
+        return [float(v) for v in value]
+    if dest in _PATHS:
+        path = Path(value).resolve()
+        try:
+            return os.path.relpath(path, folder.resolve())
+        except ValueError:                  # another drive (Windows)
+            return str(path)
+    return value
+
+
+def save_job_file(args, path):
+    """Write the job ``args`` plan (as ``use_job_file`` left it) to ``path``, a job file."""
+    import tomli_w
+    actions, defaults = _actions()
+    folder = Path(path).parent
+    document = {}
+
+    def table(section, entry):
+        out = {}
+        for key, dest in SECTIONS[section].items():
+            inverted = dest.startswith("not ")
+            dest = dest.removeprefix("not ")
+            if dest not in entry or entry[dest] is None:
+                continue
+            value = entry[dest]
+            if section != "drawing" and dest != "layer" and section != "job" and \
+                    value == getattr(defaults, dest, None) and dest not in ("text", "code"):
+                continue                    # the default: said by saying nothing
+            if dest == "hatch":
+                out[key] = [_toml(dest, h, folder) for h in value]
+            else:
+                out[key] = (not value) if inverted else _toml(dest, value, folder)
+        return out
+
+    job = {}
+    for key, dest in SECTIONS["job"].items():
+        inverted = dest.startswith("not ")
+        dest = dest.removeprefix("not ")
+        value = getattr(args, dest, None)
+        if value is None or value == getattr(defaults, dest, None) or value == []:
+            continue
+        job[key] = [_toml(dest, h, folder) for h in value] if dest == "hatch" else \
+            ((not value) if inverted else _toml(dest, value, folder))
+    if job:
+        document["job"] = job
+    for section in ("drawing", "text", "code", "image"):
+        found = [table(section, e) for e in args.entries.get(section, [])]
+        if found:
+            document[section] = found
+    layers = getattr(args, "layer_tables", None) or []
+    if layers:
+        document["layer"] = [dict(t) for t in layers]
+    try:
+        Path(path).write_text("# galvoscan job: `galvoscan mark " + Path(path).name +
+                              "` marks it\n" + tomli_w.dumps(document), encoding="utf-8")
+    except OSError as error:
+        fail(f"{path}: cannot write the job file ({error.strerror})")
