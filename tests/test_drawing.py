@@ -131,7 +131,8 @@ def test_svg_open_path_that_returns_to_its_start_is_closed(tmp_path):
 
 
 def test_svg_skipped_and_hidden(tmp_path):
-    d = load_svg(tmp_path, '<text x="1" y="1">a</text><text x="1" y="5">b</text>'
+    d = load_svg(tmp_path, '<text x="1" y="1" font-family="No Such Font">a</text>'
+                           '<text x="1" y="5" font-family="No Such Font">b</text>'
                            '<image href="x.png" width="5" height="5"/>'
                            '<line x1="0" y1="0" x2="5" y2="5"/>'
                            '<line x1="1" y1="1" x2="1" y2="1"/>'
@@ -139,7 +140,8 @@ def test_svg_skipped_and_hidden(tmp_path):
                            '<rect width="60" height="60" visibility="hidden"/>'
                            '<defs><rect id="r" width="70" height="70"/></defs>')
     assert len(d.paths) == 1
-    assert set(d.skipped) == {"2 text elements (convert text to paths)", "1 image element",
+    assert set(d.skipped) == {"2 text elements whose font No Such Font is not installed "
+                              "(convert text to paths)", "1 image element",
                               "1 hidden element", "1 zero-length path"}
 
 
@@ -189,14 +191,16 @@ def test_unreadable_file(tmp_path):
 
 
 def test_nothing_to_mark(tmp_path):
-    (tmp_path / "blank.svg").write_text(svg('<text x="0" y="0">only text</text>'))
+    (tmp_path / "blank.svg").write_text(svg('<text x="0" y="0" font-family="Nowhere">only '
+                                            'text</text>'))
     # What was left out is said: it may be why nothing is left.
     refused(tmp_path / "blank.svg",
-            "no lines or curves to mark (left out: 1 text element (convert text to paths))")
+            "no lines or curves to mark (left out: 1 text element whose font Nowhere is not "
+            "installed (convert text to paths))")
     doc, msp = new_dxf()
-    msp.add_text("only text")
+    msp.add_point((1, 1))
     doc.saveas(tmp_path / "blank.dxf")
-    refused(tmp_path / "blank.dxf", "no lines or curves to mark (left out: 1 text entity")
+    refused(tmp_path / "blank.dxf", "no lines or curves to mark (left out: 1 POINT entity")
     (tmp_path / "nothing.svg").write_text(svg(""))
     assert refused(tmp_path / "nothing.svg").endswith("no lines or curves to mark")
 
@@ -346,3 +350,47 @@ def test_binary_dxf_reads_as_its_text_twin(valid):
     cut = folder / "cut-binary.dxf"
     cut.write_bytes(files["-binary.dxf"][:300])
     refused(cut, "damaged binary DXF: it ends early or a group is corrupt")
+
+
+def test_svg_text_is_marked_in_its_font(tmp_path):
+    """A <text> in an installed font: its glyphs as closed outlines where matplotlib's own
+    TextPath puts them (em = font-size, baseline at y, anchored by text-anchor), through the
+    element's transform; each outline closed, for --hatch to fill."""
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextPath
+    d = load_svg(tmp_path, '<text x="10" y="20" font-family="DejaVu Sans" font-size="8" '
+                           'text-anchor="middle">Hg</text>')
+    assert d.closed and all(d.closed) and not d.skipped
+    font = FontProperties(fname=findfont(FontProperties(family="DejaVu Sans")), size=8)
+    ink = TextPath((0, 0), "Hg", prop=font).get_extents()
+    # The SVG's px are mm here (viewBox = mm); its Y runs down, the drawing's up.
+    xmin, ymin, xmax, ymax = d.bounds()
+    assert ymax == pytest.approx(-20 + ink.y1, abs=0.02)       # the H's top above the base
+    assert ymin == pytest.approx(-20 + ink.y0, abs=0.02)       # the g's tail below it
+    assert (xmax - xmin) == pytest.approx(ink.x1 - ink.x0, abs=0.02)
+    turned = load_svg(tmp_path, '<text x="0" y="0" font-size="8" '
+                                'transform="translate(30 30) rotate(90)">Hg</text>')
+    # Turned a quarter (clockwise on the page, Y down): the line runs down the page.
+    txmin, tymin, txmax, tymax = turned.bounds()
+    assert (tymax - tymin) == pytest.approx(xmax - xmin, abs=0.05)
+    # It starts at y = 30 on the page (-30 here), the H's left bearing further on.
+    assert tymax == pytest.approx(-30 - ink.x0, abs=0.02)
+    # rotate(90) takes the page's up (-y) to +x: the ink to the right of x = 30.
+    assert (txmax + txmin) / 2 == pytest.approx(30 + (ink.y0 + ink.y1) / 2, abs=0.02)
+
+
+def test_svg_tspans_and_font_lists(tmp_path):
+    """Each <tspan> at its own place; the first installed family of a CSS list wins; a
+    weight picks the bold face (wider strokes: more ink)."""
+    d = load_svg(tmp_path, '<text font-family="\'No Such\', DejaVu Sans" font-size="5">'
+                           '<tspan x="0" y="10">A</tspan><tspan x="20" y="10">A</tspan></text>')
+    xs = [p[:, 0].mean() for p in d.paths]
+    assert min(xs) < 5 and max(xs) > 20 and not d.skipped
+    import shapely
+    from shapely.geometry import Polygon
+
+    def ink(weight):
+        drawing = load_svg(tmp_path, f'<text x="0" y="10" font-size="10" '
+                                     f'font-weight="{weight}">I</text>')
+        return shapely.unary_union([Polygon(p) for p in drawing.paths]).area
+    assert ink("bold") > 1.2 * ink("normal")

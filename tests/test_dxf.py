@@ -186,9 +186,8 @@ def test_dxf_skipped_entities_and_hidden_layers(tmp_path):
     msp.add_line((0, 0), (0, 10), dxfattribs={"layer": "OFF"})
     msp.add_circle((0, 0), 3, dxfattribs={"layer": "FROZEN"})
     d = load_dxf(tmp_path, doc)
-    assert len(d.paths) == 1
-    assert set(d.skipped) == {"3 text entities (explode text to lines)",
-                              "1 POINT entity", "2 entities on a hidden layer"}
+    assert len(d.paths) > 3                 # the line, and the texts' glyphs
+    assert set(d.skipped) == {"1 POINT entity", "2 entities on a hidden layer"}
 
 
 def test_dxf_hatch_boundaries_are_closed_shapes(tmp_path):
@@ -235,3 +234,32 @@ def test_dxf_hatch_of_edges_either_way_is_one_closed_shape(tmp_path):
     steps = np.hypot(*np.diff(shape, axis=0).T)
     assert steps.max() <= 20 + 1e-9                     # no jump across the shape
 
+
+
+def test_dxf_text_is_marked_as_its_glyphs(tmp_path):
+    """TEXT, MTEXT (its lines) and a block reference's ATTRIB as closed glyph outlines: a
+    TEXT's height is its capitals' (DXF's rule), where it is put; an MTEXT's second line
+    below its first."""
+    doc, msp = new_dxf()
+    msp.add_text("HELL", height=5, dxfattribs={"insert": (10, 20)})     # flat letters
+    d = load_dxf(tmp_path, doc)
+    xmin, ymin, xmax, ymax = d.bounds()
+    assert ymax - ymin == pytest.approx(5, rel=0.01) and ymin == pytest.approx(20, abs=0.05)
+    assert xmin == pytest.approx(10, abs=0.8) and xmax - xmin > 12
+    assert all(d.closed) and not d.skipped
+    doc, msp = new_dxf()
+    mtext = msp.add_mtext("TOP\\PLOW", dxfattribs={"char_height": 3})
+    mtext.set_location((0, 0))
+    d = load_dxf(tmp_path, doc)
+    tops = sorted(p[:, 1].max() for p in d.paths)
+    assert tops[-1] - tops[0] > 3           # two lines, one under the other
+    doc, msp = new_dxf()
+    block = doc.blocks.new("PLATE")
+    block.add_line((0, 0), (30, 0))
+    block.add_attdef("SN", (0, 2), dxfattribs={"height": 2})
+    ref = msp.add_blockref("PLATE", (100, 100))
+    ref.add_auto_attribs({"SN": "0042"})
+    d = load_dxf(tmp_path, doc)
+    glyphs = [p for p in d.paths if len(p) > 2]
+    assert glyphs and min(p[:, 1].min() for p in glyphs) == pytest.approx(102, abs=0.2)
+    assert d.skipped == ("1 attribute definition",)

@@ -284,7 +284,16 @@ def _read_svg(data, tolerance_mm):
         if str(element.values.get("visibility", "")).lower() in ("hidden", "collapse"):
             skipped["hidden element"] += 1
         elif isinstance(element, svg.Text):
-            skipped["text element"] += 1
+            if element.text and element.text.strip():
+                found = _svg_text(element, tolerance_mm / MM_PER_PX)
+                if isinstance(found, str):
+                    skipped[found] += 1
+                    continue
+                style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
+                for points_px in found:
+                    paths.append(points_px * [MM_PER_PX, -MM_PER_PX])  # Y down → Y up
+                    closed.append(True)
+                    styles.append(style)
         elif isinstance(element, svg.Image):
             skipped["image element"] += 1
         else:
@@ -295,8 +304,30 @@ def _read_svg(data, tolerance_mm):
                 paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
                 closed.append(is_closed)
                 styles.append(style)
-    return (paths, closed, _counted(skipped, {"text element": " (convert text to paths)"}),
-            notes, styles)
+    return paths, closed, _counted(skipped), notes, styles
+
+
+def _svg_text(element, tolerance_px):
+    """A ``<text>`` (or ``<tspan>``: svgelements gives each its own) as glyph outlines in px,
+    placed by its x, y, anchor and transform; or, for a font that is not installed, what is
+    said of it instead."""
+    from .plan import PlanError
+    from .text import svg_text_outlines
+    weight = element.font_weight if element.font_weight not in (None, "") else "normal"
+    try:
+        outlines, _ = svg_text_outlines(
+            element.text, element.font_family, float(element.font_size or 16),
+            weight=weight, style=element.values.get("font-style") or "normal",
+            anchor=element.anchor or "start", tolerance=tolerance_px)
+    except PlanError as error:
+        return f"text element whose {error} (convert text to paths)"
+    m = element.transform
+    placed = []
+    for glyph in outlines:
+        x = element.x + glyph[:, 0]
+        y = element.y - glyph[:, 1]                 # the glyphs' Y up, the SVG's down
+        placed.append(np.column_stack([m.a * x + m.c * y + m.e, m.b * x + m.d * y + m.f]))
+    return placed
 
 
 def _svg_colour(element):

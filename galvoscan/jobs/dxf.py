@@ -21,7 +21,8 @@ from .drawing import DrawingError, _chords, _counted, _one_line, _round_chords
 __all__ = []                                # nothing public: load_drawing reads DXF files
 
 
-_TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB", "ATTDEF"}
+#: Text marked as its glyphs' outlines (ezdxf's text2path, in the text style's font).
+_TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB"}
 #: How a binary DXF file starts (AutoCAD's DXF reference, "Binary DXF Files").
 _BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
 #: mm per $INSUNITS unit where the definition is exact (ezdxf's table has 1 in = 25.4000000001).
@@ -192,8 +193,36 @@ def _entity_points(entity, tolerance, skipped):
     if kind == "LWPOLYLINE" or (kind == "POLYLINE" and
                                 (entity.is_2d_polyline or entity.is_3d_polyline)):
         return _polyline_points(entity, tolerance), bool(entity.is_closed)
-    skipped["text entity" if kind in _TEXT_TYPES else f"{kind} entity"] += 1
+    if kind in _TEXT_TYPES:
+        return _text_outlines(entity, tolerance)
+    skipped["attribute definition" if kind == "ATTDEF" else f"{kind} entity"] += 1
     return None
+
+
+def _text_outlines(entity, tolerance):
+    """A TEXT's, ATTRIB's or MTEXT's glyphs as closed outlines, in the text style's font (as
+    ezdxf's text2path finds it; an MTEXT first exploded into TEXT entities by ezdxf's
+    MTextExplode, in a scratch block of the document's own)."""
+    from ezdxf.addons import MTextExplode, text2path
+    if entity.dxftype() == "MTEXT":
+        scratch = entity.doc.blocks.new_anonymous_block()
+        with MTextExplode(scratch) as explode:
+            explode.explode(entity, destroy=False)
+        texts = [e for e in scratch if e.dxftype() == "TEXT"]
+    else:
+        texts = [entity]
+    out = []
+    for text in texts:
+        if not str(text.dxf.get("text", "")).strip():
+            continue
+        height = float(text.dxf.get("height", 1.0))
+        # (The chords counted before they are made, as every curve's: see MAX_CHORDS.)
+        _chords(len(text.dxf.text) * 40 * math.ceil(math.sqrt(max(height, 0) / tolerance)))
+        for path in text2path.make_paths_from_entity(text):
+            points = _xy(path.flattening(tolerance))
+            if len(points) >= 2:
+                out.append((points, bool(np.allclose(points[0], points[-1]))))
+    return out
 
 
 def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
@@ -209,7 +238,8 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
         if kind == "INSERT":
             if depth > 50:
                 raise DrawingError("block references nested more than 50 deep")
-            skipped["text entity"] += len(entity.attribs)
+            for attrib in entity.attribs:     # placed already: the outer matrix only
+                _dxf_entity(attrib, tolerance, out, skipped, matrix, depth + 1)
             block = entity.block()
             if block is None:
                 skipped["reference to a missing block"] += 1
@@ -287,5 +317,5 @@ def _read_dxf(data, tolerance_mm):
             _dxf_entity(entity, tolerance_mm / factor, out, skipped)
             # A block's entities go with the reference's layer (as CAD's layer 0 does).
             styles += [PathStyle(layer=str(entity.dxf.get("layer", "0")))] * (len(out) - before)
-    skipped = _counted(skipped, {"text entity": " (explode text to lines)"})
+    skipped = _counted(skipped)
     return [p * factor for p, _ in out], [c for _, c in out], skipped, notes, styles

@@ -243,3 +243,43 @@ def _hershey_width(font, text):
     units."""
     return sum(glyph.char_width for glyph in font.glyphs_for_text(text)) * \
         abs(font.render_options["scalex"])
+
+
+# --- SVG text --------------------------------------------------------------------------------
+
+def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
+                      anchor="start", tolerance):
+    """One line of an SVG ``<text>`` as glyph outlines (matplotlib's), in the drawing's own
+    units: the baseline at y = 0, the anchor (start, middle, end) at x = 0, Y up, ``size``
+    the em. ``families`` is the CSS list (``"'Arial', sans-serif"``): the first installed
+    wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
+    is installed."""
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextPath, TextToPath
+    import logging
+    names = [name.strip().strip("'\"") for name in str(families or "sans-serif").split(",")]
+    names = [name for name in names if name]
+    logger = logging.getLogger("matplotlib.font_manager")
+    level, logger.level = logger.level, logging.ERROR       # (its "not found" warning)
+    try:
+        found = None
+        for name in names:
+            try:
+                found = findfont(FontProperties(family=name, weight=weight, style=style),
+                                 fallback_to_default=False)
+                break
+            except ValueError:
+                continue
+    finally:
+        logger.level = level
+    if found is None:
+        raise PlanError(f"font {', '.join(names)} is not installed")
+    prop = FontProperties(fname=found, size=size)
+    try:
+        width = TextToPath().get_text_width_height_descent(text, prop, ismath=False)[0]
+        shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
+        path = TextPath((shift, 0), text, prop=prop)
+        return _flattened(path, 1.0, tolerance), found
+    except (RuntimeError, ValueError, OSError) as error:
+        raise PlanError(f"font {found}: cannot be read ({' '.join(str(error).split())})") \
+            from None
