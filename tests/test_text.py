@@ -126,3 +126,11 @@ def test_marked_text_covers_the_glyphs_off_the_wires(tmp_path, capsys):
     reach = dilation(glyphs, disk(3))                        # 0.06 mm
     assert (marked & reach).sum() / marked.sum() > 0.99      # nothing marked off the glyphs
     assert (marked & glyphs).sum() / glyphs.sum() > 0.98     # the glyphs filled
+
+
+@pytest.mark.parametrize("font, words", [(None, "'日本' are not in DejaVuSans.ttf"),
+                                         ("hershey", "'日' is not in the Hershey font futural")])
+def test_a_character_not_in_the_font_is_one_line(font, words):
+    """Not a box for a glyph the font lacks, nor a letter dropped: refused, naming it."""
+    with pytest.raises(PlanError, match=words):
+        text_drawing(TextSpec("A日本" if font is None else "A日", 5, font=font))

@@ -131,9 +131,22 @@ def _font(font):
     return FontProperties(fname=found)
 
 
+def missing_characters(text, font_file):
+    """The characters of ``text`` (spaces aside) that the font file has no glyph for."""
+    from matplotlib.font_manager import get_font
+    face = get_font(font_file)
+    return "".join(dict.fromkeys(ch for ch in text if not ch.isspace() and
+                                 face.get_char_index(ord(ch)) == 0))
+
+
 def _outline_line(line, spec, font, tolerance_mm):
     """One line's glyph outlines, baseline at y = 0, from x = 0."""
     from matplotlib.textpath import TextPath
+    missing = missing_characters(line, font.get_file())
+    if missing:
+        raise PlanError(f"{missing!r} {'is' if len(missing) == 1 else 'are'} not in "
+                        f"{Path(font.get_file()).name}: give a font that has "
+                        f"{'it' if len(missing) == 1 else 'them'} (--font)")
     prop = font.copy()
     prop.set_size(100)              # laid out at 100 units an em, scaled to the cap height
     try:
@@ -220,6 +233,11 @@ def _hershey_line(line, spec):
         raise PlanError(f"Hershey font {spec.hershey!r}: one of "
                         f"{', '.join(font.default_font_names[:12])}, …")
     font.load_default_font(spec.hershey)
+    missing = "".join(dict.fromkeys(ch for ch in line if ch not in font.all_glyphs))
+    if missing:
+        raise PlanError(f"{missing!r} {'is' if len(missing) == 1 else 'are'} not in the "
+                        f"Hershey font {spec.hershey} (it has the printable ASCII "
+                        f"characters): give an outline font (--font)")
     font.normalize_rendering(100)
     cap = [np.array(s, dtype=float) for s in font.strokes_for_text("H")]
     cap_points = np.concatenate(cap)
@@ -275,6 +293,9 @@ def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
     if found is None:
         raise PlanError(f"font {', '.join(names)} is not installed")
     prop = FontProperties(fname=found, size=size)
+    missing = missing_characters(text, found)
+    if missing:
+        raise PlanError(f"characters {missing!r} are not in font {Path(found).name}")
     try:
         width = TextToPath().get_text_width_height_descent(text, prop, ismath=False)[0]
         shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
