@@ -156,3 +156,16 @@ def test_an_image_of_layers_is_refused(tmp_path):
         main(["store", str(svg), "--layer", "Inner", "power=40", "-o",
               str(tmp_path / "job.img")])
     assert not (tmp_path / "job.img").exists()
+
+
+def test_a_layers_wobble_is_its_own(tmp_path, capsys):
+    """A layer that wobbles has its figure; the others have the wobble turned off (the board
+    keeps a register until it is written), and the plan says which."""
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    assert main(["mark", str(svg), "--layer", "Inner", "wobble=60", "wobble_hz=2000",
+                 "--estimate", "--json"]) == 0
+    inner, rest = json.loads(capsys.readouterr().out)["layers"]
+    assert inner["wobble_um"]["across"] == pytest.approx(60, abs=1)
+    assert inner["wobble_um"]["hz"] == 2000
+    assert "wobble_um" not in rest

@@ -62,3 +62,30 @@ def test_no_pyplot_figures_left(tmp_path):
     after = sys.modules.get("matplotlib.pyplot")
     if after is not None:
         assert after.get_fignums() == open_before
+
+
+def _hatch(side, spacing):
+    return [np.array([[0.0, y], [side, y]]) for y in np.arange(0, side, spacing)]
+
+
+def test_a_fine_hatch_gets_a_detail_panel(tmp_path):
+    """Lines 0.1 mm apart over 34 mm run together even zoomed in: a third panel shows a
+    detail some 30 lines wide; lines 2 mm apart need none."""
+    for spacing, panels in [(0.1, 3), (2.0, 2)]:
+        out = tmp_path / f"hatch{spacing}.svg"
+        with matplotlib.rc_context({"svg.fonttype": "none"}):
+            preview(out, _hatch(34, spacing), field_mm=110)
+        text = out.read_text()
+        assert ("a detail, 3 mm wide" in text) == (panels == 3), spacing
+        assert "the drawing, zoomed in" in text
+
+
+def test_groups_are_named_in_their_colours(tmp_path):
+    out = tmp_path / "layers.svg"
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        preview(out, [SQUARE, LINE], field_mm=110,
+                groups=[("Cut: 40.0 mm", "#ff0000", [SQUARE]), ("the rest: 40.0 mm", "black",
+                                                               [LINE])])
+    text = out.read_text()
+    assert "Cut: 40.0 mm" in text and "the rest: 40.0 mm" in text
+    assert "#ff0000" in text

@@ -1,7 +1,8 @@
 """Layers on the command line (``--layer MATCH KEY=VALUE …``) and in job files (``[[layer]]``
 tables): one key table for both, each value read by the same type as the ``mark`` option it
-stands for (so its range and its words are the option's), and the layered job's plan said a
-layer a line."""
+stands for (so its range and its words are the option's); each layer's wobble (the command
+line's, or the layer's own) into its registers; and the layered job's plan said a layer a
+line."""
 
 import argparse
 
@@ -9,12 +10,12 @@ from ..gateware.host.regmap import BY_NAME
 from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
 from ..jobs.profile_keys import DELAY_KEYS
-from .args import (contour_fill, hatch_set, number_in, passes, power_percent, prr_khz,
+from .args import (contour_fill, fail, hatch_set, number_in, passes, power_percent, prr_khz,
                    register_int, speed_mm_s)
 
 
 __all__ = ["add_layer_option", "layer_from_words", "layer_from_table", "LAYER_KEYS",
-           "layer_wobble", "describe_layers"]
+           "layer_wobble", "add_wobble", "describe_layers"]
 
 
 def _yes_no(text):
@@ -184,6 +185,51 @@ def _wobble_words(registers, profile):
     um = profile.mm_per_unit * 1000
     return (f", wobble ±{registers['wob_across'] * um:.0f} × ±{registers['wob_along'] * um:.0f} "
             f"µm at {registers['wob_freq']} Hz")
+
+
+def _wobble(args, profile):
+    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
+    profile's [wobble]."""
+    from ..jobs.wobble import WobbleSettings
+    section = profile.wobble
+    across = args.wobble if args.wobble is not None else section.across_um
+    along = args.wobble_along if args.wobble_along is not None else \
+        (args.wobble if args.wobble is not None else section.along_um)
+    hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
+    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
+
+
+def add_wobble(job, args, profile):
+    """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
+    place) into its registers, its reach checked against the field; a layer that does not
+    wobble among ones that do turns it off. Returns whether anything wobbles."""
+    from ..gateware.host.fields import WobbleShape
+    from ..jobs.plan import PlanError
+    from ..jobs.wobble import wobble_registers
+    base = _wobble(args, profile)
+    parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
+    try:
+        found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+    except PlanError as error:
+        fail(error)
+    if not any(found):
+        return False
+    for (layer, part), regs in zip(parts, found):
+        if not regs:
+            part.registers["wob_shape"] = WobbleShape.OFF.value
+            continue
+        # The figure reaches past the lines by its larger amplitude: that too must be in the
+        # field (the board would clamp it at the edge).
+        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
+        half = profile.field.size_mm / 2
+        xmin, ymin, xmax, ymax = part.bounds_mm
+        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
+            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
+                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
+        part.registers.update(regs)
+    if job.layers:
+        job.registers.update(job.layers[0].job.registers)
+    return True
 
 
 def describe_layers(job, profile):

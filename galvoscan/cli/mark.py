@@ -20,23 +20,11 @@ from .jobargs import (add_job_link_options, add_job_options, board_link, frame_j
 from .content import (add_content_options, check_content_options, content_objects,
                       part_serials)
 from .job_reports import estimate_record, sim_report
-from .layers import add_layer_option
+from .layers import add_layer_option, add_wobble
 from .machine import add_machine_option, profile_from
 
 
 __all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
-
-
-def _wobble(args, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
-    profile's [wobble]."""
-    from ..jobs.wobble import WobbleSettings
-    section = profile.wobble
-    across = args.wobble if args.wobble is not None else section.across_um
-    along = args.wobble_along if args.wobble_along is not None else \
-        (args.wobble if args.wobble is not None else section.along_um)
-    hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
-    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
 
 
 def _plan(args, profile, serial=None):
@@ -79,40 +67,6 @@ def _plan(args, profile, serial=None):
         fail(error)
 
 
-def _add_wobble(job, args, profile):
-    """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
-    place) into its registers, its reach checked against the field; a layer that does not
-    wobble among ones that do turns it off. Returns whether anything wobbles."""
-    from ..gateware.host.fields import WobbleShape
-    from ..jobs.plan import PlanError
-    from ..jobs.wobble import wobble_registers
-    from .layers import layer_wobble
-    base = _wobble(args, profile)
-    parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
-    try:
-        found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
-    except PlanError as error:
-        fail(error)
-    if not any(found):
-        return False
-    for (layer, part), regs in zip(parts, found):
-        if not regs:
-            part.registers["wob_shape"] = WobbleShape.OFF.value
-            continue
-        # The figure reaches past the lines by its larger amplitude: that too must be in the
-        # field (the board would clamp it at the edge).
-        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
-        half = profile.field.size_mm / 2
-        xmin, ymin, xmax, ymax = part.bounds_mm
-        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
-            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
-                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
-        part.registers.update(regs)
-    if job.layers:
-        job.registers.update(job.layers[0].job.registers)
-    return True
-
-
 def _link_warning(job, baud):
     from ..jobs.stream import QUEUE_DEPTH
     from ..jobs.vector_job import link_segments_per_s
@@ -136,7 +90,7 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     from .layers import describe_layers
     profile = profile or profile_from(args)
     job, placement, drawing = _plan(args, profile, serial)
-    wobbles = _add_wobble(job, args, profile)
+    wobbles = add_wobble(job, args, profile)
     speed, power, prr = job_settings_values(args, profile)
     say = (lambda line: print(line, file=sys.stderr)) if getattr(args, "json", False) \
         else print
