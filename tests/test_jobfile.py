@@ -144,3 +144,15 @@ def test_a_job_file_marks_the_wires_its_command_line_does(job_folder, capsys):
             runs.append(json.loads(capsys.readouterr().out.strip().splitlines()[-1]))
     assert runs[0]["marks"] == runs[1]["marks"] and len(runs[0]["marks"]) > 100
     assert runs[1]["errors"] == runs[1]["underruns"] == 0
+
+
+def test_the_readmes_plate_plans(tmp_path, monkeypatch, capsys):
+    """docs/marking/plate.toml, the README's picture: it plans, in its three layers, the
+    serial counter left alone by a plan."""
+    from pathlib import Path
+    plate = Path(__file__).resolve().parents[1] / "docs" / "marking" / "plate.toml"
+    monkeypatch.chdir(tmp_path)
+    assert main(["mark", str(plate), "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert [layer["match"] for layer in record["layers"]] == ["#d62728", "Text", "the rest"]
+    assert list(tmp_path.iterdir()) == []

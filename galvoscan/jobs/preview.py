@@ -95,7 +95,7 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
     # A drawing much smaller than the field gets a second panel, zoomed in on it; marks too
     # close together to tell apart there (a fine hatch) a third, on a detail of them.
     size = max(bounds[2] - bounds[0], bounds[3] - bounds[1]) if bounds else field_mm
-    zoom = bounds is not None and size < field_mm / 2
+    zoom = bounds is not None and size < field_mm * 0.8
     panel_px = 5.3 * 110                            # a panel's width, about, in pixels
     detail = _detail_window(paths, bounds, panel_px / (size * 1.15 if zoom else field_mm)) \
         if bounds is not None else None
