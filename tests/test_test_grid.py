@@ -2,11 +2,15 @@
 speed and power, each at its own settings, labelled; planned, refused, and marked on the
 simulated board square by square."""
 
+import argparse
 import json
+import math
 
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from galvoscan.cli import main
+from galvoscan.cli.testgrid import _axis
 from galvoscan.jobs.profile import default_profile
 from galvoscan.jobs.test_grid import plan_test_grid
 
@@ -55,6 +59,45 @@ def test_estimate_json(capsys):
                  "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert len(record["cells"]) == 2 and record["estimate_s"] > 0
+
+
+_numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True).map(repr),
+                     st.integers(-10 ** 6, 10 ** 6).map(str), st.text(max_size=6))
+
+
+@settings(max_examples=300, deadline=None)
+@given(parts=st.lists(_numbers, min_size=1, max_size=4), separator=st.sampled_from(":,; "))
+def test_random_axes_parse_or_are_one_line(parts, separator):
+    """Any --speeds text: N values from A to B inside the limits, or one line (argparse's
+    ArgumentTypeError) saying what is wrong; nothing else escapes."""
+    text = separator.join(parts)
+    try:
+        values = _axis("--speeds", 0.1, 100_000, "mm/s")(text)
+    except argparse.ArgumentTypeError as error:
+        assert "\n" not in str(error) and str(error)
+        return
+    assert 1 <= len(values) <= 100
+    assert all(math.isfinite(v) and 0.1 <= v <= 100_000 for v in values)
+    assert values == sorted(values) or values == sorted(values, reverse=True)
+
+
+@settings(max_examples=25, deadline=None)
+@given(cell=st.sampled_from(["0.4", "0.5", "3", "100", "101", "x", "-1", "nan"]),
+       gap=st.sampled_from(["0", "2", "100", "-1", "inf"]),
+       hatch=st.sampled_from([None, "0.001", "0.05", "10", "11", "0"]),
+       label=st.sampled_from(["0.3", "1.5", "20", "21"]))
+def test_random_grid_options_plan_or_are_one_line(cell, gap, hatch, label):
+    """Sizes in and out of range, together (a grid past the field too): it plans, or one
+    line and exit status 1 or 2; never a traceback."""
+    argv = ["test-grid", "--speeds", "300:900:2", "--powers", "20:60:2", "--cell", cell,
+            "--gap", gap, "--label-height", label, "--estimate"]
+    if hatch is not None:
+        argv += ["--hatch", hatch]
+    try:
+        assert main(argv) == 0
+    except SystemExit as stop:
+        assert stop.code not in (0, None)
+        assert "\n" not in str(stop)
 
 
 @pytest.mark.slow
