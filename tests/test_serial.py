@@ -84,3 +84,19 @@ def test_each_part_marked_on_a_board_takes_its_number(tmp_path):
             mark.communicate()
         board.send_signal(signal.SIGINT)
         board.communicate(timeout=600)
+
+
+def test_a_counter_that_cannot_be_kept_is_one_line(tmp_path):
+    """A counter whose folder is gone (or cannot be written) is refused before a part is
+    marked; one that fails after a part is marked says the number to go on from."""
+    from galvoscan.jobs.serial import SerialCounter
+    lost = SerialCounter(path=tmp_path / "gone" / "station.serial.toml", next=41)
+    with pytest.raises(PlanError, match="the serial counter cannot be written .*nothing was "
+                                        "sent"):
+        lost.check_writable()
+    with pytest.raises(PlanError, match="the part was marked, but the counter could not be "
+                                        "written .*--serial-start 42"):
+        lost.advance()
+    kept = SerialCounter(path=tmp_path / "station.serial.toml", next=41)
+    kept.check_writable()
+    assert not list(tmp_path.iterdir())     # the check leaves nothing behind

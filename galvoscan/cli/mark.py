@@ -166,6 +166,11 @@ def _cmd_mark(args):
                 else None}
             print(json.dumps(record))
         return 0
+    if counter is not None and not args.sim:
+        try:
+            counter.check_writable()
+        except PlanError as error:
+            fail(error)
     baud = args.baud or profile.link.baud
     warning = _link_warning(job, baud)
     if warning:
@@ -201,7 +206,10 @@ def _cmd_mark(args):
                      "as planned (see the counts above)" +
                      ("; the serial was not advanced" if serial is not None else ""))
             if counter is not None and not args.sim:
-                counter.advance()           # this part is marked: its number is taken
+                try:
+                    counter.advance()       # this part is marked: its number is taken
+                except PlanError as error:
+                    fail(error)
         if args.json and board is not None:
             record = sim_report(board, part, placement, drawing, profile, report,
                                 layer_starts=layer_starts)

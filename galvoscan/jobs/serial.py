@@ -55,14 +55,34 @@ class SerialCounter:
             raise PlanError(f"serials {numbers[0]} … {numbers[-1]} leave 0 … {MAX_SERIAL}")
         return numbers
 
+    def check_writable(self):
+        """Refuse (one line) a counter that could not be kept, before any part is marked: a
+        number taken and not kept would be marked again on the next part."""
+        try:
+            if self.path.exists():
+                with open(self.path, "a", encoding="utf-8"):
+                    pass
+            else:
+                scratch = self.path.with_name(self.path.name + ".new")
+                scratch.write_text("", encoding="utf-8")
+                scratch.unlink()
+        except OSError as error:
+            raise PlanError(f"{self.path}: the serial counter cannot be written "
+                            f"({error.strerror or error}): nothing was sent") from None
+
     def advance(self):
         """One part marked to its end: the next number is taken, and kept."""
         self.next += self.step
         text = f"# galvoscan's serial counter: the next part's number\nnext = {self.next}\n" \
                f"step = {self.step}\n"
         scratch = self.path.with_name(self.path.name + ".new")
-        scratch.write_text(text, encoding="utf-8")
-        os.replace(scratch, self.path)
+        try:
+            scratch.write_text(text, encoding="utf-8")
+            os.replace(scratch, self.path)
+        except OSError as error:
+            raise PlanError(f"{self.path}: the part was marked, but the counter could not be "
+                            f"written ({error.strerror or error}): the next is {self.next}; "
+                            f"give --serial-start {self.next}") from None
 
 
 def load_counter(profile_source, *, start=None, step=None):
