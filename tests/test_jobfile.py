@@ -97,6 +97,9 @@ def test_the_files_options_stay_in_the_file(job_folder, capsys):
     (job_folder / "j.toml").write_text("[[text]]\ntext = 'A'\n")
     with pytest.raises(SystemExit, match="--height is the job file's: put it in j.toml"):
         main(["mark", "j.toml", "--height", "3", "--estimate"])
+    (job_folder / "x.job").write_text("J 0 0\n")
+    with pytest.raises(SystemExit, match="a .job is in galvo units .* no job to --save"):
+        main(["mark", "x.job", "--save", "x.toml", "--estimate"])
     with pytest.raises(SystemExit):
         main(["mark", "j.toml", "--save", "j.json", "--estimate"])
     assert "a job file ends in .toml, not 'j.json'" in capsys.readouterr().err

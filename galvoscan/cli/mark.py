@@ -123,6 +123,8 @@ def _cmd_mark(args):
     from ..jobs.stream import JobStreamer
     from .jobfile import use_job_file
     check_backend_needs_sim(args)
+    if args.save and args.file and Path(args.file).suffix.lower() == ".job":
+        fail("a .job is in galvo units and marked as it is: there is no job to --save")
     use_job_file(args)
     profile = profile_from(args)
     try:
