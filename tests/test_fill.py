@@ -137,3 +137,19 @@ def test_a_job_turns_its_hatch_each_pass(tmp_path):
     same = plan(HatchSet(2.0, 0), 3)
     third = len(same.segments) // 3
     assert same.segments[:third] * 3 == same.segments
+
+
+@pytest.mark.parametrize("order", [LineOrder.SERPENTINE, LineOrder.ONEWAY])
+def test_a_hole_is_hatched_around_a_side_at_a_time(order):
+    """The lines split by the annulus's hole are marked a side at a time (a strip above, one
+    each side, one below), not across the hole on every line: a few jumps cross it, not one
+    a line, and every line's runs are still marked once."""
+    strokes = hatch_strokes(ANNULUS, [True, True], HatchSet(0.1), order=order)
+    crossing = [(a[-1], b[0]) for a, b in zip(strokes, strokes[1:])
+                if abs((a[-1] + b[0])[0] / 2) < 2 and abs((a[-1] + b[0])[1] / 2) < 2]
+    assert len(crossing) <= 3
+    lines_through_hole = round(4 / 0.1)
+    assert len(strokes) == round(10 / 0.1) + lines_through_hole
+    if order is LineOrder.SERPENTINE:   # (one way, each line starts back at its side)
+        steps = [np.hypot(*(b[0] - a[-1])) for a, b in zip(strokes, strokes[1:])]
+        assert sum(steps) < 60      # (across the hole on each of 40 lines: over 160 mm)

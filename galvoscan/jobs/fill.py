@@ -133,18 +133,57 @@ def hatch_strokes(paths, closed, hatch_set, *, pass_index=0, order=LineOrder.SER
                         with_lines=True, across=across)
     if not runs:
         return []
-    # Line by line (the runs of a line left to right along it); every other line reversed.
-    by_line, strokes = {}, []
+    by_line = {}
     for run, line in zip(runs, lines):
         by_line.setdefault(line, []).append(run)
-    for rank, line in enumerate(sorted(by_line)):
-        line_runs = by_line[line]
-        if order is not LineOrder.ONEWAY and rank % 2:
-            line_runs = [run[::-1] for run in reversed(line_runs)]
-        strokes += line_runs
+    # Strip by strip, each line by line, every other line reversed; the strips one after the
+    # other, the nearest next.
+    strips = [_serpentine(strip, order) for strip in _strips(by_line)]
+    strokes = strips[0] if len(strips) == 1 else \
+        _nearest_blocks(strips, order, start=strips[0][0][0])
     if order is LineOrder.JOINED:
         strokes = _joined(strokes, paths, closed, hatch_set.spacing_mm)
     return strokes
+
+
+def _strips(by_line):
+    """The runs (``{line: runs along it, in order}``) as strips: runs on consecutive lines,
+    each overlapping the last along the lines and no other run of either line. Where a hole
+    splits the lines (or two branches meet), a strip ends and others start; so a shape with
+    a hole is hatched around it a side at a time, not across it on every line (a boustrophedon
+    decomposition)."""
+    strips, open_runs, last_line = [], [], None
+    for line in sorted(by_line):
+        runs = by_line[line]
+        direction = runs[0][-1] - runs[0][0]
+        direction = direction / (np.hypot(*direction) or 1.0)
+        spans = [tuple(sorted((float(run[0] @ direction), float(run[-1] @ direction))))
+                 for run in runs]
+        if last_line is None or line != last_line + 1:
+            open_runs = []                      # a gap between lines: every strip ends
+        here = []
+        for k, (low, high) in enumerate(spans):
+            above = [o for o in open_runs if o[0] < high and low < o[1]]
+            strip = None
+            if len(above) == 1:
+                a_low, a_high, index = above[0]
+                below = [q for q in spans if q[0] < a_high and a_low < q[1]]
+                if len(below) == 1:
+                    strip = index
+            if strip is None:
+                strips.append([])
+                strip = len(strips) - 1
+            strips[strip].append(runs[k])
+            here.append((low, high, strip))
+        open_runs, last_line = here, line
+    return strips
+
+
+def _serpentine(strip, order):
+    """A strip's runs, every other one reversed (not oneway)."""
+    if order is LineOrder.ONEWAY:
+        return list(strip)
+    return [run[::-1] if rank % 2 else run for rank, run in enumerate(strip)]
 
 
 def _nearest_blocks(blocks, order, start=(0.0, 0.0)):
