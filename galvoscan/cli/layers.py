@@ -159,7 +159,7 @@ class _LayerAction(argparse.Action):
 def add_layer_option(group):
     group.add_argument(
         "--layer", nargs="+", action=_LayerAction, default=[], dest="layers",
-        metavar="MATCH [KEY=VALUE", help="settings of their own for the paths of one colour "
+        metavar=("MATCH", "KEY=VALUE"), help="settings of their own for the paths of one colour "
         "(an SVG stroke, else fill: \"#ff0000\"; quote it) or one layer (an Inkscape layer's "
         "label, a DXF layer's name); repeat it for more layers, run in that order, what none "
         "matches last; keys: " + ", ".join(f"{key} ({unit})" for key, (_, _, unit) in
