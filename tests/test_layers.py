@@ -169,3 +169,18 @@ def test_a_layers_wobble_is_its_own(tmp_path, capsys):
     assert inner["wobble_um"]["across"] == pytest.approx(60, abs=1)
     assert inner["wobble_um"]["hz"] == 2000
     assert "wobble_um" not in rest
+
+
+def test_a_layers_delays_are_its_own(tmp_path, capsys):
+    """Delays given to a layer are its registers (the jump delay timing its estimate too);
+    the other layers keep the profile's."""
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    assert main(["mark", str(svg), "--layer", "Inner", "jump_delay=2000", "laser_on_delay=-10",
+                 "mark_delay=300", "--estimate", "--json"]) == 0
+    inner, rest = json.loads(capsys.readouterr().out)["layers"]
+    assert (inner["jump_delay_us"], inner["laser_on_delay_us"], inner["mark_delay_us"]) == \
+        (2000, -10, 300)
+    assert rest["laser_on_delay_us"] == 100 and rest["jump_delay_us"] == 500
+    # One jump to the square, then marks: its 2 ms jump delay is in the time.
+    assert inner["estimate_s"] > 0.002

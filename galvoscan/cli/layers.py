@@ -40,6 +40,10 @@ def _hatch(text):
     return None if str(text).strip().lower() == "none" else hatch_set(str(text))
 
 
+#: The delay registers a layer may set, µs: the jump delay (else the job's longest jump's) and
+#: the laser, mark and polygon delays (else the profile's).
+_DELAYS = ("jump_delay", *DELAY_KEYS.values())
+
 #: key → (Layer field, the type that reads it, what it is). Delays are registers, their
 #: ranges the register map's.
 LAYER_KEYS = {
@@ -58,7 +62,7 @@ LAYER_KEYS = {
     "wobble_along": ("wobble_along_um", number_in("wobble along", 0, 10_000), "µm"),
     "wobble_hz": ("wobble_hz", number_in("wobble hz", 1, WOBBLE_MAX_HZ), "Hz"),
     **{register: (register, register_int(register, register.replace("_", " ")),
-                  BY_NAME[register].unit) for register in DELAY_KEYS.values()},
+                  BY_NAME[register].unit) for register in _DELAYS},
 }
 
 
@@ -84,7 +88,7 @@ def _layer(match, pairs, where):
             raise ValueError(f"{where}: {key}: {error}") from None
         if key == "hatch":
             hatch.append(parsed)
-        elif name in DELAY_KEYS.values():
+        elif name in _DELAYS:
             delays.append((name, parsed))
         elif name in fields:
             raise ValueError(f"{where}: {key} is given twice")

@@ -143,7 +143,9 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
                                   math.hypot(x - here[0], y - here[1]) / units_per_mm)
         here = (x, y)
     # One jump delay for the whole job (the board has one register): the longest jump's.
-    jump_delay = profile.jump_delay_register(longest_jump_mm)
+    jump_delay = dict(settings.delays_us).get("jump_delay")        # a layer's own
+    if jump_delay is None:
+        jump_delay = profile.jump_delay_register(longest_jump_mm)
     registers = {
         "pitch": pitch.pitch_units,
         "pulses_per_point": pitch.pulses_per_point,
