@@ -2,6 +2,7 @@
 counter file beside the profile, read, refused when damaged, advanced only for a part marked
 to its end, through the real serial link into a served simulated board."""
 
+import json
 import signal
 import subprocess
 import sys
@@ -100,3 +101,22 @@ def test_a_counter_that_cannot_be_kept_is_one_line(tmp_path):
     kept = SerialCounter(path=tmp_path / "station.serial.toml", next=41)
     kept.check_writable()
     assert not list(tmp_path.iterdir())     # the check leaves nothing behind
+
+
+def test_repeated_parts_are_planned_once_unless_numbered(tmp_path, monkeypatch, capsys):
+    """--repeat of the same part plans it once (100,000 plans took minutes and a gigabyte);
+    numbered parts are each planned with their number. The time of all parts is said."""
+    import galvoscan.cli.mark as mark
+    monkeypatch.chdir(tmp_path)
+    planned = []
+    plan = mark._plan
+    monkeypatch.setattr(mark, "_plan", lambda *a, **k: planned.append(a) or plan(*a, **k))
+    assert main(["mark", "--text", "AB", "--font", "hershey", "--repeat", "5000",
+                 "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert len(planned) == 1 and record["parts"] == 5000
+    assert record["estimate_all_parts_s"] == pytest.approx(5000 * record["estimate_s"], rel=1e-6)
+    planned.clear()
+    assert main(["mark", "--text", "{serial}", "--font", "hershey", "--repeat", "4",
+                 "--estimate", "--json"]) == 0
+    assert len(planned) == 4

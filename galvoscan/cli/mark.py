@@ -131,9 +131,18 @@ def _cmd_mark(args):
         counter, serials = part_serials(args, profile)
     except PlanError as error:
         fail(error)
-    # Every part planned (and refused, if it must be) before the link is opened.
-    parts = [planned_job(args, profile=profile, serial=serial, quiet=k > 0)
-             for k, serial in enumerate(serials)]
+    # Every part planned (and refused, if it must be) before the link is opened: once, when
+    # the parts are the same (no serial), else each with its own number.
+    first = planned_job(args, profile=profile, serial=serials[0])
+    parts = [first] * len(serials)
+    if counter is not None and len(serials) > 1:
+        bar = progress_bar(len(serials) - 1, "part")
+        try:
+            for k in range(1, len(serials)):
+                parts[k] = planned_job(args, profile=profile, serial=serials[k], quiet=True)
+                bar.update(1)
+        finally:
+            bar.close()
     job, placement, drawing, profile, wobbles, say = parts[0]
     if args.save:
         from .jobfile import save_job_file
@@ -143,6 +152,10 @@ def _cmd_mark(args):
         say(f"serials {serials[0]}" + (f" … {serials[-1]}" if len(serials) > 1 else "") +
             f" (kept in {counter.path}; advanced when a part has been marked"
             f"{', not by a simulation' if args.sim else ''})")
+    total_s = sum(part.estimate_s for part, *_ in parts)
+    if len(parts) > 1:
+        say(f"{len(parts)} parts: estimated time {total_s:.1f} s in all, the time to send each "
+            f"part aside")
     if args.estimate or not has_link(args, profile):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")
@@ -160,6 +173,7 @@ def _cmd_mark(args):
                      **estimate_record(lj.job, profile, lj.settings.power_percent,
                                        lj.settings.prr_khz, lj.settings.passes, None)}
                     for lj in job.layers]
+            record.update(parts=len(parts), estimate_all_parts_s=round(total_s, 6))
             record["fill"] = {
                 "hatch": [[s.spacing_mm, s.angle_deg, s.step_deg, s.offset_mm]
                           for s in args.hatch or ()],
