@@ -140,7 +140,7 @@ def test_svg_skipped_and_hidden(tmp_path):
                            '<rect width="60" height="60" visibility="hidden"/>'
                            '<defs><rect id="r" width="70" height="70"/></defs>')
     assert len(d.paths) == 1
-    assert set(d.skipped) == {"2 text elements whose font No Such Font is not installed "
+    assert set(d.skipped) == {"2 text elements left out: its font No Such Font is not installed "
                               "(convert text to paths)", "1 image element",
                               "1 hidden element", "1 zero-length path"}
 
@@ -195,7 +195,7 @@ def test_nothing_to_mark(tmp_path):
                                             'text</text>'))
     # What was left out is said: it may be why nothing is left.
     refused(tmp_path / "blank.svg",
-            "no lines or curves to mark (left out: 1 text element whose font Nowhere is not "
+            "no lines or curves to mark (left out: 1 text element left out: its font Nowhere is not "
             "installed (convert text to paths))")
     doc, msp = new_dxf()
     msp.add_point((1, 1))
@@ -394,3 +394,22 @@ def test_svg_tspans_and_font_lists(tmp_path):
                                      f'font-weight="{weight}">I</text>')
         return shapely.unary_union([Polygon(p) for p in drawing.paths]).area
     assert ink("bold") > 1.2 * ink("normal")
+
+
+def test_svg_tspans_follow_on_from_the_text_before(tmp_path):
+    """A <tspan> without an x starts where the text before it ends (and its dx on), as a
+    browser sets it, and so does the text after it; not on top of the first word."""
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextToPath
+    prop = FontProperties(fname=findfont(FontProperties(family=["sans-serif"])), size=4)
+    width = TextToPath().get_text_width_height_descent("Bold|", prop, ismath=False)[0] - \
+        TextToPath().get_text_width_height_descent("|", prop, ismath=False)[0]
+    alone = load_svg(tmp_path, '<text x="1" y="10" font-size="4">Bold</text>')
+    flowed = load_svg(tmp_path, '<text x="1" y="10" font-size="4">Bold<tspan dx="2">I</tspan>'
+                                ' I</text>')
+    # The I's stem (its outline's left edge) is past Bold's advance and the dx.
+    extra = [p for p in flowed.paths if p[:, 0].min() > alone.bounds()[2] + 0.5]
+    assert len(extra) == 2
+    first_i = min(p[:, 0].min() for p in extra)
+    assert first_i == pytest.approx(1 + width + 2, abs=0.6)
+    assert max(p[:, 0].min() for p in extra) > first_i + 1     # " I" after it, a space on

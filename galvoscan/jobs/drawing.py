@@ -313,18 +313,26 @@ def _svg_text(element, tolerance_px):
     said of it instead."""
     from .plan import PlanError
     from .text import svg_text_outlines
+    from .svg_screen import FLOW_ATTRIBUTE, FLOW_X_ATTRIBUTE
     weight = element.font_weight if element.font_weight not in (None, "") else "normal"
+    before = element.values.get(FLOW_ATTRIBUTE)
+    x0 = element.x
+    if before is not None:                          # follows on from the text before it
+        try:
+            x0 = float(element.values.get(FLOW_X_ATTRIBUTE))      # its dx in it
+        except (TypeError, ValueError):
+            before = None
     try:
         outlines, _ = svg_text_outlines(
             element.text, element.font_family, float(element.font_size or 16),
             weight=weight, style=element.values.get("font-style") or "normal",
-            anchor=element.anchor or "start", tolerance=tolerance_px)
+            anchor=element.anchor or "start", tolerance=tolerance_px, before=before or "")
     except PlanError as error:
-        return f"text element whose {error} (convert text to paths)"
+        return f"text element left out: its {error} (convert text to paths)"
     m = element.transform
     placed = []
     for glyph in outlines:
-        x = element.x + glyph[:, 0]
+        x = x0 + glyph[:, 0]
         y = element.y - glyph[:, 1]                 # the glyphs' Y up, the SVG's down
         placed.append(np.column_stack([m.a * x + m.c * y + m.e, m.b * x + m.d * y + m.f]))
     return placed

@@ -266,10 +266,11 @@ def _hershey_width(font, text):
 # --- SVG text --------------------------------------------------------------------------------
 
 def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
-                      anchor="start", tolerance):
+                      anchor="start", tolerance, before=""):
     """One line of an SVG ``<text>`` as glyph outlines (matplotlib's), in the drawing's own
     units: the baseline at y = 0, the anchor (start, middle, end) at x = 0, Y up, ``size``
-    the em. ``families`` is the CSS list (``"'Arial', sans-serif"``): the first installed
+    the em; ``before``: the text of the line before it (a ``<tspan>`` that follows on), whose
+    advance it starts at. ``families`` is the CSS list (``"'Arial', sans-serif"``): the first installed
     wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
     is installed."""
     from matplotlib.font_manager import FontProperties, findfont
@@ -297,8 +298,14 @@ def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
     if missing:
         raise PlanError(f"characters {missing!r} are not in font {Path(found).name}")
     try:
-        width = TextToPath().get_text_width_height_descent(text, prop, ismath=False)[0]
-        shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
+        measure = TextToPath().get_text_width_height_descent
+        width = measure(text, prop, ismath=False)[0]
+        if before:
+            # (A trailing space has no ink: measured with a mark after it, less the mark's.)
+            shift = measure(before + "|", prop, ismath=False)[0] - \
+                measure("|", prop, ismath=False)[0]
+        else:
+            shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
         path = TextPath((shift, 0), text, prop=prop)
         return _flattened(path, 1.0, tolerance), found
     except (RuntimeError, ValueError, OSError) as error:
