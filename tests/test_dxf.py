@@ -263,3 +263,18 @@ def test_dxf_text_is_marked_as_its_glyphs(tmp_path):
     glyphs = [p for p in d.paths if len(p) > 2]
     assert glyphs and min(p[:, 1].min() for p in glyphs) == pytest.approx(102, abs=0.2)
     assert d.skipped == ("1 attribute definition",)
+
+
+def test_dxf_text_in_a_missing_font_or_with_missing_characters(tmp_path):
+    """A style's font that is not installed is said (ezdxf marks the text in another); a text
+    whose characters the font lacks is left out naming them, not marked as boxes."""
+    doc, msp = new_dxf()
+    doc.styles.add("NOFONT", font="nosuchfont.ttf")
+    msp.add_text("OK", height=3, dxfattribs={"style": "NOFONT"})
+    msp.add_text("日本", height=3, dxfattribs={"insert": (0, 10)})
+    msp.add_line((0, 0), (1, 1))
+    d = load_dxf(tmp_path, doc)
+    said = " | ".join(d.skipped)
+    assert "text entity in font nosuchfont.ttf, not installed: marked in" in said
+    assert "text entity left out: '日本' not in font" in said
+    assert max(p[:, 1].max() for p in d.paths) < 5          # the 日本 at y = 10 is not there

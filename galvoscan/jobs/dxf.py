@@ -194,15 +194,17 @@ def _entity_points(entity, tolerance, skipped):
                                 (entity.is_2d_polyline or entity.is_3d_polyline)):
         return _polyline_points(entity, tolerance), bool(entity.is_closed)
     if kind in _TEXT_TYPES:
-        return _text_outlines(entity, tolerance)
+        return _text_outlines(entity, tolerance, skipped)
     skipped["attribute definition" if kind == "ATTDEF" else f"{kind} entity"] += 1
     return None
 
 
-def _text_outlines(entity, tolerance):
+def _text_outlines(entity, tolerance, skipped):
     """A TEXT's, ATTRIB's or MTEXT's glyphs as closed outlines, in the text style's font (as
     ezdxf's text2path finds it; an MTEXT first exploded into TEXT entities by ezdxf's
-    MTextExplode, in a scratch block of the document's own)."""
+    MTextExplode, in a scratch block of the document's own). A font that is not installed is
+    said (ezdxf marks it in another); a text with characters its font lacks is left out,
+    naming them (it would be marked as boxes)."""
     from ezdxf.addons import MTextExplode, text2path
     if entity.dxftype() == "MTEXT":
         scratch = entity.doc.blocks.new_anonymous_block()
@@ -218,11 +220,36 @@ def _text_outlines(entity, tolerance):
         height = float(text.dxf.get("height", 1.0))
         # (The chords counted before they are made, as every curve's: see MAX_CHORDS.)
         _chords(len(text.dxf.text) * 40 * math.ceil(math.sqrt(max(height, 0) / tolerance)))
+        missing = _font_misses(text, skipped)
+        if missing:
+            skipped[f"text entity left out: {missing}"] += 1
+            continue
         for path in text2path.make_paths_from_entity(text):
             points = _xy(path.flattening(tolerance))
             if len(points) >= 2:
                 out.append((points, bool(np.allclose(points[0], points[-1]))))
     return out
+
+
+def _font_misses(text, skipped):
+    """Why ``text`` cannot be marked in the font ezdxf takes for it (characters it lacks), or
+    None; a style's font that is not installed counted in ``skipped`` as a note."""
+    from ezdxf.fonts import fonts
+    style = text.doc.styles.get(text.dxf.get("style", "Standard")) if text.doc else None
+    asked = style.dxf.get("font", "") if style is not None else ""
+    face = fonts.get_entity_font_face(text)
+    if asked and not fonts.is_shx_font_name(asked) and not fonts.font_manager.has_font(asked):
+        skipped[f"text entity in font {asked}, not installed: marked in {face.filename}"] += 1
+    if not face.filename.lower().endswith((".ttf", ".otf", ".ttc")):
+        return None
+    try:
+        cmap = fonts.font_manager.get_ttf_font(face.filename).getBestCmap()
+    except Exception:                       # (a font ezdxf lists but cannot open)
+        return None
+    plain = text.plain_text() if hasattr(text, "plain_text") else str(text.dxf.text)
+    lacking = "".join(dict.fromkeys(ch for ch in plain if not ch.isspace() and
+                                    ord(ch) not in cmap))
+    return f"{lacking!r} not in font {face.filename}" if lacking else None
 
 
 def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
