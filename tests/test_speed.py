@@ -54,10 +54,23 @@ def test_choose_pitch_against_brute_force(speed, prr_khz, field_mm, max_pitch_mm
     assert prr / pitch.pulses_per_point <= 100e3 * (1 + 1e-12)
 
 
+@pytest.mark.parametrize("strict", [True, "range"])
 @pytest.mark.parametrize("speed", [1e6, 0.01])
-def test_choose_pitch_refuses_out_of_range(speed):
+def test_choose_pitch_refuses_out_of_range(speed, strict):
     with pytest.raises(PlanError, match=r"out of reach at 100 kHz: .* mm/s"):
-        choose_pitch(speed, 100e3, 65536 / 110, max_pitch_mm=0.05)
+        choose_pitch(speed, 100e3, 65536 / 110, max_pitch_mm=0.05, strict=strict)
+
+
+def test_a_speed_between_two_is_refused_or_the_nearest():
+    """300 mm/s at 50 kHz on a 110 mm field lies between 293.7 (7 units, 2 pulses) and 307.7
+    mm/s (11 units, 3 pulses), each over 2 % off: strict refuses naming both; "range" takes
+    the nearer (mark then says so)."""
+    units_per_mm = 65536 / 110
+    with pytest.raises(PlanError, match=r"falls between .*: 293.7 or 307.7 mm/s"):
+        choose_pitch(300, 50e3, units_per_mm, max_pitch_mm=0.025)
+    pitch = choose_pitch(300, 50e3, units_per_mm, max_pitch_mm=0.025, strict="range")
+    assert (pitch.pitch_units, pitch.pulses_per_point) == (7, 2)
+    assert pitch.speed_mm_s == pytest.approx(7 / units_per_mm * 50e3 / 2)
 
 
 def test_choose_pitch_respects_the_point_rate():

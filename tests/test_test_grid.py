@@ -46,6 +46,8 @@ def test_the_grid_and_its_settings():
     (["--speeds", "100:200:30", "--powers", "1:90:30"], "400 at most"),
     (["--speeds", "100", "--powers", "120"], "--powers must be from 0 to 100 %"),
     (["--speeds", "100", "--powers", "10", "--preview", "g.bmp"], ".png"),
+    # A speed past what the machine makes is refused, not replaced by the fastest.
+    (["--speeds", "200:5000:3", "--powers", "20"], "2600 mm/s is out of reach at 50 kHz"),
 ])
 def test_bad_grids_are_one_line(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:

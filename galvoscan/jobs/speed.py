@@ -50,8 +50,9 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     Raises
     ------
     PlanError
-        When nothing comes within 2 % of the speed (``strict``; else the closest is taken);
-        the message gives the reachable range, or the two speeds either side.
+        When nothing comes within 2 % of the speed (``strict``; else the closest is taken;
+        ``"range"``: the closest when the speed is inside the reachable range, refused only
+        outside it); the message gives the reachable range, or the two speeds either side.
     """
     from .plan import PlanError             # here: .plan imports this module
 
@@ -82,6 +83,9 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
     speed = pitch / units_per_mm * prr_hz / pulses
     if strict and abs(speed - speed_mm_s) / speed_mm_s > 0.02:
         slowest, fastest = prr_hz / units_per_mm / high_n, top / units_per_mm * prr_hz / low_n
+        if slowest <= speed_mm_s <= fastest and strict == "range":
+            return Pitch(pitch, pulses, speed, pitch / units_per_mm,
+                         (speed - speed_mm_s) / speed_mm_s)
         if slowest <= speed_mm_s <= fastest:
             # Inside the range, between two speeds whole pitches and pulses make.
             below, above = speeds[speeds <= speed_mm_s].max(), speeds[speeds >= speed_mm_s].min()

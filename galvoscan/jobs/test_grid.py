@@ -61,7 +61,7 @@ def plan_test_grid(speeds, powers, profile, *, prr_khz, cell_mm=5.0, gap_mm=2.0,
     # says the speed marked.
     from .speed import choose_pitch
     speeds = [choose_pitch(v, prr_khz * 1e3, profile.units_per_mm,
-                           max_pitch_mm=profile.laser.spot_mm / 2, strict=False).speed_mm_s
+                           max_pitch_mm=profile.laser.spot_mm / 2, strict="range").speed_mm_s
               for v in speeds]
     cells = []
     for row, power in enumerate(sorted(powers)):

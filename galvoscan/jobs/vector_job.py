@@ -125,7 +125,7 @@ def _machine_settings(settings, profile):
     # A pitch of at most half the spot keeps the marked points overlapping.
     pitch = choose_pitch(settings.speed_mm_s, prr_hz, profile.units_per_mm,
                          max_pitch_mm=profile.laser.spot_mm / 2,
-                         pulses_per_point=settings.pulses_per_point)
+                         pulses_per_point=settings.pulses_per_point, strict="range")
     return prr_register, prr_hz, pitch
 
 
@@ -162,13 +162,17 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
                                 jump_delay_us=jump_delay)
     mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm)
     notes = list(notes)
+    if abs(pitch.error) > 0.02:
+        notes.append(f"{settings.speed_mm_s:g} mm/s falls between the speeds whole galvo "
+                     f"units and pulses make at {prr_hz / 1e3:g} kHz: marked at the nearest, "
+                     f"{pitch.speed_mm_s:.1f} mm/s ({pitch.error:+.1%})")
     if prr_hz / pitch.pulses_per_point > _STALL_FREE_POINTS_HZ:
         joints = sum(1 for a, b in zip(segments, segments[1:]) if a[0] == b[0] == "mark")
         notes.append(f"a point every {pitch.pulses_per_point / prr_hz * 1e6:.0f} µs is faster "
                      f"than the board sets up a segment ({SETUP_CLOCKS} clocks at "
-                     f"{DEFAULT_CLOCK_HZ / 1e6:g} MHz): expect up to "
-                     f"{joints} stalls, a 10 µs pause with the laser off at each joint between "
-                     f"two marks (a lower PRR, or more pulses per point, avoids them)")
+                     f"{DEFAULT_CLOCK_HZ / 1e6:g} MHz): expect about {joints} stalls, a "
+                     f"10 µs pause with the laser off at each joint between two marks (a "
+                     f"lower PRR, or more pulses per point, avoids them)")
     marks = np.concatenate(paths_mm)
     bounds = (*marks.min(axis=0), *marks.max(axis=0))
     return VectorJob(segments=segments, paths_mm=paths_mm, jump_before_mm=before,
