@@ -109,6 +109,19 @@ def test_a_marked_code_reads_back_off_the_wires(args, spot, size, kind, tmp_path
         (data, kind)
 
 
+@pytest.mark.parametrize("args, words", [
+    (["--data", "A" * 3000, "--size", "5"], "modules of 30 µm, less than the 50 µm spot"),
+    (["--data", "hello", "--size", "0.5"], "modules of 24 µm, less than the 50 µm spot"),
+    (["--data", "hello", "--size", "0.7", "--code-fill", "dots"],
+     "modules of 33 µm, less than the 50 µm spot \\(a dot may be 4/3 of its module\\)"),
+])
+def test_a_code_too_fine_for_the_spot_is_refused(args, words):
+    """A module narrower than the spot (the default profile's 50 µm) cannot be marked apart
+    from its neighbours: a code too long for its size is refused before anything is sent."""
+    with pytest.raises(SystemExit, match=words):
+        main(["mark", "--code", "qr", *args, "--estimate"])
+
+
 def test_a_drawing_in_a_codes_quiet_zone_is_refused(tmp_path):
     svg = tmp_path / "logo.svg"
     svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '

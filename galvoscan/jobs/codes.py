@@ -142,6 +142,10 @@ def code_drawing(spec):
     return Drawing(name=name, paths=tuple(paths), closed=tuple(closed), notes=notes), module
 
 
+#: How much narrower than the spot a dotted code's module may be (its dot 4/3 of it).
+DOT_OVERLAP = 0.75
+
+
 def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
     """The code as a :class:`~.vector_job.MarkObject` of a job at ``settings``: centred on
     ``centre_mm`` (field mm), filled along its rows at the widest spacing that divides a
@@ -151,6 +155,14 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
     from .plan import Placement
     from .vector_job import MarkObject
     drawing, module = code_drawing(spec)
+    # A module narrower than the spot cannot be marked apart from its neighbours (a dot may
+    # reach a little past its module: readers take dots that touch).
+    smallest = spot_mm * (DOT_OVERLAP if spec.fill is CodeFill.DOTS else 1.0)
+    if module < smallest:
+        raise PlanError(f"{spec.kind.value} code {spec.data[:20]!r}: modules of "
+                        f"{module * 1000:.0f} µm, less than the {spot_mm * 1000:.0f} µm spot"
+                        f"{' (a dot may be 4/3 of its module)' if spec.fill is CodeFill.DOTS else ''}"
+                        f": a larger --size, or less data")
     if spec.fill is CodeFill.DOTS:
         fill = replace(settings, hatch=(), contour=None, outline=True)
     else:
