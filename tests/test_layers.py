@@ -184,3 +184,17 @@ def test_a_layers_delays_are_its_own(tmp_path, capsys):
     assert rest["laser_on_delay_us"] == 100 and rest["jump_delay_us"] == 500
     # One jump to the square, then marks: its 2 ms jump delay is in the time.
     assert inner["estimate_s"] > 0.002
+
+
+def test_a_layered_plan_and_its_preview_give_the_same_jumps(tmp_path, capsys):
+    """The plan's jumps of a job of layers are each layer's joined where the last ended, as
+    the preview draws (and its legend sums) them."""
+    import matplotlib
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        assert main(["mark", str(svg), "--layer", "Inner", "power=40", "--layer", "#ff0000",
+                     "power=60", "--preview", str(tmp_path / "p.svg"), "--estimate",
+                     "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert f"jumps {record['jump_mm']:.1f} mm" in (tmp_path / "p.svg").read_text()

@@ -64,6 +64,13 @@ def test_no_pyplot_figures_left(tmp_path):
         assert after.get_fignums() == open_before
 
 
+def _detail_mm(text):
+    """The detail panel's width its title gives, mm (None: no detail panel)."""
+    import re
+    found = re.search(r"a detail, ([0-9.]+) mm wide", text)
+    return float(found.group(1)) if found else None
+
+
 def _hatch(side, spacing):
     return [np.array([[0.0, y], [side, y]]) for y in np.arange(0, side, spacing)]
 
@@ -76,7 +83,9 @@ def test_a_fine_hatch_gets_a_detail_panel(tmp_path):
         with matplotlib.rc_context({"svg.fonttype": "none"}):
             preview(out, _hatch(34, spacing), field_mm=110)
         text = out.read_text()
-        assert ("a detail, 3 mm wide" in text) == (panels == 3), spacing
+        assert (_detail_mm(text) is not None) == (panels == 3), spacing
+        if panels == 3:             # some 30 lines wide
+            assert _detail_mm(text) == pytest.approx(30 * spacing, rel=0.2)
         assert "the drawing, zoomed in" in text
 
 
@@ -89,3 +98,22 @@ def test_groups_are_named_in_their_colours(tmp_path):
     text = out.read_text()
     assert "Cut: 40.0 mm" in text and "the rest: 40.0 mm" in text
     assert "#ff0000" in text
+
+
+def test_dots_are_drawn_and_counted(tmp_path):
+    """Marks of no length (a dotted code's modules) are drawn as dots and counted."""
+    out = tmp_path / "dots.svg"
+    dots = [np.array([[x, 0.0], [x, 0.0]]) for x in range(5)]
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        preview(out, dots + [LINE], field_mm=110)
+    assert "marks 40.0 mm (6 paths), 5 dots" in out.read_text()
+
+
+def test_a_fine_hatch_in_one_corner_gets_its_detail_panel(tmp_path):
+    """The density is the densest part's, not the drawing's mean: a small fine hatch in a
+    corner of a large sparse drawing still gets its detail panel, on it."""
+    out = tmp_path / "corner.svg"
+    sparse = [np.array([[-20.0, -20], [20, -20], [20, 20], [-20, 20], [-20, -20]])]
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        preview(out, sparse + [p + (15, 15) for p in _hatch(3, 0.05)], field_mm=110)
+    assert _detail_mm(out.read_text()) == pytest.approx(30 * 0.05, rel=0.2)

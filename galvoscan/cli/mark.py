@@ -10,6 +10,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
 from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
@@ -106,8 +108,9 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     if args.preview:
         from ..jobs.preview import preview
         source = args.file or getattr(args, "job_file", None)
+        dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
         title = f"{Path(source).name if source else drawing.name}: " \
-                f"{job.mark_mm:.1f} mm marked"
+                f"{job.mark_mm:.1f} mm marked" + (f", {dots} dots" if dots else "")
         if job.layers:
             preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
                     groups=[(f"{lj.label}: {lj.job.mark_mm:.1f} mm", lj.colour, lj.job.paths_mm)

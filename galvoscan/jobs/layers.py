@@ -243,6 +243,8 @@ def merged(layer_jobs):
     """The layers' jobs as one :class:`~.vector_job.VectorJob` for its totals, preview and
     outline (its ``layers`` the :class:`LayerJob` s; its registers and pitch the first
     layer's); one job without layers as it is."""
+    from .plan import jump_length
+    from .speed import jump_mark_lengths
     from .vector_job import VectorJob
     if len(layer_jobs) == 1 and layer_jobs[0].layer is None:
         return layer_jobs[0].job
@@ -250,12 +252,19 @@ def merged(layer_jobs):
     total = lambda name: sum(getattr(job, name) for job in jobs)      # noqa: E731
     bounds = np.array([job.bounds_mm for job in jobs])
     notes = list(dict.fromkeys(note for job in jobs for note in job.notes))
-    return VectorJob(segments=[s for job in jobs for s in job.segments],
-                     paths_mm=[p for job in jobs for p in job.paths_mm],
-                     jump_before_mm=total("jump_before_mm"), jump_after_mm=total("jump_after_mm"),
+    segments = [s for job in jobs for s in job.segments]
+    # Each layer's first jump is from where the last one ended, as the preview draws it.
+    units_per_mm = jobs[0].pitch.pitch_units / jobs[0].pitch.pitch_mm
+    _, jump_mm = jump_mark_lengths(segments, units_per_mm)
+    # One pass's jumps likewise: each layer's own, joined where the last ended.
+    paths = [p for job in jobs for p in job.paths_mm]
+    after = jump_length(paths)
+    before = total("jump_before_mm") - total("jump_after_mm") + after
+    return VectorJob(segments=segments,
+                     paths_mm=paths, jump_before_mm=before, jump_after_mm=after,
                      pitch=jobs[0].pitch, registers=jobs[0].registers,
                      estimate_s=total("estimate_s"), mark_mm=total("mark_mm"),
-                     jump_mm=total("jump_mm"),
+                     jump_mm=jump_mm,
                      bounds_mm=(*bounds[:, :2].min(axis=0).tolist(),
                                 *bounds[:, 2:].max(axis=0).tolist()),
                      notes=notes, layers=list(layer_jobs))

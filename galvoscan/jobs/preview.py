@@ -24,20 +24,40 @@ _MERGED_PX = 4
 _DETAIL_LINES = 30
 
 
+#: Cells a side of the grid the marks' density is taken on, for the detail panel.
+_DENSITY_CELLS = 16
+
+
 def _detail_window(paths, bounds, px_per_mm):
     """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
-    tell apart at ``px_per_mm`` (their mean spacing, the area they cover over their length,
-    under :data:`_MERGED_PX`); None where they are not."""
+    tell apart at ``px_per_mm``: their spacing (a cell's area over the length marked in it)
+    in the densest cell of a grid over the drawing under :data:`_MERGED_PX`; None where they
+    are not."""
     x0, y0, x1, y1 = bounds
-    mark_mm = _length_mm(paths)
-    if mark_mm <= 0:
+    cell = max(x1 - x0, y1 - y0, 1e-6) / _DENSITY_CELLS
+    starts = np.concatenate([p[:-1] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
+    ends = np.concatenate([p[1:] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
+    lengths = np.hypot(*(ends - starts).T)
+    if not lengths.sum() > 0:
         return None
-    spacing = (x1 - x0) * (y1 - y0) / mark_mm
-    if not 0 < spacing * px_per_mm < _MERGED_PX:
+    # Each segment as samples a quarter of a cell apart, each carrying its share of length.
+    count = np.maximum(1, np.ceil(lengths / (cell / 4))).astype(int)
+    share = np.repeat(lengths / count, count)
+    t = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + 0.5) / \
+        np.repeat(count, count)
+    samples = np.repeat(starts, count, axis=0) + t[:, None] * np.repeat(ends - starts, count,
+                                                                          axis=0)
+    column = np.clip(((samples[:, 0] - x0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
+    row = np.clip(((samples[:, 1] - y0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
+    density = np.zeros((_DENSITY_CELLS, _DENSITY_CELLS))
+    np.add.at(density, (row, column), share)
+    r, c = np.unravel_index(np.argmax(density), density.shape)
+    spacing = cell * cell / density[r, c]
+    if not spacing * px_per_mm < _MERGED_PX:
         return None
-    # On the marked point nearest the drawing's centre, so the window holds marks.
+    # On the marked point nearest the densest cell's centre, so the window holds marks.
+    centre = np.array([x0 + (c + 0.5) * cell, y0 + (r + 0.5) * cell])
     points = np.concatenate(paths)
-    centre = np.array([(x0 + x1) / 2, (y0 + y1) / 2])
     cx, cy = points[np.argmin(np.hypot(*(points - centre).T))]
     return cx, cy, max(_DETAIL_LINES * spacing, 1e-3)
 
@@ -124,6 +144,12 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
         if paths:
             for label, colour, part in groups:
                 ax.add_collection(LineCollection(part, colors=colour, linewidths=0.7, zorder=2))
+                # A dot (a mark of no length: a code's module, a photo's lone pixel) as a dot.
+                dots = np.array([p[0] for p in part if not np.ptp(p, axis=0).any()])
+                if len(dots):
+                    ax.plot(dots[:, 0], dots[:, 1], linestyle="none", marker=".",
+                            markersize=2, color=colour, zorder=2)
+                    label += f", {len(dots)} dots"
                 keep(Line2D([], [], color=colour, linewidth=0.7, label=label))
             x0, y0, x1, y1 = bounds
             ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
