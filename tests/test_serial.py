@@ -120,3 +120,24 @@ def test_repeated_parts_are_planned_once_unless_numbered(tmp_path, monkeypatch, 
     assert main(["mark", "--text", "{serial}", "--font", "hershey", "--repeat", "4",
                  "--estimate", "--json"]) == 0
     assert len(planned) == 4
+
+
+@pytest.mark.slow
+def test_sim_json_of_repeated_parts_is_every_parts(tmp_path, monkeypatch, capsys):
+    """--sim --json of two parts: segments, jumps, length and counters are both parts' (twice
+    one part's), as the marks and pulses off the wires are."""
+    from sim_board import VECTOR_BOARD, quick_sim_board
+    monkeypatch.chdir(tmp_path)
+    args = ["mark", "--text", "AB", "--font", "hershey", "--height", "1", "--speed", "1007.1",
+            "--sim", "--timeout", "600", "--json"]
+    runs = []
+    with quick_sim_board(**VECTOR_BOARD):
+        for repeat in ("1", "2"):
+            assert main([*args, "--repeat", repeat]) == 0
+            runs.append(json.loads(capsys.readouterr().out.strip().splitlines()[-1]))
+    one, both = runs
+    for key in ("segments", "jumps", "pulses"):
+        assert both[key] == 2 * one[key], key
+    assert both["mark_length_mm"] == pytest.approx(2 * one["mark_length_mm"], abs=1e-3)
+    assert len(both["marks"]) == 2 * len(one["marks"]) and both["parts"] == 2
+    assert both["errors"] == both["underruns"] == 0

@@ -5,7 +5,7 @@ the marks' frame."""
 from pathlib import Path
 
 
-__all__ = ["describe_job", "estimate_record", "sim_report", "FIELD_FRAME", "SVG_FRAME", "DXF_FRAME"]
+__all__ = ["describe_job", "estimate_record", "mark_estimate_record", "sim_report", "FIELD_FRAME", "SVG_FRAME", "DXF_FRAME"]
 
 
 def describe_job(job, profile, settings_line):
@@ -68,6 +68,33 @@ def estimate_record(job, profile, power, prr, passes, preview):
             "across": round(regs["wob_across"] * profile.mm_per_unit * 1000, 1),
             "along": round(regs["wob_along"] * profile.mm_per_unit * 1000, 1),
             "hz": regs["wob_freq"]}
+    return record
+
+
+def mark_estimate_record(job, args, profile, *, parts, total_s):
+    """``mark --estimate --json``: the plan (a job of layers: its totals and each layer's
+    own), the parts and their time, the fill asked for."""
+    from .jobargs import job_settings_values
+    speed, power, prr = job_settings_values(args, profile)
+    record = estimate_record(job, profile, power, prr,
+                              args.passes or profile.defaults.passes, args.preview)
+    if job.layers:
+        # Each layer's settings are its own: the top level keeps the totals only.
+        record = {key: record[key] for key in ("segments", "mark_mm", "jump_mm",
+                                                "bounds_mm", "field_mm", "estimate_s",
+                                                "notes", "preview")}
+        record["layers"] = [
+            {"match": lj.label, "sets": lj.layer.changes() if lj.layer else None,
+             **estimate_record(lj.job, profile, lj.settings.power_percent,
+                               lj.settings.prr_khz, lj.settings.passes, None)}
+            for lj in job.layers]
+    record.update(parts=parts, estimate_all_parts_s=round(total_s, 6))
+    record["fill"] = {
+        "hatch": [[s.spacing_mm, s.angle_deg, s.step_deg, s.offset_mm]
+                  for s in args.hatch or ()],
+        "hatch_lines": args.hatch_lines,
+        "contour": [args.contour.spacing_mm, args.contour.count] if args.contour
+        else None}
     return record
 
 

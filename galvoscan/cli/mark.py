@@ -21,7 +21,7 @@ from .jobargs import (add_job_link_options, add_job_options, board_link, frame_j
                       stopped_in_one_line)
 from .content import (add_content_options, check_content_options, content_objects,
                       part_serials)
-from .job_reports import estimate_record, sim_report
+from .job_reports import mark_estimate_record, sim_report
 from .layers import add_layer_option, add_wobble
 from .machine import add_machine_option, profile_from
 
@@ -163,26 +163,8 @@ def _cmd_mark(args):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")
         if args.json:
-            speed, power, prr = job_settings_values(args, profile)
-            record = estimate_record(job, profile, power, prr,
-                                      args.passes or profile.defaults.passes, args.preview)
-            if job.layers:
-                # Each layer's settings are its own: the top level keeps the totals only.
-                record = {key: record[key] for key in ("segments", "mark_mm", "jump_mm",
-                                                        "bounds_mm", "field_mm", "estimate_s",
-                                                        "notes", "preview")}
-                record["layers"] = [
-                    {"match": lj.label, "sets": lj.layer.changes() if lj.layer else None,
-                     **estimate_record(lj.job, profile, lj.settings.power_percent,
-                                       lj.settings.prr_khz, lj.settings.passes, None)}
-                    for lj in job.layers]
-            record.update(parts=len(parts), estimate_all_parts_s=round(total_s, 6))
-            record["fill"] = {
-                "hatch": [[s.spacing_mm, s.angle_deg, s.step_deg, s.offset_mm]
-                          for s in args.hatch or ()],
-                "hatch_lines": args.hatch_lines,
-                "contour": [args.contour.spacing_mm, args.contour.count] if args.contour
-                else None}
+            record = mark_estimate_record(job, args, profile, parts=len(parts),
+                                          total_s=total_s)
             print(json.dumps(record))
         return 0
     if counter is not None and not args.sim:
@@ -195,6 +177,7 @@ def _cmd_mark(args):
     if warning:
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
+    reports = []
     with board_link(args, profile, wobble=wobbles) as (client, board):
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]
@@ -210,6 +193,7 @@ def _cmd_mark(args):
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
                     report, layer_starts = _run_layers(streamer, part, board, timeout)
+                    reports.append(report)
             finally:
                 bar.close()
             counters = report.counters
@@ -229,16 +213,25 @@ def _cmd_mark(args):
                     counter.advance()       # this part is marked: its number is taken
                 except PlanError as error:
                     fail(error)
+        # Every part's, summed: the marks and pulses off the wires are all of them too.
+        counts = {name: sum(r.counters[name] for r in reports) for name in report.counters}
         if args.json and board is not None:
             record = sim_report(board, part, placement, drawing, profile, report,
                                 layer_starts=layer_starts)
-            record.update(parts=len(parts), serials=[s for s in serials if s is not None])
+            record.update(
+                parts=len(parts), serials=[s for s in serials if s is not None],
+                segments=sum(r.segments for r in reports),
+                jumps=sum(1 for p, *_ in parts for op, *_ in p.segments if op == "jump"),
+                mark_length_mm=round(sum(p.mark_mm for p, *_ in parts), 4),
+                underruns=counts["vec_underruns"], stalls=counts["vec_stalls"],
+                rejected=counts["vec_rejected"], errors=counts["errors"])
+            if part.layers:     # each layer's own, in "layers"
+                record["pulses_per_point"] = None
             print(json.dumps(record))
         elif args.json:
-            print(json.dumps({"segments": report.segments, "pulses": report.pulses,
-                              "parts": len(parts),
-                              "serials": [s for s in serials if s is not None],
-                              **report.counters}))
+            print(json.dumps({"segments": sum(r.segments for r in reports),
+                              "pulses": sum(r.pulses for r in reports), "parts": len(parts),
+                              "serials": [s for s in serials if s is not None], **counts}))
     return 0
 
 
