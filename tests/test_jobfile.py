@@ -80,6 +80,11 @@ def test_saved_job_plans_as_its_command_line(job_folder, capsys):
     ("speed = = 1", r"not valid TOML"),
     ("[[drawing]]\nfile = 'missing.svg'\n", r"missing.svg: no such file"),
     ("[[text]]\ntext = 'A'\nlayer = 'Nope'\n", r"put on layer 'Nope', which is not one of"),
+    ("[job]\nport = '/dev/ttyUSB0'\n[[text]]\ntext = 'A'\n",
+     r"'port' belongs to a run, not to the job: give --port on the command line"),
+    ("[[code]]\nkind = 'qr'\ndata = 'x'\n", r"\[\[code\]\] 1: --code needs --data TEXT and --size"),
+    ("[[image]]\nfile = 'nowhere.png'\nwidth = 3\n", r"\[\[image\]\] 1: .*nowhere.png: no such file"),
+    ("[[drawing]]\nfile = 'gone.svg'\n", r"\[\[drawing\]\] 1: .*gone.svg: no such file"),
 ])
 def test_bad_job_files_are_one_line(job_folder, capsys, text, words):
     (job_folder / "bad.toml").write_text(text)
@@ -97,6 +102,14 @@ def test_the_files_options_stay_in_the_file(job_folder, capsys):
     (job_folder / "j.toml").write_text("[[text]]\ntext = 'A'\n")
     with pytest.raises(SystemExit, match="--height is the job file's: put it in j.toml"):
         main(["mark", "j.toml", "--height", "3", "--estimate"])
+    # Its fill too: a run may change only the speed, power, PRR and passes.
+    with pytest.raises(SystemExit, match="--hatch is the job file's"):
+        main(["mark", "j.toml", "--hatch", "0.2", "--estimate"])
+    with pytest.raises(SystemExit, match="--layer is the job file's"):
+        main(["mark", "j.toml", "--layer", "Logo", "speed=500", "--estimate"])
+    # --save makes the folder it is asked to write in.
+    assert main(["mark", "j.toml", "--save", "new/folder/k.toml", "--estimate"]) == 0
+    assert (job_folder / "new" / "folder" / "k.toml").exists()
     (job_folder / "x.job").write_text("J 0 0\n")
     with pytest.raises(SystemExit, match="a .job is in galvo units .* no job to --save"):
         main(["mark", "x.job", "--save", "x.toml", "--estimate"])

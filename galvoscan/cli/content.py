@@ -136,12 +136,19 @@ def content_objects(args, settings, profile, *, serial=None):
     part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
     import argparse
     from dataclasses import replace
+    from ..jobs.drawing import DrawingError
+    from ..jobs.plan import PlanError
     objects = []
     for kind, make in (("text", _text_object), ("image", _image_object),
                        ("code", _code_object)):
         for entry in args.entries.get(kind, ()):
             one = argparse.Namespace(**{**vars(args), **entry})
-            made = make(one, settings, profile, serial)
+            try:
+                made = make(one, settings, profile, serial)
+            except (PlanError, DrawingError) as error:
+                if not entry.get("_where"):
+                    raise
+                raise PlanError(f"{entry['_where']}: {error}") from None
             objects.append(replace(made, layer=entry["layer"]) if entry.get("layer") else made)
     return objects
 

@@ -116,7 +116,12 @@ def _entry(section, table, actions, folder, where, defaults):
     entry = {} if section == "job" else {
         dest.removeprefix("not "): getattr(defaults, dest.removeprefix("not "), None)
         for dest in keys.values() if dest != "layer"}
+    if section != "job":
+        entry["_where"] = where              # for what goes wrong with it later
     for key, value in table.items():
+        if key not in keys and key.replace("-", "_") in _RUN_OPTIONS:
+            raise ValueError(f"{where}: {key!r} belongs to a run, not to the job: give "
+                             f"--{key.replace('_', '-')} on the command line")
         if key not in keys:
             near = difflib.get_close_matches(key, keys, n=1)
             raise ValueError(f"{where}: {key!r} is not a setting of [{section}]"
@@ -194,11 +199,17 @@ def load_job_file(path):
     return job, entries, layers, tables
 
 
-#: What a job file holds: with one, these options are the file's, not the command line's.
+#: What a job file holds: with one, these options are the file's, not the command line's
+#: (a run may change only its speed, power, PRR and passes).
 _FILE_ONLY = ("origin", "offset", "scale", "rotate", "text", "font", "height", "text_at",
               "align", "letter_spacing", "line_height", "code", "data", "size", "code_at",
               "code_ec", "code_fill", "code_quiet", "code_height", "image", "width",
-              "image_at", "dither", "line_spacing", "one_way", "layers")
+              "image_at", "dither", "line_spacing", "one_way", "layers", "hatch",
+              "hatch_lines", "contour", "no_outline", "tolerance", "wobble", "wobble_along",
+              "wobble_hz")
+#: A run's options, not a job's: a job file that names one is told where it goes.
+_RUN_OPTIONS = ("port", "spi", "sim", "baud", "timeout", "backend", "machine", "repeat",
+                "serial_start", "serial_step", "json", "preview", "estimate", "frame", "save")
 
 
 def use_job_file(args):
@@ -212,7 +223,8 @@ def use_job_file(args):
     actions, defaults = _actions()
     given = [d for d in _FILE_ONLY if getattr(args, d, None) != getattr(defaults, d, None)]
     if given:
-        fail(f"--{given[0].replace('_', '-')} is the job file's: put it in {args.file}")
+        fail(f"{actions[given[0]].option_strings[0]} is the job file's: put it in "
+             f"{args.file} (a run may give only --speed, --power, --prr and --passes)")
     job, entries, layers, tables = load_job_file(args.file)
     for dest, value in job.items():
         if dest in ("speed", "power", "prr", "passes") and getattr(args, dest) is not None:
@@ -302,6 +314,7 @@ def save_job_file(args, path):
     if layers:
         document["layer"] = [dict(t) for t in layers]
     try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
         Path(path).write_text("# galvoscan job: `galvoscan mark " + Path(path).name +
                               "` marks it\n" + tomli_w.dumps(document), encoding="utf-8")
     except OSError as error:

@@ -59,7 +59,11 @@ def _plan(args, profile, serial=None):
         for entry in entries["drawing"]:
             placement = Placement(origin=entry["origin"], offset_mm=entry["offset"],
                                   scale=entry["scale"], rotate_deg=entry["rotate"])
-            drawing = load_drawing(entry["file"], tolerance_mm=args.tolerance)
+            try:
+                drawing = load_drawing(entry["file"], tolerance_mm=args.tolerance)
+            except DrawingError as error:
+                where = entry.get("_where")
+                raise DrawingError(f"{where}: {error}" if where else str(error)) from None
             drawings.append(MarkObject(drawing, placement, settings))
         objects[:0] = drawings
         first = objects[0]
