@@ -2,6 +2,7 @@
 
 import csv
 import json
+import math
 
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -81,3 +82,17 @@ def test_sim_vector_rejects_a_bad_job(tmp_path):
     job.write_text("jump 1 2\nzap 3 4\n")
     with pytest.raises(SystemExit, match="line 2: unknown command 'zap'"):
         main(["sim", "--mode", "vector", "--job", str(job)])
+
+
+def test_a_job_files_plan_says_its_jumps(tmp_path, capsys):
+    """A .job is marked as it is: its one pass's jumps in the plan are its own (they were
+    said as 0.0 mm beside a total of tens of mm)."""
+    job = tmp_path / "c.job"
+    job.write_text("jump 30000 30000\nmark 31000 30000\njump 33000 33000\nmark 33000 34000\n")
+    assert main(["mark", str(job), "--estimate"]) == 0
+    out = capsys.readouterr().out
+    # From the centre (32768) to (30000, 30000), then (31000, 30000) to (33000, 33000).
+    units_per_mm = 65536 / 110
+    jumps = (math.hypot(2768, 2768) + math.hypot(2000, 3000)) / units_per_mm
+    assert f"one pass: jumps {jumps:.1f} mm in the drawing's order, {jumps:.1f} mm as " \
+           f"ordered" in out

@@ -198,7 +198,9 @@ def plan_job_file(segments, settings, profile):
     paths_mm = [from_galvo(np.array(p, dtype=float), profile.field.size_mm) for p in paths]
     if not paths_mm:
         raise PlanError("the job has no mark segments")
-    return _finish(list(segments) * settings.passes, paths_mm, 0.0, 0.0, settings, profile,
+    from .speed import jump_mark_lengths
+    _, jumps = jump_mark_lengths(list(segments), profile.units_per_mm)    # one pass, as it is
+    return _finish(list(segments) * settings.passes, paths_mm, jumps, jumps, settings, profile,
                    ["a .job is in galvo units: no placement, hatch or reordering"])
 
 
