@@ -82,6 +82,7 @@ def test_dxf_layers_by_name(tmp_path):
     (["#ff0000", "outline=maybe"], "must be yes or no"),
     (["#ff0000", "speed"], "'speed' is not KEY=VALUE"),
     (["#ff0000", "speed=500", "speed=600"], "speed is given twice"),
+    (["Inner", "--layer", "inner", "power=50"], "layer 'inner' is given twice"),
     (["#123456", "speed=1007.1"], "layer '#123456' matches nothing in the job \\(its colours: "
                                   "#000000, #0000ff, #008000, #ff0000; its layers: 'Engrave', "
                                   "'Inner'\\)"),

@@ -90,6 +90,16 @@ def test_huge_images_are_refused_before_decoding(tmp_path, monkeypatch):
         PhotoSpec("x.png", 1, 2)
 
 
+def test_a_picture_enlarged_is_said(tmp_path):
+    Image.new("L", (3, 3), 0).save(tmp_path / "tiny.gif")
+    drawing, dark = photo_drawing(PhotoSpec(str(tmp_path / "tiny.gif"), 10, 0.05))
+    assert dark.shape == (200, 200)
+    assert any("3 pixels across made 200 cells (66.7 × enlarged)" in n for n in drawing.notes)
+    Image.new("L", (200, 200), 0).save(tmp_path / "fine.png")
+    drawing, _ = photo_drawing(PhotoSpec(str(tmp_path / "fine.png"), 10, 0.05))
+    assert not any("enlarged" in n for n in drawing.notes)
+
+
 def test_image_options_need_image(tmp_path):
     with pytest.raises(SystemExit, match="--dither is for --image"):
         main(["mark", "--text", "A", "--dither", "ordered", "--estimate"])

@@ -55,11 +55,24 @@ def test_the_fields_and_their_refusal(capsys):
     assert main(["mark", "--text", "made {date:%Y}", "--estimate", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert record["segments"] > 10
-    with pytest.raises(SystemExit, match="is not a field it knows"):
+    with pytest.raises(SystemExit, match=r"\{nope\} is not a field galvoscan knows "
+                                         r"\(\{serial\}, "):
         main(["mark", "--text", "SN {nope}", "--estimate"])
+    with pytest.raises(SystemExit, match=r"a field written wrong \(unmatched '\{'"):
+        main(["mark", "--text", "SN {serial:04d", "--estimate"])
     with pytest.raises(SystemExit, match="--font is for --text"):
         main(["mark", "--code", "qr", "--data", "x", "--size", "5", "--font", "hershey",
               "--estimate"])
+
+
+def test_bare_date_and_time_fields_read_as_a_person_writes_them():
+    """{date} is the ISO date and {time} hours and minutes (Python's own would give the
+    microseconds); a format given is strftime's."""
+    import re
+    from galvoscan.cli.content import fields
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d", fields("{date} {time}"))
+    assert re.fullmatch(r"\d\d\.\d\d\.\d{4}", fields("{date:%d.%m.%Y}"))
+    assert fields("SN {serial:05d}", serial=42) == "SN 00042"
 
 
 def _image(marks, bounds, *, radius_mm, px_mm=0.02):
@@ -134,3 +147,9 @@ def test_a_character_not_in_the_font_is_one_line(font, words):
     """Not a box for a glyph the font lacks, nor a letter dropped: refused, naming it."""
     with pytest.raises(PlanError, match=words):
         text_drawing(TextSpec("A日本" if font is None else "A日", 5, font=font))
+
+
+def test_a_file_that_is_no_font_is_one_line(tmp_path):
+    (tmp_path / "logo.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 64)
+    with pytest.raises(PlanError, match="logo.png: not a font .* that can be read"):
+        text_drawing(TextSpec("A", 5, font=str(tmp_path / "logo.png")))

@@ -28,7 +28,7 @@ def add_content_options(parser):
     text.add_argument("--text-at", type=pair_mm("--text-at"), default=(0.0, 0.0),
                       metavar="X,Y", help="where the first line's baseline starts (left), is "
                                           "centred (centre) or ends (right), field mm "
-                                          "(default: 0,0)")
+                                          "(default: 0,0; a negative X as --text-at=-5,2)")
     text.add_argument("--align", choices=[*ALIGNMENTS, "center"], default="left",
                       help="each line's left end, centre or right end at --text-at")
     text.add_argument("--letter-spacing", type=number_in("letter spacing", -100, 1000),
@@ -85,7 +85,8 @@ def add_content_options(parser):
                        default=None, metavar="MM", help="scan line spacing and cell width, mm "
                                                         "(default: the spot's diameter)")
     image.add_argument("--image-at", type=pair_mm("--image-at"), default=None, metavar="X,Y",
-                       help="the picture's centre, field mm (default: 0,0)")
+                       help="the picture's centre, field mm (default: 0,0; a negative X as "
+                            "--image-at=-5,2)")
     image.add_argument("--one-way", action="store_true",
                        help="every scan line left to right (default: each the other way from "
                             "the last)")
@@ -101,21 +102,36 @@ def has_content(args):
     return any(getattr(args, kind, None) is not None for kind in _OPTIONS)
 
 
+class _Moment:
+    """The time of marking as a field: ``{date:%d.%m.%Y}`` its strftime; bare ``{date}`` the
+    ISO date, ``{time}`` hours and minutes (not Python's microseconds)."""
+
+    def __init__(self, now, plain):
+        self.now, self.plain = now, plain
+
+    def __format__(self, spec):
+        return self.now.strftime(spec or self.plain)
+
+
 def fields(text, *, serial=None, what="--text"):
     """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
-    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`) for a field it does not know."""
+    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`) for a field it does not know
+    or one written wrong."""
     from datetime import datetime
     from ..jobs.plan import PlanError
     now = datetime.now()
-    values = {"date": now, "time": now}
-    if serial is not None:
-        values["serial"] = serial
+    values = {"serial": serial if serial is not None else 0,
+              "date": _Moment(now, "%Y-%m-%d"), "time": _Moment(now, "%H:%M")}
+    known = "{serial}, {serial:05d}, {date}, {date:%d.%m.%Y}, {time}, {time:%H:%M:%S}"
     try:
         return text.replace("\\n", "\n").format(**values)
-    except (KeyError, IndexError, ValueError, AttributeError) as error:
-        known = ", ".join(values)
-        raise PlanError(f"{what} {text!r}: {' '.join(str(error).split())} is not a field it "
-                        f"knows ({known}; braces as {{{{ and }}}})") from None
+    except (KeyError, IndexError, AttributeError) as error:
+        raise PlanError(f"{what} {text!r}: {{{' '.join(str(error).split()).strip(chr(39))}}} "
+                        f"is not a field galvoscan knows ({known}; a brace itself as {{{{ "
+                        f"or }}}})") from None
+    except ValueError as error:
+        raise PlanError(f"{what} {text!r}: a field written wrong ({' '.join(str(error).split())}"
+                        f"); fields are {known}, a brace itself {{{{ or }}}}") from None
 
 
 def check_content_options(args):

@@ -156,7 +156,8 @@ def _cmd_mark(args):
         save_job_file(args, args.save)
         say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
     if counter is not None:
-        say(f"serials {serials[0]}" + (f" … {serials[-1]}" if len(serials) > 1 else "") +
+        say(f"serial{'s' if len(serials) > 1 else ''} {serials[0]}" +
+            (f" … {serials[-1]}" if len(serials) > 1 else "") +
             f" (kept in {counter.path}; advanced when a part has been marked"
             f"{', not by a simulation' if args.sim else ''})")
     total_s = sum(part.estimate_s for part, *_ in parts)
@@ -349,8 +350,9 @@ def add_parsers(commands):
                           "the guide laser on and the laser off, to position the part; marks "
                           "nothing")
     out.add_argument("--json", action="store_true",
-                     help="print the result as JSON (with --sim: the marked points, decoded "
-                          "off the XY2-100 wires, in the drawing's mm)")
+                     help="print the result as one JSON object on stdout (with --sim: the "
+                          "marked points decoded off the XY2-100 wires, in field mm and in the "
+                          "drawing's own)")
     add_job_link_options(mark)
     add_machine_option(mark)
     mark.set_defaults(run=_cmd_mark)

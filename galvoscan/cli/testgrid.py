@@ -57,7 +57,7 @@ def _cmd_test_grid(args):
         fail(error)
     say = (lambda line: print(line, file=sys.stderr)) if args.json else print
     total = sum(c.job.estimate_s for c in cells) + labels.estimate_s
-    say(f"{len(cells)} squares of {args.cell:g} mm, {prr:g} kHz, labels at "
+    say(f"{len(cells)} square{'' if len(cells) == 1 else 's'} of {args.cell:g} mm, {prr:g} kHz, labels at "
         f"{args.label_speed:g} mm/s; estimated time {total:.1f} s")
     for c in cells:
         say(f"  {c.speed_mm_s:7.1f} mm/s  {c.power_percent:5.1f} %  at ({c.centre_mm[0]:g}, "

@@ -138,7 +138,7 @@ def code_drawing(spec):
     name = f"{spec.kind.value} code {spec.data[:20]!r}"
     notes = (f"{name}: {columns} × {rows if not height else 1} modules of "
              f"{module * 1000:.0f} µm, {spec.size_mm:g} mm wide; keep {quiet:.2f} mm clear "
-             f"around it (its quiet zone, {spec.quiet} modules)",)
+             f"around it (its quiet zone, {spec.quiet} module{'' if spec.quiet == 1 else 's'})",)
     return Drawing(name=name, paths=tuple(paths), closed=tuple(closed), notes=notes), module
 
 

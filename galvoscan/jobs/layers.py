@@ -195,6 +195,11 @@ def plan_layers(objects, layers, settings, profile):
     from .plan import Placement, PlanError, place
     from .vector_job import check_clear, plan_objects
     check_clear(objects)
+    seen = set()
+    for layer in layers:
+        if layer.match.casefold() in seen:
+            raise PlanError(f"layer {layer.match!r} is given twice: give its settings once")
+        seen.add(layer.match.casefold())
     by_layer, rest = [[] for _ in layers], []
     for o in objects:
         if o.layer is not None:

@@ -109,8 +109,14 @@ def _bayer(n=8):
 
 def photo_bitmap(spec):
     """The dithered grid: a bool array, ``True`` for a dark cell (marked), row 0 at the top."""
+    return _bitmap(spec)[0]
+
+
+def _bitmap(spec):
+    """The dithered grid and the picture's width in pixels."""
     from PIL import Image
     grey = _grey(spec)
+    pixels = grey.width
     columns = max(1, round(spec.width_mm / spec.line_spacing_mm))
     rows = max(1, round(columns * grey.height / grey.width))
     if rows * columns > MAX_CELLS:
@@ -119,20 +125,20 @@ def photo_bitmap(spec):
                            f"--width or a wider --line-spacing")
     grey = grey.resize((columns, rows), Image.Resampling.LANCZOS)
     if spec.dither is Dither.FLOYD:
-        return np.asarray(grey.convert("1", dither=Image.Dither.FLOYDSTEINBERG)) == 0
+        return np.asarray(grey.convert("1", dither=Image.Dither.FLOYDSTEINBERG)) == 0, pixels
     values = np.asarray(grey, dtype=float)
     if spec.dither is Dither.THRESHOLD:
-        return values < 128
+        return values < 128, pixels
     bayer = _bayer()
     limits = (bayer + 0.5) / bayer.size * 255
     tiled = np.tile(limits, (rows // 8 + 1, columns // 8 + 1))[:rows, :columns]
-    return values < tiled
+    return values < tiled, pixels
 
 
 def photo_drawing(spec):
     """The photo as a :class:`~.drawing.Drawing` of open marks in scan order (its lower-left
     corner at 0,0, Y up), and its grid."""
-    dark = photo_bitmap(spec)
+    dark, pixels = _bitmap(spec)
     rows, columns = dark.shape
     s = spec.line_spacing_mm
     paths = []
@@ -150,11 +156,16 @@ def photo_drawing(spec):
         raise DrawingError(f"{name}: no dark pixels to mark at {s:g} mm ({spec.dither.value})")
     for path in paths:
         path.flags.writeable = False
-    notes = (f"{name}: {columns} × {rows} cells of {s * 1000:.0f} µm ({spec.width_mm:g} × "
+    notes = [f"{name}: {columns} × {rows} cells of {s * 1000:.0f} µm ({spec.width_mm:g} × "
              f"{rows * s:.2f} mm), {spec.dither.value} dithered, {int(dark.sum()):,} dark in "
-             f"{len(paths):,} marks",)
+             f"{len(paths):,} marks"]
+    if columns > 1.5 * pixels:
+        notes.append(f"{name}: {pixels} pixels across made {columns} cells ({columns / pixels:.1f}"
+                     f" × enlarged): a picture with more pixels, or a wider --line-spacing, "
+                     f"keeps its detail")
     return Drawing(name=name, paths=tuple(paths), closed=(False,) * len(paths),
-                   notes=notes), dark
+                   notes=tuple(notes)), dark
+
 
 
 def photo_object(spec, settings, *, centre_mm=(0.0, 0.0)):

@@ -133,8 +133,10 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
             if first:
                 handles.append(handle)
         ax.plot([-half, half, half, -half, -half], [-half, -half, half, half, -half],
-                color="tab:red", linewidth=0.8)
-        keep(Line2D([], [], color="tab:red", linewidth=0.8, label=f"field {field_mm:g} mm"))
+                color="0.35", linewidth=0.8, linestyle="-.")
+        # (Grey, dash-dotted: a layer's colour may be any, red too.)
+        keep(Line2D([], [], color="0.35", linewidth=0.8, linestyle="-.",
+                    label=f"field {field_mm:g} mm"))
         if jumps and jump_lines:
             # Under the marks: a jump is where the laser is off, the marks are what matters.
             ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,

@@ -112,9 +112,16 @@ def _font(font):
     """matplotlib's FontProperties of a family name or a font file, by its file (the family's
     found here, once); one line if missing."""
     from matplotlib.font_manager import FontProperties, findfont
-    if font and (os.sep in font or font.lower().endswith((".ttf", ".otf", ".ttc"))):
+    if font and (os.sep in font or font.lower().endswith((".ttf", ".otf", ".ttc")) or
+                 Path(font).is_file()):
         if not Path(font).is_file():
             raise PlanError(f"font file {font}: not found")
+        from matplotlib.font_manager import get_font
+        try:
+            get_font(font)
+        except (RuntimeError, OSError, ValueError):
+            raise PlanError(f"font file {font}: not a font (TrueType or OpenType) that can "
+                            f"be read") from None
         return FontProperties(fname=font)
     family = font or "DejaVu Sans"
     prop = FontProperties(family=family)
