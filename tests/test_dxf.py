@@ -278,3 +278,14 @@ def test_dxf_text_in_a_missing_font_or_with_missing_characters(tmp_path):
     assert "text entity in font nosuchfont.ttf, not installed: marked in" in said
     assert "text entity left out: '日本' not in font" in said
     assert max(p[:, 1].max() for p in d.paths) < 5          # the 日本 at y = 10 is not there
+
+
+def test_a_drawing_too_large_names_the_units_the_file_gives(tmp_path):
+    """ezdxf's new files are in metres: a 30 mm line drawn as 30 is 30 m, and the refusal
+    says the file's units, not only 'check the drawing's units'."""
+    from galvoscan.jobs.drawing import DrawingError
+    doc, msp = new_dxf(units=6)
+    msp.add_line((0, 0), (30, 0))
+    with pytest.raises(DrawingError, match=r"check the drawing's units \(DXF units m "
+                                           r"\(\$INSUNITS 6\): 1000 mm each\)"):
+        load_dxf(tmp_path, doc)

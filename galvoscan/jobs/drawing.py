@@ -169,8 +169,10 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles):
                       tuple(kept))
     xmin, ymin, xmax, ymax = drawing.bounds()
     if max(xmax - xmin, ymax - ymin) > MAX_EXTENT_MM:
+        said = [note for note in notes if "units" in note]
         raise DrawingError(f"{path}: {xmax - xmin:.6g} × {ymax - ymin:.6g} mm, more than "
-                           f"{MAX_EXTENT_MM / 1000:g} m: check the drawing's units")
+                           f"{MAX_EXTENT_MM / 1000:g} m: check the drawing's units"
+                           f"{f' ({said[0]})' if said else ''}")
     return drawing
 
 

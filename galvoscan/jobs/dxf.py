@@ -326,6 +326,9 @@ def _read_dxf(data, tolerance_mm):
         factor = 1.0
     elif code in _EXACT_MM:
         factor = _EXACT_MM[code]
+        if factor != 1.0:
+            notes.append(f"DXF units {units.decode(code)} ($INSUNITS {code}): "
+                         f"{factor:g} mm each")
     else:
         try:
             factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
