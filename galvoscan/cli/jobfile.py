@@ -313,9 +313,16 @@ def save_job_file(args, path):
     layers = getattr(args, "layer_tables", None) or []
     if layers:
         document["layer"] = [dict(t) for t in layers]
+    # Each table of a list as a [[table]] of its own, as a person writes one (tomli-w puts a
+    # list of short tables inline).
+    text = "# galvoscan job: `galvoscan mark " + Path(path).name + "` marks it\n"
+    if "job" in document:
+        text += "\n" + tomli_w.dumps({"job": document.pop("job")})
+    for section, tables in document.items():
+        for table in tables:
+            text += f"\n[[{section}]]\n" + tomli_w.dumps(table)
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text("# galvoscan job: `galvoscan mark " + Path(path).name +
-                              "` marks it\n" + tomli_w.dumps(document), encoding="utf-8")
+        Path(path).write_text(text, encoding="utf-8")
     except OSError as error:
         fail(f"{path}: cannot write the job file ({error.strerror})")
