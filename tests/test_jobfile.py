@@ -84,7 +84,11 @@ def test_saved_job_plans_as_its_command_line(job_folder, capsys):
      r"'port' belongs to a run, not to the job: give --port on the command line"),
     ("[[code]]\nkind = 'qr'\ndata = 'x'\n", r"\[\[code\]\] 1: --code needs --data TEXT and --size"),
     ("[[image]]\nfile = 'nowhere.png'\nwidth = 3\n", r"\[\[image\]\] 1: .*nowhere.png: no such file"),
-    ("[[drawing]]\nfile = 'gone.svg'\n", r"\[\[drawing\]\] 1: .*gone.svg: no such file"),
+    ("[[drawing]]\nfile = 'gone.svg'\n", r"bad.toml \[\[drawing\]\] 1: .*gone.svg: no such file"),
+    ("[[drawing]]\n", r"\[\[drawing\]\] 1 needs file = … \(the SVG, DXF or .job"),
+    ("[[image]]\nwidth = 5\n", r"\[\[image\]\] 1 needs file"),
+    ("[[text]]\nheight = 3\n", r"\[\[text\]\] 1 needs text = … \(the text to mark\)"),
+    ("[[code]]\ndata = 'x'\n", r"\[\[code\]\] 1 needs kind"),
 ])
 def test_bad_job_files_are_one_line(job_folder, capsys, text, words):
     (job_folder / "bad.toml").write_text(text)

@@ -199,3 +199,31 @@ def test_a_layered_plan_and_its_preview_give_the_same_jumps(tmp_path, capsys):
                      "--json"]) == 0
     record = json.loads(capsys.readouterr().out)
     assert f"jumps {record['jump_mm']:.1f} mm" in (tmp_path / "p.svg").read_text()
+
+
+def test_a_layer_keeps_a_codes_and_a_photos_own_fill(tmp_path, capsys):
+    """A layer's hatch and outline apply to drawings and outline text; a code's module lines,
+    a photo's scan lines and single-line strokes are their own (outline = false dropped the
+    photo without a word): in the layer they take its speed and power only."""
+    from PIL import Image
+    Image.new("L", (20, 20), 0).save(tmp_path / "black.png")
+    job = tmp_path / "job.toml"
+    job.write_text('[[image]]\nfile = "black.png"\nwidth = 2\nat = [10, 0]\nlayer = "T"\n'
+                   '[[code]]\nkind = "qr"\ndata = "7"\nsize = 4\nat = [-10, 0]\nlayer = "T"\n'
+                   '[[text]]\ntext = "AB"\nfont = "hershey"\nheight = 2\nat = [0, 8]\n'
+                   'layer = "T"\n'
+                   '[[layer]]\nmatch = "T"\nspeed = 503.5\noutline = false\nhatch = "0.3,45"\n')
+    assert main(["mark", str(job), "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    (layer,) = record["layers"]
+    xmin, ymin, xmax, ymax = layer["bounds_mm"]
+    assert xmin < -11.5 and xmax > 10.9 and ymax > 9.5        # the code, the photo, the text
+    assert layer["speed_mm_s"] == pytest.approx(503.5, rel=0.01)
+    # A drawing that has nothing to mark at its layer's settings is refused, naming it.
+    svg = tmp_path / "lines.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                   'viewBox="0 0 10 10"><path d="M1 1 L9 9" stroke="#ff0000"/></svg>')
+    with pytest.raises(SystemExit, match=r"layer '#ff0000': lines.svg \[#ff0000\]: nothing "
+                                         r"to mark"):
+        main(["mark", str(svg), "--text", "A", "--font", "hershey", "--text-at=0,-20",
+              "--layer", "#ff0000", "outline=no", "--estimate"])

@@ -212,7 +212,8 @@ def _text_object(args, settings, profile, serial):
     else:
         fill = settings if settings.hatch or settings.contour else replace(
             settings, hatch=(HatchSet(profile.laser.spot_mm / 2),), outline=True)
-    return MarkObject(drawing, Placement(origin="page", offset_mm=tuple(args.text_at)), fill)
+    return MarkObject(drawing, Placement(origin="page", offset_mm=tuple(args.text_at)), fill,
+                      own_fill=bool(spec.hershey))   # single strokes: the lines themselves
 
 
 def part_serials(args, profile):

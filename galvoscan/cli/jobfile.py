@@ -108,7 +108,14 @@ def _read(dest, value, action, where):
     return parsed
 
 
-def _entry(section, table, actions, folder, where, defaults):
+#: The key each table cannot do without.
+_NEEDED = {"drawing": "file", "text": "text", "code": "kind", "image": "file"}
+_NEEDED_WHAT = {"drawing": "the SVG, DXF or .job, relative to the job file",
+                "text": "the text to mark", "code": "qr, datamatrix or code128",
+                "image": "the PNG or JPEG, relative to the job file"}
+
+
+def _entry(section, table, actions, folder, where, defaults, folder_name=""):
     """A table as ``{dest: value}``, the options it leaves out at their defaults."""
     if not isinstance(table, dict):
         raise ValueError(f"{where} must be a table of settings")
@@ -117,7 +124,10 @@ def _entry(section, table, actions, folder, where, defaults):
         dest.removeprefix("not "): getattr(defaults, dest.removeprefix("not "), None)
         for dest in keys.values() if dest != "layer"}
     if section != "job":
-        entry["_where"] = where              # for what goes wrong with it later
+        needed = _NEEDED[section]
+        if needed not in table:
+            raise ValueError(f"{where} needs {needed} = … ({_NEEDED_WHAT[section]})")
+        entry["_where"] = f"{folder_name} {where}"      # for what goes wrong with it later
     for key, value in table.items():
         if key not in keys and key.replace("-", "_") in _RUN_OPTIONS:
             raise ValueError(f"{where}: {key!r} belongs to a run, not to the job: give "
@@ -191,7 +201,7 @@ def load_job_file(path):
                     tables.append(table)
                 else:
                     entries[section].append(_entry(section, table, actions, folder, where,
-                                                   defaults))
+                                                   defaults, path.name))
     except ValueError as error:
         fail(f"{path}: {error}")
     if not any(entries[s] for s in ("drawing", "text", "code", "image")):
@@ -315,7 +325,7 @@ def save_job_file(args, path):
         document["layer"] = [dict(t) for t in layers]
     # Each table of a list as a [[table]] of its own, as a person writes one (tomli-w puts a
     # list of short tables inline).
-    text = "# galvoscan job: `galvoscan mark " + Path(path).name + "` marks it\n"
+    text = f"# galvoscan job: `galvoscan mark {path}` marks it\n"
     if "job" in document:
         text += "\n" + tomli_w.dumps({"job": document.pop("job")})
     for section, tables in document.items():

@@ -170,4 +170,4 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
         fill = replace(settings, hatch=(HatchSet(module / lines, 0.0),), contour=None,
                        outline=True)
     return MarkObject(drawing, Placement(offset_mm=tuple(centre_mm)), fill,
-                      keep_clear_mm=spec.quiet * module)
+                      keep_clear_mm=spec.quiet * module, own_fill=True)

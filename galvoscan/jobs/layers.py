@@ -234,7 +234,7 @@ def plan_layers(objects, layers, settings, profile):
             planned.append(LayerJob(None, settings, plan_objects(held, settings, profile),
                                     preview_colour(None, k)))
             continue
-        held = [replace(o, fill=layer.settings(o.fill)) for o in held]
+        held = [replace(o, fill=_layer_fill(layer, o)) for o in held]
         layer_settings = layer.settings(settings)
         try:
             job = plan_objects(held, layer_settings, profile)
@@ -242,6 +242,17 @@ def plan_layers(objects, layers, settings, profile):
             raise PlanError(f"layer {layer.match!r}: {error}") from None
         planned.append(LayerJob(layer, layer_settings, job, preview_colour(layer, k)))
     return planned
+
+
+def _layer_fill(layer, o):
+    """An object's fill in ``layer``: the layer's settings, but a code's or a photo's own
+    fill kept (its modules' lines, its scan lines: a layer's hatch or outline would undo
+    it)."""
+    fill = layer.settings(o.fill)
+    if o.own_fill:
+        fill = replace(fill, hatch=o.fill.hatch, hatch_lines=o.fill.hatch_lines,
+                       contour=o.fill.contour, outline=o.fill.outline)
+    return fill
 
 
 def merged(layer_jobs):

@@ -181,4 +181,4 @@ def photo_object(spec, settings, *, centre_mm=(0.0, 0.0)):
     corner = (centre_mm[0] - columns * spec.line_spacing_mm / 2,
               centre_mm[1] - rows * spec.line_spacing_mm / 2)
     return MarkObject(drawing, Placement(origin="page", offset_mm=corner), fill,
-                      keep_order=True)
+                      keep_order=True, own_fill=True)

@@ -217,6 +217,7 @@ class MarkObject:
     keep_clear_mm: float = 0.0
     keep_order: bool = False
     layer: str = None               # the layer (by name) it takes its settings from
+    own_fill: bool = False          # its fill is its own (a code's, a photo's): no layer's
 
 
 def plan_vector_job(drawing, placement, settings, profile):
@@ -241,6 +242,9 @@ def plan_objects(objects, settings, profile):
                                               keep_order=o.keep_order)
             if paths:
                 here = paths[-1][-1]
+            elif index == 0 and len(objects) > 1:
+                raise PlanError(f"{o.drawing.name}: nothing to mark at its settings (no "
+                                f"outline, and no closed shape to fill)")
             planned.append((paths, before, after))
     ordered = [path for paths, _, _ in planned for path in paths]
     if not ordered:
