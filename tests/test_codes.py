@@ -112,10 +112,12 @@ def test_a_marked_code_reads_back_off_the_wires(args, spot, size, kind, tmp_path
 @pytest.mark.parametrize("args, words", [
     (["--data", "A" * 3000, "--size", "5"], "modules of 30 µm, less than the 50 µm spot"),
     (["--data", "hello", "--size", "0.5"], "modules of 24 µm, less than the 50 µm spot"),
+    (["--data", "x", "--size", "5", "--code-height", "5"], "--code-height is Code 128's"),
     (["--data", "hello", "--size", "0.7", "--code-fill", "dots"],
      "modules of 33 µm, less than the 50 µm spot \\(a dot may be 4/3 of its module\\)"),
 ])
 def test_a_code_too_fine_for_the_spot_is_refused(args, words):
+    """(And a bar height is Code 128's only.)"""
     """A module narrower than the spot (the default profile's 50 µm) cannot be marked apart
     from its neighbours: a code too long for its size is refused before anything is sent."""
     with pytest.raises(SystemExit, match=words):

@@ -153,3 +153,15 @@ def test_a_hole_is_hatched_around_a_side_at_a_time(order):
     if order is LineOrder.SERPENTINE:   # (one way, each line starts back at its side)
         steps = [np.hypot(*(b[0] - a[-1])) for a, b in zip(strokes, strokes[1:])]
         assert sum(steps) < 60      # (across the hole on each of 40 lines: over 160 mm)
+
+
+def test_a_hatch_finer_than_a_galvo_unit_is_refused(tmp_path):
+    """Lines closer than a galvo unit fall on one another: refused, saying the unit."""
+    from galvoscan.cli import main
+    svg = tmp_path / "sq.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="5mm" height="5mm" '
+                   'viewBox="0 0 5 5"><rect width="5" height="5" fill="none" stroke="red"/>'
+                   '</svg>')
+    with pytest.raises(SystemExit, match=r"hatch spacing 0.001 mm is finer than a galvo unit "
+                                         r"\(1.68 µm on this field\)"):
+        main(["mark", str(svg), "--hatch", "0.001", "--estimate"])

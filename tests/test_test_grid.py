@@ -48,6 +48,9 @@ def test_the_grid_and_its_settings():
     (["--speeds", "100", "--powers", "10", "--preview", "g.bmp"], ".png"),
     # A speed past what the machine makes is refused, not replaced by the fastest.
     (["--speeds", "200:5000:3", "--powers", "20"], "2600 mm/s is out of reach at 50 kHz"),
+    # A grid past the field says so as a grid, not as one square's place.
+    (["--speeds", "200:1000:10", "--powers", "20:80:10", "--cell", "20"],
+     "10 × 10 squares of 20 mm, 2 mm apart, make a grid 218 × 218 mm"),
 ])
 def test_bad_grids_are_one_line(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:

@@ -175,6 +175,9 @@ def _code_object(args, settings, profile, serial):
     from ..jobs.plan import PlanError
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
+    if args.code_height is not None and CodeKind(args.code) is not CodeKind.CODE128:
+        raise PlanError(f"--code-height is Code 128's bar height: a {args.code} code is "
+                        f"--size wide and as high")
     spec = CodeSpec(CodeKind(args.code), fields(args.data, serial=serial, what="--data"),
                     args.size, ec_level=args.code_ec,
                     fill=CodeFill(args.code_fill), quiet_modules=args.code_quiet,

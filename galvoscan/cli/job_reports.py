@@ -22,8 +22,9 @@ def describe_job(job, profile, settings_line):
     ]
     if job.layers:
         # Each layer has its own settings: they are said a layer a line (describe_layers).
-        lines.append(f"{len(job.layers)} layers, each marked as a job of its own; estimated "
-                     f"time {job.estimate_s:.3f} s")
+        many = len(job.layers) > 1
+        lines.append(f"{len(job.layers)} layer{'s, each' if many else ','} marked as a job of "
+                     f"its own; estimated time {job.estimate_s:.3f} s")
         return lines + [f"note: {note}" for note in job.notes]
     lines += [
         settings_line,

@@ -110,19 +110,28 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
         for line in describe_layers(job, profile):
             say(line)
     if args.preview:
-        from ..jobs.preview import preview
-        source = args.file or getattr(args, "job_file", None)
-        dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
-        title = f"{Path(source).name if source else drawing.name}: " \
-                f"{job.mark_mm:.1f} mm marked" + (f", {dots} dots" if dots else "")
-        if job.layers:
-            preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
-                    groups=[(f"{lj.label}: {lj.job.mark_mm:.1f} mm", lj.colour, lj.job.paths_mm)
-                            for lj in job.layers])
-        else:
-            preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title)
+        _draw_preview(args, job, drawing, profile)
         say(f"wrote {args.preview}")
     return job, placement, drawing, profile, wobbles, say
+
+
+def _draw_preview(args, job, drawing, profile):
+    """The preview of one pass (each layer's in its colour), the title saying all passes'."""
+    from ..jobs.preview import preview
+    from ..jobs.speed import path_length_mm
+    source = args.file or getattr(args, "job_file", None)
+    dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
+    passes = max(lj.settings.passes for lj in job.layers) if job.layers else \
+        (args.passes or profile.defaults.passes)
+    title = f"{Path(source).name if source else drawing.name}: {job.mark_mm:.1f} mm marked" + \
+        (f", {dots} dots" if dots else "") + (" (a pass drawn)" if passes > 1 else "")
+    groups = None
+    if job.layers:
+        groups = [(f"{lj.label}: {path_length_mm(lj.job.paths_mm):.1f} mm"
+                   f"{f' × {lj.settings.passes} passes' if lj.settings.passes > 1 else ''}",
+                   lj.colour, lj.job.paths_mm) for lj in job.layers]
+    preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
+            groups=groups)
 
 
 def _cmd_mark(args):
@@ -162,8 +171,11 @@ def _cmd_mark(args):
             f"{', not by a simulation' if args.sim else ''})")
     total_s = sum(part.estimate_s for part, *_ in parts)
     if len(parts) > 1:
-        say(f"{len(parts)} parts: estimated time {total_s:.1f} s in all, the time to send each "
-            f"part aside")
+        hours, rest = divmod(round(total_s), 3600)
+        said = f"{hours} h {rest // 60:02d} min" if hours else \
+            (f"{rest // 60} min {rest % 60:02d} s" if rest >= 60 else f"{total_s:.1f} s")
+        say(f"{len(parts)} parts: estimated time {said} in all, the time to send each part "
+            f"aside")
     if args.estimate or not has_link(args, profile):
         if not args.estimate and not args.preview:
             say("no board given (--port, --spi or --sim): nothing sent")

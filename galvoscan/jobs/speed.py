@@ -13,7 +13,13 @@ import math
 import numpy as np
 
 
-__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths"]
+__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths", "path_length_mm"]
+
+
+def path_length_mm(paths_mm):
+    """The length of polylines in mm (a pass of a job's marks, as the preview draws them)."""
+    return sum(float(np.sum(np.hypot(*np.diff(np.asarray(p, dtype=float), axis=0).T)))
+               for p in paths_mm)
 
 
 @dataclass(frozen=True)

@@ -53,6 +53,14 @@ def plan_test_grid(speeds, powers, profile, *, prr_khz, cell_mm=5.0, gap_mm=2.0,
     pitch = cell_mm + gap_mm
     width, height = len(speeds) * pitch - gap_mm, len(powers) * pitch - gap_mm
     x0, y0 = -width / 2, -height / 2
+    # The squares and their labels (a row of numbers below, a column at the left) in the field.
+    reach = max(width / 2 + gap_mm + 4 * label_height_mm,
+                height / 2 + gap_mm + 2 * label_height_mm)
+    if reach > profile.field.size_mm / 2:
+        raise PlanError(f"{len(speeds)} × {len(powers)} squares of {cell_mm:g} mm, {gap_mm:g} mm "
+                        f"apart, make a grid {width:g} × {height:g} mm with its labels reaching "
+                        f"±{reach:.1f} mm; the field is ±{profile.field.size_mm / 2:g} mm: fewer "
+                        f"or smaller squares")
     hatch = HatchSet(hatch_mm or profile.laser.spot_mm / 2)
     half = cell_mm / 2
     square = np.array([(-half, -half), (half, -half), (half, half), (-half, half),

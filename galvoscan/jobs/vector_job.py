@@ -231,6 +231,12 @@ def plan_objects(objects, settings, profile):
     machine at ``settings``' speed, power, PRR and passes."""
     field_mm = profile.field.size_mm
     _machine_settings(settings, profile)        # the speed and PRR first: the cheap checks
+    for o in objects:
+        for hatch_set in o.fill.hatch:
+            if hatch_set.spacing_mm < profile.mm_per_unit:
+                raise PlanError(f"hatch spacing {hatch_set.spacing_mm:g} mm is finer than a "
+                                f"galvo unit ({profile.mm_per_unit * 1000:.2f} µm on this "
+                                f"field): the lines would fall on one another")
     placed = [place(o.drawing, o.placement) for o in objects]
     _check_clear(objects, placed)
     # A pass's fills differ from the last only where a hatch set turns a step each pass.
