@@ -39,6 +39,16 @@ def test_modules_and_shapes():
     assert area.area == pytest.approx(dark.sum() * module ** 2, rel=1e-9)
 
 
+def test_code128_bars_are_filled_along_their_length(capsys):
+    """A Code 128's bars are filled with lines along them: 20 mm of code, 4 mm high, at a 50 µm
+    spot is some 1,200 segments (lines across them, one every 25 µm of the height: 11,315)."""
+    assert main(["mark", "--code", "code128", "--data", "LOT 7731", "--size", "20",
+                 "--code-height", "4", "--estimate", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["segments"] < 1500
+    assert record["bounds_mm"][3] - record["bounds_mm"][1] == pytest.approx(4, abs=0.01)
+
+
 def test_code128_is_bars():
     spec = CodeSpec("code128", "ABC-123", 30, height_mm=6)
     dark = code_modules(spec)

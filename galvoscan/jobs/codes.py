@@ -167,7 +167,10 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
         fill = replace(settings, hatch=(), contour=None, outline=True)
     else:
         lines = max(1, math.ceil(module / (spot_mm / 2) - 1e-9))
-        fill = replace(settings, hatch=(HatchSet(module / lines, 0.0),), contour=None,
+        # Along the rows; a Code 128's bars along their length (a few long lines a bar, not
+        # a short one across it every spacing of its height).
+        angle = 90.0 if spec.kind is CodeKind.CODE128 else 0.0
+        fill = replace(settings, hatch=(HatchSet(module / lines, angle),), contour=None,
                        outline=True)
     return MarkObject(drawing, Placement(offset_mm=tuple(centre_mm)), fill,
                       keep_clear_mm=spec.quiet * module, own_fill=True)
