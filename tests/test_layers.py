@@ -74,6 +74,27 @@ def test_dxf_layers_by_name(tmp_path):
     assert len(parts[0].paths) == 2 and len(rest.paths) == 1
 
 
+def test_dxf_colours_and_colour_names(tmp_path):
+    """A DXF entity's colour: its ACI number (1 red), BYLAYER its layer's (5 blue), or its
+    true colour; a CSS colour name (red) matches paths of that colour, in SVG or DXF."""
+    import ezdxf
+    document = ezdxf.new(units=4)
+    document.layers.add("CUT", color=5)
+    space = document.modelspace()
+    space.add_line((0, 0), (10, 0), dxfattribs={"color": 1})
+    space.add_line((0, 5), (10, 5), dxfattribs={"layer": "CUT"})
+    space.add_line((0, 8), (10, 8), dxfattribs={"true_color": 0x00FF00})
+    document.saveas(tmp_path / "colours.dxf")
+    drawing = load_drawing(tmp_path / "colours.dxf")
+    assert [s.colour for s in drawing.styles] == ["#ff0000", "#0000ff", "#00ff00"]
+    parts, rest = split_by_layer(drawing, [Layer("red"), Layer("#00f")])
+    assert [len(p.paths) for p in parts] == [1, 1] and len(rest.paths) == 1
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    parts, _ = split_by_layer(load_drawing(svg), [Layer("red")])
+    assert len(parts[0].paths) == 2                     # stroke="#FF0000" and "#ff0000"
+
+
 @pytest.mark.parametrize("layer, words", [
     (["#ff0000", "sped=300"], "'sped' is not a layer setting \\(did you mean 'speed'\\?\\)"),
     (["#ff0000", "speed=0"], "--layer #ff0000: speed: speed must be from 0.1"),

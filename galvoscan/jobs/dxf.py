@@ -199,6 +199,31 @@ def _entity_points(entity, tolerance, skipped):
     return None
 
 
+def _entity_colour(entity, document, layer):
+    """An entity's colour as ``#rrggbb``: its true colour, else its ACI colour, BYLAYER its
+    layer's (ezdxf's ACI table: 1 red, 5 blue, 7 white …); None for BYBLOCK or unknown."""
+    from ezdxf import colors
+    try:
+        if entity.dxf.hasattr("true_color"):
+            r, g, b = colors.int2rgb(entity.dxf.true_color)
+            return f"#{r:02x}{g:02x}{b:02x}"
+        aci = entity.dxf.get("color", colors.BYLAYER)
+        if aci == colors.BYLAYER:
+            table = document.layers.get(layer)
+            if table is None:
+                return None
+            if table.dxf.hasattr("true_color"):
+                r, g, b = colors.int2rgb(table.dxf.true_color)
+                return f"#{r:02x}{g:02x}{b:02x}"
+            aci = abs(table.dxf.get("color", 7))
+        if not 1 <= aci <= 255:
+            return None
+        r, g, b = colors.aci2rgb(aci)
+        return f"#{r:02x}{g:02x}{b:02x}"
+    except Exception:                       # a damaged table: no colour, the rest is read
+        return None
+
+
 def _text_outlines(entity, tolerance, skipped):
     """A TEXT's, ATTRIB's or MTEXT's glyphs as closed outlines, in the text style's font (as
     ezdxf's text2path finds it; an MTEXT first exploded into TEXT entities by ezdxf's
@@ -345,7 +370,10 @@ def _read_dxf(data, tolerance_mm):
         else:                               # flattened in the drawing's own units
             before = len(out)
             _dxf_entity(entity, tolerance_mm / factor, out, skipped)
-            # A block's entities go with the reference's layer (as CAD's layer 0 does).
-            styles += [PathStyle(layer=str(entity.dxf.get("layer", "0")))] * (len(out) - before)
+            # A block's entities go with the reference's layer and colour (as CAD's layer 0
+            # and BYBLOCK do).
+            layer = str(entity.dxf.get("layer", "0"))
+            styles += [PathStyle(colour=_entity_colour(entity, document, layer),
+                                 layer=layer)] * (len(out) - before)
     skipped = _counted(skipped)
     return [p * factor for p, _ in out], [c for _, c in out], skipped, notes, styles

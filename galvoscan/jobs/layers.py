@@ -76,12 +76,22 @@ class Layer:
     def is_colour(self):
         return colour_key(self.match) is not None
 
+    @property
+    def colour_name(self):
+        """The colour a CSS colour name stands for (``red``: ``#ff0000``), else None: a name
+        such as ``red`` matches paths of that colour as well as a layer of that name."""
+        from matplotlib.colors import CSS4_COLORS
+        found = CSS4_COLORS.get(self.match.lower())
+        return found.lower() if found else None
+
     def matches(self, style):
         if style is None:
             return False
         if self.is_colour:
             return style.colour == self.match
-        return style.layer is not None and style.layer.casefold() == self.match.casefold()
+        named = self.colour_name
+        return (style.layer is not None and style.layer.casefold() == self.match.casefold()) \
+            or (named is not None and style.colour == named)
 
     def settings(self, base):
         """``base`` (a :class:`~.vector_job.JobSettings`) with this layer's settings in it."""
@@ -166,8 +176,9 @@ def preview_colour(layer, index):
     drawn as light grey), else one of a palette; the rest (``layer`` None) black."""
     if layer is None:
         return "black"
-    if layer.is_colour:
-        return "#cccccc" if layer.match == "#ffffff" else layer.match
+    colour = layer.match if layer.is_colour else layer.colour_name
+    if colour is not None:
+        return "#cccccc" if colour == "#ffffff" else colour
     return _PALETTE[index % len(_PALETTE)]
 
 
