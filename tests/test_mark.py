@@ -481,3 +481,46 @@ def test_cross_hatch_and_contour_marked_off_the_wires(tmp_path, capsys):
         assert hit == {0, 1, 2, 3}, (axis, hit)         # every line of both sets
     assert np.sum(inside & on_row) > 10 and np.sum(inside & on_column) > 10
     assert np.sum(on_ring & ~on_outline) > 10
+
+
+@pytest.mark.slow
+def test_each_jump_is_held_as_long_as_its_length_needs_on_the_wires(tmp_path, capsys):
+    """With a settling time per mm, each jump is held (on the XY2-100 wires, before its first
+    pulse on the DB25 pins) at least ``jump_delay_us + settle_us_per_mm × length``: the long
+    jump across the field its long hold, the many short ones between dashes short ones, not
+    each the longest's."""
+    import json
+    import numpy as np
+    from sim_board import VECTOR_BOARD, quick_sim_board
+    machine = tmp_path / "machine.toml"
+    machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 50\n"
+                       "settle_us_per_mm = 20\n")
+    dashes = "".join(f'<path d="M {x0 + 0.6 * k:.1f} 50 h 0.3" stroke="black"/>'
+                     for x0 in (5, 85) for k in range(12))
+    svg = tmp_path / "dashes.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
+                   f'viewBox="0 0 100 100">{dashes}</svg>')
+    with quick_sim_board(**VECTOR_BOARD) as boards:
+        assert main(["mark", str(svg), "--speed", "503.5", "--prr", "50", "--machine",
+                     str(machine), "--sim", "--timeout", "600", "--json"]) == 0
+        board = boards.built[-1]
+        points = board.points()
+    out = capsys.readouterr()
+    assert "each jump held as long as its length needs" in out.err
+    units_per_mm = 65536 / 110
+    held, last = [], None
+    for x, y, pulses, frames, cycle, first_pulse in points:
+        # A marked point 0.1 mm or more from the last marked one: a jump ended there.
+        if pulses and last is not None and \
+                np.hypot(x - last[0], y - last[1]) / units_per_mm >= 0.1:
+            length = np.hypot(x - last[0], y - last[1]) / units_per_mm
+            held.append((length, (first_pulse - cycle) / board.clk_freq * 1e6))
+        if pulses:
+            last = (x, y)
+    assert len(held) >= 20
+    for length, hold_us in held:
+        assert hold_us >= 50 + 20 * length - 10, (length, hold_us)
+    long_ones = [h for length, h in held if length > 50]
+    short_ones = [h for length, h in held if length < 1]
+    assert long_ones and short_ones and max(short_ones) < 200 < min(long_ones)
+    assert json.loads(out.out.strip().splitlines()[-1])["errors"] == 0

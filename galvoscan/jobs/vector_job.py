@@ -3,7 +3,6 @@ cut jumps, turned into galvo units, checked against the field through the lens c
 and timed; every register value it needs worked out and checked before anything is sent.
 """
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +11,7 @@ from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
 from ..gateware.sources.dda import SETUP_CLOCKS
 from ..gateware.points import FIELD_CENTRE
 from .fill import Contour, LineOrder, contour_rings, hatch_strokes, oriented
+from .speed import jump_lengths_mm, settled_jumps
 from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_length,
                    jump_mark_lengths, order_paths, place, to_galvo)
 
@@ -129,23 +129,24 @@ def _machine_settings(settings, profile):
     return prr_register, prr_hz, pitch
 
 
-def _finish(segments, paths_mm, before, after, settings, profile, notes):
-    """Registers, timing and bounds of a job's segments."""
+def _finish(segments, paths_mm, before, after, settings, profile, notes, *, settle=True):
+    """Registers, timing and bounds of a job's segments (``settle``: each jump held as long
+    as its length needs, :func:`~.speed.settled_jumps`)."""
     prr_register, prr_hz, pitch = _machine_settings(settings, profile)
     units_per_mm = profile.units_per_mm
     table = profile.correction_table()
     _check_corrected(segments, table)
-    longest_jump_mm = 0.0
-    here = (FIELD_CENTRE, FIELD_CENTRE)
-    for op, x, y in segments:
-        if op == "jump":
-            longest_jump_mm = max(longest_jump_mm,
-                                  math.hypot(x - here[0], y - here[1]) / units_per_mm)
-        here = (x, y)
-    # One jump delay for the whole job (the board has one register): the longest jump's.
+    notes = list(notes)
     jump_delay = dict(settings.delays_us).get("jump_delay")        # a layer's own
     if jump_delay is None:
-        jump_delay = profile.jump_delay_register(longest_jump_mm)
+        settled, jump_delay, extra = settled_jumps(segments, profile, units_per_mm) if settle \
+            else (segments, settled_jumps(segments, profile, units_per_mm)[1], 0)
+        if extra:
+            notes.append(f"each jump held as long as its length needs: a {jump_delay} µs jump "
+                         f"delay, held again after the longer jumps ({extra:,} holds; every "
+                         f"jump held for the longest would wait "
+                         f"{profile.jump_delay_register(max(jump_lengths_mm(segments, units_per_mm))):,} µs)")
+            segments = settled
     registers = {
         "pitch": pitch.pitch_units,
         "pulses_per_point": pitch.pulses_per_point,
@@ -161,7 +162,6 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes):
                                 pulses_per_point=pitch.pulses_per_point, prr_hz=prr_hz,
                                 jump_delay_us=jump_delay)
     mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm)
-    notes = list(notes)
     if abs(pitch.error) > 0.02:
         notes.append(f"{settings.speed_mm_s:g} mm/s falls between the speeds whole galvo "
                      f"units and pulses make at {prr_hz / 1e3:g} kHz: marked at the nearest, "
@@ -201,7 +201,7 @@ def plan_job_file(segments, settings, profile):
     from .speed import jump_mark_lengths
     _, jumps = jump_mark_lengths(list(segments), profile.units_per_mm)    # one pass, as it is
     return _finish(list(segments) * settings.passes, paths_mm, jumps, jumps, settings, profile,
-                   ["a .job is in galvo units: no placement, hatch or reordering"])
+                   ["a .job is in galvo units: no placement, hatch or reordering"], settle=False)
 
 
 @dataclass(frozen=True, eq=False)
