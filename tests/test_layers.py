@@ -248,3 +248,18 @@ def test_a_layer_keeps_a_codes_and_a_photos_own_fill(tmp_path, capsys):
                                          r"to mark"):
         main(["mark", str(svg), "--text", "A", "--font", "hershey", "--text-at=0,-20",
               "--layer", "#ff0000", "outline=no", "--estimate"])
+
+
+def test_a_blocks_entities_take_their_own_colours(tmp_path):
+    """Inside a block: an entity's own colour is its own; BYBLOCK, and BYLAYER on layer 0,
+    the reference's (as CAD draws them)."""
+    import ezdxf
+    document = ezdxf.new(units=4)
+    block = document.blocks.new("TAG")
+    block.add_line((0, 0), (1, 0), dxfattribs={"color": 1})                  # red
+    block.add_line((0, 1), (1, 1), dxfattribs={"color": 0})                  # BYBLOCK
+    block.add_line((0, 2), (1, 2))                                           # BYLAYER, 0
+    document.modelspace().add_blockref("TAG", (10, 10), dxfattribs={"color": 5})   # blue
+    document.saveas(tmp_path / "block.dxf")
+    drawing = load_drawing(tmp_path / "block.dxf")
+    assert [s.colour for s in drawing.styles] == ["#ff0000", "#0000ff", "#0000ff"]

@@ -199,27 +199,31 @@ def _entity_points(entity, tolerance, skipped):
     return None
 
 
-def _entity_colour(entity, document, layer):
-    """An entity's colour as ``#rrggbb``: its true colour, else its ACI colour, BYLAYER its
-    layer's (ezdxf's ACI table: 1 red, 5 blue, 7 white …); None for BYBLOCK or unknown."""
+def _entity_colour(entity, document, block_colour=None):
+    """An entity's colour as ``#rrggbb``: its true colour, else its ACI colour (ezdxf's table:
+    1 red, 5 blue, 7 white …); BYLAYER its layer's (inside a block, on layer 0, the
+    reference's, as CAD draws it); BYBLOCK the reference's; None where there is none."""
     from ezdxf import colors
+
+    def hex_of(rgb):
+        return "#{:02x}{:02x}{:02x}".format(*rgb)
     try:
         if entity.dxf.hasattr("true_color"):
-            r, g, b = colors.int2rgb(entity.dxf.true_color)
-            return f"#{r:02x}{g:02x}{b:02x}"
+            return hex_of(colors.int2rgb(entity.dxf.true_color))
         aci = entity.dxf.get("color", colors.BYLAYER)
+        if aci == colors.BYBLOCK:
+            return block_colour
         if aci == colors.BYLAYER:
-            table = document.layers.get(layer)
+            layer_name = str(entity.dxf.get("layer", "0"))
+            if layer_name == "0" and block_colour is not None:
+                return block_colour
+            table = document.layers.get(layer_name) if document is not None else None
             if table is None:
                 return None
             if table.dxf.hasattr("true_color"):
-                r, g, b = colors.int2rgb(table.dxf.true_color)
-                return f"#{r:02x}{g:02x}{b:02x}"
+                return hex_of(colors.int2rgb(table.dxf.true_color))
             aci = abs(table.dxf.get("color", 7))
-        if not 1 <= aci <= 255:
-            return None
-        r, g, b = colors.aci2rgb(aci)
-        return f"#{r:02x}{g:02x}{b:02x}"
+        return hex_of(colors.aci2rgb(aci)) if 1 <= aci <= 255 else None
     except Exception:                       # a damaged table: no colour, the rest is read
         return None
 
@@ -277,8 +281,9 @@ def _font_misses(text, skipped):
     return f"{lacking!r} not in font {face.filename}" if lacking else None
 
 
-def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
-    """Append the polylines of one entity to ``out``, in the drawing's units.
+def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0, block_colour=None):
+    """Append the polylines of one entity to ``out``, in the drawing's units, each with its
+    colour (:func:`_entity_colour`; ``block_colour``: the reference's, inside a block).
 
     Block references are not exploded by ezdxf (which makes a non-uniformly scaled polyline
     loose lines and ellipses, no longer closed): the block's entities are flattened in its own
@@ -286,12 +291,13 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
     reference's matrix (row vectors, as ezdxf's ``Matrix44``).
     """
     kind = entity.dxftype()
+    colour = _entity_colour(entity, entity.doc, block_colour)
     try:
         if kind == "INSERT":
             if depth > 50:
                 raise DrawingError("block references nested more than 50 deep")
             for attrib in entity.attribs:     # placed already: the outer matrix only
-                _dxf_entity(attrib, tolerance, out, skipped, matrix, depth + 1)
+                _dxf_entity(attrib, tolerance, out, skipped, matrix, depth + 1, colour)
             block = entity.block()
             if block is None:
                 skipped["reference to a missing block"] += 1
@@ -301,7 +307,7 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
                 m = m if matrix is None else m @ matrix
                 stretch = max(np.linalg.norm(m[:2, :2], 2), 1e-12)
                 for child in block:
-                    _dxf_entity(child, tolerance / stretch, out, skipped, m, depth + 1)
+                    _dxf_entity(child, tolerance / stretch, out, skipped, m, depth + 1, colour)
             return
         found = _entity_points(entity, tolerance, skipped)
     except DrawingError:
@@ -311,7 +317,7 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0):
         return
     for points, closed in ([found] if isinstance(found, tuple) else found or ()):
         out.append((points if matrix is None else points @ matrix[:2, :2] + matrix[3, :2],
-                    closed))
+                    closed, colour))
 
 
 def _read_dxf(data, tolerance_mm):
@@ -370,10 +376,8 @@ def _read_dxf(data, tolerance_mm):
         else:                               # flattened in the drawing's own units
             before = len(out)
             _dxf_entity(entity, tolerance_mm / factor, out, skipped)
-            # A block's entities go with the reference's layer and colour (as CAD's layer 0
-            # and BYBLOCK do).
+            # A block's entities go with the reference's layer.
             layer = str(entity.dxf.get("layer", "0"))
-            styles += [PathStyle(colour=_entity_colour(entity, document, layer),
-                                 layer=layer)] * (len(out) - before)
+            styles += [PathStyle(colour=colour, layer=layer) for _, _, colour in out[before:]]
     skipped = _counted(skipped)
-    return [p * factor for p, _ in out], [c for _, c in out], skipped, notes, styles
+    return [p * factor for p, _, _ in out], [c for _, c, _ in out], skipped, notes, styles
