@@ -284,53 +284,41 @@ def _toml(dest, value, folder):
 def save_job_file(args, path):
     """Write the job ``args`` plan (as ``use_job_file`` left it) to ``path``, a job file."""
     import tomli_w
-    actions, defaults = _actions()
+    _, defaults = _actions()
     folder = Path(path).parent
-    document = {}
 
     def table(section, entry):
+        """A section's entry (``{dest: value}``) as its TOML table: the defaults said by
+        saying nothing (a drawing's placement said whole)."""
         out = {}
         for key, dest in SECTIONS[section].items():
             inverted = dest.startswith("not ")
             dest = dest.removeprefix("not ")
-            if dest not in entry or entry[dest] is None:
+            value = entry.get(dest)
+            if value is None or value == []:
                 continue
-            value = entry[dest]
-            if section != "drawing" and dest != "layer" and section != "job" and \
-                    value == getattr(defaults, dest, None) and dest not in ("text", "code"):
-                continue                    # the default: said by saying nothing
+            if section != "drawing" and dest not in ("layer", "text", "code") and \
+                    value == getattr(defaults, dest, None):
+                continue
             if dest == "hatch":
                 out[key] = [_toml(dest, h, folder) for h in value]
             else:
                 out[key] = (not value) if inverted else _toml(dest, value, folder)
         return out
 
-    job = {}
-    for key, dest in SECTIONS["job"].items():
-        inverted = dest.startswith("not ")
-        dest = dest.removeprefix("not ")
-        value = getattr(args, dest, None)
-        if value is None or value == getattr(defaults, dest, None) or value == []:
-            continue
-        job[key] = [_toml(dest, h, folder) for h in value] if dest == "hatch" else \
-            ((not value) if inverted else _toml(dest, value, folder))
-    if job:
-        document["job"] = job
-    for section in ("drawing", "text", "code", "image"):
-        found = [table(section, e) for e in args.entries.get(section, [])]
-        if found:
-            document[section] = found
-    layers = getattr(args, "layer_tables", None) or []
-    if layers:
-        document["layer"] = [dict(t) for t in layers]
+    job = table("job", {dest.removeprefix("not "): getattr(args, dest.removeprefix("not "), None)
+                        for dest in SECTIONS["job"].values()})
+    lists = {section: [table(section, e) for e in args.entries.get(section, [])]
+             for section in ("drawing", "text", "code", "image")}
+    lists["layer"] = [dict(t) for t in getattr(args, "layer_tables", None) or []]
     # Each table of a list as a [[table]] of its own, as a person writes one (tomli-w puts a
     # list of short tables inline).
     text = f"# galvoscan job: `galvoscan mark {path}` marks it\n"
-    if "job" in document:
-        text += "\n" + tomli_w.dumps({"job": document.pop("job")})
-    for section, tables in document.items():
-        for table in tables:
-            text += f"\n[[{section}]]\n" + tomli_w.dumps(table)
+    if job:
+        text += "\n" + tomli_w.dumps({"job": job})
+    for section, tables in lists.items():
+        for one in tables:
+            text += f"\n[[{section}]]\n" + tomli_w.dumps(one)
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         Path(path).write_text(text, encoding="utf-8")

@@ -136,7 +136,7 @@ def _draw_preview(args, job, drawing, profile):
 
 def _cmd_mark(args):
     from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer
+    from ..jobs.stream import JobStreamer, StreamReport
     from .jobfile import use_job_file
     check_backend_needs_sim(args)
     if args.save and args.file and Path(args.file).suffix.lower() == ".job":
@@ -231,13 +231,14 @@ def _cmd_mark(args):
                 except PlanError as error:
                     fail(error)
         # Every part's, summed: the marks and pulses off the wires are all of them too.
-        counts = {name: sum(r.counters[name] for r in reports) for name in report.counters}
+        every = StreamReport.total(reports)
+        counts = every.counters
         if args.json and board is not None:
             record = sim_report(board, part, placement, drawing, profile, report,
                                 layer_starts=layer_starts)
             record.update(
                 parts=len(parts), serials=[s for s in serials if s is not None],
-                segments=sum(r.segments for r in reports),
+                segments=every.segments,
                 jumps=sum(1 for p, *_ in parts for op, *_ in p.segments if op == "jump"),
                 mark_length_mm=round(sum(p.mark_mm for p, *_ in parts), 4),
                 underruns=counts["vec_underruns"], stalls=counts["vec_stalls"],
@@ -246,8 +247,8 @@ def _cmd_mark(args):
                 record["pulses_per_point"] = None
             print(json.dumps(record))
         elif args.json:
-            print(json.dumps({"segments": sum(r.segments for r in reports),
-                              "pulses": sum(r.pulses for r in reports), "parts": len(parts),
+            print(json.dumps({"segments": every.segments, "pulses": every.pulses,
+                              "parts": len(parts),
                               "serials": [s for s in serials if s is not None], **counts}))
     return 0
 
@@ -256,19 +257,14 @@ def _run_layers(streamer, job, board, timeout):
     """Run ``job`` (its layers one after the other, each at its own settings): the reports
     summed into one, and (on a simulated board) the index of each layer's first pulse."""
     from ..jobs.stream import StreamReport
-    total, starts = StreamReport(), []
+    reports, starts = [], []
     for part in [lj.job for lj in job.layers] if job.layers else [job]:
         starts.append(len(board.pulses) if board is not None else None)
-        report = streamer.run_vector(part.segments, part.registers, timeout_s=timeout,
-                                     ready_timeout_s=timeout)
-        total.segments += report.segments
-        total.pulses += report.pulses
-        total.seconds += report.seconds
-        for name, value in report.counters.items():
-            total.counters[name] = total.counters.get(name, 0) + value
-        if not report.clean:
+        reports.append(streamer.run_vector(part.segments, part.registers, timeout_s=timeout,
+                                           ready_timeout_s=timeout))
+        if not reports[-1].clean:
             break                           # said, and refused, by the caller
-    return total, starts
+    return StreamReport.total(reports), starts
 
 
 def _job_file_path(text):

@@ -205,7 +205,9 @@ def plan_layers(objects, layers, settings, profile):
     likely), naming what the drawings hold."""
     from .plan import Placement, PlanError, place
     from .vector_job import check_clear, plan_objects
-    check_clear(objects)
+    if layers:
+        # Across every object: the layers' own plans check only the objects each holds.
+        check_clear(objects)
     seen = set()
     for layer in layers:
         if layer.match.casefold() in seen:

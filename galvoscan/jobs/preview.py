@@ -3,12 +3,10 @@ in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no di
 
 import numpy as np
 
+from .speed import path_length_mm
+
 
 __all__ = ["preview"]
-
-
-def _length_mm(paths):
-    return sum(float(np.sum(np.hypot(*np.diff(p, axis=0).T))) for p in paths)
 
 
 def _jump_lines(paths):
@@ -99,9 +97,9 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
 
     paths = [np.asarray(p, dtype=float).reshape(-1, 2) for p in paths_mm]
     paths = [p for p in paths if len(p)]
-    mark_mm = _length_mm(paths)
+    mark_mm = path_length_mm(paths)
     jump_lines = _jump_lines(paths) if paths else []
-    jump_mm = _length_mm(jump_lines)
+    jump_mm = path_length_mm(jump_lines)
     half = field_mm / 2
     bounds = None
     if paths:

@@ -14,7 +14,7 @@ import numpy as np
 
 
 __all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths", "path_length_mm",
-           "jump_lengths_mm", "settled_jumps"]
+           "settled_jumps"]
 
 
 def path_length_mm(paths_mm):
@@ -134,7 +134,7 @@ def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_de
         if op == "mark":
             total += math.ceil(length / pitch_units - 1e-12) * dwell_s
         else:
-            total += (1 + max(1, math.ceil(jump_delay_us * 1e-6 / frame_s - 1e-9))) * frame_s
+            total += _jump_s(jump_delay_us, frame_s)
     return total
 
 
@@ -145,26 +145,16 @@ def jump_mark_lengths(segments, units_per_mm):
     return mark / units_per_mm, jump / units_per_mm
 
 
-def _jump_frames_us(delay_us):
-    """What a jump costs the board, µs: its frame, and its delay in whole 10 µs frames (at
-    least one)."""
-    return 10 + 10 * max(1, math.ceil(delay_us / 10))
+def _jump_s(delay_us, frame_s=10e-6):
+    """What a jump costs the board, s: its frame, and its delay in whole frames (at least
+    one)."""
+    return (1 + max(1, math.ceil(delay_us * 1e-6 / frame_s - 1e-9))) * frame_s
 
 
-def jump_lengths_mm(segments, units_per_mm):
-    """Each jump's length, mm, from the field centre on (0 for none)."""
-    from .plan import CENTRE                # here: .plan imports this module
-    lengths, here = [0.0], (CENTRE, CENTRE)
-    for op, x, y in segments:
-        if op == "jump":
-            lengths.append(math.hypot(x - here[0], y - here[1]) / units_per_mm)
-        here = (x, y)
-    return lengths
-
-
-def settled_jumps(segments, profile, units_per_mm):
-    """``(segments, jump_delay, extra)``: the jumps each held as long as its own length needs,
-    when that is quicker than holding every one for the longest's.
+def settled_jumps(segments, profile, units_per_mm, *, settle=True):
+    """``(segments, jump_delay, extra, longest)``: the jumps each held as long as its own
+    length needs, when that is quicker than holding every one for the longest's (``longest``,
+    the jump delay that takes; ``settle=False``: that, every jump held once).
 
     The board has one jump delay; a jump to where the head already is holds it once more. So
     the delay is set to what makes the whole job quickest, and a jump whose settling
@@ -172,25 +162,20 @@ def settled_jumps(segments, profile, units_per_mm):
     jumps as it needs: a photo's thousands of short gaps no longer each wait for its longest
     jump. The job's first jump, from wherever the head was, is held for a jump across the
     whole field."""
-    from .plan import CENTRE                # here: .plan imports this module
-    lengths, here = [], (CENTRE, CENTRE)
-    for op, x, y in segments:
-        lengths.append(math.hypot(x - here[0], y - here[1]) / units_per_mm if op == "jump"
-                       else None)
-        here = (x, y)
+    lengths = [length / units_per_mm if op == "jump" else None for op, length in _walk(segments)]
     jumps = [length for length in lengths if length is not None]
     longest = profile.jump_delay_register(max(jumps, default=0.0))
-    if not jumps or profile.galvo.settle_us_per_mm <= 0:
-        return segments, longest, 0
+    if not settle or not jumps or profile.galvo.settle_us_per_mm <= 0:
+        return segments, longest, 0, longest
     needs = np.array([profile.jump_delay_register(profile.field.size_mm * math.sqrt(2))] +
                      [profile.jump_delay_register(length) for length in jumps[1:]], float)
     # Each delay in whole frames: how many holds each jump takes, and what they cost.
     frames = np.arange(1, max(1, math.ceil(needs.max() / 10)) + 1)
     holds = np.ceil(needs[None, :] / (10.0 * frames[:, None]) - 1e-9).clip(min=1)
-    cost = holds.sum(axis=1) * (10 + 10 * frames)
+    cost = holds.sum(axis=1) * np.array([_jump_s(10 * f) for f in frames])
     best = int(np.argmin(cost))
-    if cost[best] >= len(jumps) * _jump_frames_us(longest):
-        return segments, longest, 0
+    if cost[best] >= len(jumps) * _jump_s(longest):
+        return segments, longest, 0, longest
     delay, holds = int(10 * frames[best]), holds[best].astype(int)
     settled, k = [], 0
     for segment, length in zip(segments, lengths):
@@ -198,4 +183,4 @@ def settled_jumps(segments, profile, units_per_mm):
         if length is not None:
             settled += [segment] * (holds[k] - 1)
             k += 1
-    return settled, delay, int(holds.sum()) - len(jumps)
+    return settled, delay, int(holds.sum()) - len(jumps), longest

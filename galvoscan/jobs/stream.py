@@ -66,6 +66,18 @@ class StreamReport:
     pulses: int = 0
     seconds: float = 0.0
 
+    @classmethod
+    def total(cls, reports):
+        """The reports of jobs run one after another (a job's layers, a batch's parts) as one:
+        segments, pulses, time and each counter summed."""
+        reports = list(reports)
+        counters = {}
+        for report in reports:
+            for name, value in report.counters.items():
+                counters[name] = counters.get(name, 0) + value
+        return cls(segments=sum(r.segments for r in reports), counters=counters,
+                   pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports))
+
     @property
     def clean(self):
         """Nothing refused and no underrun."""

@@ -111,7 +111,7 @@ def text_drawing(spec, *, tolerance_mm=0.01):
 def _font(font):
     """matplotlib's FontProperties of a family name or a font file, by its file (the family's
     found here, once); one line if missing."""
-    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.font_manager import FontProperties
     if font and (os.sep in font or font.lower().endswith((".ttf", ".otf", ".ttc")) or
                  Path(font).is_file()):
         if not Path(font).is_file():
@@ -124,18 +124,27 @@ def _font(font):
                             f"be read") from None
         return FontProperties(fname=font)
     family = font or "DejaVu Sans"
-    prop = FontProperties(family=family)
+    found = _installed(family)
+    if found is None:
+        raise PlanError(f"font {family!r} is not installed (give a .ttf/.otf file, or "
+                        f"hershey for a single-line font)")
+    return FontProperties(fname=found)
+
+
+def _installed(family, weight="normal", style="normal"):
+    """The file of an installed font of ``family`` (its face of that weight and style, as
+    matplotlib finds it), or None: no other family's in its place."""
     import logging
+    from matplotlib.font_manager import FontProperties, findfont
     logger = logging.getLogger("matplotlib.font_manager")
     level, logger.level = logger.level, logging.ERROR   # (its "not found" warning)
     try:
-        found = findfont(prop, fallback_to_default=False)
+        return findfont(FontProperties(family=family, weight=weight, style=style),
+                        fallback_to_default=False)
     except ValueError:
-        raise PlanError(f"font {family!r} is not installed (give a .ttf/.otf file, or "
-                        f"hershey for a single-line font)") from None
+        return None
     finally:
         logger.level = level
-    return FontProperties(fname=found)
 
 
 def missing_characters(text, font_file):
@@ -277,27 +286,15 @@ def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
     """One line of an SVG ``<text>`` as glyph outlines (matplotlib's), in the drawing's own
     units: the baseline at y = 0, the anchor (start, middle, end) at x = 0, Y up, ``size``
     the em; ``before``: the text of the line before it (a ``<tspan>`` that follows on), whose
-    advance it starts at. ``families`` is the CSS list (``"'Arial', sans-serif"``): the first installed
-    wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
+    advance it starts at. ``families`` is the CSS list (``"'Arial', sans-serif"``): the
+    first installed wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
     is installed."""
-    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath, TextToPath
-    import logging
     names = [name.strip().strip("'\"") for name in str(families or "sans-serif").split(",")]
     names = [name for name in names if name]
-    logger = logging.getLogger("matplotlib.font_manager")
-    level, logger.level = logger.level, logging.ERROR       # (its "not found" warning)
-    try:
-        found = None
-        for name in names:
-            try:
-                found = findfont(FontProperties(family=name, weight=weight, style=style),
-                                 fallback_to_default=False)
-                break
-            except ValueError:
-                continue
-    finally:
-        logger.level = level
+    found = next((path for path in (_installed(name, weight, style) for name in names)
+                  if path is not None), None)
     if found is None:
         raise PlanError(f"font {', '.join(names)} is not installed")
     prop = FontProperties(fname=found, size=size)

@@ -11,7 +11,7 @@ from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
 from ..gateware.sources.dda import SETUP_CLOCKS
 from ..gateware.points import FIELD_CENTRE
 from .fill import Contour, LineOrder, contour_rings, hatch_strokes, oriented
-from .speed import jump_lengths_mm, settled_jumps
+from .speed import settled_jumps
 from .plan import (PlanError, choose_pitch, estimate_seconds, field_check, jump_length,
                    jump_mark_lengths, order_paths, place, to_galvo)
 
@@ -139,14 +139,12 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
     notes = list(notes)
     jump_delay = dict(settings.delays_us).get("jump_delay")        # a layer's own
     if jump_delay is None:
-        settled, jump_delay, extra = settled_jumps(segments, profile, units_per_mm) if settle \
-            else (segments, settled_jumps(segments, profile, units_per_mm)[1], 0)
+        segments, jump_delay, extra, longest = settled_jumps(segments, profile, units_per_mm,
+                                                             settle=settle)
         if extra:
             notes.append(f"each jump held as long as its length needs: a {jump_delay} µs jump "
                          f"delay, held again after the longer jumps ({extra:,} holds; every "
-                         f"jump held for the longest would wait "
-                         f"{profile.jump_delay_register(max(jump_lengths_mm(segments, units_per_mm))):,} µs)")
-            segments = settled
+                         f"jump held for the longest would wait {longest:,} µs)")
     registers = {
         "pitch": pitch.pitch_units,
         "pulses_per_point": pitch.pulses_per_point,
@@ -198,7 +196,6 @@ def plan_job_file(segments, settings, profile):
     paths_mm = [from_galvo(np.array(p, dtype=float), profile.field.size_mm) for p in paths]
     if not paths_mm:
         raise PlanError("the job has no mark segments")
-    from .speed import jump_mark_lengths
     _, jumps = jump_mark_lengths(list(segments), profile.units_per_mm)    # one pass, as it is
     return _finish(list(segments) * settings.passes, paths_mm, jumps, jumps, settings, profile,
                    ["a .job is in galvo units: no placement, hatch or reordering"], settle=False)
