@@ -1,7 +1,8 @@
 """Text (galvoscan/jobs/text.py, `mark --text`): capital height, alignment, spacing and lines
 measured on the shapes; the marks off the simulated board's wires against matplotlib's own
 rendering of the same font (Agg fills the glyph curves itself: none of our flattening,
-hatching, placement or board is in it)."""
+hatching, placement or board is in it); and an SVG's <text> (text.svg_text_outlines, read by
+drawing.py) against matplotlib's own extents of its glyphs."""
 
 import json
 
@@ -12,6 +13,7 @@ from galvoscan.cli import main
 from galvoscan.jobs.plan import PlanError
 from galvoscan.jobs.text import TextSpec, text_drawing
 
+from drawings import load_svg
 from sim_board import VECTOR_BOARD, quick_sim_board
 
 
@@ -153,3 +155,66 @@ def test_a_file_that_is_no_font_is_one_line(tmp_path):
     (tmp_path / "logo.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"\0" * 64)
     with pytest.raises(PlanError, match="logo.png: not a font .* that can be read"):
         text_drawing(TextSpec("A", 5, font=str(tmp_path / "logo.png")))
+
+
+def test_svg_text_is_marked_in_its_font(tmp_path):
+    """A <text> in an installed font: its glyphs as closed outlines where matplotlib's own
+    TextPath puts them (em = font-size, baseline at y, anchored by text-anchor), through the
+    element's transform; each outline closed, for --hatch to fill."""
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextPath
+    d = load_svg(tmp_path, '<text x="10" y="20" font-family="DejaVu Sans" font-size="8" '
+                           'text-anchor="middle">Hg</text>')
+    assert d.closed and all(d.closed) and not d.skipped
+    font = FontProperties(fname=findfont(FontProperties(family="DejaVu Sans")), size=8)
+    ink = TextPath((0, 0), "Hg", prop=font).get_extents()
+    # The SVG's px are mm here (viewBox = mm); its Y runs down, the drawing's up.
+    xmin, ymin, xmax, ymax = d.bounds()
+    assert ymax == pytest.approx(-20 + ink.y1, abs=0.02)       # the H's top above the base
+    assert ymin == pytest.approx(-20 + ink.y0, abs=0.02)       # the g's tail below it
+    assert (xmax - xmin) == pytest.approx(ink.x1 - ink.x0, abs=0.02)
+    turned = load_svg(tmp_path, '<text x="0" y="0" font-size="8" '
+                                'transform="translate(30 30) rotate(90)">Hg</text>')
+    # Turned a quarter (clockwise on the page, Y down): the line runs down the page.
+    txmin, tymin, txmax, tymax = turned.bounds()
+    assert (tymax - tymin) == pytest.approx(xmax - xmin, abs=0.05)
+    # It starts at y = 30 on the page (-30 here), the H's left bearing further on.
+    assert tymax == pytest.approx(-30 - ink.x0, abs=0.02)
+    # rotate(90) takes the page's up (-y) to +x: the ink to the right of x = 30.
+    assert (txmax + txmin) / 2 == pytest.approx(30 + (ink.y0 + ink.y1) / 2, abs=0.02)
+
+
+def test_svg_tspans_and_font_lists(tmp_path):
+    """Each <tspan> at its own place; the first installed family of a CSS list wins; a
+    weight picks the bold face (wider strokes: more ink)."""
+    d = load_svg(tmp_path, '<text font-family="\'No Such\', DejaVu Sans" font-size="5">'
+                           '<tspan x="0" y="10">A</tspan><tspan x="20" y="10">A</tspan></text>')
+    xs = [p[:, 0].mean() for p in d.paths]
+    assert min(xs) < 5 and max(xs) > 20 and not d.skipped
+    import shapely
+    from shapely.geometry import Polygon
+
+    def ink(weight):
+        drawing = load_svg(tmp_path, f'<text x="0" y="10" font-size="10" '
+                                     f'font-weight="{weight}">I</text>')
+        return shapely.unary_union([Polygon(p) for p in drawing.paths]).area
+    assert ink("bold") > 1.2 * ink("normal")
+
+
+def test_svg_tspans_follow_on_from_the_text_before(tmp_path):
+    """A <tspan> without an x starts where the text before it ends (and its dx on), as a
+    browser sets it, and so does the text after it; not on top of the first word."""
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextToPath
+    prop = FontProperties(fname=findfont(FontProperties(family=["sans-serif"])), size=4)
+    width = TextToPath().get_text_width_height_descent("Bold|", prop, ismath=False)[0] - \
+        TextToPath().get_text_width_height_descent("|", prop, ismath=False)[0]
+    alone = load_svg(tmp_path, '<text x="1" y="10" font-size="4">Bold</text>')
+    flowed = load_svg(tmp_path, '<text x="1" y="10" font-size="4">Bold<tspan dx="2">I</tspan>'
+                                ' I</text>')
+    # The I's stem (its outline's left edge) is past Bold's advance and the dx.
+    extra = [p for p in flowed.paths if p[:, 0].min() > alone.bounds()[2] + 0.5]
+    assert len(extra) == 2
+    first_i = min(p[:, 0].min() for p in extra)
+    assert first_i == pytest.approx(1 + width + 2, abs=0.6)
+    assert max(p[:, 0].min() for p in extra) > first_i + 1     # " I" after it, a space on
