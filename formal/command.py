@@ -1,230 +1,327 @@
-"""The command path from both links to a register write, as properties (Dai & Tang 2020's
-frame; galvoscan's bad-input rules, README "Safety")."""
+"""The command path from both links to a register write, as properties: checked frames,
+writes in sequence, segments whole, counted refusals, and a watchdog fed by progress only
+(the frames of :mod:`~galvoscan.gateware.host.frames`; galvoscan's bad-input rules, README
+"Safety").
+
+Two harnesses, each small enough for a quick proof:
+
+* :class:`SPIFrameSpec`: the SPI target alone, its pins free: a frame it hands on as intact
+  is one of exactly 80 SCK rising edges since ``cs_n`` fell whose CRC-16 holds, computed here
+  from the pins (the spec's own shift register), and carries that frame's first 64 bits;
+* :class:`CommandPathSpec`: the decoder and the register file, with frame events from both
+  links free (any contents, any intact flag, on any clock: a superset of what either
+  transport hands on): no register is written but by an intact write frame with the
+  expected sequence number, a segment's end point is the one in the frame that queues it,
+  every refused frame is counted, and the watchdog hears only of progress.
+
+Together: no register changes on a frame whose check fails, from either link.
+"""
 
 from amaranth.asserts import AnyConst, AnySeq
-from amaranth.hdl import (Assert, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+from amaranth.hdl import (Assert, Cat, ClockDomain, Const, Cover, Elaboratable, Module, Mux,
                           ResetSignal, Signal)
 from amaranth.lib.wiring import connect
 
-from ..gateware.host.command import CommandDecoder
-from ..gateware.host.frames import FRAME_BITS
+from ..gateware.host.command import FREE_ADDRESS, SEGMENT_ADDRESS, CommandDecoder
+from ..gateware.host.frames import (COMMAND_BITS, CRC_INIT, CRC_POLY, PAYLOAD_BITS, Answer,
+                                     crc16)
+from ..gateware.host.progress import ProgressFeed
 from ..gateware.host.registers import RegisterFile
-from ..gateware.host.regmap import CHECK_BYTE
+from ..gateware.host.regmap import BY_NAME
 from ..gateware.host.spi_target import SPITarget
 
 
-__all__ = ["CommandPathSpec"]
+__all__ = ["SPIFrameSpec", "CommandPathSpec", "spi_frame_bits"]
 
 #: ``errors`` stops here.
 _ERRORS_TOP = 0xFFFF
 
 
-class CommandPathSpec(Elaboratable):
-    """No register write without a complete 32-bit frame with check byte 0x64, from either link,
-    and every other frame counted; for every input and every reset.
+def spi_frame_bits(seq=0, address=BY_NAME["dwell"].address, data=5, x=0, y=0):
+    """The 80 bits, first first, of a write frame (what the paced host clocks in)."""
+    body = bytes([seq, address, data >> 8, data & 0xFF, x >> 8, x & 0xFF, y >> 8, y & 0xFF])
+    frame = body + crc16(body).to_bytes(2, "big")
+    return [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
 
-    The SPI pins are free on every clock (any SCK rate, glitches, ``cs_n`` released anywhere),
-    and so is the UART port's side of the decoder (any frame event, on any clock, with any
-    contents: a superset of what the UART port can hand on; the port's byte and idle rules are
-    simulated against a model in ``tests/test_uart_port.py``). The reset is free too, mid-frame
-    included. The spec reads the SPI pins as the design must: through two flip-flops. Proved:
 
-    * **writes**: a register is written only two clocks after ``cs_n`` rose at the end of a
-      frame of exactly 32 SCK rising edges (counted since ``cs_n`` fell after the last reset)
-      whose last byte is 0x64 and whose address bit 7 is clear, or on the clock after a UART
-      frame event of 32 bits with those bytes is taken; and the access given to the register
-      file on the clock the frame was taken is that frame's address and data. So a frame cut
-      short, run over, or cut by a reset never writes;
-    * **one frame a clock**: a UART frame waits while an SPI frame is decoded;
-    * **counting**: a frame is accepted or not on the clock after it is taken, and only if it
-      is complete with check byte 0x64; ``errors`` goes up by one on the clock after a frame is
-      not accepted (up to 65535), and changes at no other time.
+def _synchronised(m, pin, init):
+    """The pin two clocks ago, as the design sees it after its synchronisers (which a reset
+    does not touch)."""
+    stages = [Signal(init=init, reset_less=True, name=f"{pin.name}_d{i}") for i in (1, 2)]
+    m.d.sync += [stages[0].eq(pin), stages[1].eq(stages[0])]
+    return stages[1]
 
-    A frame may last for ever, so k-induction alone cannot relate the spec's view of the frame
-    to the SPI target's; helper invariants (also proved) say that the two agree.
 
-    The proof is made with everything live. Its covers come in two harnesses: this one shows
-    a UART write, a rejected frame counted and a read answered within a few clocks; an SPI
-    harness (``uart_live=False, reset_free=False, one_frame=True``: a restriction of this
-    one) shows an SPI write, a frame cut short and a read answered over SPI, which need some
-    70 clocks, where the free UART, reset and SCK would make every step of the search far
-    slower.
+class SPIFrameSpec(Elaboratable):
+    """The SPI target: what it hands on is what the pins carried.
+
+    Proved for free pins and a free reset (mid-frame included):
+
+    * **frames**: the target offers a frame event exactly while the spec holds an ended frame
+      not yet taken (cs_n rose after falling, and no frame started since), and it carries the
+      first 64 bits clocked in;
+    * **check**: the event is intact only if exactly 80 SCK rising edges came while ``cs_n``
+      was low and the CRC-16/CCITT of the 80 bits, worked out here bit by bit from the pins,
+      is zero (the frame's own CRC holds).
+
+    Helper invariants tie the target's assembly registers and CRC to the spec's.
 
     Parameters
     ----------
-    make_spi, make_decoder : callables
-        Build the SPI target and the decoder under proof (the tests pass broken ones).
+    make_spi : callable
+        Builds the target under proof (the tests pass broken ones).
     helpers : bool
-        State the helper invariants. The broken designs' bounded checks leave them out, so
-        that the counterexample shows the bad write itself.
-    uart_live : bool
-        UART frame events free (else none come).
+        State the helper invariants (the broken designs' bounded checks leave them out).
     reset_free : bool
-        The reset free (else never asserted).
-    regmap : :class:`~galvoscan.gateware.host.regmap.RegisterMap`, optional
-        The register file's map (default: the default build's). The SPI covers' harness uses a
-        small one: the properties do not depend on which registers there are, and a smaller
-        register file makes each of the 70 steps of the search cheaper.
     one_frame : bool
-        One SPI frame from a paced host instead of free pins: for covers and the broken
-        designs' bounded checks only, never for the proof. SCK toggles on every clock from
-        power-up; ``cs_n`` is low from the first clock to a last one the solver chooses (any
-        constant), then high; COPI is free; with ``reset_free`` the reset is free on every
-        clock while ``cs_n`` is low, except its last (a reset that cuts the frame). Each such
-        run is one of the free harness's runs, so a cover reached or a counterexample found
-        here is one there too. The SCK and frame timing being fixed spares the solver ruling
-        out every other SCK pattern step by step, which took minutes; a rising edge every
-        other clock is the fastest SCK the synchronisers pass, so a frame ends here as soon as
-        it can with free pins: 31 bits are seen at clock 65 at the earliest, 32 at clock 67.
+        A paced host instead of free pins, for the covers and the broken designs' bounded
+        checks: SCK toggles every clock, ``cs_n`` is low from the first clock to a last one
+        the solver chooses, and COPI carries a good write frame (:func:`spi_frame_bits`)
+        with any one bit flipped or none. Each such run is one of the free pins' runs.
     """
 
-    def __init__(self, *, make_spi=SPITarget, make_decoder=CommandDecoder, helpers=True,
-                 uart_live=True, reset_free=True, regmap=None, one_frame=False):
-        self.regmap = regmap
-        self.one_frame = one_frame
+    def __init__(self, *, make_spi=SPITarget, helpers=True, reset_free=True, one_frame=False):
         self.make_spi = make_spi
-        self.make_decoder = make_decoder
         self.helpers = helpers
-        self.uart_live = uart_live
         self.reset_free = reset_free
+        self.one_frame = one_frame
 
     def elaborate(self, platform):
         m = Module()
         m.domains.sync = ClockDomain()
         reset = Signal()
         m.d.comb += ResetSignal("sync").eq(reset)
-        if self.reset_free and not self.one_frame:
-            m.d.comb += reset.eq(AnySeq(1))
         m.submodules.spi = spi = self.make_spi()
+        m.d.comb += spi.replies.valid.eq(AnySeq(1))
+        m.d.comb += spi.replies.payload.eq(AnySeq(Answer.size))
+        m.d.comb += spi.frames.ready.eq(AnySeq(1))
+        if self.one_frame:
+            clock = Signal(8, reset_less=True)
+            with m.If(clock != 255):
+                m.d.sync += clock.eq(clock + 1)
+            last = AnyConst(8)
+            flip = AnyConst(7)              # a bit to flip (80 and up: none)
+            bits = spi_frame_bits()
+            sck_pin = Signal(reset_less=True)
+            m.d.sync += sck_pin.eq(~sck_pin)
+            # The bit on COPI at each rising SCK edge: bit k rises at clock 2k + 1.
+            index = clock[1:]
+            copi = Signal()
+            with m.Switch(index):
+                for k, bit in enumerate(bits):
+                    with m.Case(k):
+                        m.d.comb += copi.eq(bit ^ (flip == k))
+            m.d.comb += [spi.sck.eq(sck_pin), spi.cs_n.eq(clock > last), spi.copi.eq(copi)]
+            if self.reset_free:
+                m.d.comb += reset.eq(AnySeq(1) & (clock < last))
+        else:
+            m.d.comb += [spi.sck.eq(AnySeq(1)), spi.cs_n.eq(AnySeq(1)), spi.copi.eq(AnySeq(1))]
+            if self.reset_free:
+                m.d.comb += reset.eq(AnySeq(1))
+
+        sck = _synchronised(m, spi.sck, 0)
+        cs_n = _synchronised(m, spi.cs_n, 1)
+        copi = _synchronised(m, spi.copi, 0)
+        sck_q = Signal()
+        m.d.sync += sck_q.eq(sck)
+
+        # The frame as the pins carry it, and its CRC, a bit at a time.
+        selected = Signal()
+        bits = Signal(range(COMMAND_BITS + 2))
+        shift = Signal(PAYLOAD_BITS)
+        crc = Signal(16, init=CRC_INIT)
+        ended = Signal()            # an ended frame the target has not had taken
+        feedback = crc[15] ^ copi
+        with m.If(~cs_n & ~selected):
+            m.d.sync += [selected.eq(1), bits.eq(0), shift.eq(0), crc.eq(CRC_INIT),
+                         ended.eq(0)]
+        with m.Elif(~cs_n & selected & sck & ~sck_q):
+            with m.If(bits < PAYLOAD_BITS):
+                m.d.sync += shift.eq(Cat(copi, shift))
+            with m.If(bits != COMMAND_BITS + 1):
+                m.d.sync += bits.eq(bits + 1)
+            m.d.sync += crc.eq(Cat(Const(0, 1), crc[:15]) ^
+                               (Const(CRC_POLY, 16) & feedback.replicate(16)))
+        with m.Elif(cs_n & selected):
+            m.d.sync += [selected.eq(0), ended.eq(1)]
+        with m.If(spi.frames.valid & spi.frames.ready):
+            m.d.sync += ended.eq(0)
+
+        intact = (bits == COMMAND_BITS) & (crc == 0)
+        event = spi.frames
+        m.d.comb += [
+            Assert(event.valid == ended, "an SPI frame event is offered once per frame"),
+            Assert(~event.valid | (event.payload.payload == shift),
+                   "an SPI frame event carries the frame's first 64 bits"),
+            Assert(~event.valid | ~event.payload.intact | intact,
+                   "an SPI frame is intact only with 80 bits and a CRC that holds"),
+            Assert(~event.valid | event.payload.intact | ~intact,
+                   "an SPI frame with 80 bits and a CRC that holds is intact"),
+        ]
+        if self.helpers:
+            m.d.comb += [
+                Assert(spi._selected == selected, "helper: target selected"),
+                Assert(spi._bits == bits, "helper: target bit count"),
+                Assert(spi._shift == shift, "helper: target bits"),
+                Assert(spi._check.crc == crc, "helper: target CRC"),
+                Assert(~(ended & selected), "helper: a frame event only between frames"),
+            ]
+        m.d.comb += [
+            Cover(event.valid & event.payload.intact, "an intact SPI frame"),
+            Cover(event.valid & ~event.payload.intact & (bits == COMMAND_BITS),
+                  "a damaged 80-bit SPI frame refused by its CRC"),
+            Cover(event.valid & (bits == COMMAND_BITS - 1), "a frame cut short by cs_n"),
+        ]
+        return m
+
+
+class CommandPathSpec(Elaboratable):
+    """Decoder → register file, for any frame events on both links, on any clock, and any
+    reset. Proved:
+
+    * **writes**: a register is written only two clocks after a frame is taken, and only if
+      that frame is intact, a write (address bit 7 clear) whose ``seq`` is the one expected,
+      and the access given is its address and data. So a frame whose check failed never
+      writes, nor does one out of sequence;
+    * **sequence**: the ``seq`` expected starts at 0 and goes up by one with each write done;
+    * **segments**: a write of ``vec_op`` is done with the frame's x and y on
+      ``segment_x`` / ``segment_y`` and ``segment`` high, and ``segment`` is high at no other
+      time: the queue never takes one word of a segment without the others;
+    * **counting**: a frame taken that is not intact is refused two clocks later; ``refused``
+      comes only two or three clocks after a frame was taken; ``errors`` goes up by one on the
+      clock after a refusal or an answer its link could not take (up to 65535), and changes
+      at no other time;
+    * **watchdog**: the progress feed tells the laser's watchdog of life only on the clock
+      after a segment was queued or ``keepalive`` was pulsed: reads never feed it.
+
+    Parameters
+    ----------
+    make_decoder, make_feed : callables
+        Build the decoder and the progress feed under proof (the tests pass broken ones).
+    reset_free : bool
+    """
+
+    def __init__(self, *, make_decoder=CommandDecoder, make_feed=ProgressFeed, reset_free=True,
+                 regmap=None):
+        self.make_decoder = make_decoder
+        self.make_feed = make_feed
+        self.reset_free = reset_free
+        self.regmap = regmap
+
+    def elaborate(self, platform):
+        m = Module()
+        m.domains.sync = ClockDomain()
+        if self.reset_free:
+            m.d.comb += ResetSignal("sync").eq(AnySeq(1))
         m.submodules.decoder = decoder = self.make_decoder()
         # The register file without its read path: a value read is anything at all.
         m.submodules.registers = registers = RegisterFile(self.regmap, read_back=False)
         m.d.comb += registers.bus.read_data.eq(AnySeq(16))
-        connect(m, spi.frames, decoder.spi_frames)
-        connect(m, decoder.spi_replies, spi.replies)
         connect(m, decoder.bus, registers.bus)
-        uart = decoder.uart_frames
-        m.d.comb += [
-            uart.valid.eq(AnySeq(1) if self.uart_live else 0),
-            uart.payload.word.eq(AnySeq(len(uart.payload.word))),
-            uart.payload.bits.eq(AnySeq(len(uart.payload.bits))),
-            decoder.uart_replies.ready.eq(AnySeq(1)),
-            spi.copi.eq(AnySeq(1)),
-        ]
-        if self.one_frame:
-            # The host's own count of clocks (a reset of the design does not touch the host).
-            clock = Signal(8, reset_less=True)
-            with m.If(clock != 255):
-                m.d.sync += clock.eq(clock + 1)
-            last = AnyConst(8)                  # cs_n's last low clock
-            sck_pin = Signal(reset_less=True)
-            m.d.sync += sck_pin.eq(~sck_pin)
-            m.d.comb += [spi.sck.eq(sck_pin), spi.cs_n.eq(clock > last)]
-            if self.reset_free:
-                m.d.comb += reset.eq(AnySeq(1) & (clock < last))
-        else:
-            m.d.comb += [spi.sck.eq(AnySeq(1)), spi.cs_n.eq(AnySeq(1))]
+        for name in ("vec_op_ready", "cor_write_ready"):
+            if hasattr(registers, name):
+                m.d.comb += getattr(registers, name).eq(AnySeq(1))
+        for link in (decoder.spi_frames, decoder.uart_frames):
+            m.d.comb += [link.valid.eq(AnySeq(1)),
+                         link.payload.payload.eq(AnySeq(PAYLOAD_BITS)),
+                         link.payload.intact.eq(AnySeq(1))]
+        # The UART port as the decoder meets it: busy from taking an answer (it sends it from
+        # the decoder's copy) until any later clock; the SPI target takes one or not, freely.
+        uart_busy = Signal()
+        with m.If(decoder.uart_replies.valid & decoder.uart_replies.ready):
+            m.d.sync += uart_busy.eq(1)
+        with m.Elif(AnySeq(1)):
+            m.d.sync += uart_busy.eq(0)
+        m.d.comb += [decoder.uart_replies.ready.eq(~uart_busy),
+                     decoder.spi_replies.ready.eq(AnySeq(1))]
+        m.submodules.feed = feed = self.make_feed()
+        m.d.comb += [feed.segment.eq(decoder.segment), feed.pushed.eq(registers.vec_op_push),
+                     feed.keepalive.eq(registers.keepalive), feed.player.eq(0)]
+        if hasattr(feed, "accepted"):           # (a broken feed that listens to every frame)
+            m.d.comb += feed.accepted.eq(decoder.accepted)
 
-        # The pins two clocks ago, as the design sees them after its synchronisers (which a
-        # reset does not touch).
-        def delayed(pin, init):
-            stages = [Signal(init=init, reset_less=True, name=f"{pin.name}_d{i}")
-                      for i in (1, 2)]
-            m.d.sync += [stages[0].eq(pin), stages[1].eq(stages[0])]
-            return stages[1]
-        sck, cs_n, copi = delayed(spi.sck, 0), delayed(spi.cs_n, 1), delayed(spi.copi, 0)
-        sck_q = Signal()
-        m.d.sync += sck_q.eq(sck)
+        # --- the frames taken -----------------------------------------------------------------
+        spi, uart = decoder.spi_frames, decoder.uart_frames
+        take_spi = spi.valid & spi.ready
+        take_uart = uart.valid & uart.ready
+        taken = take_spi | take_uart
+        frame = Mux(take_spi, spi.payload.as_value(), uart.payload.as_value())
+        taken_q, taken_qq, taken_qqq = Signal(), Signal(), Signal()
+        frame_q, frame_qq = Signal.like(spi.payload), Signal.like(spi.payload)
+        m.d.sync += [taken_q.eq(taken), frame_q.eq(frame),
+                     taken_qq.eq(taken_q), frame_qq.eq(frame_q), taken_qqq.eq(taken_qq)]
+        m.d.comb += Assert(~(take_spi & take_uart), "one frame a clock: SPI first")
 
-        # The SPI frame, from cs_n falling (or seen low after a reset) to cs_n rising.
-        selected = Signal()
-        bits = Signal(range(FRAME_BITS + 2))
-        shift = Signal(FRAME_BITS)
-        with m.If(~cs_n & ~selected):
-            m.d.sync += [selected.eq(1), bits.eq(0), shift.eq(0)]
-        with m.Elif(~cs_n & selected & sck & ~sck_q):
-            m.d.sync += shift.eq(Cat(copi, shift))
-            with m.If(bits != FRAME_BITS + 1):
-                m.d.sync += bits.eq(bits + 1)
-        with m.Elif(cs_n & selected):
-            m.d.sync += selected.eq(0)
+        def fields(f):
+            p = f.payload
+            return {"seq": p[56:64], "address": p[48:56], "data": p[32:48], "x": p[16:32],
+                    "y": p[0:16], "intact": f.intact}
 
-        # The SPI frame that ended on the last clock.
-        ended = Signal()
-        word = Signal(FRAME_BITS)
-        word_bits = Signal.like(bits)
-        m.d.sync += ended.eq(cs_n & selected)
-        with m.If(cs_n & selected):
-            m.d.sync += [word.eq(shift), word_bits.eq(bits)]
-
-        def good_write(frame_bits, frame_word):
-            return ((frame_bits == FRAME_BITS) & (frame_word[0:8] == CHECK_BYTE) &
-                    ~frame_word[31] & (registers.bus.address == frame_word[24:31]) &
-                    (registers.bus.write_data == frame_word[8:24]))
-
-        def complete(frame_bits, frame_word):
-            return (frame_bits == FRAME_BITS) & (frame_word[0:8] == CHECK_BYTE)
-
-        uart_taken = uart.valid & ~ended
-        taken = ended | uart_taken
-        # A frame taken on one clock is decided on the next (the register file checks the
-        # access on the clock it is given and writes on the next): what was taken, as seen
-        # on the clock after.
-        good_q, complete_q, taken_q, ended_q = Signal(), Signal(), Signal(), Signal()
-        m.d.sync += [
-            good_q.eq((ended & good_write(word_bits, word)) |
-                      (uart_taken & good_write(uart.payload.bits, uart.payload.word))),
-            complete_q.eq(Mux(ended, complete(word_bits, word),
-                              uart_taken & complete(uart.payload.bits, uart.payload.word))),
-            taken_q.eq(taken),
-            ended_q.eq(ended),
-        ]
+        # --- the sequence ---------------------------------------------------------------------
         write = registers.bus.write_en & registers.bus.write_ok
+        seq = Signal(8)
+        with m.If(write):
+            m.d.sync += seq.eq(seq + 1)
+        m.d.comb += Assert(decoder.seq == seq, "the seq expected goes up with each write done")
+
+        # --- writes ---------------------------------------------------------------------------
+        f = fields(frame_qq)
+        good = (taken_qq & f["intact"] & ~f["address"][7] & (f["seq"] == seq) &
+                (registers._write_address == f["address"][:7]) &
+                (registers._write_data == f["data"]))
+        m.d.comb += Assert(~write | good, "a register is written only by an intact write "
+                                          "frame with the expected seq")
+        # --- segments -------------------------------------------------------------------------
+        pushed = write & (registers._write_address == SEGMENT_ADDRESS)
         m.d.comb += [
-            # On the clock after the frame was taken, the access given on that clock being
-            # the frame's address and data.
-            Assert(~write | good_q,
-                   "a register is written only by a complete frame with check byte 0x64"),
-            Assert(uart.ready == ~ended, "one frame a clock: a UART frame waits for SPI"),
+            Assert(~pushed | (decoder.segment & (decoder.segment_x == f["x"]) &
+                              (decoder.segment_y == f["y"])),
+                   "a segment is queued with its frame's end point"),
+            Assert(~decoder.segment | (registers.bus.write_en &
+                                      (registers._write_address == SEGMENT_ADDRESS)),
+                   "segment only with a write of vec_op"),
         ]
 
-        # --- every frame accepted or counted ------------------------------------------------
-        accepted = decoder.accepted
-        m.d.comb += Assert(~accepted | (taken_q & complete_q),
-                           "only a complete frame with check byte 0x64 is accepted")
-        m.d.comb += Assert(~write | accepted, "a write is an accepted frame")
+        # --- counting -------------------------------------------------------------------------
+        m.d.comb += [
+            Assert(~(taken_qq & ~frame_qq.intact) | decoder.refused,
+                   "a frame that is not intact is refused"),
+            Assert(~decoder.refused | taken_qq | taken_qqq, "only a frame taken is refused"),
+        ]
+        # An answer the link cannot take on the clock it is offered is lost, and counted (over
+        # the UART, never: no frame is taken while it is busy).
+        lost = ((decoder.uart_replies.valid & ~decoder.uart_replies.ready) |
+                (decoder.spi_replies.valid & ~decoder.spi_replies.ready))
         errors_q = Signal.like(decoder.errors)
-        rejected_q = Signal()
-        m.d.sync += [errors_q.eq(decoder.errors), rejected_q.eq(taken_q & ~accepted)]
+        counted_q = Signal()
+        m.d.sync += [errors_q.eq(decoder.errors), counted_q.eq(decoder.refused | lost)]
         m.d.comb += Assert(
-            decoder.errors == Mux((errors_q == _ERRORS_TOP) | ~rejected_q, errors_q,
+            decoder.errors == Mux((errors_q == _ERRORS_TOP) | ~counted_q, errors_q,
                                   errors_q + 1),
-            "every rejected frame is counted, and nothing else")
+            "every refused frame is counted, and nothing else")
 
-        if self.helpers:
-            # Helper invariants: the SPI target's frame is the spec's frame.
-            m.d.comb += [
-                Assert(spi._selected == selected, "helper: target selected"),
-                Assert(spi._bits == bits, "helper: target bit count"),
-                Assert(~selected | (spi._shift == shift), "helper: target bits"),
-                Assert(spi.frames.valid == ended, "helper: one frame event per frame"),
-                Assert(~ended | ((spi.frames.payload.word == word) &
-                                 (spi.frames.payload.bits == word_bits)),
-                       "helper: frame event carries the frame"),
-            ]
+        # --- the watchdog's food --------------------------------------------------------------
+        fed_q = Signal()
+        m.d.sync += fed_q.eq((decoder.segment & registers.vec_op_push) | registers.keepalive)
+        m.d.comb += Assert(~feed.alive | fed_q,
+                           "the watchdog is fed only by a segment queued or a keepalive")
 
-        # --- covers -------------------------------------------------------------------------
-        if self.uart_live:
-            m.d.comb += [
-                Cover(write & taken_q & ~ended_q, "a register is written over the UART"),
-                Cover(rejected_q & (errors_q != 0), "a second rejected frame counted"),
-                Cover(decoder.uart_replies.valid, "a read is answered over the UART"),
-            ]
-        else:
-            m.d.comb += [
-                Cover(write & ended_q, "a register is written over SPI"),
-                Cover(ended & (word_bits == FRAME_BITS - 1) & (word[0:8] == CHECK_BYTE),
-                      "a frame with a good check byte cut short by cs_n"),
-                Cover(decoder.spi_replies.valid, "a read is answered over SPI"),
-            ]
+        # --- covers ---------------------------------------------------------------------------
+        read_answered = decoder.uart_replies.valid & ~decoder.uart_replies.payload.code[7]
+        m.d.comb += Assert(~decoder.uart_replies.valid | decoder.uart_replies.ready,
+                           "a UART answer is never lost")
+        held_q = Signal.like(decoder.uart_replies.payload)
+        busy_q = Signal()
+        m.d.sync += [held_q.eq(decoder.uart_replies.payload), busy_q.eq(uart_busy)]
+        m.d.comb += Assert(~(busy_q & uart_busy) |
+                           (decoder.uart_replies.payload.as_value() == held_q.as_value()),
+                           "the answer the UART port sends is held while it does")
+        m.d.comb += [
+            Cover(write & (registers._write_address != SEGMENT_ADDRESS), "a register written"),
+            Cover(pushed & (seq == 1), "a second write: a segment queued"),
+            Cover(feed.alive, "the watchdog fed"),
+            Cover(decoder.refused & (errors_q != 0), "a second refused frame counted"),
+            Cover(read_answered & (decoder.uart_replies.payload.code == FREE_ADDRESS),
+                  "a read answered"),
+        ]
         return m

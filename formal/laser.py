@@ -24,9 +24,13 @@ class LaserSafetySpec(Elaboratable):
     * **interlock, alarms**: while the interlock is seen open or an alarm is seen, every laser
       output is low; and if armed, the fault is latched on the next clock (so whatever cut the
       outputs also needs a clear and a re-arm);
-    * **watchdog**: armed with no accepted frame for the watchdog time (the value in force when
-      the last frame was accepted or arm was set) latches the watchdog fault at most that many
-      milliseconds and one clock after the last frame;
+    * **link**: a frame the host link refused while armed latches the link fault on the next
+      clock (and with it, below, every laser output off);
+    * **watchdog**: armed with no sign of progress (``alive``: a segment queued, a keepalive,
+      the player's next word; see :class:`~galvoscan.gateware.host.progress.ProgressFeed`,
+      proved to be fed by nothing else) for the watchdog time (the value in force when the
+      last sign came or arm was set) latches the watchdog fault at most that many
+      milliseconds and one clock after it;
     * **faults**: a latched fault stays latched until ``fault_clear`` is pulsed while the
       interlock is seen closed and no alarm is seen (or the system is reset); from the clock a
       fault is latched, every laser output is low, and stays low until the fault is cleared and
@@ -60,8 +64,8 @@ class LaserSafetySpec(Elaboratable):
         m.domains.sync = ClockDomain()
         m.submodules.dut = dut = self.controller
         m.d.comb += ResetSignal("sync").eq(AnySeq(1))
-        inputs = ["arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-                  "interlock_open", "guide"] + (["alarm"] if self.alarms else [])
+        inputs = ["arm", "power", "prr", "watchdog_ms", "alive", "link_fault", "fault_clear",
+                  "marking", "interlock_open", "guide"] + (["alarm"] if self.alarms else [])
         for name in inputs:
             port = getattr(dut, name)
             m.d.comb += port.eq(AnySeq(len(port)))
@@ -108,6 +112,10 @@ class LaserSafetySpec(Elaboratable):
         for cause, _ in Faults:
             m.d.comb += Assert(~faults_q[cause] | dut.faults[cause] | cleared_q,
                                "a fault stays latched until cleared")
+        link_due = Signal()
+        m.d.sync += link_due.eq(dut.link_fault & dut.arm)
+        m.d.comb += Assert(~link_due | dut.faults.link | cleared_q,
+                           "a frame the link refused while armed latches a fault")
         any_fault = dut.faults.as_value().any()
         # From a fault on, off until cleared and arm seen low.
         off_owed = Signal()
@@ -185,4 +193,6 @@ class LaserSafetySpec(Elaboratable):
         if self.alarms:
             m.d.comb += Cover(emitted & dut.faults.alarm & ~faults_q.alarm,
                               "an alarm after emission")
+        m.d.comb += Cover(emitted & dut.faults.link & ~faults_q.link,
+                          "a refused frame after emission")
         return m

@@ -4,7 +4,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..gateware.phy.xy2_100 import FRAME_BITS, XY2Transmitter
-from .command import CommandPathSpec
+from .command import CommandPathSpec, SPIFrameSpec
 from ..gateware.host.regmap import register_map
 from .correction import CorrectionLinkSpec, CorrectionSpec
 from ..gateware.field.correction import FieldCorrection
@@ -16,7 +16,7 @@ from .player import PlayerSpec
 from ..gateware.player.player import JobPlayer
 
 
-__all__ = ["Proof", "PROOFS", "xy2_phy_proof", "command_path_proof", "laser_safety_proof",
+__all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
            "correction_proof", "correction_link_proof", "player_proof",
            "LASER_PROOF_PARAMETERS"]
 
@@ -119,50 +119,53 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
         cover_depth=2 * frame + 10, cover_harness=lambda: harness(reset_free=False))
 
 
-def command_path_proof(*, make_spi=None, make_decoder=None, helpers=True, uart_live=True,
-                       reset_free=True, name="command_path"):
-    """Both links → decoder → register file, reset free: no write without a complete frame
-    with 0x64, every rejected frame counted.
+def spi_frame_proof(*, make_spi=None, helpers=True, name="spi_frames"):
+    """The SPI target, pins and reset free: an intact frame is 80 bits whose CRC holds, and
+    carries them.
 
-    Helper invariants make a short induction enough. With the UART live, its covers are a few
-    clocks deep, and so are the counterexamples of faults on the UART's path (a frame comes on
-    any clock).
-
-    Over SPI alone (``uart_live=False``) the covers and the bounded check search one frame
-    from a paced host (:class:`CommandPathSpec`'s ``one_frame``, a restriction of the proof's
-    free pins: what is reached or broken there is reached or broken with free pins). Its
-    fastest frame ends 31 bits in at clock 65 and 32 bits in at clock 67, and no SPI cover and
-    no fault that needs such a frame shows sooner, so clocks 0-63 are not searched; a reset
-    that cuts the frame shows as soon, since the target must still count 32 bits. Searching to
-    clock 80 leaves room for a read reply a few clocks later than now.
-    """
-    kwargs = {"helpers": helpers, "uart_live": uart_live, "reset_free": reset_free}
-    if not uart_live:
-        # The spiral-only build's map, without laser, correction or interpolation: 13 registers,
-        # not 45.
-        kwargs["regmap"] = register_map(modes=("spiral",), laser=False, correction_nodes=None,
-                                        spiral_interpolation=False)
+    Helper invariants tie the target's registers to the spec's, so a short induction is
+    enough. The covers and the broken designs' bounded check search one good frame from a
+    paced host, any one bit flipped (:class:`SPIFrameSpec`'s ``one_frame``, a restriction of
+    the free pins): its 80 bits rise at clocks 1, 3, … 159 and it ends as cs_n rises, so no
+    cover and no fault that needs the frame shows before clock 160, and clocks before that are
+    not searched."""
+    kwargs = {"helpers": helpers}
     if make_spi is not None:
         kwargs["make_spi"] = make_spi
-    if make_decoder is not None:
-        kwargs["make_decoder"] = make_decoder
-    spi_only = not uart_live
-    harness = lambda: CommandPathSpec(**kwargs)
-    one_frame = lambda: CommandPathSpec(**kwargs, one_frame=True)
     return Proof(
         name=name,
-        description="command path, SPI pins and UART frames live, reset free: a register is "
-                    "written only by a complete frame with check byte 0x64 (cs_n released "
-                    "or a reset mid-frame discards it); every rejected frame is counted"
-                    if not spi_only else
-                    "command path over SPI alone: the same properties, and covers of an SPI "
-                    "write, a frame cut short and a read answered",
-        harness=harness,
+        description="SPI target, pins and reset free: a frame is intact only with exactly 80 "
+                    "SCK edges and a CRC-16 that holds, and carries its bits",
+        harness=lambda: SPIFrameSpec(**kwargs),
+        # The spec's synchroniser stages and SCK edge detector are its own: a few clocks of
+        # induction see them agree with the target's.
         depth=8,
-        cover_depth=80 if spi_only else 8, cover_skip=64 if spi_only else 0,
-        cover_harness=one_frame if spi_only else None,
-        bmc_depth=80 if spi_only else 8, bmc_skip=64 if spi_only else 0,
-        bmc_harness=one_frame if spi_only else None)
+        cover_depth=168, cover_skip=158,
+        cover_harness=lambda: SPIFrameSpec(**kwargs, reset_free=False, one_frame=True),
+        bmc_depth=168, bmc_skip=158,
+        bmc_harness=lambda: SPIFrameSpec(**kwargs, one_frame=True),
+        fresh_solver=True)
+
+
+def command_path_proof(*, make_decoder=None, make_feed=None, name="command_path"):
+    """Both links' frame events → decoder → register file, reset free: no write without an
+    intact write frame in sequence, segments whole, every refusal counted, the watchdog fed by
+    progress only. A frame comes on any clock, so the covers and the faults are a few clocks
+    deep."""
+    kwargs = {}
+    if make_decoder is not None:
+        kwargs["make_decoder"] = make_decoder
+    if make_feed is not None:
+        kwargs["make_feed"] = make_feed
+    return Proof(
+        name=name,
+        description="command path, both links' frames free, reset free: a register is written "
+                    "only by an intact write frame with the expected sequence number; a "
+                    "segment is queued whole; every refused frame is counted; only progress "
+                    "feeds the watchdog",
+        harness=lambda: CommandPathSpec(**kwargs),
+        depth=6,
+        cover_depth=10)
 
 
 #: The laser controller as proved: a 4 kHz clock makes 1 ms four clocks, so the 1.5 ms lead is 6
@@ -283,8 +286,8 @@ PROOFS = [
     # The iCEBreaker's 12 MHz system clock, from power-up and after any reset (with the helper
     # invariants the induction is a few clocks deep, so the free reset costs nothing).
     xy2_phy_proof(6),
+    spi_frame_proof(),
     command_path_proof(),
-    command_path_proof(uart_live=False, reset_free=False, name="command_path_spi"),
     laser_safety_proof(),
     # As built with vector mode: the PRR clock runs free and leads pulse_ahead (MO gates it).
     laser_safety_proof(

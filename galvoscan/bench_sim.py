@@ -66,8 +66,11 @@ def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
 # --- host link -----------------------------------------------------------------------------------
 
 def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
-    """Command throughput over SPI and UART, and command → XY2 latency for a vector jump."""
-    from .client import encode_read, encode_write
+    """Command throughput over SPI and UART (write frames with their answers), and
+    command → XY2 latency for a vector jump (one segment frame)."""
+    from cobs import cobs
+    from .client import encode_command
+    from .gateware.host.regmap import BY_NAME
     from .gateware.top import GalvoScanTop, ScanSettings
     from .sim import XY2Receiver
     top = GalvoScanTop(clk_freq=clk_freq, baud=baud,
@@ -83,16 +86,21 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
         return await spi_transfer(ctx, top, frame, clk_freq)
 
     async def uart_frame(ctx, frame):
-        for byte in frame:
+        for byte in cobs.encode(frame) + b"\0":
             for level in [0, *((byte >> i) & 1 for i in range(8)), 1]:
                 ctx.set(top.uart_rx, level)
                 await ctx.delay(bit_time)
 
+    seq = 0
+
+    def write(name, value, x=0, y=0):
+        nonlocal seq
+        seq = (seq + 1) & 0xFF
+        return encode_command(seq - 1 & 0xFF, BY_NAME[name].address, value, x, y)
+
     async def jump_latency(ctx, send, x, y):
         """Queue a jump to (x, y); clocks from the end of the last frame to the XY2 frame."""
-        await send(ctx, encode_write("vec_x", x))
-        await send(ctx, encode_write("vec_y", y))
-        await send(ctx, encode_write("vec_op", 0))
+        await send(ctx, write("vec_op", 0, x, y))
         sent_at = ctx.get(counted.cycles)
         while not any(c > sent_at and (fx, fy) == (x, y) for c, fx, fy in frame_ends):
             await ctx.delay(10e-6)
@@ -107,19 +115,21 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
             ctx.set(top.laser_alarm, 0)     # the laser reports no alarm
         await ctx.delay(20e-6)
         # Jumps held one frame, so that each jump's latency is its own.
-        await spi_frame(ctx, encode_write("jump_delay", 10))
+        await spi_frame(ctx, write("jump_delay", 10))
         for name, send in (("spi", spi_frame), ("uart", uart_frame)):
             start = ctx.get(counted.cycles)
             for k in range(frames):
-                await send(ctx, encode_write("pitch", 60 + k))
+                await send(ctx, write("pitch", 60 + k))
             seconds = (ctx.get(counted.cycles) - start) / clk_freq
             results[f"{name}_frames_per_s"] = frames / seconds
             latencies = [await jump_latency(ctx, send, 20000 + 5000 * k, 40000 - 3000 * k)
                          for k in range(3)]
             results[f"{name}_latency_us"] = 1e6 * sum(latencies) / len(latencies)
             results[f"{name}_latency_max_us"] = 1e6 * max(latencies)
-        await spi_frame(ctx, encode_read("errors"))
-        results["errors"] = (await spi_frame(ctx, encode_read("errors")) >> 8) & 0xFFFF
+        errors = encode_command(0, 0x80 | BY_NAME["errors"].address)
+        await spi_frame(ctx, errors)
+        # The answer's data: bytes 2 and 3 of the six that come back first.
+        results["errors"] = (await spi_frame(ctx, errors) >> 8 * (10 - 4)) & 0xFFFF
 
     async def head(ctx):
         receiver = XY2Receiver()
@@ -140,8 +150,8 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
 # --- simulator -----------------------------------------------------------------------------------
 
 def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", **top_kwargs):
-    """Vector segments a second streamed end to end: ``JobStreamer`` (batches, reads of
-    ``fifo_free``) through the UART pins of the simulated board at the default baud, one-point
+    """Vector segments a second streamed end to end: ``JobStreamer`` (batches of segment
+    frames, each answered with the queue's free places) through the UART pins of the simulated board at the default baud, one-point
     marks that the board takes faster than the link brings them (so each one finds the queue
     empty: ``underruns`` counts them all, by design); in the board's own time.
 

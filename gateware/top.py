@@ -24,13 +24,15 @@ from .field.scale import ScaleOffset
 from .flash.spi_flash import SPIFlashReader
 from .host.bus_arbiter import BusArbiter
 from .host.command import CommandDecoder
+from .host.frames import PAYLOAD_BITS
+from .host.progress import ProgressFeed
 from .host.registers import RegisterFile
 from .host.fields import pack
 from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
                           PlayerResult, PlayerState, PlayerStatus, register_map)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
-from .host.uart_port import REPLY_QUEUE_DEPTH, UARTCommandPort
+from .host.uart_port import UARTCommandPort
 from .laser.controller import MAX_ALARMS, LaserController
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .player.player import JobPlayer
@@ -104,8 +106,6 @@ class GalvoScanTop(wiring.Component):
     laser : bool
         Build the laser controller. Without it the laser pins stay low, its registers are
         unknown addresses, and vector mode (timed by the laser's pulses) cannot be built.
-    uart_reply_depth : int
-        Read answers the UART port queues (1 on the smallest boards).
     register_reads : str
         How the register file reads back what it holds: ``"ram"``, from a copy in block RAM
         (two RAMs, some 90 cells fewer on the full build), or ``"mux"``, through a multiplexer
@@ -177,7 +177,7 @@ class GalvoScanTop(wiring.Component):
     def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=None, table=None,
                  settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
                  multiplier="dsp", links=("spi", "uart"), laser=True,
-                 uart_reply_depth=REPLY_QUEUE_DEPTH, laser_alarms=2, register_reads="ram",
+                 laser_alarms=2, register_reads="ram",
                  vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
                  spiral_interpolation=True, vector_delays=False, player=False,
                  start_debounce_ms=DEFAULT_DEBOUNCE_MS):
@@ -215,7 +215,6 @@ class GalvoScanTop(wiring.Component):
             raise ValueError(f"links must be some of spi, uart, each once, not {links!r}")
         self.links = links
         self.laser = bool(laser)
-        self.uart_reply_depth = uart_reply_depth
         if register_reads not in ("ram", "mux"):
             raise ValueError(f"register_reads must be ram or mux, not {register_reads!r}")
         self.register_reads = register_reads
@@ -305,13 +304,18 @@ class GalvoScanTop(wiring.Component):
         m = Module()
 
         # --- host link ----------------------------------------------------------------------
-        m.submodules.decoder = decoder = CommandDecoder()
-        m.submodules.registers = regs = RegisterFile(
-            self.regmap, reads_from_ram=self.register_reads == "ram")
+        m.submodules.decoder = decoder = self._decoder = CommandDecoder()
+        regs = RegisterFile(self.regmap, reads_from_ram=self.register_reads == "ram")
+        # `soft_reset` returns the registers (and below, the vector path and the counters) to
+        # their power-up values; the link's own state (its sequence number, its error count)
+        # and the laser's latched faults stay.
+        m.submodules.registers = ResetInserter(regs.soft_reset)(regs)
+        # A segment's end point is all a build without vector mode would not use of a frame.
+        kept_bytes = PAYLOAD_BITS // 8 if "vector" in self.modes else 4
         # A link left out of the build: its pins are unused (the outputs idle) and the decoder
         # never hears from it.
         if "spi" in self.links:
-            m.submodules.spi = spi = SPITarget()
+            m.submodules.spi = spi = SPITarget(kept_bits=kept_bytes * 8)
             m.d.comb += [
                 spi.sck.eq(self.spi_sck),
                 spi.cs_n.eq(self.spi_cs_n),
@@ -324,7 +328,7 @@ class GalvoScanTop(wiring.Component):
             m.d.comb += decoder.spi_replies.ready.eq(1)
         if "uart" in self.links:
             m.submodules.uart = uart = UARTCommandPort(divisor=self.clocking.uart_divisor,
-                                                       reply_depth=self.uart_reply_depth)
+                                                       kept_bytes=kept_bytes)
             m.d.comb += [uart.rx.eq(self.uart_rx), self.uart_tx.eq(uart.tx)]
             connect(m, uart.frames, decoder.uart_frames)
             connect(m, decoder.uart_replies, uart.replies)
@@ -335,18 +339,19 @@ class GalvoScanTop(wiring.Component):
             m.submodules.arbiter = arbiter = BusArbiter()
             connect(m, decoder.bus, arbiter.host)
             connect(m, arbiter.bus, regs.bus)
-            m.d.comb += arbiter.host_given.eq(decoder.spi_frames.valid |
-                                              decoder.uart_frames.valid)
+            m.d.comb += arbiter.host_given.eq(decoder.given)
         else:
             connect(m, decoder.bus, regs.bus)
 
         # Counters the host reads: those of the vector queue stop at their top, the laser's
         # pulses wrap (the host counts by differences).
-        m.submodules.status = status = StatusBlock(
+        status = StatusBlock(
             saturating=[name for name in ("vec_rejected", "vec_underruns", "vec_stalls")
                         if name in self.regmap],
-            wrapping=["pulses"] if self.laser else [])
+            wrapping=[name for name in ("pulses", "vec_taken") if name in self.regmap])
+        m.submodules.status = ResetInserter(regs.soft_reset)(status)
         m.d.comb += [
+            regs.link_seq.eq(decoder.seq),
             status.status_read.eq(decoder.status_read),
             status.flags.interlock_open.eq(self.interlock_open),
             regs.status.eq(status.status),
@@ -386,9 +391,11 @@ class GalvoScanTop(wiring.Component):
             sequencer = DirectedVectorSequencer if self.wobble else VectorSequencer
             vector = sources[Mode.VECTOR] = sequencer(frame_us=int(self.frame_us),
                                                       delays=self.vector_delays)
-            # vec_flush starts the vector path afresh: queue, sequencer (and the wobble and
-            # the laser delays, below).
-            m.submodules.vector = ResetInserter(regs.vec_flush)(vector)
+            # vec_flush (and soft_reset) start the vector path afresh: queue, sequencer (and
+            # the wobble and the laser delays, below).
+            self._vector_flush = flush = Signal()
+            m.d.comb += flush.eq(regs.vec_flush | regs.soft_reset)
+            m.submodules.vector = ResetInserter(flush)(vector)
             names = ("pitch", "pulses_per_point", "jump_delay")
             if self.vector_delays:
                 names += ("mark_delay", "polygon_delay", "polygon_scaled")
@@ -397,13 +404,16 @@ class GalvoScanTop(wiring.Component):
             self._elaborate_vector_queue(m, regs, vector, status)
 
         m.submodules.select = select = SourceSelect(sources)
-        m.d.comb += [select.mode.eq(regs.mode), select.run.eq(regs.run)]
+        # A latched laser fault stops the scan where it is (the mirrors hold): the segments
+        # taken (vec_taken) then say how far a job got.
+        self._fault_latched = Signal()
+        m.d.comb += [select.mode.eq(regs.mode), select.run.eq(regs.run & ~self._fault_latched)]
         # Each mode's points: the vector sequencer's through the wobble stage, if built.
         streams = {mode: source.points for mode, source in sources.items()}
         clipped = scale.clipped
         if self.wobble:
             wobble = Wobble(frame_rate=self.bit_rate / FRAME_BITS)
-            m.submodules.wobble = ResetInserter(regs.vec_flush)(wobble)
+            m.submodules.wobble = ResetInserter(self._vector_flush)(wobble)
             connect(m, vector.points, wobble.line_points)
             m.d.comb += [
                 wobble.direction.eq(vector.direction),
@@ -515,7 +525,7 @@ class GalvoScanTop(wiring.Component):
         # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
         layout = DelayedVectorCommand if self.vector_delays else VectorCommand
         queue = SyncFIFOBuffered(width=layout.size, depth=self.vector_queue_depth)
-        m.submodules.queue = ResetInserter(regs.vec_flush)(queue)
+        m.submodules.queue = ResetInserter(self._vector_flush)(queue)
         command = Signal(layout)
         if self.vector_delays:
             word = VecOpWord(regs.vec_op)
@@ -523,10 +533,13 @@ class GalvoScanTop(wiring.Component):
             op = word.op
         else:           # (vec_op is the op alone)
             op = regs.vec_op[0]
+        # The host's segments carry their end point in the frame that queues them (one checked
+        # frame: never an old vec_x or vec_y); the player's come from vec_x and vec_y.
+        decoder = self._decoder
         m.d.comb += [
             command.op.eq(op),
-            command.x.eq(regs.vec_x),
-            command.y.eq(regs.vec_y),
+            command.x.eq(Mux(decoder.segment, decoder.segment_x, regs.vec_x)),
+            command.y.eq(Mux(decoder.segment, decoder.segment_y, regs.vec_y)),
             queue.w_stream.payload.eq(command),
             queue.w_stream.valid.eq(regs.vec_op_push),
             regs.vec_op_ready.eq(queue.w_stream.ready),
@@ -535,6 +548,7 @@ class GalvoScanTop(wiring.Component):
             status.events.vec_rejected.eq(regs.vec_op_refused),
             status.events.vec_underruns.eq(vector.underrun),
             status.events.vec_stalls.eq(vector.stall),
+            status.events.vec_taken.eq(vector.commands.valid & vector.commands.ready),
         ]
         connect(m, queue.r_stream, vector.commands)
         self._queue = queue
@@ -549,10 +563,15 @@ class GalvoScanTop(wiring.Component):
         m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
                                                      mo_lead=self.mo_lead, lookahead=lookahead,
                                                      alarms=self.laser_alarms)
-        # The watchdog hears of an accepted frame a clock later: that takes the decoder's
-        # checks off the path into the laser's timers (the longest path otherwise).
-        command_seen = Signal()
-        m.d.sync += command_seen.eq(decoder.accepted)
+        # The watchdog is fed by progress only: a segment the host queued, its keepalive, the
+        # player's next word; reading registers is no sign that a job goes on. It hears a
+        # clock later: that takes the register file's checks off the path into the laser's
+        # timers. A frame the link refused latches a link fault while armed.
+        m.submodules.progress = progress = ProgressFeed()
+        m.d.comb += [progress.segment.eq(decoder.segment), progress.keepalive.eq(regs.keepalive),
+                     progress.player.eq(self._player_alive)]
+        if "vector" in self.modes:
+            m.d.comb += progress.pushed.eq(regs.vec_op_push)
         selected = dict(zip(sources, select.selected))
         marking = Signal()
         if Mode.SPIRAL in sources:
@@ -587,7 +606,7 @@ class GalvoScanTop(wiring.Component):
             vector = sources[Mode.VECTOR]
             delays = LaserDelays(clocks_per_us=int(self.clk_freq / 1e6),
                                  lead_us=2 * int(self.frame_us))
-            m.submodules.laser_delays = ResetInserter(regs.vec_flush)(delays)
+            m.submodules.laser_delays = ResetInserter(self._vector_flush)(delays)
             m.d.comb += [
                 delays.frame_strobe.eq(phy.frame_strobe),
                 delays.run.eq(vector.run),
@@ -602,7 +621,9 @@ class GalvoScanTop(wiring.Component):
             laser.power.eq(regs.laser_power),
             laser.prr.eq(regs.laser_prr),
             laser.watchdog_ms.eq(regs.watchdog),
-            laser.alive.eq(command_seen | self._player_alive),
+            laser.alive.eq(progress.alive),
+            laser.link_fault.eq(decoder.refused),
+            self._fault_latched.eq(laser.faults.as_value().any()),
             laser.fault_clear.eq(regs.fault_clear),
             laser.marking.eq(marking),
             laser.interlock_open.eq(self.interlock_open),
@@ -620,6 +641,7 @@ class GalvoScanTop(wiring.Component):
             status.flags.fault_interlock.eq(laser.faults.interlock),
             status.flags.fault_watchdog.eq(laser.faults.watchdog),
             status.flags.fault_alarm.eq(laser.faults.alarm),
+            status.flags.fault_link.eq(laser.faults.link),
             status.flags.laser_enable.eq(laser.laser_enable),
             status.flags.laser_ready.eq(laser.mo_ready & laser.laser_enable),
             status.flags.mo_on.eq(laser.laser_mo),

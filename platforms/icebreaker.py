@@ -265,10 +265,8 @@ class ICEBreakerScanner(Elaboratable):
         options = {"wobble": wobble, "spiral_interpolation": interpolation,
                    "vector_delays": delays, "player": player}
         if player:
-            # The SPI link's pins are the machine's lines; the client waits for each answer,
-            # so one queued is enough, and the player needs the cells a deep queue's logic
-            # takes.
-            options.update(links=("uart",), uart_reply_depth=1)
+            # The SPI link's pins are the machine's lines.
+            options.update(links=("uart",))
         return options
 
     def _player_pins(self, m, platform, scanner):

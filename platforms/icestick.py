@@ -107,7 +107,7 @@ class ICEStickScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
             settings=self.settings, modes=ICESTICK_MODES, correction=None,
-            multiplier="serial", links=("uart",), laser=False, uart_reply_depth=1,
+            multiplier="serial", links=("uart",), laser=False,
             register_reads="mux", spiral_interpolation=False)
 
         xy2 = platform.request("xy2", 0, dir="-")

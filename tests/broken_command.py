@@ -1,19 +1,18 @@
-"""Deliberately broken command paths, to show that the command proof catches each fault."""
+"""Deliberately broken command paths, to show that the command proofs catch each fault."""
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
 
 from galvoscan.gateware.host.command import CommandDecoder
-from galvoscan.gateware.host.regmap import CHECK_BYTE
+from galvoscan.gateware.host.frames import COMMAND_BITS
+from galvoscan.gateware.host.progress import ProgressFeed
 from galvoscan.gateware.host.spi_target import SPITarget
 
 
 class TamperedDecoder(wiring.Component):
-    """The real decoder with one link's frame stream tampered with (``_feed``); everything
-    else passes through unchanged."""
-
-    #: The stream ``_feed`` connects: ``"spi_frames"`` or ``"uart_frames"``.
-    tampered = None
+    """The real decoder with its frames tampered with on the way in (``_feed``) or its
+    segment outputs on the way out (``_segment``); everything else passes through."""
 
     def __init__(self):
         self.inner = CommandDecoder()
@@ -23,54 +22,97 @@ class TamperedDecoder(wiring.Component):
         m = Module()
         m.submodules.inner = inner = self.inner
         for name in ("spi_frames", "uart_frames"):
-            if name != self.tampered:
-                wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(inner, name))
+            outer, to = getattr(self, name), getattr(inner, name)
+            m.d.comb += [to.valid.eq(outer.valid), outer.ready.eq(to.ready)]
+            self._feed(m, outer.payload, to.payload)
         wiring.connect(m, inner.spi_replies, wiring.flipped(self.spi_replies))
         wiring.connect(m, inner.uart_replies, wiring.flipped(self.uart_replies))
         wiring.connect(m, inner.bus, wiring.flipped(self.bus))
-        for name in ("errors", "accepted", "status_read", "write_refused"):
+        for name in ("given", "errors", "refused", "accepted", "status_read", "seq"):
             m.d.comb += getattr(self, name).eq(getattr(inner, name))
-        self._feed(m, getattr(self, self.tampered), getattr(inner, self.tampered))
+        self._segment(m)
         return m
 
+    def _feed(self, m, outer, inner):
+        m.d.comb += inner.eq(outer)
 
-class DecoderIgnoringCheckByte(TamperedDecoder):
-    """The real decoder, fed SPI frames whose check byte has been replaced by 0x64."""
+    def _segment(self, m):
+        m.d.comb += [self.segment.eq(self.inner.segment),
+                     self.segment_x.eq(self.inner.segment_x),
+                     self.segment_y.eq(self.inner.segment_y)]
 
-    tampered = "spi_frames"
+
+class DecoderIgnoringCheck(TamperedDecoder):
+    """Every frame taken as intact: the CRC's verdict ignored."""
 
     def _feed(self, m, outer, inner):
-        m.d.comb += [
-            inner.valid.eq(outer.valid),
-            outer.ready.eq(inner.ready),
-            inner.payload.bits.eq(outer.payload.bits),
-            inner.payload.word.eq(Cat(Const(CHECK_BYTE, 8), outer.payload.word[8:])),
-        ]
+        m.d.comb += [inner.payload.eq(outer.payload), inner.intact.eq(1)]
 
 
-class TargetPassingShortFrames(wiring.Component):
-    """The real SPI target, but a frame cut short after 31 bits is reported as complete."""
+class DecoderIgnoringSequence(TamperedDecoder):
+    """Every frame's seq taken as the one expected: a write after a lost one is done."""
 
-    def __init__(self):
-        self.inner = SPITarget()
-        super().__init__(self.inner.signature)
-        # The proof's helper invariants look at the frame state of the target.
-        self._selected, self._bits, self._shift = \
-            self.inner._selected, self.inner._bits, self.inner._shift
+    def _feed(self, m, outer, inner):
+        m.d.comb += [inner.eq(outer), inner.payload[56:64].eq(self.inner.seq)]
+
+
+class DecoderQueueingOldEndPoint(TamperedDecoder):
+    """A segment's x and y from a register written by an earlier frame: the queue takes the
+    operation with the old end point (as three register writes did)."""
+
+    def _segment(self, m):
+        old_x, old_y = Signal(16), Signal(16)
+        with m.If(self.inner.segment):
+            m.d.sync += [old_x.eq(self.inner.segment_x), old_y.eq(self.inner.segment_y)]
+        m.d.comb += [self.segment.eq(self.inner.segment), self.segment_x.eq(old_x),
+                     self.segment_y.eq(old_y)]
+
+
+class FeedOnRefusedSegments(ProgressFeed):
+    """The watchdog fed by a segment frame whether or not the queue took it."""
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.inner = inner = self.inner
-        wiring.connect(m, wiring.flipped(self.replies), inner.replies)
-        bits = inner.frames.payload.bits
-        m.d.comb += [
-            inner.sck.eq(self.sck), inner.cs_n.eq(self.cs_n), inner.copi.eq(self.copi),
-            self.cipo.eq(inner.cipo),
-            self.frames.valid.eq(inner.frames.valid),
-            inner.frames.ready.eq(self.frames.ready),
-            self.frames.payload.word.eq(inner.frames.payload.word),
-            self.frames.payload.bits.eq(Mux(bits == 31, 32, bits)),
-        ]
+        m.d.sync += self.alive.eq(self.segment | self.keepalive | self.player)
+        return m
+
+
+class FeedOnEveryFrame(wiring.Component):
+    """The watchdog fed by every frame the decoder takes, reads among them (the chatter that
+    held an armed board while the host polled its status)."""
+
+    segment: In(1)
+    pushed: In(1)
+    keepalive: In(1)
+    player: In(1)
+    accepted: In(1)
+    alive: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.d.sync += self.alive.eq((self.segment & self.pushed) | self.keepalive | self.player |
+                                  self.accepted)
+        return m
+
+
+class TargetPassingShortFrames(SPITarget):
+    """The real SPI target, but a frame cut short after 79 bits whose CRC holds so far is
+    reported intact."""
+
+    def elaborate(self, platform):
+        m = super().elaborate(platform)
+        m.d.comb += self.frames.payload.intact.eq(
+            ((self._bits == COMMAND_BITS) | (self._bits == COMMAND_BITS - 1)) &
+            (self._check.crc == 0))
+        return m
+
+
+class TargetIgnoringCRC(SPITarget):
+    """The real SPI target, but any 80-bit frame is intact."""
+
+    def elaborate(self, platform):
+        m = super().elaborate(platform)
+        m.d.comb += self.frames.payload.intact.eq(self._bits == COMMAND_BITS)
         return m
 
 
@@ -85,59 +127,39 @@ class TargetKeepingFramesThroughReset(SPITarget):
         self._shift = Signal.like(self._shift, reset_less=True)
 
 
-class DecoderDroppingUARTErrors(TamperedDecoder):
-    """The real decoder, but a UART frame that is not 32 bits long is taken and dropped
-    without being counted."""
-
-    tampered = "uart_frames"
-
-    def _feed(self, m, outer, inner):
-        whole = outer.payload.bits == 32
-        m.d.comb += [
-            inner.valid.eq(outer.valid & whole),
-            inner.payload.eq(outer.payload),
-            outer.ready.eq(inner.ready | ~whole),
-        ]
-
-
-class DecoderAcceptingLongUARTFrames(TamperedDecoder):
-    """The real decoder, but a UART frame that ran over (33 bits) is decoded as complete."""
-
-    tampered = "uart_frames"
-
-    def _feed(self, m, outer, inner):
-        bits = outer.payload.bits
-        m.d.comb += [
-            inner.valid.eq(outer.valid),
-            outer.ready.eq(inner.ready),
-            inner.payload.word.eq(outer.payload.word),
-            inner.payload.bits.eq(Mux(bits == 33, 32, bits)),
-        ]
-
-
-#: Each fault: the parts to swap in (and which of the links and reset the check needs), and
-#: the property it must break. The broken designs are checked without the helper invariants
-#: (a bounded check; over SPI one paced frame, from clock 64 on), so that the counterexample
-#: is the bad write or the lost count itself.
+#: Each fault of the decoder's side: the parts to swap into the command path's harness, and
+#: the properties it must break (a bounded check a few clocks deep, without reset).
 BROKEN_COMMAND_PATHS = {
-    "decoder_ignores_check_byte": (
-        {"make_decoder": DecoderIgnoringCheckByte, "uart_live": False, "reset_free": False},
-        ("a register is written only by a complete frame with check byte 0x64",
-         "only a complete frame with check byte 0x64 is accepted")),
+    "decoder_ignores_check": (
+        {"make_decoder": DecoderIgnoringCheck},
+        ("a register is written only by an intact write frame with the expected seq",
+         "a frame that is not intact is refused")),
+    "decoder_ignores_sequence": (
+        {"make_decoder": DecoderIgnoringSequence},
+        "a register is written only by an intact write frame with the expected seq"),
+    "queue_takes_old_end_point": (
+        {"make_decoder": DecoderQueueingOldEndPoint},
+        "a segment is queued with its frame's end point"),
+    "feed_on_refused_segments": (
+        {"make_feed": FeedOnRefusedSegments},
+        "the watchdog is fed only by a segment queued or a keepalive"),
+    "feed_on_every_frame": (
+        {"make_feed": FeedOnEveryFrame},
+        "the watchdog is fed only by a segment queued or a keepalive"),
+}
+
+#: Each fault of the SPI target: the target to swap in and the properties it must break
+#: (a bounded check of one paced frame, any one bit flipped).
+BROKEN_SPI_TARGETS = {
     "target_passes_short_frames": (
-        {"make_spi": TargetPassingShortFrames, "uart_live": False, "reset_free": False},
-        "a register is written only by a complete frame with check byte 0x64"),
+        TargetPassingShortFrames,
+        "an SPI frame is intact only with 80 bits and a CRC that holds"),
+    "target_ignores_crc": (
+        TargetIgnoringCRC,
+        "an SPI frame is intact only with 80 bits and a CRC that holds"),
     "target_keeps_frames_through_reset": (
-        {"make_spi": TargetKeepingFramesThroughReset, "uart_live": False},
-        # The frame that straddles the reset: written, or taken as a frame the spec never saw.
-        ("a register is written only by a complete frame with check byte 0x64",
-         "only a complete frame with check byte 0x64 is accepted",
-         "every rejected frame is counted, and nothing else")),
-    "decoder_drops_uart_errors": (
-        {"make_decoder": DecoderDroppingUARTErrors},
-        "every rejected frame is counted, and nothing else"),
-    "decoder_accepts_long_uart_frames": (
-        {"make_decoder": DecoderAcceptingLongUARTFrames},
-        ("a register is written only by a complete frame with check byte 0x64",
-         "only a complete frame with check byte 0x64 is accepted")),
+        TargetKeepingFramesThroughReset,
+        ("an SPI frame is intact only with 80 bits and a CRC that holds",
+         "an SPI frame event carries the frame's first 64 bits",
+         "an SPI frame with 80 bits and a CRC that holds is intact")),
 }

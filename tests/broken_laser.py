@@ -6,8 +6,8 @@ from amaranth.lib import wiring
 from galvoscan.gateware.laser.controller import LaserController
 
 
-INPUTS = ("arm", "power", "prr", "watchdog_ms", "alive", "fault_clear", "marking",
-          "interlock_open", "alarm", "guide")
+INPUTS = ("arm", "power", "prr", "watchdog_ms", "alive", "link_fault", "fault_clear",
+          "marking", "interlock_open", "alarm", "guide")
 OUTPUTS = ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "laser_enable",
            "faults", "mo_ready", "pulse", "laser_guide")
 
@@ -52,6 +52,9 @@ class TamperedLaser(wiring.Component):
             closed = Signal()
             m.d.sync += closed.eq(~self.interlock_open)
             inputs["fault_clear"] = self.fault_clear | closed
+        elif self.kind == "link_faults_ignored":
+            # Refused frames are not wired to the controller.
+            inputs["link_fault"] = 0
         elif self.kind == "guide_while_armed":
             # The guide laser follows its register, armed or not.
             outputs["laser_guide"] = self.guide
@@ -73,6 +76,7 @@ LASER_FAULTS = {
     "fault_clears_itself": "a fault stays latched until cleared",
     "short_lead": "modulation only after MO has led for the lead time",
     "watchdog_never_fires": "silence for the watchdog time while armed latches a fault",
+    "link_faults_ignored": "a frame the link refused while armed latches a fault",
     "mo_stays_on_after_watchdog":
         "a latched fault keeps every laser output off until cleared and re-armed",
     # Unwired alarms: no alarm fault latches, and a fault is cleared while an alarm is on.

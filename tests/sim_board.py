@@ -13,7 +13,11 @@ import pytest
 from galvoscan.gateware.top import ScanSettings
 from galvoscan.sim.board import PIN_FIELDS, SimulatedBoard
 
+from link_codec import cobs_encode, command
 from wires import frames_from_samples
+
+#: The register a last SPI frame reads, to clock out the answer before it (it changes nothing).
+LINK_SEQ = 0x18
 
 
 def _arguments_key(value):
@@ -211,51 +215,81 @@ class SimBoard:
 
 
 class SimUARTTransport:
-    """Frames as bytes on ``uart_rx``; answers read off ``uart_tx``. A pause of more than three
-    character times follows every frame, as a careful host leaves."""
+    """The host's serial port on the simulated pins: each frame COBS-encoded (the tests' own
+    encoder) with a zero byte after it, back to back on ``uart_rx``; answers read off
+    ``uart_tx``, six bytes each. Plugs into the real :class:`~galvoscan.client.HostClient`.
 
-    def __init__(self, board, *, pause_chars=4, queue_writes=False):
+    ``queue_writes``: :meth:`transact` only queues its bytes and returns no answers (as an
+    OS that has taken them); they go out as the simulation runs."""
+
+    def __init__(self, board, *, queue_writes=False, timeout=0.01):
         self.board = board
-        self.pause = pause_chars * 10 * board.bit_time
-        # queue_writes: a write only queues its bytes (as the real UARTTransport's returns once
-        # the OS has them); they go out, back to back, as the simulation runs: at the next
-        # query or flush(), or whenever the test runs the board.
         self.queue_writes = queue_writes
+        self.timeout = timeout          # board seconds
+        self._seen = 0
+        self._rest = b""
 
-    def queue(self, data, *, pause=True):
-        """Add bytes to what the host sends, with or without the pause that ends a frame."""
+    def queue(self, data):
+        """Add raw bytes to what the host sends."""
         self.board.uart_to_board.extend(data)
-        if pause and self.pause > 0:
-            self.board.uart_to_board.append(("pause", self.pause))
 
-    def flush(self):
+    def drain(self):
         """Run until everything queued has gone out (and the decoder has seen it)."""
         character = 10 * self.board.bit_time
         self.board.run_until(lambda: not self.board.uart_to_board, timeout=0.1, step=character)
         self.board.run_for(12 * self.board.bit_time)
 
-    def send_bytes(self, data, *, pause=True):
-        self.queue(data, pause=pause)
-        self.flush()
+    def send_bytes(self, data):
+        self.queue(data)
+        self.drain()
 
-    def write_frame(self, frame):
+    def incoming(self):
+        """Bytes off ``uart_tx`` since the last call (a faulty line may change them)."""
+        new = bytes(self.board.uart_from_board[self._seen:])
+        self._seen = len(self.board.uart_from_board)
+        return new
+
+    def packets(self, count, *, timeout=None):
+        """The next ``count`` answers off ``uart_tx``, six bytes each, waiting up to
+        ``timeout`` board seconds for them (fewer if they do not come)."""
+        self.heard = bool(self._rest)
+
+        def enough():
+            new = self.incoming()
+            self.heard = self.heard or bool(new)
+            self._rest += new
+            return len(self._rest) >= 6 * count
+        try:
+            self.board.run_until(enough, timeout=self.timeout if timeout is None else timeout,
+                                 step=self.board.bit_time)
+        except TimeoutError:
+            pass
+        taken, self._rest = self._rest[:6 * count], self._rest[6 * count:]
+        return [taken[i:i + 6] for i in range(0, len(taken), 6)]
+
+    def transact(self, frames):
+        self.queue(b"".join(cobs_encode(frame) + b"\0" for frame in frames))
         if self.queue_writes:
-            self.queue(frame)
-        else:
-            self.send_bytes(frame)
+            return []
+        self.drain()
+        return self.packets(len(frames))
 
-    def query(self, frame):
-        received = len(self.board.uart_from_board)
-        self.send_bytes(frame)
-        # Looked for after every bit, so that the next frame follows the answer at once.
-        self.board.run_until(lambda: len(self.board.uart_from_board) >= received + 4,
-                             timeout=0.01, step=self.board.bit_time)
-        return bytes(self.board.uart_from_board[received:received + 4])
+    def flush(self):
+        """Start afresh: a zero byte ends whatever the board was gathering, and what comes back
+        until the line has been quiet for twenty character times is dropped."""
+        self.send_bytes(b"\0")
+        quiet = 20 * 10 * self.board.bit_time
+        while True:
+            self.board.run_for(quiet)
+            if not self.incoming():
+                break
+        self._rest = b""
 
 
 class SimSPITransport:
-    """Frames clocked in on ``spi_copi`` with SCK at ``clk_freq / clocks_per_sck``; the answer
-    to a read is clocked out during the next frame (a read of ``errors``)."""
+    """Frames clocked in on ``spi_copi`` with SCK at ``clk_freq / clocks_per_sck``; each
+    answer is clocked out during the next frame (a last read of ``link_seq`` clocks out the
+    last)."""
 
     def __init__(self, board, *, clocks_per_sck=12, phase=0.37):
         self.board = board
@@ -275,17 +309,16 @@ class SimSPITransport:
         return results[:-1]
 
     def transfer(self, frame):
+        """Clock ``frame`` in; the first six bytes that came back (the answer to the frame
+        before)."""
         bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
         got = self.transfer_bits(bits)
-        return bytes(int("".join(map(str, got[i:i + 8])), 2) for i in range(0, 32, 8))
+        return bytes(int("".join(map(str, got[i:i + 8])), 2) for i in range(0, 48, 8))
 
-    def write_frame(self, frame):
-        self.transfer(frame)
-
-    def query(self, frame):
-        from galvoscan.client import FTDISPITransport
-        self.transfer(frame)
-        return self.transfer(FTDISPITransport.FETCH)
+    def transact(self, frames):
+        fetch = command(0xFF, LINK_SEQ, read=True)
+        returned = [self.transfer(frame) for frame in [*frames, fetch]]
+        return returned[1:]
 
 
 #: The smallest system top that runs vector jobs: no other mode, no correction stage. Vector

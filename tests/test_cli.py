@@ -13,6 +13,7 @@ from galvoscan.cli import main
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
+from link_codec import cobs_encode, command
 from spiral_model import spiral_frames
 
 
@@ -179,10 +180,14 @@ def test_regs_json_is_the_map(capsys):
 def test_encode_prints_frames(capsys):
     code, out, _ = run(capsys, "encode", "dwell=5", "center_y=0xABCD")
     assert code == 0
-    # dwell is at 0x04, center_y at 0x08 (the map); data MSB first; check byte 0x64.
-    assert out.splitlines() == ["04 00 05 64", "08 ab cd 64"]
-    code, out, _ = run(capsys, "encode", "--read", "status", "y_last")
-    assert out.splitlines() == ["80 00 00 64", "8c 00 00 64"]
+    # dwell is at 0x04, center_y at 0x08 (the map); data MSB first; the sequence numbers from
+    # 0; the CRC the tests' own.
+    assert out.splitlines() == [command(0, 0x04, 5).hex(" "), command(1, 0x08, 0xABCD).hex(" ")]
+    code, out, _ = run(capsys, "encode", "--read", "--seq", "7", "status", "y_last")
+    assert out.splitlines() == [command(7, 0x00, read=True).hex(" "),
+                                command(8, 0x0C, read=True).hex(" ")]
+    code, out, _ = run(capsys, "encode", "--uart", "dwell=5")
+    assert out.splitlines() == [(cobs_encode(command(0, 0x04, 5)) + b"\0").hex(" ")]
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -10,12 +10,13 @@ import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
                                     correction_link_proof, correction_proof,
-                                    laser_safety_proof, player_proof, xy2_phy_proof)
+                                    laser_safety_proof, player_proof, spi_frame_proof,
+                                    xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
-from broken_command import BROKEN_COMMAND_PATHS
+from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
@@ -68,27 +69,20 @@ def test_broken_phy_fails_the_proof(fault, tmp_path):
     assert expected_properties(FAULTS[fault]) & failed_properties(bmc), (fault, bmc.failed)
 
 
-#: The SPI faults' first clock searched: the one-frame host's fastest frame ends 32 bits in at
-#: clock 67 and 31 bits in at clock 65 (see command_path_proof), so a write or count made of a
-#: whole frame cannot break a property sooner than clock 68, one of a frame cut after 31 bits
-#: sooner than clock 66 (their counterexamples are those clocks); the proof's bmc_skip is 64.
-SPI_FRAME_FAULTS = {"decoder_ignores_check_byte": 67, "target_keeps_frames_through_reset": 67,
-                    "target_passes_short_frames": 65}
-
-
 @pytest.mark.parametrize("fault", sorted(BROKEN_COMMAND_PATHS))
 def test_broken_command_path_fails_the_proof(fault, tmp_path):
     parts, properties = BROKEN_COMMAND_PATHS[fault]
-    proof = command_path_proof(**parts, helpers=False, name=f"broken_{fault}")
-    # A fault that needs a whole frame lies deeper than the induction looks (depth 8): a
-    # bounded check as deep as the covers finds a reachable counterexample. A UART frame comes
-    # on any clock, so a fault in its path shows within a few clocks; one in the SPI path
-    # needs a whole frame, searched from one paced host (see command_path_proof).
-    if fault in SPI_FRAME_FAULTS:
-        # Searched from the clock its frame can end on (each clock looked at before it is a
-        # solver call over the whole unrolled frame, for nothing).
-        proof = replace(proof, bmc_skip=SPI_FRAME_FAULTS[fault])
-    bmc = proof.check(tmp_path)
+    # Frames come on any clock: a bounded check as deep as the covers finds each fault.
+    bmc = command_path_proof(**parts, name=f"broken_{fault}").check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert expected_properties(properties) & failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(BROKEN_SPI_TARGETS))
+def test_broken_spi_target_fails_the_proof(fault, tmp_path):
+    make, properties = BROKEN_SPI_TARGETS[fault]
+    # One paced frame, any one bit flipped: a bad frame event shows as cs_n rises.
+    bmc = spi_frame_proof(make_spi=make, helpers=False, name=f"broken_{fault}").check(tmp_path)
     assert bmc.status == "FAIL"
     assert expected_properties(properties) & failed_properties(bmc), (fault, bmc.failed)
 

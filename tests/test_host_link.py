@@ -2,20 +2,21 @@
 
 import pytest
 
-from galvoscan.client import ClientError, HostClient, encode_read, encode_write
-from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS, encode_frame
+from galvoscan.client import ClientError, HostClient, WriteRefused, encode_read, encode_write
+from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import ScanSettings
 
+from link_codec import REASON, command, parse_answer
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 from spiral_model import spiral_frames
 
 
 def writable(board):
-    """The board's writable registers that read back what was written (a queue register reads
-    its last write), with the ranges of its build."""
-    return [r for r in board.top.regmap if r.access in ("rw", "queue")]
+    """The board's writable registers that read back what was written, with the ranges of
+    its build (vec_op, a queue, is written a segment at a time: test_segments_...)."""
+    return [r for r in board.top.regmap if r.access == "rw"]
 
 
 def make_link(kind, board):
@@ -113,53 +114,114 @@ def test_client_refuses_what_the_board_would_reject():
 
 
 def test_encoding_is_the_documented_frame():
-    # Address, data high, data low, 0x64: written out by hand from Dai & Tang 2020's frame.
-    assert encode_write("dwell", 0x1234) == bytes([BY_NAME["dwell"].address, 0x12, 0x34, 0x64])
-    assert encode_read("errors") == bytes([0x80 | BY_NAME["errors"].address, 0, 0, 0x64])
-
-
+    # seq, address, data, x, y, CRC-16/CCITT: the tests' own encoder of the README's frame.
+    assert encode_write("dwell", 0x1234, seq=9) == command(9, BY_NAME["dwell"].address, 0x1234)
+    assert encode_read("errors", tag=3) == command(3, BY_NAME["errors"].address, read=True)
 @pytest.mark.parametrize("kind", ["uart", "spi"])
-def test_board_counts_each_rejected_frame(kind):
+def test_board_refuses_and_counts_each_bad_frame_with_its_reason(kind):
     board = SimBoard()
     link = make_link(kind, board)
     client = HostClient(link)
     dwell = BY_NAME["dwell"].address
+    good = command(0, dwell, 5)
+    damaged = bytearray(good)
+    damaged[3] ^= 0x10                                  # one bit of the value flipped
     bad = [
-        encode_frame(dwell, 5)[:3] + b"\x65",           # wrong check byte
-        encode_frame(0x7E, 5),                           # unknown address
-        encode_frame(BY_NAME["status"].address, 1),      # read-only
-        encode_frame(dwell, 0),                          # out of range
-        encode_frame(BY_NAME["x_last"].address, 200),    # out of range
-        encode_frame(0x80 | dwell, 1),                   # read with data
+        (bytes(damaged), "check"),
+        (good[:-1] + bytes([good[-1] ^ 1]), "check"),   # the CRC itself damaged
+        (command(7, dwell, 5), "sequence"),             # not the seq the board expects
+        (command(0, 0x7E, 5), "register"),              # unknown address
+        (command(0, BY_NAME["status"].address, 1), "register"),     # read-only
+        (command(0, dwell, 0), "register"),             # out of range
+        (command(0, BY_NAME["x_last"].address, 200), "register"),   # out of the build's range
+        (command(0, dwell, 1, read=True), "register"),  # a read with data
     ]
-    for frame in bad:
-        link.write_frame(frame)
+    answers = link.transact([frame for frame, _ in bad])
+    for (frame, reason), packet in zip(bad, answers):
+        tag, code, data = parse_answer(packet)
+        assert code == 0x80 | REASON[reason], (frame.hex(" "), reason, code)
+        assert data == 0                                # the seq the board expects, still 0
+    assert len(answers) == len(bad)
     assert client.read("dwell") == 3
     assert client.read("errors") == len(bad)
     client.write("dwell", 9)
     assert client.read("dwell") == 9
 
 
-def test_uart_cut_short_and_line_errors_are_counted_and_realigned():
+@pytest.mark.parametrize("kind", ["uart", "spi"])
+def test_writes_are_taken_in_sequence_only(kind):
+    """A write lost on the line makes the next refused (the board never takes one out of
+    order); the client finds out from link_seq and sends again only what was not taken."""
+    board = SimBoard()
+    link = make_link(kind, board)
+    client = HostClient(link)
+    seq = client.sequence()
+    dwell, amp = BY_NAME["dwell"].address, BY_NAME["amp_x"].address
+    # The first of two writes lost: the second, with the next seq, is refused.
+    [answer] = link.transact([command(seq + 1, amp, 1234)])
+    assert parse_answer(answer) == (seq + 1, 0x80 | REASON["sequence"], seq)
+    [answer] = link.transact([command(seq, dwell, 7)])
+    assert parse_answer(answer) == (seq, dwell, 7)      # what dwell now holds
+    assert client.read("link_seq") == (seq + 1) & 0xFF
+    assert client.read("amp_x") == BY_NAME["amp_x"].reset
+    # A read takes any tag and does not move the sequence.
+    [answer] = link.transact([command(0xAB, dwell, read=True)])
+    assert parse_answer(answer) == (0xAB, dwell, 7)
+    assert client.read("link_seq") == (seq + 1) & 0xFF
+
+
+def test_a_refused_write_stops_the_client_with_its_reason():
+    board = SimBoard()
+    client = HostClient(SimUARTTransport(board))
+    with pytest.raises(WriteRefused, match="x_last = 200") as refused:
+        client.write_many([("dwell", 4), ("x_last", 200), ("dwell", 6)])
+    assert refused.value.reason == "register" and refused.value.taken == 1
+    assert client.read("dwell") == 4
+
+
+@pytest.mark.parametrize("kind", ["uart", "spi"])
+def test_segments_are_queued_whole_and_answered_with_the_room_left(kind):
+    board = SimBoard(vector_queue_depth=8, settings=ScanSettings(mode="vector", run=False))
+    client = HostClient(make_link(kind, board))
+    free = client.queue_segments([(0, 1000, 2000), (0, 3000, 4000)])
+    # Eight places, two segments queued, and those the sequencer took from the queue (even
+    # stopped, it takes one in hand) free again.
+    assert free == 8 - 2 + client.read("vec_taken")
+    assert client.read("vec_taken") == 1
+    # vec_x and vec_y are the job player's; a host's segment does not touch them.
+    assert client.read("vec_x") == BY_NAME["vec_x"].reset
+    assert client.read("errors") == 0
+
+
+def test_uart_finds_the_next_frame_after_a_lost_byte_an_extra_byte_and_a_bad_stop_bit():
     board = SimBoard()
     link = SimUARTTransport(board)
     client = HostClient(link)
-    write = encode_write("dwell", 11)
-    link.send_bytes(write[:2])                           # cut short, then a pause
-    board.uart_to_board.extend([write[0], write[1], ("bad_stop", write[2]), write[3]])
-    link.send_bytes(b"")                                 # a byte with a bad stop bit
-    link.send_bytes(write)                               # then a good frame
-    assert client.read("dwell") == 11
-    assert client.read("errors") == 2
+    seq = client.sequence()
+    frame = lambda value: cobs_frame(command(seq, BY_NAME["dwell"].address, value))
+    lost = frame(11)
+    link.send_bytes(lost[:3] + lost[4:])                # a byte lost
+    link.send_bytes(frame(12)[:4] + b"\x42" + frame(12)[4:])   # a byte too many
+    bad_stop = frame(13)
+    board.uart_to_board.extend([*bad_stop[:2], ("bad_stop", bad_stop[2]), *bad_stop[3:]])
+    link.send_bytes(frame(14)[:5])                      # cut short: ends at the next frame
+    link.send_bytes(b"\0" + frame(15))                  # (the zero closes it) then a good one
+    assert client.read("dwell") == 15
+    assert client.read("errors") == 4
+
+
+def cobs_frame(frame):
+    from link_codec import cobs_encode
+    return cobs_encode(frame) + b"\0"
 
 
 def test_spi_frames_of_the_wrong_length_are_discarded_whole():
     board = SimBoard()
     link = SimSPITransport(board)
     client = HostClient(link)
-    write = encode_write("dwell", 13)
+    write = command(client.sequence(), BY_NAME["dwell"].address, 13)
     bits = [(b >> (7 - i)) & 1 for b in write for i in range(8)]
-    link.transfer_bits(bits[:31])                        # cs_n released one bit early
+    link.transfer_bits(bits[:79])                        # cs_n released one bit early
     link.transfer_bits(bits + [0])                       # one bit too many
     link.transfer_bits([])                               # cs_n pulse with no clock
     assert client.read("dwell") == 3

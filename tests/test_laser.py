@@ -7,7 +7,7 @@ import pytest
 from amaranth.sim import Simulator
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
-from galvoscan.client import HostClient, encode_write
+from galvoscan.client import HostClient
 from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.laser.controller import LaserController
 
@@ -305,12 +305,11 @@ def test_watchdog_switches_the_laser_off():
 
 # --- fuzzed command streams with the interlock toggling --------------------------------------------
 
-laser_writes = st.sampled_from([encode_write("arm", 1), encode_write("arm", 0),
-                                encode_write("laser_power", 0),
-                                encode_write("fault_clear", 1), encode_write("run", 1),
-                                encode_write("run", 0), encode_write("laser_power", 77),
-                                encode_write("watchdog", 1)])
-garbage = st.binary(min_size=1, max_size=6)
+laser_writes = st.sampled_from([("arm", 1), ("arm", 0), ("laser_power", 0), ("fault_clear", 1),
+                                ("run", 1), ("run", 0), ("laser_power", 77), ("watchdog", 1),
+                                ("keepalive", 1)])
+# Bytes that are no frame (a damaged one: refused, and while armed a link fault).
+garbage = st.binary(min_size=1, max_size=12)
 
 
 @settings(max_examples=24, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -321,13 +320,17 @@ def test_fuzzed_commands_never_emit_unsafely(steps):
     board = SimBoard.powered_up(backend="compiled", mo_lead=lead, record_laser=True,
                                 **SPIRAL_ONLY)
     link = SimUARTTransport(board)
-    link.send_bytes(encode_write("arm", 1))     # start armed, so emission is within reach
+    client = HostClient(link)
+    client.write("arm", 1)                      # start armed, so emission is within reach
     for data, toggle_interlock, toggle_alarms, wait_us in steps:
         if toggle_interlock:
             board.interlock_closed = not board.interlock_closed
         if toggle_alarms:
             board.alarms_clear = not board.alarms_clear
-        link.send_bytes(data)
+        if isinstance(data, tuple):
+            client.write(*data)
+        else:
+            link.send_bytes(data + b"\0")
         board.run_for(wait_us * 1e-6)
     board.run_for(2 * lead)
 

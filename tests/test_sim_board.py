@@ -4,7 +4,7 @@ import random
 
 import pytest
 
-from galvoscan.client import encode_write
+from galvoscan.client import HostClient
 
 from sim_board import SimBoard, SimUARTTransport
 
@@ -20,9 +20,9 @@ def test_laser_pins_recorded_by_changes_equal_a_sample_on_every_clock(backend):
     for record in ("every clock", True):
         rng = random.Random(5)
         board = SimBoard(mo_lead=50e-6, record_laser=record, backend=backend)
-        link = SimUARTTransport(board)
-        link.send_bytes(encode_write("laser_prr", 2000))
-        link.send_bytes(encode_write("arm", 1))
+        client = HostClient(SimUARTTransport(board))
+        client.write("laser_prr", 2000)
+        client.write("arm", 1)
         lengths = []
         for _ in range(10):
             if rng.random() < 0.4:
@@ -30,8 +30,8 @@ def test_laser_pins_recorded_by_changes_equal_a_sample_on_every_clock(backend):
             if rng.random() < 0.2:
                 board.alarms_clear = not board.alarms_clear
             if rng.random() < 0.4:
-                link.send_bytes(encode_write(*rng.choice([("arm", 1), ("fault_clear", 1),
-                                                          ("guide", 1), ("arm", 0)])))
+                client.write(*rng.choice([("arm", 1), ("fault_clear", 1), ("guide", 1),
+                                          ("arm", 0), ("keepalive", 1)]))
             board.run_for(rng.random() * 20e-6 + rng.choice([0, 0.1e-6, 0.5 / board.clk_freq]))
             lengths.append(len(board.laser_pins))
         boards.append((board, lengths))

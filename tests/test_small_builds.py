@@ -10,6 +10,7 @@ from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 from galvoscan.platforms.icestick import ICEStickScanner
 
+from link_codec import command
 from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 from spiral_model import spiral_frames
 from wires import frames_from_samples, record_falling_edges
@@ -17,7 +18,7 @@ from wires import frames_from_samples, record_falling_edges
 
 #: The iCEstick's top, as platforms/icestick.py builds it.
 SMALL = dict(modes=("spiral",), correction=None, multiplier="serial", links=("uart",),
-             laser=False, uart_reply_depth=1, spiral_interpolation=False)
+             laser=False, spiral_interpolation=False)
 
 
 @pytest.mark.parametrize("dwell", [1, 3])
@@ -47,7 +48,7 @@ def test_small_top_answers_on_uart_only_and_has_no_laser():
     assert not any(any(pins) for pins in board.laser_pins)
     # SPI is not built: frames on its pins change nothing and are not answered.
     spi = SimSPITransport(board)
-    spi.write_frame(bytes([0x04, 0x00, 0x09, 0x64]))       # dwell = 9
+    spi.transfer(command(uart.sequence(), 0x04, 9))        # dwell = 9
     assert uart.read("dwell") == 4 and uart.read("errors") == 3
 
 

@@ -195,7 +195,8 @@ def test_the_client_refuses_bad_delay_values(name, value):
 def test_the_board_refuses_out_of_range_delays_and_counts_them():
     """Raw frames past the client: each out-of-range value is refused, counted, and changes
     nothing; the signed laser-on delay reads back negative."""
-    from galvoscan.gateware.host.regmap import BY_NAME, encode_frame
+    from galvoscan.gateware.host.regmap import BY_NAME
+    from link_codec import command
     # The jobs' build, over the jobs' link.
     board = jobs_board()
     client = job_link(board)[1]
@@ -204,8 +205,8 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     bad = [("laser_on_delay", -20 & 0xFFFF), ("laser_on_delay", 1024),
            ("laser_on_delay", 0x8000), ("laser_off_delay", 1024), ("mark_delay", 4096),
            ("polygon_delay", 0xFFFF), ("polygon_scaled", 2)]
-    for name, data in bad:
-        client.transport.write_frame(encode_frame(BY_NAME[name].address, data))
+    seq = client.sequence()             # (each is refused, so the next expects it still)
+    client.transport.transact([command(seq, BY_NAME[name].address, data) for name, data in bad])
     assert client.read("errors") == len(bad)
     assert client.read("laser_on_delay") == -19
     assert [client.read(n) for n in ("laser_off_delay", "mark_delay", "polygon_delay",

@@ -15,10 +15,11 @@ import pytest
 
 from galvoscan.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMPLITUDE,
-                                             WOBBLE_MAX_HZ, encode_frame)
+                                             WOBBLE_MAX_HZ)
 from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
+from link_codec import command
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
 from test_vector import job_link, pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
@@ -179,7 +180,7 @@ def test_bad_register_values_are_refused_and_counted(wobble_board, case, data):
     value = data.draw(st.integers(low, high))
     before, errors = client.read(name), client.read("errors")
     # Past the client's own range check: the frame as a broken host would send it.
-    client.transport.write_frame(encode_frame(BY_NAME[name].address, value))
+    client.transport.transact([command(client.sequence(), BY_NAME[name].address, value)])
     assert client.read(name) == before
     assert client.read("errors") == errors + 1
 

@@ -65,8 +65,10 @@ def main(argv=None):
         # Output piped into `head` and the like: stop quietly.
         sys.stderr.close()
         return 0
-    except KeyboardInterrupt:
-        print("galvoscan: stopped (Ctrl-C)", file=sys.stderr)
+    except KeyboardInterrupt as error:
+        # A job says how far it got (JobInterrupted); anything else stops where it is.
+        print(f"galvoscan: stopped (Ctrl-C){f': {error}' if str(error) else ''}",
+              file=sys.stderr)
         return 130
     except OSError as error:
         # A file that could not be written or read after all (a full disk, a lost device):

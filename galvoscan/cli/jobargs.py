@@ -111,15 +111,21 @@ def load_lens_table(client, profile, say):
 
 
 @contextlib.contextmanager
-def stopped_in_one_line():
+def stopped_in_one_line(*, on_complete=None):
     """A job the board stopped, or a link that failed, as one line and a non-zero exit (the
-    streamer has already sent arm = 0)."""
+    streamer has already sent arm = 0). ``on_complete()``: called first when the job was
+    marked to its end before it stopped (a part that is done: its serial number is taken);
+    it returns words to add to the line."""
     from ..client import ClientError
-    from ..jobs.stream import JobAborted
+    from ..jobs.stream import JobAborted, JobInterrupted
     try:
         yield
+    except JobInterrupted as error:
+        more = on_complete() if error.complete and on_complete is not None else ""
+        raise JobInterrupted(f"{error}{more}") from error
     except JobAborted as error:
-        fail(f"job stopped, laser disarmed: {error}")
+        more = on_complete() if error.complete and on_complete is not None else ""
+        fail(f"job stopped, laser disarmed: {error}{more}")
     except (ClientError, OSError) as error:
         fail(f"job stopped, laser disarm sent: the link failed: {error}")
 

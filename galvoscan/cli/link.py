@@ -50,22 +50,28 @@ def _assignments(items):
         assignments = [parse_assignment(item) for item in items]
         for name, value in assignments:
             encode_write(name, value)            # the name, the access and the range
+            if name == "vec_op":
+                raise ClientError("vec_op queues a segment, its end point in the same frame: "
+                                  "galvoscan send does not (galvoscan mark queues them)")
     except ClientError as error:
         fail(error)
     return assignments
 
 
 def _cmd_encode(args):
+    from cobs import cobs
     from ..client import ClientError, encode_read, encode_write
     try:
         if args.read:
-            frames = [encode_read(name) for name in args.items]
+            frames = [encode_read(name, tag=(args.seq + k) & 0xFF)
+                      for k, name in enumerate(args.items)]
         else:
-            frames = [encode_write(name, value) for name, value in _assignments(args.items)]
+            frames = [encode_write(name, value, seq=(args.seq + k) & 0xFF)
+                      for k, (name, value) in enumerate(_assignments(args.items))]
     except ClientError as error:
         fail(error)
     for frame in frames:
-        print(frame.hex(" "))
+        print((cobs.encode(frame) + b"\0" if args.uart else frame).hex(" "))
     return 0
 
 
@@ -110,27 +116,27 @@ def _cmd_read(args):
 
 def _cmd_reset(args):
     from ..client import ClientError, HostClient
-    from ..gateware.host.fields import Status
+    from ..gateware.host.fields import Capabilities, Status
     with open_link(args) as link:
         board = HostClient(link)
         try:
-            errors = board.read("errors")
-            # Laser off first; then the vector queue emptied and the mode stopped.
-            for name, value in (("arm", 0), ("run", 0), ("vec_flush", 1)):
-                board.write(name, value)
-            refused = (board.read("errors") - errors) & 0xFFFF
+            # Laser off first; then every register to its power-up value, the vector queue
+            # emptied and vector mode stopped.
+            board.write("arm", 0)
+            board.write("soft_reset", 1)
             flags = Status.from_bits(board.read("status"))
-            free = board.read("fifo_free") if not refused else None
+            free = board.read("fifo_free") if Capabilities.from_bits(
+                board.read("caps")).vector else None
         except ClientError as error:
             fail(error)
-    if refused:
-        fail("the board took arm=0 and run=0 but not vec_flush: its bitstream is older "
-             "than the flush (power-cycle it to empty the queue, or build and flash it "
-             "again)")
-    latched = flags.fault_interlock or flags.fault_watchdog or flags.fault_alarm
-    print(f"reset: disarmed, stopped, vector queue emptied ({free} segments free); " +
-          ("a fault is latched (galvoscan send fault_clear=1 clears it)" if latched else
-           "no fault latched"))
+    latched = [name for name in ("interlock", "watchdog", "alarm", "link")
+               if getattr(flags, f"fault_{name}")]
+    print("reset: every register back to its power-up value (laser disarmed)" +
+          (f", vector queue emptied ({free} segments free)" if free is not None else "") +
+          "; kept: " +
+          (f"the latched {', '.join(latched)} fault (galvoscan send fault_clear=1 clears it)"
+           if latched else "no fault latched") +
+          ", the link's error count and sequence number")
     return 0
 
 
@@ -154,9 +160,15 @@ def add_parsers(commands):
 
     encode = commands.add_parser(
         "encode", help="print command frames as hex bytes",
-        description="Print the 4-byte frames (hex, one frame a line) that write or read "
-                    "registers, for any other tool or microcontroller to send.")
+        description="Print the command frames (hex, one frame a line: sequence number, "
+                    "address, data, x, y, CRC-16) that write or read registers, for any other "
+                    "tool or microcontroller to send. A board takes a write only with the "
+                    "sequence number it expects (galvoscan read link_seq).")
     encode.add_argument("--read", action="store_true", help="read requests for NAMEs")
+    encode.add_argument("--seq", type=int, choices=range(256), default=0, metavar="N",
+                        help="the first frame's sequence number, 0 … 255 (default 0)")
+    encode.add_argument("--uart", action="store_true",
+                        help="the bytes on the serial line: COBS-encoded, a zero byte after")
     encode.add_argument("items", nargs="+", metavar="NAME=VALUE | NAME",
                         help="registers to write (NAME=VALUE) or, with --read, to read")
     encode.set_defaults(run=_cmd_encode)
@@ -172,10 +184,12 @@ def add_parsers(commands):
     send.set_defaults(run=_cmd_send)
 
     reset = commands.add_parser(
-        "reset", help="disarm, stop, and empty the vector queue",
+        "reset", help="disarm and return every register to its power-up value",
         description="Make a board ready for the next job without a power cycle: arm = 0 "
-                    "(laser off), run = 0, and vec_flush (the vector queue emptied, a job "
-                    "left half-queued dropped). Latched faults stay latched.")
+                    "(laser off), then soft_reset: every register back to its power-up value, "
+                    "the vector queue emptied (a job left half-queued dropped), the counters "
+                    "cleared. Latched faults stay latched (fault_clear clears them), and so do "
+                    "the link's error count and sequence number.")
     add_link_options(reset)
     reset.set_defaults(run=_cmd_reset)
 

@@ -200,8 +200,18 @@ def _cmd_mark(args):
             serial = serials[number]
             bar = progress_bar(None if args.frame else len(part.segments), "seg")
             streamer = JobStreamer(client, progress=bar.update)
+
+            def part_done(serial=serial):
+                # The part was marked whole before the job stopped: its number is taken.
+                if counter is None or args.sim:
+                    return ""
+                try:
+                    counter.advance()
+                except PlanError as error:
+                    return f"; {error}"
+                return f"; serial {serial} was marked whole, and the counter advanced"
             try:
-                with stopped_in_one_line():
+                with stopped_in_one_line(on_complete=part_done):
                     if number == 0:
                         load_lens_table(client, profile, say)
                     if args.frame:
@@ -220,9 +230,11 @@ def _cmd_mark(args):
             say(f"{which + ': ' if which else ''}marked {report.segments} segments in "
                 f"{report.seconds:.1f} s (host time); {report.pulses} pulses; underruns "
                 f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
-                f"{counters['vec_rejected']}, errors {counters['errors']}")
+                f"{counters['vec_rejected']}, errors {counters['errors']}" +
+                (f" (damaged on the link and sent again {report.resent} time(s): every "
+                 f"frame landed)" if counters["errors"] else ""))
             if not report.clean:
-                fail("the board refused frames or the queue ran dry: the job was not marked "
+                fail("the board refused segments or the queue ran dry: the job was not marked "
                      "as planned (see the counts above)" +
                      ("; the serial was not advanced" if serial is not None else ""))
             if counter is not None and not args.sim:
@@ -256,12 +268,18 @@ def _cmd_mark(args):
 def _run_layers(streamer, job, board, timeout):
     """Run ``job`` (its layers one after the other, each at its own settings): the reports
     summed into one, and (on a simulated board) the index of each layer's first pulse."""
-    from ..jobs.stream import StreamReport
+    from ..jobs.stream import JobAborted, StreamReport
     reports, starts = [], []
-    for part in [lj.job for lj in job.layers] if job.layers else [job]:
+    parts = [lj.job for lj in job.layers] if job.layers else [job]
+    for index, part in enumerate(parts):
         starts.append(len(board.pulses) if board is not None else None)
-        reports.append(streamer.run_vector(part.segments, part.registers, timeout_s=timeout,
-                                           ready_timeout_s=timeout))
+        try:
+            reports.append(streamer.run_vector(part.segments, part.registers,
+                                               timeout_s=timeout, ready_timeout_s=timeout))
+        except JobAborted as error:
+            # A layer marked whole is the part done only if it is the last.
+            error.complete = error.complete and index == len(parts) - 1
+            raise
         if not reports[-1].clean:
             break                           # said, and refused, by the caller
     return StreamReport.total(reports), starts

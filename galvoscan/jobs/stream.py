@@ -4,11 +4,16 @@
 The queue's depth is the board's: read off ``fifo_free`` while the queue is empty (a real
 board's is 512; a simulated one may be built shorter).
 
-The link carries one frame at a time; a segment is three (``vec_x``, ``vec_y``, ``vec_op``). The
-streamer writes at most a batch of segments between two reads of ``fifo_free``, so no more
-than a batch's frames are ever in flight, and a read answered tells it the board has taken
-everything sent before. Status is read between batches: a latched fault, an open interlock or
-an alarm stops the job at once.
+A segment is one checked frame (its end point and its operation together), and the board
+answers each with the free places left in its queue: the streamer sends at most a batch of
+segments, reads their answers, and sends the next batch into the room the last answer gave.
+Status is read between batches: a latched fault, an open interlock or an alarm stops the job
+at once. The watchdog is fed by the segments themselves; while the streamer waits on an armed
+board (the MO lead, a full queue, the last segments marking) it writes ``keepalive``.
+
+Before it arms, the streamer reads back every setting the job wrote and refuses to arm on any
+difference. Every ending says how far the job got: the board counts the segments its
+sequencer took (``vec_taken``), and a fault stops the sequencer where it is.
 
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
 first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
@@ -27,7 +32,7 @@ from ..gateware.sources.vector import VecOpWord
 from .corners import corner_frames
 
 
-__all__ = ["JobAborted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
+__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
            "DEFAULT_BATCH", "check_segment", "segment_words", "job_segments"]
 
 
@@ -41,7 +46,34 @@ _COUNTER_TOP = 0xFFFF
 
 
 class JobAborted(Exception):
-    """The board stopped the job (a fault, the interlock, an alarm); the laser is disarmed."""
+    """The board stopped the job (a fault, the interlock, an alarm, the link); the laser is
+    disarmed.
+
+    Attributes
+    ----------
+    taken, total : int or None
+        Segments the board's sequencer had taken when the job stopped, of the job's (None:
+        not known, the link being lost).
+    complete : bool
+        Every segment was marked to its end before the job stopped: the part is done.
+    """
+
+    def __init__(self, message, *, taken=None, total=None, complete=False):
+        super().__init__(message)
+        self.taken = taken
+        self.total = total
+        self.complete = complete
+
+
+class JobInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a job; the laser is disarmed. Says how far the job got, as
+    :class:`JobAborted` does (``taken``, ``total``, ``complete``)."""
+
+    def __init__(self, message, *, taken=None, total=None, complete=False):
+        super().__init__(message)
+        self.taken = taken
+        self.total = total
+        self.complete = complete
 
 
 @dataclass
@@ -60,11 +92,16 @@ class StreamReport:
         Laser pulses emitted during the job (the board's counter, read in time to unwrap it).
     seconds : float
         Host time the job took.
+    resent : int
+        Frames the host sent again because the board refused them as damaged or out of step,
+        or their answers were lost: every one then landed (a job with a frame that did not
+        land stops; it does not end with a report).
     """
     segments: int = 0
     counters: dict = field(default_factory=dict)
     pulses: int = 0
     seconds: float = 0.0
+    resent: int = 0
 
     @classmethod
     def total(cls, reports):
@@ -76,13 +113,15 @@ class StreamReport:
             for name, value in report.counters.items():
                 counters[name] = counters.get(name, 0) + value
         return cls(segments=sum(r.segments for r in reports), counters=counters,
-                   pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports))
+                   pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports),
+                   resent=sum(r.resent for r in reports))
 
     @property
     def clean(self):
-        """Nothing refused and no underrun."""
-        return not any(self.counters.get(name) for name in
-                       ("vec_underruns", "vec_rejected", "errors"))
+        """No segment refused for a full queue, and no underrun. (Frames the link damaged are
+        counted in ``errors``, and were sent again: every write of a job that ends with a
+        report landed, acknowledged.)"""
+        return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
 
 
 def check_segment(op, x, y):
@@ -157,8 +196,11 @@ class JobStreamer:
             raise JobAborted("the laser reported an alarm: the laser is off (see the laser's "
                              "own display; then `galvoscan send fault_clear=1`)")
         if flags.fault_watchdog:
-            raise JobAborted("the board's watchdog fired: the link went silent for longer "
-                             "than `watchdog` ms")
+            raise JobAborted("the board's watchdog fired: no segment or keepalive came for "
+                             "longer than `watchdog` ms")
+        if flags.fault_link:
+            raise JobAborted("the board refused a frame while armed (damaged or lost on the "
+                             "line): it switched the laser off at once")
         return flags
 
     def _count_pulses(self):
@@ -202,10 +244,13 @@ class JobStreamer:
     def disarm(self):
         """``arm = 0`` then ``run = 0`` and the guide laser off; best effort (the link may be
         what failed)."""
+        from ..client import LinkLost
         for name in ("arm", "run", "guide"):
             try:
                 self.board.write(name, 0)
-            except Exception:       # a lost link: the board's watchdog switches it off
+            except LinkLost:        # a lost link: the board's watchdog switches it off
+                return
+            except Exception:
                 pass
 
     # --- running -------------------------------------------------------------------------------
@@ -225,11 +270,22 @@ class JobStreamer:
         if registers.get("wob_shape") and not caps.wobble:
             raise JobAborted("the board has no wobble stage: its bitstream was built "
                              "without it (galvoscan build --wobble)")
-        for name, value in registers.items():
-            if name == "wob_shape" and not caps.wobble:
-                continue            # (off, on a board that has no wobble to turn off)
-            self.board.write(name, value)
+        self.board.write_many([(name, value) for name, value in registers.items()
+                               if not (name == "wob_shape" and not caps.wobble)])
+        # (wob_shape off, on a board that has no wobble to turn off, is not written.)
         return registers
+
+    def verify(self, registers):
+        """Read back every setting of ``registers``: a difference refuses to arm."""
+        from ..gateware.host.regmap import BY_NAME
+        caps = self.capabilities()
+        for name, value in registers.items():
+            if BY_NAME[name].access != "rw" or (name == "wob_shape" and not caps.wobble):
+                continue
+            got = self.board.read(name)
+            if got != value:
+                raise JobAborted(f"the board holds {name} = {got} where the job wrote {value}: "
+                                 f"not arming")
 
     def wait_ready(self, timeout_s):
         """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""
@@ -237,6 +293,7 @@ class JobStreamer:
         while not self.status().laser_ready:
             if time.monotonic() > deadline:
                 raise JobAborted(f"the laser did not become ready within {timeout_s:g} s")
+            self.keepalive()
             time.sleep(self.poll_s)
 
     def wait_idle(self, timeout_s):
@@ -245,7 +302,12 @@ class JobStreamer:
         while self.status().vector_busy:
             if time.monotonic() > deadline:
                 raise JobAborted(f"the board was still marking after {timeout_s:g} s")
+            self.keepalive()
             time.sleep(self.poll_s)
+
+    def keepalive(self):
+        """Feed the armed board's watchdog (status reads do not)."""
+        self.board.write("keepalive", 1)
 
     def stream(self, segments, *, start, timeout_s, corners=None):
         """Feed ``segments`` (``(op, x, y)``, galvo units) into the queue as it frees up.
@@ -267,6 +329,8 @@ class JobStreamer:
         while sent < len(segments):
             if free == 0:
                 self.status()
+                if started:
+                    self.keepalive()
                 free = self.board.read("fifo_free")
                 if free == 0:
                     if time.monotonic() > deadline:
@@ -275,15 +339,13 @@ class JobStreamer:
                     continue
                 deadline = time.monotonic() + timeout_s
             count = min(free, self.batch, len(segments) - sent)
-            for (op, x, y), hold in zip(segments[sent:sent + count],
-                                        corners[sent:sent + count]):
-                for name, value in zip(("vec_x", "vec_y", "vec_op"),
-                                       segment_words(op, x, y, hold)):
-                    self.board.write(name, value)
+            words = [segment_words(op, x, y, hold)
+                     for (op, x, y), hold in zip(segments[sent:sent + count],
+                                                 corners[sent:sent + count])]
+            # Each answered with the free places after it: the last one's is the room now.
+            free = self.board.queue_segments([(op_word, x, y) for x, y, op_word in words])
             sent += count
-            free -= count
-            # A read: the board has taken all of the batch before it answers.
-            free = min(free, self.board.read("fifo_free"))
+            self.sent = sent
             if self.progress is not None:
                 self.progress(count)
             if not started and (sent == len(segments) or free < self.batch):
@@ -300,25 +362,74 @@ class JobStreamer:
             self.wait_ready(ready_timeout_s)
         self.board.write("run", 1)
 
-    def _job(self, body):
+    def _taken(self):
+        """``vec_taken`` now, or None (no vector mode, or no answer)."""
+        from ..client import ClientError
+        if not self.capabilities().vector:
+            return None
+        try:
+            return self.board.read("vec_taken")
+        except ClientError:
+            return None
+
+    def _job(self, body, total=None):
         """What every job does around its ``body()`` (which returns the segments it sent):
-        refuse a board not ready, count, disarm however it ends, report the counters' rise."""
+        refuse a board not ready, count, disarm however it ends (saying how far it got),
+        report the counters' rise. ``total``: the job's segments."""
+        from ..client import ClientError, LinkLost
         started = time.monotonic()
         self.check_ready()
         before = self.counters()
         self._count_pulses()
         first = self.pulses
+        taken_before = self._taken() if total is not None else None
+        self.sent = 0
+        retries = getattr(self.board, "retries", 0)
         try:
             sent = body()
-        except BaseException:
+        except BaseException as error:
             self.disarm()
-            raise
+            if total is None or not isinstance(error, (JobAborted, ClientError,
+                                                       KeyboardInterrupt)):
+                raise
+            ending = self._ending(error, taken_before, total)
+            if isinstance(error, KeyboardInterrupt):
+                raise JobInterrupted(str(ending), taken=ending.taken, total=total,
+                                     complete=ending.complete) from error
+            raise ending from error
         self.disarm()
         after = self.counters()
         self._count_pulses()
         return StreamReport(
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
-            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS})
+            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS},
+            resent=getattr(self.board, "retries", 0) - retries)
+
+    def _ending(self, error, taken_before, total):
+        """``error`` as a :class:`JobAborted` that says how far the job got."""
+        from ..client import LinkLost
+        watchdog = getattr(self, "_watchdog_ms", None)
+        if isinstance(error, LinkLost):
+            bound = f"within {watchdog} ms of the last segment it took" if watchdog else \
+                "when its watchdog runs out"
+            return JobAborted(f"the link to the board is lost ({error}); the board had "
+                              f"acknowledged {self.sent} of {total} segments, and it stops the "
+                              f"laser {bound}", total=total)
+        said = "the laser is disarmed" if isinstance(error, KeyboardInterrupt) else str(error)
+        now = self._taken()
+        if now is None or taken_before is None:
+            return JobAborted(f"{said} (how far the job got is not known: the board does not "
+                              f"answer)", total=total)
+        taken = (now - taken_before) & _COUNTER_TOP
+        busy = None
+        try:
+            busy = Status.from_bits(self.board.read("status")).vector_busy
+        except Exception:
+            pass
+        complete = taken >= total and busy is False
+        where = (f"every segment ({total}) was marked: the part is done" if complete else
+                 f"stopped at segment {min(taken, total)} of {total}: the part is not done")
+        return JobAborted(f"{said}; {where}", taken=taken, total=total, complete=complete)
 
     def _without_missing_delays(self, registers):
         """``registers`` less the RTC delays if the board has none (the default bitstream:
@@ -344,6 +455,8 @@ class JobStreamer:
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
+            self.verify(written)
+            self._watchdog_ms = self.board.read("watchdog")
             corners = corner_frames(segments, written["polygon_delay"]) \
                 if written.get("polygon_scaled") else None
             sent = self.stream(segments, timeout_s=timeout_s, corners=corners,
@@ -354,14 +467,14 @@ class JobStreamer:
                 # A later job that does not ask for wobble must not inherit it.
                 self.board.write("wob_shape", 0)
             return sent
-        return self._job(body)
+        return self._job(body, total=len(segments))
 
     def run_area(self, registers, *, pulses, timeout_s, ready_timeout_s=5.0):
         """A spiral or raster job: set up, arm, run until the laser has fired ``pulses``
         pulses (the board's own clock: this works on a simulated board too), disarm."""
         def body():
             first = self.pulses
-            self.setup(registers)
+            self.verify(self.setup(registers))
             self._start(armed=True, ready_timeout_s=ready_timeout_s)
             deadline = time.monotonic() + timeout_s
             while self.pulses - first < pulses:
@@ -371,6 +484,7 @@ class JobStreamer:
                 if time.monotonic() > deadline:
                     raise JobAborted(f"the laser fired {self.pulses - first} of {pulses} "
                                      f"pulses in {timeout_s:g} s")
+                self.keepalive()
                 time.sleep(self.poll_s)
             return 0
         return self._job(body)

@@ -16,6 +16,7 @@ import threading
 import time
 from collections import deque
 
+from ..client import ClockedTransport, PacketTransport
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
 from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
@@ -326,48 +327,50 @@ class PTYServer:
         self.stop()
 
 
-class SimTransport:
+class SimTransport(PacketTransport):
     """Frames straight into a :class:`SimulatedBoard`'s UART, in the board's own time (no
     pseudo-terminal, no host clock): what a host at the link's full speed, with no latency of
-    its own, would get. For measuring the link (``galvoscan bench``)."""
+    its own, would get. ``timeout`` is in board seconds."""
 
     def __init__(self, board, *, timeout=0.05):
         self.board = board
         self.timeout = timeout          # board seconds
+        self.quiet_s = 200 * board.bit_time
 
-    def write_frame(self, frame):
+    def _now(self):
+        return self.board.now
+
+    def _write(self, data):
         board = self.board
-        board.to_board.extend(frame)
+        board.to_board.extend(data)
         # Until the last byte has started: the next frame's follow it back to back.
         while board.to_board:
             board.run_for(len(board.to_board) * 10 * board.bit_time)
 
-    def query(self, frame):
-        from ..client import ClientError
+    def _read(self, seconds):
+        """What came within ``seconds`` of board time: as soon as anything has, a character
+        time at a time."""
         board = self.board
-        board.from_board.clear()
-        self.write_frame(frame)
         waited = 0.0
-        while len(board.from_board) < 4:
-            if waited > self.timeout:
-                raise ClientError(f"no answer from the simulated board in {self.timeout} s")
-            board.run_for(10 * board.bit_time)
-            waited += 10 * board.bit_time
-        answer = bytes(list(board.from_board)[:4])
+        while not board.from_board and waited < seconds:
+            step = max(min(seconds - waited, 10 * board.bit_time), 1 / board.clk_freq)
+            board.run_for(step)
+            waited += step
+        data = bytes(board.from_board)
         board.from_board.clear()
-        return answer
+        return data
 
 
-class SimSPITransport:
+class SimSPITransport(ClockedTransport):
     """Frames into a :class:`SimulatedBoard`'s SPI target, in the board's own time, as a host
-    at the link's top speed sends them (SCK = clock / 12, mode 0); the answer to a read is
-    clocked out during the next frame, a read of ``errors`` (as ``FTDISPITransport``)."""
+    at the link's top speed sends them (SCK = clock / 12, mode 0); each answer is clocked out
+    during the next frame (as ``FTDISPITransport``)."""
 
     def __init__(self, board, *, clocks_per_sck=12):
         self.board = board
         self.half_period = clocks_per_sck / board.clk_freq / 2
 
-    def transfer(self, frame):
+    def _transfer(self, frame):
         board = self.board
         bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
         results = []
@@ -381,11 +384,3 @@ class SimSPITransport:
         for bit in results[:-1]:
             value = (value << 1) | bit
         return value.to_bytes(len(frame), "big")
-
-    def write_frame(self, frame):
-        self.transfer(frame)
-
-    def query(self, frame):
-        from ..client import FTDISPITransport
-        self.transfer(frame)
-        return self.transfer(FTDISPITransport.FETCH)

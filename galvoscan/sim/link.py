@@ -22,9 +22,10 @@ class Timed(Elaboratable):
 
 
 async def spi_transfer(ctx, top, frame, clk_freq):
-    """Clock one 4-byte frame into the top's SPI pins, as a host at the link's top speed does
-    (SCK = clk / 12, mode 0, ``cs_n`` high for four half periods after); return the 32 bits
-    that came back on CIPO (the answer to the previous read)."""
+    """Clock one frame into the top's SPI pins, as a host at the link's top speed does
+    (SCK = clk / 12, mode 0, ``cs_n`` high for four half periods after); return the bits
+    that came back on CIPO, as one number (the answer to the frame before, in the first six
+    bytes)."""
     half_sck = 6 / clk_freq
     bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
     ctx.set(top.spi_cs_n, 0)

@@ -1,139 +1,194 @@
-"""Command decoder: checks each frame and turns it into a register write or a read reply."""
+"""Command decoder: checks each frame, turns it into a register write or read, and answers it."""
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from .frames import FRAME_BITS, CommandFrame
+from .frames import REFUSED, Answer, CommandFrame
 from .registers import RegisterBus
-from .regmap import BY_NAME, CHECK_BYTE
+from .regmap import BY_NAME
 
 
-__all__ = ["CommandDecoder"]
+__all__ = ["CommandDecoder", "SEGMENT_ADDRESS", "FREE_ADDRESS"]
+
+
+#: A write here queues a segment: the frame's data, x and y together.
+SEGMENT_ADDRESS = BY_NAME["vec_op"].address
+#: What the answer to a segment gives: the queue's free places after it.
+FREE_ADDRESS = BY_NAME["fifo_free"].address
 
 
 class CommandDecoder(wiring.Component):
-    """The instruction decoder of Dai & Tang 2020, for two transports.
+    """Takes the frames of both links (:mod:`.frames`), one at a time, and answers every one.
 
-    A frame is ``address[31:24] data[23:8] check[7:0]``. It is accepted only if it is complete
-    (32 bits), its check byte is 0x64, and then
+    A frame is taken on one clock and copied; on the next it is decided, and on the one after
+    the verdict is acted on:
 
-    * for a write (address bit 7 clear): the register exists, is writable and the value is in
-      its range; the register is written, on the clock after the frame is taken (the register
-      file checks on one clock and writes on the next: see :class:`~.registers.RegisterBus`);
-    * for a read (address bit 7 set): the register exists and the data field is zero; the
-      answer ``address, value, 0x64`` is offered on the transport the request came from three
-      clocks after the frame is taken (the register file reads on the clock after, and answers
-      on the clock after that).
+    * not intact (cut short, run over, damaged: its CRC failed): refused, reason ``check``;
+    * a read (address bit 7 set) of a register, with zero data: the register file reads it, and
+      the answer gives the value;
+    * a write whose ``seq`` is the one expected (:attr:`seq`): given to the register file,
+      which takes it on the clock after or refuses it (reason ``register``). Taken, the next
+      ``seq`` is expected, and the register is read back: the answer gives what it holds now
+      (for ``vec_op``, the free places in the queue). A write of ``vec_op`` queues the
+      frame's (data, x, y) together (:attr:`segment`, :attr:`segment_x`,
+      :attr:`segment_y`);
+    * a write with another ``seq``: refused, reason ``sequence``: a write lost on the line
+      makes every later one refused, so none is ever taken out of order;
+    * anything else: refused, reason ``register``.
 
-    Anything else changes nothing and adds one to :attr:`errors`, as does a read whose answer
-    cannot be queued. One frame is taken per clock; SPI goes first when both arrive together.
-    What a frame did (:attr:`accepted`, :attr:`write_refused`, the count in :attr:`errors`)
-    is known on the clock after it is taken.
+    A refused frame changes nothing, adds one to :attr:`errors`, pulses :attr:`refused` (the
+    system top latches a link fault on it while armed) and is answered with its reason and
+    the ``seq`` expected. SPI goes first when both links' frames wait; the other waits (both
+    transports hold a frame until it is taken). The next frame is taken on the clock after an
+    answer is offered.
 
     Interface attributes
     --------------------
     spi_frames, uart_frames : ``In(stream.Signature(CommandFrame))``
-    spi_replies : ``Out(stream.Signature(32))``
-        Held until taken; a read over SPI is refused while one waits.
-    uart_replies : ``Out(stream.Signature(32))``
-        Offered for one clock, into the UART port's queue: a read over the UART is refused
-        while the queue has no room (``ready`` low), so when its answer comes there is room.
+    spi_replies, uart_replies : ``Out(stream.Signature(Answer))``
+        Each frame's answer, offered for one clock to the link the frame came from, and held
+        until the next frame is taken. The SPI target takes a copy for the host's next frame
+        (one it cannot take then, a frame being already under way, is lost and counted in
+        :attr:`errors`: a host that paces its frames as the client does never meets that).
+        The UART port sends it from here: no frame is taken while ``uart_replies.ready`` is
+        low (an answer going out), which is over long before a next frame can have come.
     bus : ``Out(RegisterBus())``
         To the register file.
+    given : ``Out(1)``
+        An access is given on :attr:`bus` this clock (the job player's writes wait).
     errors : ``Out(16)``
-        Rejected frames since reset; stops at 65535.
+        Refused frames since reset; stops at 65535.
+    refused : ``Out(1)``
+        High for one clock for each refused frame.
     accepted : ``Out(1)``
-        High for one clock for each accepted frame, the clock after it is taken (the
-        watchdog's sign of life).
+        High for one clock for each frame taken (a read done, a write done).
     status_read : ``Out(1)``
         High for one clock when ``status`` is read (it clears the sticky flags): the clock the
         register file reads it, so the value read is the one before the clearing.
-    write_refused : ``Out(1)``
-        High for one clock when a well-formed write frame is refused by the register file,
-        the clock after it is taken.
+    seq : ``Out(8)``
+        The ``seq`` the next write must carry (the ``link_seq`` register).
+    segment : ``Out(1)``
+        The write done this clock is the host's ``vec_op``: the queue takes
+        (:attr:`segment_x`, :attr:`segment_y`) with it, not ``vec_x`` and ``vec_y``.
+    segment_x, segment_y : ``Out(16)``
     """
 
     spi_frames: In(stream.Signature(CommandFrame))
     uart_frames: In(stream.Signature(CommandFrame))
-    spi_replies: Out(stream.Signature(32))
-    uart_replies: Out(stream.Signature(32))
+    spi_replies: Out(stream.Signature(Answer))
+    uart_replies: Out(stream.Signature(Answer))
     bus: Out(RegisterBus())
+    given: Out(1)
     errors: Out(16)
+    refused: Out(1)
     accepted: Out(1)
     status_read: Out(1)
-    write_refused: Out(1)
+    seq: Out(8)
+    segment: Out(1)
+    segment_x: Out(16)
+    segment_y: Out(16)
 
     def elaborate(self, platform):
         m = Module()
 
-        from_spi = self.spi_frames.valid
-        m.d.comb += [
-            self.spi_frames.ready.eq(1),
-            self.uart_frames.ready.eq(~from_spi),
-        ]
-        valid = self.spi_frames.valid | self.uart_frames.valid
-        frame = CommandFrame(Mux(from_spi, self.spi_frames.payload, self.uart_frames.payload))
-
-        address = frame.word[24:32]
-        data = frame.word[8:24]
-        complete = (frame.bits == FRAME_BITS) & (frame.word[0:8] == CHECK_BYTE)
+        # --- take a frame -------------------------------------------------------------------
+        frame = Signal(CommandFrame)
+        from_spi = Signal()
+        payload = frame.payload
+        seq, address = payload[56:64], payload[48:56]
+        data = payload[32:48]
         is_read = address[7]
-        m.d.comb += [
-            self.bus.address.eq(address[0:7]),
-            self.bus.write_data.eq(data),
-        ]
+        m.d.comb += [self.segment_x.eq(payload[16:32]), self.segment_y.eq(payload[0:16])]
 
-        with m.If(self.spi_replies.ready):
-            m.d.sync += self.spi_replies.valid.eq(0)
-        # A read in flight: the register file reads it on the clock after the frame (`fetch`)
-        # and the value comes on the next (`answer`); its link's reply is not free until the
-        # answer is sent.
-        fetch, fetch_spi, fetch_address = Signal(), Signal(), Signal(7)
-        answer, answer_spi, answer_address = Signal(), Signal(), Signal(7)
-        in_flight_spi = (fetch & fetch_spi) | (answer & answer_spi)
-        in_flight_uart = (fetch & ~fetch_spi) | (answer & ~answer_spi)
-        # The SPI target takes its reply as the host's next frame starts: it waits here until
-        # then. The UART port queues its replies: one with room when the read is taken still
-        # has room when the answer comes (nothing else fills the queue), so the answer is
-        # offered for that one clock only, straight from the register file.
-        reply_free = Mux(from_spi,
-                         (~self.spi_replies.valid | self.spi_replies.ready) & ~in_flight_spi,
-                         self.uart_replies.ready & ~in_flight_uart)
+        # --- answer -------------------------------------------------------------------------
+        # The answer is the frame's own copy, its address and data replaced by the answer's
+        # code and data once they are known (its tag is the frame's seq): offered for one
+        # clock, from flip-flops, to the link the frame came from, and held until the next
+        # frame is taken. The SPI target keeps a copy for the host's next frame; the UART port
+        # sends it from here, so no frame is taken while it does (`uart_replies.ready` low),
+        # which it has done long before the next frame can have come.
+        answer = Signal(Answer)
+        answer_valid = Signal()
+        m.d.comb += answer.eq(payload[32:64])
+        for link, spi in ((self.spi_replies, True), (self.uart_replies, False)):
+            m.d.comb += [link.payload.eq(answer),
+                         link.valid.eq(answer_valid & (from_spi if spi else ~from_spi))]
+        lost = answer_valid & from_spi & ~self.spi_replies.ready
 
-        read_taken = valid & complete & is_read & self.bus.read_ok & (data == 0) & reply_free
-        # A well-formed write, given to the register file now and done (or refused) on the
-        # next clock; a frame neither that nor a read taken is rejected, counted on the next.
-        write_given = Signal()
-        rejected = Signal()
-        m.d.sync += [
-            write_given.eq(valid & complete & ~is_read),
-            rejected.eq(valid & ~(complete & ~is_read) & ~read_taken),
-            fetch.eq(read_taken),
-            fetch_spi.eq(from_spi),
-            fetch_address.eq(address[0:7]),
-            answer.eq(fetch),
-            answer_spi.eq(fetch_spi),
-            answer_address.eq(fetch_address),
-        ]
-        write_done = write_given & self.bus.write_ok
-        refused = write_given & ~self.bus.write_ok
-        m.d.comb += [
-            self.bus.write_en.eq(write_given),
-            self.accepted.eq(write_done | fetch),
-            self.write_refused.eq(refused),
-            self.status_read.eq(fetch & (fetch_address == BY_NAME["status"].address)),
-        ]
+        verdict = Signal(2)         # why the frame taken is refused (REFUSED), or 0
 
-        reply_word = Cat(Const(CHECK_BYTE, 8), self.bus.read_data, answer_address, Const(0, 1))
-        with m.If(answer & answer_spi):
-            m.d.sync += [self.spi_replies.payload.eq(reply_word), self.spi_replies.valid.eq(1)]
-        m.d.comb += [
-            self.uart_replies.payload.eq(reply_word),
-            self.uart_replies.valid.eq(answer & ~answer_spi),
-        ]
+        def offer(code, data):
+            m.d.sync += [address.eq(code), payload[32:48].eq(data), answer_valid.eq(1)]
+            m.next = "IDLE"
 
-        # `rejected` and `refused` are about the same frame: one count a clock at most.
-        with m.If((rejected | refused) & (self.errors != 0xFFFF)):
+        def refuse(reason):
+            m.d.comb += self.refused.eq(1)
+            offer(0x80 | reason, self.seq)
+
+        # The register file reads on the clock after an access is given and answers on the
+        # next: an answer's data is on `read_data` two clocks after its read was given.
+        with m.FSM():
+            with m.State("IDLE"):
+                m.d.sync += answer_valid.eq(0)
+                # Not on the clock an answer is offered, nor while the UART port sends one.
+                free = ~answer_valid & self.uart_replies.ready
+                m.d.comb += [self.spi_frames.ready.eq(free),
+                             self.uart_frames.ready.eq(free & ~self.spi_frames.valid)]
+                with m.If(free & self.spi_frames.valid):
+                    m.d.sync += [frame.eq(self.spi_frames.payload), from_spi.eq(1)]
+                    m.next = "DECIDE"
+                with m.Elif(free & self.uart_frames.valid):
+                    m.d.sync += [frame.eq(self.uart_frames.payload), from_spi.eq(0)]
+                    m.next = "DECIDE"
+            with m.State("DECIDE"):
+                # The access is given whatever is decided (a refused one is a read of no
+                # consequence), and the verdict is kept for the next clock: neither the job
+                # player's bus nor the answer then waits on the register file's address
+                # decode (the longest path otherwise).
+                m.d.comb += [self.bus.address.eq(address[:7]), self.bus.write_data.eq(data),
+                             self.given.eq(1)]
+                with m.If(~frame.intact):
+                    m.d.sync += verdict.eq(REFUSED["check"])
+                with m.Elif(is_read):
+                    m.d.sync += verdict.eq(Mux(self.bus.read_ok & (data == 0), 0,
+                                               REFUSED["register"]))
+                with m.Else():
+                    m.d.sync += verdict.eq(Mux(seq == self.seq, 0, REFUSED["sequence"]))
+                m.next = "DECIDED"
+            with m.State("DECIDED"):
+                with m.If(verdict != 0):
+                    refuse(verdict)
+                with m.Elif(is_read):
+                    # The register file reads now.
+                    m.d.comb += self.status_read.eq(address[:7] == BY_NAME["status"].address)
+                    m.next = "READ"
+                with m.Else():
+                    # The register file takes the write now, or refuses it; taken, the
+                    # register is read back (a segment: the queue's free places).
+                    is_segment = address[:7] == SEGMENT_ADDRESS
+                    m.d.comb += [
+                        self.bus.write_en.eq(1),
+                        self.segment.eq(is_segment),
+                        self.bus.address.eq(Mux(is_segment, FREE_ADDRESS, address[:7])),
+                        self.given.eq(1),
+                    ]
+                    with m.If(self.bus.write_ok):
+                        m.d.sync += self.seq.eq(self.seq + 1)
+                        m.next = "FETCH"
+                    with m.Else():
+                        # Answered on the next clock: the answer then waits on no range check.
+                        m.d.sync += verdict.eq(REFUSED["register"])
+                        m.next = "REFUSE"
+            with m.State("REFUSE"):
+                refuse(verdict)
+            with m.State("FETCH"):
+                # The register file reads the write's register back now.
+                m.next = "READ"
+            with m.State("READ"):
+                m.d.comb += self.accepted.eq(1)
+                offer(address[:7], self.bus.read_data)
+
+        with m.If((self.refused | lost) & (self.errors != 0xFFFF)):
             m.d.sync += self.errors.eq(self.errors + 1)
         return m

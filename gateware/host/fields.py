@@ -74,6 +74,7 @@ Status = data.StructLayout({
     "laser_ready": 1,       # armed and MO has led for the MO lead: marking now emits
     "player_busy": 1,       # the job player is checking or playing the flash's job
     "job_refused": 1,       # the player refused the flash's job at the last start
+    "fault_link": 1,        # latched: the host link refused a frame while armed
 })
 
 #: Bit number of each :data:`Status` flag, for host code that tests bits of a value read.

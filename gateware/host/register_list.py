@@ -80,12 +80,25 @@ def all_registers(table_points, correction_nodes):
                  "bit 9 alarm fault (latched), bit 10 a laser alarm input active now, bit 11 "
                  "laser_enable (the laser's buffers enabled), bit 12 laser ready (armed and MO "
                  "on for the MO lead: a job may start), bit 13 the job player busy, bit 14 the "
-                 "player refused the flash's job at the last start",
+                 "player refused the flash's job at the last start, bit 15 link fault (latched: the host "
+                 "link refused a frame while armed)",
                  width=Status.size),
         Register("errors", 0x01, "ro", 0, 0, 0, "frames",
-                 "rejected command frames since reset (bad check byte, unknown address, write to "
-                 "a read-only register, value out of range, cut short, UART framing error); "
-                 "stops at 65535"),
+                 "refused command frames since power-up (a CRC that fails, cut short or run over, "
+                 "a UART framing error, a write out of sequence, an unknown address, a write to "
+                 "a read-only register, a value out of range, the queue full); stops at 65535"),
+        Register("link_seq", 0x18, "ro", 0, 0, 0, "frame",
+                 "the sequence number the next write frame must carry (a write with another is "
+                 "refused); goes up by one, modulo 256, with each write taken", width=8),
+        Register("keepalive", 0x19, "strobe", 0, 0, 1, "write 1",
+                 "feeds the watchdog while armed: a host that waits on an armed board (the MO "
+                 "lead, the queue emptying, a spiral) writes it; reads do not feed it",
+                 width=1, needs=('laser',)),
+        Register("soft_reset", 0x1A, "strobe", 0, 0, 1, "write 1",
+                 "returns every writable register to its power-up value (arm = 0: the laser "
+                 "off), empties the vector queue and stops vector mode, and clears the "
+                 "counters; keeps latched faults (fault_clear clears them), errors and "
+                 "link_seq (the link's own record)", width=1),
         Register("caps", 0x0E, "ro", 0, 0, 0, "flags",
                  "what this bitstream holds, a bit each (1: built): " + ", ".join(
                      f"bit {field.offset} {name}" for name, field in Capabilities) +
@@ -200,6 +213,11 @@ def all_registers(table_points, correction_nodes):
                  "bits 7:1: the host's polygon delay × (1 - cos φ), RTC's variable polygon "
                  "delay); 0 = polygon_delay at every corner", width=1,
                  needs=('vector', 'delays')),
+        Register("vec_taken", 0x1B, "ro", 0, 0, 0, "segments",
+                 "segments the vector sequencer has taken from the queue since reset, modulo "
+                 "65536: with vector busy clear, every one is marked to its end; while busy, all "
+                 "but the last two at most. The sequencer takes none while a fault is latched",
+                 needs=('vector',)),
         Register("vec_flush", 0x2F, "strobe", 0, 0, 1, "write 1",
                  "empties the vector queue and stops vector mode where it is (the sequencer, the "
                  "wobble and the laser delays start afresh): a job left half-queued no longer "
@@ -292,9 +310,10 @@ def all_registers(table_points, correction_nodes):
                  "pulse repetition rate on DB25 pin 20, 20.0 … 200.0 kHz (500 = 50 kHz), 50 % duty",
                  width=11,
                  needs=('laser',)),
-        Register("watchdog", 0x13, "rw", 1000, 1, 60000, "ms",
-                 "while armed, no accepted command frame for this long switches the laser off and "
-                 "latches a watchdog fault",
+        Register("watchdog", 0x13, "rw", 200, 1, 60000, "ms",
+                 "while armed, no progress for this long switches the laser off and latches a "
+                 "watchdog fault: progress is a segment queued, a keepalive written or the job "
+                 "player's next word; reading registers is none",
                  needs=('laser',)),
         Register("fault_clear", 0x14, "strobe", 0, 0, 1, "write 1",
                  "clears latched faults if the interlock is closed and no alarm is active; the "

@@ -10,14 +10,9 @@ of one build; the register file and the system top take every register fact from
 module-level :data:`REGISTERS`, :data:`BY_NAME` and :data:`BY_ADDRESS` are the host's view (see
 :data:`HOST_MAP`).
 
-A command frame is four bytes, most significant first (as Dai & Tang's decoder takes them)::
-
-    address | data[15:8] | data[7:0] | 0x64
-
-Bit 7 of the address byte selects a read: ``0x80 | address, 0x00, 0x00, 0x64`` asks for a
-register, and the answer is a frame in the same format, ``address, data_hi, data_lo, 0x64``.
-A frame is accepted only if its check byte is 0x64, its address is known, the access is allowed
-(no writes to read-only registers, read requests carry zero data) and the value is in range;
+The frames that carry writes and reads, their CRC and sequence numbers, are in
+:mod:`.frames`. A write is taken only if its address is known, the access is allowed (no
+writes to read-only registers, read requests carry zero data) and the value is in range;
 anything else changes nothing and counts in ``errors``.
 
 Access: ``rw`` registers hold what was written; ``ro`` ones report state; a ``strobe`` register
@@ -45,15 +40,12 @@ from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION
                             all_registers)
 
 
-__all__ = ["CHECK_BYTE", "READ_FLAG", "RegisterMap", "register_map", "MAX_TABLE_POINTS",
-           "HOST_MAP", "REGISTERS", "BY_NAME", "BY_ADDRESS", "encode_frame", "decode_frame",
-           "FrameError", *fields.__all__, *limits.__all__,
+__all__ = ["READ_FLAG", "RegisterMap", "register_map", "MAX_TABLE_POINTS",
+           "HOST_MAP", "REGISTERS", "BY_NAME", "BY_ADDRESS", *fields.__all__, *limits.__all__,
            *(name for name in register_list.__all__ if name != "all_registers")]
 
 
 
-#: The last byte of every frame.
-CHECK_BYTE = 0x64
 #: Set in the address byte of a read request.
 READ_FLAG = 0x80
 
@@ -230,23 +222,3 @@ assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
            WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS)
-
-
-class FrameError(ValueError):
-    """Bytes that are not a well-formed frame, or a value a register cannot take."""
-
-
-def encode_frame(address, data):
-    """The four bytes of a frame."""
-    if not 0 <= address <= 0xFF or not 0 <= data <= 0xFFFF:
-        raise FrameError(f"address {address} or data {data} does not fit a frame")
-    return bytes([address, data >> 8, data & 0xFF, CHECK_BYTE])
-
-
-def decode_frame(frame):
-    """``(address, data)`` of a four-byte frame with the right check byte."""
-    if len(frame) != 4:
-        raise FrameError(f"a frame is 4 bytes, not {len(frame)}")
-    if frame[3] != CHECK_BYTE:
-        raise FrameError(f"check byte {frame[3]:#04x}, not {CHECK_BYTE:#04x}")
-    return frame[0], (frame[1] << 8) | frame[2]

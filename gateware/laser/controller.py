@@ -18,6 +18,7 @@ Faults = data.StructLayout({
     "interlock": 1,     # the interlock opened while armed
     "watchdog": 1,      # no accepted command frame for the watchdog time while armed
     "alarm": 1,         # a laser alarm input was active while armed
+    "link": 1,          # the host link refused a frame while armed (a damaged or lost frame)
 })
 
 #: Most laser alarm inputs a controller takes (IPG's type-D interface has four alarm pins).
@@ -87,6 +88,8 @@ class LaserController(wiring.Component):
         Pulse repetition rate in units of :data:`PRR_UNIT_HZ` (checked by the register map).
     watchdog_ms : ``In(16)``
         Milliseconds without an accepted frame before a fault, while armed.
+    link_fault : ``In(1)``
+        Pulse: the host link refused a frame; while armed it latches a ``link`` fault.
     alive : ``In(1)``
         Pulses with each accepted command frame.
     fault_clear : ``In(1)``
@@ -148,6 +151,7 @@ class LaserController(wiring.Component):
             "prr": In(11),
             "watchdog_ms": In(16),
             "alive": In(1),
+            "link_fault": In(1),
             "fault_clear": In(1),
             "marking": In(1),
             "interlock_open": In(1, init=1),
@@ -210,6 +214,10 @@ class LaserController(wiring.Component):
             m.d.sync += faults.interlock.eq(1)
         with m.If(watchdog_fired):
             m.d.sync += faults.watchdog.eq(1)
+        # A frame refused while armed: one the host sent is lost (damaged, or out of step), so
+        # what the laser does next is not what the host planned.
+        with m.If(self.link_fault & self.arm):
+            m.d.sync += faults.link.eq(1)
         if self.alarms:
             with m.If(alarm_active & self.arm):
                 m.d.sync += faults.alarm.eq(1)
