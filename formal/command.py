@@ -192,7 +192,11 @@ class CommandPathSpec(Elaboratable):
       clock after a refusal or an answer its link could not take (up to 65535), and changes
       at no other time;
     * **watchdog**: the progress feed tells the laser's watchdog of life only on the clock
-      after a segment was queued or ``keepalive`` was pulsed: reads never feed it.
+      after a segment was queued or ``keepalive`` was pulsed: reads never feed it;
+    * **answers**: a UART answer is never offered while the port is busy, and the answer it
+      sends is held while it does (the port reads it from the decoder, with no copy). The
+      UART port is modelled as busy from taking an answer until any later clock; the SPI
+      target takes an answer or not, freely.
 
     Parameters
     ----------

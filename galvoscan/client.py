@@ -186,10 +186,12 @@ class HostClient:
         return reg.decode(self._read_address(reg.address, name))
 
     def _read_address(self, address, name):
+        heard = False
         for attempt in range(self.tries):
             self._tag = (self._tag + 1) & 0xFF
             tag = self._tag
             [answer] = self._transact([encode_command(tag, READ_FLAG | address)])
+            heard = heard or getattr(self.transport, "heard", True)
             if answer is not None and answer.tag == tag and answer.code == address:
                 return answer.data
             if answer is not None and answer.tag == tag and answer.refused and \
@@ -199,12 +201,12 @@ class HostClient:
             if attempt + 1 < self.tries:
                 self.retries += 1
                 self._flush()
-        raise LinkLost(self._lost(f"a read of {name}"))
+        raise LinkLost(self._lost(f"a read of {name}", heard))
 
-    def _lost(self, what):
+    def _lost(self, what, heard):
         """Why no good answer came: nothing at all, or bytes that are no answer."""
         timeout = getattr(self.transport, "timeout", None)
-        if getattr(self.transport, "heard", True) is False:
+        if not heard:
             return (f"no answer from the board within {timeout:g} s ({what}, {self.tries} "
                     f"tries): check the port and the baud rate, or give a slow board (a "
                     f"simulated one: the --timeout it printed) a longer --timeout")
@@ -352,12 +354,13 @@ class PacketTransport:
 class ClockedTransport:
     """What an SPI link does with frames: each one clocked in whole; its answer comes out
     during the next, so a last read of ``link_seq`` (which changes nothing) clocks out the
-    last answer. A subclass gives ``_transfer(bytes) -> bytes``."""
+    last answer. A subclass gives ``transfer(bytes) -> bytes``: the bytes clocked out while
+    those were clocked in."""
 
     FETCH = encode_command(0xFF, READ_FLAG | BY_NAME["link_seq"].address)
 
     def transact(self, frames):
-        returned = [self._transfer(frame) for frame in [*frames, self.FETCH]]
+        returned = [self.transfer(frame) for frame in [*frames, self.FETCH]]
         return [data[:ANSWER_BYTES] for data in returned[1:]]
 
 
@@ -426,7 +429,7 @@ class FTDISPITransport(ClockedTransport):
         self._controller.configure(url)
         self._port = self._controller.get_port(cs=0, freq=frequency, mode=0)
 
-    def _transfer(self, frame):
+    def transfer(self, frame):
         return bytes(self._port.exchange(frame, duplex=True))
 
     def close(self):

@@ -19,7 +19,7 @@ def _table():
 _TABLE = _table()
 
 #: The refusal reasons an answer's code carries (bit 7 set).
-REASON = {"check": 1, "sequence": 2, "register": 3, "busy": 4}
+REASON = {"check": 1, "sequence": 2, "register": 3}
 
 
 def crc16(data, crc=0xFFFF):

@@ -16,18 +16,20 @@ def test_bench_quick(capsys, backend):
     assert result["xy2_200"]["frames_per_s"] == 200_000
     assert result["xy2_200"]["idle_clocks"] == 0
     link = result["link"]
-    # SPI: 32 bits of two half periods at SCK = 12 MHz / 12, plus half a period before cs_n
+    # SPI: 80 bits of two half periods at SCK = 12 MHz / 12, plus half a period before cs_n
     # rises and four with it high: the host this bench plays.
-    assert abs(link["spi_frames_per_s"] - 1 / ((2 * 32 + 5) * 0.5e-6)) < 1
-    # UART: four 10-bit characters back to back at 115 200 baud.
-    assert abs(link["uart_frames_per_s"] - 115_200 / 40) < 1
+    assert abs(link["spi_frames_per_s"] - 1 / ((2 * 80 + 5) * 0.5e-6)) < 1
+    # UART: a frame's ten bytes COBS-encoded (one byte more) and the zero after them, 10-bit
+    # characters back to back at 115 200 baud.
+    assert abs(link["uart_frames_per_s"] - 115_200 / 120) < 1
     # A jump reaches the wires within a few 10 µs frames (DDA set-up, then the frame boundary,
     # then the frame itself).
     for name in ("spi", "uart"):
         assert 10 < link[f"{name}_latency_us"] <= link[f"{name}_latency_max_us"] < 40
-    # Vector segments streamed over the UART at the default 1 Mbaud: three 4-byte frames a
-    # segment, 10 bits a byte, and a read of fifo_free (a request and its answer) per batch:
-    # under 8 333 a second, and at least 5 000 (what 1 mm segments at 5 m/s need).
+    # Vector segments streamed over the UART at the default 1 Mbaud: one 12-byte frame a
+    # segment on the line (ten bytes, COBS's one, the zero), 10 bits a byte, and the wait for
+    # the last answer of each batch: under 8 333 a second, and at least 5 000 (what 1 mm
+    # segments at 5 m/s need).
     stream = link["stream"]
     assert stream["baud"] == 1_000_000 and stream["errors"] == 0
     assert stream["backend"] == backend

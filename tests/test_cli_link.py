@@ -90,8 +90,9 @@ def test_a_board_that_answers_late_or_not_at_all_is_told_apart():
     tty.setraw(slave)
     try:
         with SerialTransport(os.ttyname(slave), baud=115200, timeout=0.05) as link:
-            with pytest.raises(LinkLost, match=r"no answer from the board within 0.05 s: "
-                                               r"check the port .* longer --timeout"):
+            with pytest.raises(LinkLost, match=r"no answer from the board within 0.05 s "
+                                               r"\(a read of status, 3 tries\): check the "
+                                               r"port .* longer --timeout"):
                 HostClient(link).read("status")
             os.read(master, 4096)                       # (the frames it sent)
 

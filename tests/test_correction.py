@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 from hypothesis import given, settings, strategies as st, HealthCheck, Phase
 
-from galvoscan.client import HostClient
+from galvoscan.client import HostClient, WriteRefused
 from galvoscan.correction.upload import upload_table
 from galvoscan.gateware.field.correction import FieldCorrection
 from galvoscan.gateware.field.correction_table import TABLE_SIZES, CorrectionTable
@@ -279,8 +279,9 @@ def test_top_without_correction_refuses_its_registers():
     board = SimBoard(correction=None)
     client = HostClient(SimSPITransport(board))
     assert client.read("errors") == 0
-    client.write("cor_enable", 0)                    # an unknown address in this build
-    client.write("cor_write", 1)
+    for name, value in (("cor_enable", 0), ("cor_write", 1)):   # unknown in this build
+        with pytest.raises(WriteRefused, match=name):
+            client.write(name, value)
     assert client.read("errors") == 2
 
 

@@ -162,8 +162,9 @@ def test_spiral_and_laser_from_host_commands():
     pulses_before = client.read("pulses")
     mark = len(board.laser_pins)
     board.run_for(1e-3)
-    pulses_after = client.read("pulses")
-    window = board.laser_pins[mark:]
+    end = len(board.laser_pins)
+    pulses_after = client.read("pulses")        # (counted when the read arrives: later)
+    window = board.laser_pins[mark:end]
     rises = [i for i in range(1, len(window)) if window[i][2] and not window[i - 1][2]]
     frequency = (len(rises) - 1) / ((rises[-1] - rises[0]) / CLK)
     assert frequency == pytest.approx(100e3, rel=2e-3)

@@ -272,6 +272,9 @@ def run_job(board, transport):
         return "done", report
     except JobAborted as error:
         return "stopped", error
+    except ClientError as error:
+        # The link failed before the job began (the board's state checked, nothing sent yet).
+        return "failed", error
 
 
 def recover_and_run_again(board, make_link):
@@ -298,6 +301,9 @@ def check_fault(link, fault):
     if outcome == "stopped":
         message = str(result)
         assert "segment" in message or "part is done" in message, message
+    elif outcome == "failed":
+        assert "answer" in str(result), result
+        assert not board.board.pulses, "the laser fired, though the job never began"
     else:
         # Done: every segment taken, every pulse of a clean run fired (nothing lost silently).
         assert result.segments == len(job_segments(JOB))

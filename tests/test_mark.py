@@ -365,7 +365,11 @@ def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
             process.communicate()
     assert process.returncode == 130, (out, rest, err)
     assert "Traceback" not in err
-    assert err.strip().splitlines()[-1] == "galvoscan: stopped (Ctrl-C)"
+    # How far the job got, said in the line.
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("galvoscan: stopped (Ctrl-C): the laser is disarmed; stopped at "
+                           "segment "), last
+    assert last.endswith("the part is not done"), last
 
 
 def test_unknown_units_are_refused_before_anything(tmp_path):

@@ -16,8 +16,11 @@ from galvoscan.gateware.host.regmap import (BY_NAME, Mode, RegisterMap, Status, 
 #: The default build's registers (128-point spiral table, 17 × 17 correction nodes, all modes,
 #: the laser): name, address, access, reset, lowest and highest value written, bits held.
 DEFAULT_BUILD = [
-    ("status", 0x00, "ro", 0, 0, 0, 15),
+    ("status", 0x00, "ro", 0, 0, 0, 16),
     ("errors", 0x01, "ro", 0, 0, 0, 16),
+    ("link_seq", 0x18, "ro", 0, 0, 0, 8),
+    ("keepalive", 0x19, "strobe", 0, 0, 1, 1),
+    ("soft_reset", 0x1a, "strobe", 0, 0, 1, 1),
     ("caps", 0x0e, "ro", 0, 0, 0, 11),
     ("vec_depth", 0x0f, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
@@ -42,6 +45,7 @@ DEFAULT_BUILD = [
     ("vec_rejected", 0x27, "ro", 0, 0, 0, 16),
     ("vec_underruns", 0x28, "ro", 0, 0, 0, 16),
     ("vec_stalls", 0x29, "ro", 0, 0, 0, 16),
+    ("vec_taken", 0x1b, "ro", 0, 0, 0, 16),
     ("vec_flush", 0x2f, "strobe", 0, 0, 1, 1),
     ("ras_x", 0x30, "rw", 28768, 0, 65535, 16),
     ("ras_y", 0x31, "rw", 28768, 0, 65535, 16),
@@ -60,7 +64,7 @@ DEFAULT_BUILD = [
     ("arm", 0x10, "rw", 0, 0, 1, 1),
     ("laser_power", 0x11, "rw", 0, 0, 255, 8),
     ("laser_prr", 0x12, "rw", 500, 200, 2000, 11),
-    ("watchdog", 0x13, "rw", 1000, 1, 60000, 16),
+    ("watchdog", 0x13, "rw", 200, 1, 60000, 16),
     ("fault_clear", 0x14, "strobe", 0, 0, 1, 1),
     ("pulses", 0x15, "ro", 0, 0, 0, 16),
     ("guide", 0x16, "rw", 0, 0, 1, 1),
@@ -91,8 +95,10 @@ SPIRAL_ONLY = {"dwell", "x_first", "x_last", "y_first", "y_last", "spiral_interp
 RASTER_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("ras_")}
 VECTOR_ONLY = {"vec_x", "vec_y", "vec_op", "fifo_free", "pitch", "pulses_per_point",
                "jump_delay", "vec_rejected", "vec_underruns", "vec_stalls", "laser_on_delay",
-               "laser_off_delay", "mark_delay", "polygon_delay", "polygon_scaled", "vec_flush"}
-LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses", "guide"}
+               "laser_off_delay", "mark_delay", "polygon_delay", "polygon_scaled", "vec_flush",
+               "vec_taken"}
+LASER_ONLY = {"arm", "laser_power", "laser_prr", "watchdog", "fault_clear", "pulses", "guide",
+              "keepalive"}
 CORRECTION_ONLY = {name for name, *_ in DEFAULT_BUILD if name.startswith("cor_")}
 
 
@@ -257,7 +263,7 @@ def test_status_layout_is_the_status_register():
                            "fault_watchdog": 4, "mo_on": 5, "emitting": 6,
                            "interlock_open": 7, "vector_busy": 8, "fault_alarm": 9,
                            "alarm": 10, "laser_enable": 11, "laser_ready": 12,
-                           "player_busy": 13, "job_refused": 14}
+                           "player_busy": 13, "job_refused": 14, "fault_link": 15}
 
 
 def test_mode_register_holds_the_modes():

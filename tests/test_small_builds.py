@@ -5,7 +5,7 @@ link, no laser controller; on the system top's pins."""
 
 import pytest
 
-from galvoscan.client import HostClient
+from galvoscan.client import HostClient, WriteRefused
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 from galvoscan.platforms.icestick import ICEStickScanner
@@ -42,7 +42,9 @@ def test_small_top_answers_on_uart_only_and_has_no_laser():
     assert uart.read("dwell") == 4
     # The laser registers are not there: writes are refused and counted, nothing switches on.
     for name, value in (("laser_power", 200), ("arm", 1), ("fault_clear", 1)):
-        uart.write(name, value)
+        with pytest.raises(WriteRefused) as refused:
+            uart.write(name, value)
+        assert refused.value.reason == "register"
     assert uart.read("errors") == 3
     board.run_for(1e-3)
     assert not any(any(pins) for pins in board.laser_pins)

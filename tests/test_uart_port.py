@@ -1,10 +1,10 @@
 # amaranth: UnusedElaboratable=no
 """The UART command port alone (gateware/host/uart_port.py): bytes on ``rx`` gathered into
 frames, answers sent on ``tx``, against a model of the frame rules written here from
-frames.py's docstring ("over the UART each frame and each answer is COBS-encoded and ends with a
-zero byte ...: after a lost or extra byte the receiver finds the next frame at the next zero,
-and only the frame the fault fell in is lost"), with the test's own codec (link_codec.py: its
-own CRC and COBS, not the gateware's)."""
+frames.py's docstring ("over the UART each frame is COBS-encoded and ends with a zero byte
+...: after a lost or extra byte the receiver finds the next frame at the next zero, and only
+the frame the fault fell in is lost"; "answers go back as their six bytes"), with the test's
+own codec (link_codec.py: its own CRC and COBS, not the gateware's)."""
 
 from amaranth.hdl import Value
 from amaranth.sim import Simulator
@@ -13,12 +13,12 @@ import pytest
 
 from galvoscan.gateware.host.frames import Answer, CommandFrame
 from galvoscan.gateware.host.uart_port import UARTCommandPort
-from link_codec import answer, cobs_decode, cobs_encode, command, crc16, packets, parse_answer
+from link_codec import answer, cobs_decode, cobs_encode, command, crc16, parse_answer
 
 
 DIVISOR = 8                 # the fewest clocks a bit the receiver takes: the quickest simulation
 CHAR = 10                   # bits in a character time (8N1)
-ANSWER_CHARS = 8            # an answer on the line: a code byte, six bytes, the zero byte
+ANSWER_CHARS = 6            # an answer on the line: its six bytes, nothing more
 PERIOD = 1e-6               # the simulated clock's (any: only clocks count)
 IDLES = [0, 0, 0, 1, 5, CHAR, 4 * CHAR]     # pauses (bits) before a byte: none ends a frame
 
@@ -54,8 +54,9 @@ def line_segments(events, divisor):
     return segments
 
 
-def decode_line(samples, divisor):
-    """Bytes read off a line sampled once a clock; every bit must last ``divisor`` clocks."""
+def characters(samples, divisor):
+    """``(start, value)`` of the characters on a line sampled once a clock (``start`` the
+    clock its start bit begins); every bit must last ``divisor`` clocks."""
     out, i = [], 0
     while True:
         try:
@@ -70,8 +71,13 @@ def decode_line(samples, divisor):
             assert len(set(run)) == 1, f"bit {n} of the character at {start} wobbles"
             bits.append(run[0])
         assert bits[0] == 0 and bits[9] == 1
-        out.append(sum(b << k for k, b in enumerate(bits[1:9])))
+        out.append((start, sum(b << k for k, b in enumerate(bits[1:9]))))
         i = start + 10 * divisor
+
+
+def decode_line(samples, divisor):
+    """The bytes on a line sampled once a clock."""
+    return [value for _, value in characters(samples, divisor)]
 
 
 def byte_events(data, *, first_idle=1, idle=0, bad=()):
@@ -135,10 +141,19 @@ def check_frames(got, want):
 
 # --- running the port ----------------------------------------------------------------------------
 
-def run_port(events, *, replies=(), divisor=DIVISOR, frames_ready=None):
-    """Drive ``rx`` with the bytes while offering ``replies`` (``(tag, code, data)`` answers, as
-    fast as the port takes them); returns (frames as ``(intact, payload)``, the tx line a clock
-    at a time, clocks at which each reply was taken).
+#: Clocks from the command decoder taking a frame to offering its answer, at the fewest.
+DECODER_CLOCKS = 3
+
+
+def run_port(events, *, replies=(), divisor=DIVISOR, frames_ready=None, per_frame=False):
+    """Drive ``rx`` with the bytes while offering ``replies`` (``(tag, code, data)`` answers) as
+    the command decoder does: each valid for one clock while ``replies.ready`` is high, its
+    payload held until ``ready`` is high again, and then at once other bits (the next frame's,
+    from which the decoder's next answer is made, :data:`DECODER_CLOCKS` later at the
+    soonest); as fast as the port takes them, or with ``per_frame`` the k-th once k frames
+    have come out. Returns (frames as ``(intact, payload)``, the tx line a clock at a time,
+    and for each reply the clock it was taken at and the first clock ``ready`` was high again,
+    low every clock in between).
 
     Only replies and a ``frames_ready`` pattern need the line and the clocks counted: without
     them the monitors wake only when ``frames.valid`` or ``tx`` change (a quicker simulation),
@@ -146,9 +161,10 @@ def run_port(events, *, replies=(), divisor=DIVISOR, frames_ready=None):
     dut = UARTCommandPort(divisor=divisor)
     segments = line_segments(events, divisor)
     # Idle line after the bytes: enough for the last event, and for the answers (which go out
-    # while rx is driven; a character each spare for working out the CRC).
+    # while rx is driven, a character each spare; one per frame, the last after the last).
     rx_chars = sum(clocks for _, clocks in segments) // (CHAR * divisor)
-    tail_chars = 2 + max(0, (ANSWER_CHARS + 1) * len(replies) - rx_chars)
+    tail_chars = 2 + (ANSWER_CHARS + 1 if per_frame and replies else
+                      max(0, (ANSWER_CHARS + 1) * len(replies) - rx_chars))
     frames, tx, taken, tx_changes = [], [], [], []
     clock = [0]
     every_clock = bool(replies) or frames_ready is not None
@@ -166,14 +182,25 @@ def run_port(events, *, replies=(), divisor=DIVISOR, frames_ready=None):
         ctx.set(dut.rx, 1)
         await ctx.delay(tail_chars * CHAR * divisor * PERIOD)
 
+    answer_bits = Value.cast(dut.replies.payload)
+
     async def reply(ctx):
-        for tag, code, data in replies:
-            ctx.set(dut.replies.payload, {"tag": tag, "code": code, "data": data})
+        for k, (tag, code, data) in enumerate(replies):
+            while not ctx.get(dut.replies.ready) or (per_frame and len(frames) <= k):
+                await ctx.tick()
+            bits = (tag << 24) | (code << 16) | data
+            ctx.set(answer_bits, bits)
             ctx.set(dut.replies.valid, 1)
-            await ctx.tick().until(dut.replies.ready)
-            taken.append(clock[0])
-            assert not ctx.get(dut.replies.ready), "an answer taken while one goes out"
-        ctx.set(dut.replies.valid, 0)
+            await ctx.tick()
+            ctx.set(dut.replies.valid, 0)
+            start = clock[0]
+            while not ctx.get(dut.replies.ready):
+                await ctx.tick()
+            taken.append((start, clock[0]))
+            # The decoder takes the next frame now: its answer's bits are the frame's, not the
+            # answer's, until it is made.
+            ctx.set(answer_bits, bits ^ 0xFFFFFFFF)
+            await ctx.tick().repeat(DECODER_CLOCKS)
 
     # The frame as its raw bits, payload low (one signal sampled, not two fields of it: the
     # simulator evaluates a slice the slow way, on every clock).
@@ -459,18 +486,31 @@ def test_a_damaged_frame_never_costs_the_next(host_frames, idle):
 # --- answers -----------------------------------------------------------------------------------
 
 def wire_answers(answers):
-    """The answers on the line, as the test's codec writes them."""
-    return b"".join(on_wire(answer(*a)) for a in answers)
+    """The answers on the line, as the test's codec writes them: six bytes each, back to
+    back."""
+    return b"".join(answer(*a) for a in answers)
 
 
 def answers_on(tx):
-    """The answers read off the tx line by the test's codec: every one a COBS packet whose CRC
-    holds, and the line ends after a zero byte."""
-    found, rest = packets(decode_line(tx, DIVISOR))
-    assert rest == b"", rest.hex()
-    decoded = [p is not None and parse_answer(p) for p in found]
-    assert all(decoded), found
+    """The answers read off the tx line by the test's codec: six bytes each, every one's CRC
+    holding, nothing more."""
+    line = bytes(decode_line(tx, DIVISOR))
+    assert len(line) % ANSWER_CHARS == 0, line.hex()
+    found = [line[i:i + ANSWER_CHARS] for i in range(0, len(line), ANSWER_CHARS)]
+    decoded = [parse_answer(p) for p in found]
+    assert all(decoded), [p.hex() for p in found]
     return decoded
+
+
+def check_ready(tx, taken):
+    """Each answer's ``replies.ready`` low (``taken``: run_port's clocks, the one it was
+    taken at and the first ``ready`` was high again, low in between) until its last byte is
+    handed to the transmitter, the clock before that byte's start bit: then high at once."""
+    starts = [start for start, _ in characters(tx, DIVISOR)]
+    assert len(starts) == ANSWER_CHARS * len(taken)
+    for k, (at, back) in enumerate(taken):
+        first, last = starts[ANSWER_CHARS * k], starts[ANSWER_CHARS * (k + 1) - 1]
+        assert at < first and last - 2 <= back <= last, (k, at, back, first, last)
 
 
 ANSWERS_WITH_ZEROS = [
@@ -479,46 +519,72 @@ ANSWERS_WITH_ZEROS = [
     (0x12, 0x05, 77),           # the CRC's first byte zero
     (0x12, 0x05, 1792),         # zeros in the data and the CRC
     (0x05, 0x22, 0x0100),
-    (0x80, 0x81, 0xFFFF),       # no zero byte: one group of six
+    (0x80, 0x81, 0xFFFF),       # no zero byte
+    (0x00, 0x00, 0x0000),       # one answer twice over
+    (0x00, 0x00, 0x0000),
 ]
 assert answer(0x12, 0x05, 30)[5] == 0 and answer(0x12, 0x05, 77)[4] == 0
-assert 0 not in answer(0x80, 0x81, 0xFFFF)
+assert 0 not in answer(0x80, 0x81, 0xFFFF) and answer(0x12, 0x05, 1792)[3:5] == b"\0\0"
 
 
-def test_answers_go_out_cobs_encoded_in_order():
+def test_answers_go_out_as_six_bytes_in_order():
     """Each answer (``tag`` in the top byte) goes out as tag, code, data and the CRC over them,
-    COBS-encoded, then a zero byte: here answers with zero bytes anywhere, one after another."""
+    six bytes back to back and nothing else: here answers with zero bytes anywhere, one after
+    another."""
     assert [(name, field.offset, field.width) for name, field in Answer] == \
         [("data", 0, 16), ("code", 16, 8), ("tag", 24, 8)]
-    _, tx, _ = run_port([], replies=ANSWERS_WITH_ZEROS)
+    _, tx, taken = run_port([], replies=ANSWERS_WITH_ZEROS)
     assert bytes(decode_line(tx, DIVISOR)) == wire_answers(ANSWERS_WITH_ZEROS)
     assert answers_on(tx) == ANSWERS_WITH_ZEROS
-    assert all(len(on_wire(answer(*a))) == ANSWER_CHARS for a in ANSWERS_WITH_ZEROS)
+    assert all(len(answer(*a)) == ANSWER_CHARS for a in ANSWERS_WITH_ZEROS)
+    check_ready(tx, taken)
 
 
 def test_one_answer_goes_out_at_a_time():
     """There is no queue: an answer is taken while none is going out, and ``replies.ready``
-    is low from then until its last (zero) byte has been handed to the transmitter (run_port
-    checks it is low just after each answer is taken); answers offered back to back go one an
-    answer's time apart."""
+    is low from then until its last byte has been handed to the transmitter, the payload
+    held all that time and changed at once after (run_port); answers offered as soon as
+    they can be go back to back on the line, one an answer's time apart."""
     replies = [(k, 0x05, 0x1200 + k) for k in range(4)]
     _, tx, taken = run_port([], replies=replies)
     assert answers_on(tx) == replies
+    check_ready(tx, taken)
+    chars = characters(tx, DIVISOR)
+    # The first byte goes once its eight bits are in the CRC: a few clocks more.
+    assert 8 < chars[0][0] - taken[0][0] <= 8 + 4, (chars[0], taken[0])
+    # Back to back: a character time apart (the transmitter may hold a stop bit a clock
+    # longer), from the first answer's first byte to the last answer's last.
+    gaps = [b - a for (a, _), (b, _) in zip(chars, chars[1:])]
+    assert all(CHAR * DIVISOR <= g <= CHAR * DIVISOR + 1 for g in gaps), gaps
+    # The next answer is taken as soon as the last's last byte is handed on (and the
+    # decoder has made it): five characters and the CRC of the first byte for the first,
+    # an answer's time for the others.
+    starts = [at for at, _ in taken]
     answer_time = ANSWER_CHARS * CHAR * DIVISOR
-    gaps = [b - a for a, b in zip(taken, taken[1:])]
-    # The first answer starts after its CRC is worked out (32 clocks); the next is taken when
-    # the first's zero byte has started. (The transmitter may hold a stop bit a clock longer.)
-    assert (ANSWER_CHARS - 1) * CHAR * DIVISOR <= gaps[0] <= answer_time, gaps
+    gaps = [b - a for a, b in zip(starts, starts[1:])]
+    assert (ANSWER_CHARS - 1) * CHAR * DIVISOR + 8 <= gaps[0] <= answer_time, gaps
     assert all(answer_time <= g <= answer_time + ANSWER_CHARS for g in gaps[1:]), gaps
 
 
 def test_answers_go_out_while_frames_come_in():
-    """Full duplex: frames keep coming in whole while answers are being sent."""
-    data = on_wire(GROUPS) + on_wire(ZEROS) + on_wire(PLAIN)
+    """Full duplex: frames keep coming in whole while answers are being sent, each answer
+    offered once a frame has come out (as the decoder does), the last also while the next
+    frame comes in."""
+    data = on_wire(GROUPS) + on_wire(ZEROS) + on_wire(PLAIN) + on_wire(CRC_ZERO)
     replies = [(0x05, 0x22, 0x0003), (0x00, 0x00, 0x0000), (0x11, 0x22, 0x3344)]
-    frames, tx, _ = run_port(byte_events(data), replies=replies)
-    assert frames == [(True, payload(GROUPS)), (True, payload(ZEROS)), (True, payload(PLAIN))]
+    frames, tx, taken = run_port(byte_events(data), replies=replies, per_frame=True)
+    assert frames == [(True, payload(frame)) for frame in (GROUPS, ZEROS, PLAIN, CRC_ZERO)]
     assert answers_on(tx) == replies
+    check_ready(tx, taken)
+    # The frames come back to back, twelve characters each from the line's first clocks:
+    # each answer goes out while the next frame comes in (its first byte from the middle of
+    # the stop bit of the zero byte of the frame it answers).
+    frame_time = len(on_wire(GROUPS)) * CHAR * DIVISOR
+    starts = [start for start, _ in characters(tx, DIVISOR)]
+    for k in range(len(replies)):
+        first, last = starts[ANSWER_CHARS * k], starts[ANSWER_CHARS * (k + 1) - 1]
+        assert (k + 1) * frame_time - CHAR * DIVISOR < first, (k, first)
+        assert last + CHAR * DIVISOR < (k + 2) * frame_time, (k, last)
 
 
 # --- random streams ------------------------------------------------------------------------------
@@ -555,7 +621,8 @@ def test_random_byte_streams_against_the_model(pieces, replies):
     for data, idle, bad in pieces:
         events += piece_events(data, idle, bad)
     events = well_formed(events)
-    frames, tx, _ = run_port(events, replies=replies)
+    frames, tx, taken = run_port(events, replies=replies)
     check_frames(frames, model_frames(events))
     if replies:
         assert answers_on(tx) == replies
+        check_ready(tx, taken)

@@ -10,7 +10,7 @@ import bisect
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient
+from galvoscan.client import ClientError, HostClient, WriteRefused
 from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
 from galvoscan.gateware.host.fields import pack
 from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
@@ -42,18 +42,16 @@ def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settin
     return board, client
 
 
-def queue(client, job, *, x=None, y=None, factors=None):
-    """The job's segments; ``x``, ``y``: what vec_x and vec_y hold now, not written again;
-    ``factors``: each mark's polygon_scaled factor (vec_op bits 1 up; RTC delay builds)."""
+def queue(client, job, *, factors=None):
+    """The job's segments, a checked frame each, back to back; ``factors``: each mark's
+    polygon_scaled factor (vec_op bits 1 up; RTC delay builds)."""
+    words = []
     for index, (op, x_to, y_to) in enumerate(job):
-        if x_to != x:
-            client.write("vec_x", x_to)
-        if y_to != y:
-            client.write("vec_y", y_to)
-        x, y = x_to, y_to
         factor = 0 if factors is None else factors[index]
-        client.write("vec_op", pack(VecOpWord, op=VectorOp[op.upper()],
-                                    corner_frames=0 if op == "jump" else factor))
+        words.append((pack(VecOpWord, op=VectorOp[op.upper()],
+                           corner_frames=0 if op == "jump" else factor), x_to, y_to))
+    if words:
+        client.queue_segments(words)
 
 
 def pulses_per_frame(board):
@@ -83,9 +81,9 @@ NO_DELAYS = {}
 
 
 def job_link(board):
-    """The real client over the UART at 8 clocks a bit, its writes back to back as a host's
-    serial port sends them (320 clocks a write; SPI at its 12 clocks an SCK takes 420)."""
-    link = SimUARTTransport(board, pause_chars=0, queue_writes=True)
+    """The real client over the UART at 8 clocks a bit; the segments go back to back, each
+    answered as it lands."""
+    link = SimUARTTransport(board)
     return link, HostClient(link)
 
 
@@ -100,13 +98,10 @@ def set_up_job(board, job, registers, *, always=(), factors=None):
         if value != regmap[name].reset or name in always:
             client.write(name, value)
     client.write("arm", 1)
-    link.flush()
     armed = board.now
-    queue(client, job, x=regmap["vec_x"].reset, y=regmap["vec_y"].reset, factors=factors)
-    link.flush()
-    board.run_for(armed + 0.3e-3 - board.now)                # MO lead
+    queue(client, job, factors=factors)
+    board.run_for(max(0, armed + 0.3e-3 - board.now))       # MO lead
     client.write("run", 1)
-    link.flush()
     return client
 
 
@@ -195,11 +190,12 @@ SHORT_QUEUE = 16
 def test_full_queue_refuses_and_counts():
     board, client = start_board(vector_queue_depth=SHORT_QUEUE)
     assert client.read("fifo_free") == SHORT_QUEUE
-    for _ in range(SHORT_QUEUE + 1):             # the queue, and one in the sequencer's hand
-        client.write("vec_op", 0)
+    # The queue, and one in the sequencer's hand: the last answer says no room is left.
+    assert client.queue_segments([(0, 32768, 32768)] * (SHORT_QUEUE + 1)) == 0
     assert client.read("fifo_free") == 0
     assert client.read("errors") == 0
-    client.write("vec_op", 0)                    # refused
+    with pytest.raises(WriteRefused, match="vector queue is full"):
+        client.queue_segments([(0, 32768, 32768)])
     assert client.read("vec_rejected") == 1
     assert client.read("errors") == 1
     # Nothing queued was lost: every jump comes out once the mode runs.
@@ -263,10 +259,12 @@ def test_a_spiral_only_build_refuses_the_other_modes():
     counted, like frames for unknown addresses."""
     board = SimBoard(modes=("spiral",))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    client.write("mode", 2)                     # not built: refused
-    client.write("mode", 1)
-    client.write("vec_op", 1)                   # no such register in this build
-    client.write("ras_w", 100)
+    for write in (lambda: client.write("mode", 2),      # not built: refused
+                  lambda: client.write("mode", 1),
+                  lambda: client.queue_segments([(1, 0, 0)]),   # no such register here
+                  lambda: client.write("ras_w", 100)):
+        with pytest.raises(WriteRefused):
+            write()
     assert client.read("mode") == 0
     assert client.read("errors") == 4
     with pytest.raises(ClientError):
@@ -306,7 +304,7 @@ def test_the_words_the_host_packs_are_the_registers_documented_bits():
 def test_vec_flush_empties_the_queue_and_stops_the_mode():
     """A job left half-queued (a host that died mid-job): vec_flush empties the queue and
     stops the sequencer where it is; the next job is taken and marks from its start."""
-    from galvoscan.client import HostClient
+    from galvoscan.client import HostClient, WriteRefused
     from galvoscan.gateware.host.fields import STATUS_BITS
     from galvoscan.jobs.stream import JobStreamer
     from galvoscan.sim.board import SimTransport, SimulatedBoard
@@ -314,10 +312,7 @@ def test_vec_flush_empties_the_queue_and_stops_the_mode():
                            settings=ScanSettings(mode="vector", run=False), correction=None,
                            mo_lead=0.2e-3, vector_queue_depth=8)
     client = HostClient(SimTransport(board))
-    for x in (30000, 31000, 32000):
-        client.write("vec_x", x)
-        client.write("vec_y", 30000)
-        client.write("vec_op", 1)
+    client.queue_segments([(1, x, 30000) for x in (30000, 31000, 32000)])
     client.write("run", 1)
     board.run_for(0.2e-3)
     assert client.read("fifo_free") < 8

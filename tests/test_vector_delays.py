@@ -8,7 +8,7 @@ SCANLAB's delay definitions (tests/vector_delay_model.py); bad delay values refu
 from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient, encode_write
+from galvoscan.client import ClientError, HostClient, encode_write, WriteRefused
 from galvoscan.gateware.top import ScanSettings
 
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
@@ -218,8 +218,10 @@ def test_a_build_without_the_delays_has_none_of_their_registers():
     board = SimBoard(clk_freq=CLK, settings=ScanSettings(mode="vector", run=False),
                      vector_delays=False)
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    client.write("mark_delay", 100)             # no such register in this build
-    client.write("vec_op", 3)                   # only 0 and 1 here
+    with pytest.raises(WriteRefused):
+        client.write("mark_delay", 100)         # no such register in this build
+    with pytest.raises(WriteRefused):
+        client.queue_segments([(3, 0, 0)])      # only 0 and 1 here
     assert client.read("errors") == 2
 
 

@@ -398,8 +398,16 @@ class JobStreamer:
                                      complete=ending.complete) from error
             raise ending from error
         self.disarm()
-        after = self.counters()
-        self._count_pulses()
+        try:
+            after = self.counters()
+            self._count_pulses()
+        except ClientError as error:
+            if total is None:
+                raise
+            # Marked to its end (the queue ran empty), then the link failed.
+            raise JobAborted(f"every segment ({total}) was marked: the part is done, but the "
+                             f"link failed before its counters were read ({error})",
+                             taken=total, total=total, complete=True) from error
         return StreamReport(
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS},

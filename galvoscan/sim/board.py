@@ -370,7 +370,7 @@ class SimSPITransport(ClockedTransport):
         self.board = board
         self.half_period = clocks_per_sck / board.clk_freq / 2
 
-    def _transfer(self, frame):
+    def transfer(self, frame):
         board = self.board
         bits = [(byte >> (7 - i)) & 1 for byte in frame for i in range(8)]
         results = []
