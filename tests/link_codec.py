@@ -3,7 +3,7 @@ host link") independently of the gateware and of the host client: its own CRC-16
 table, not the gateware's bit loop nor binascii's) and its own COBS."""
 
 __all__ = ["crc16", "command", "answer", "parse_answer", "cobs_encode", "cobs_decode",
-           "packets", "REASON"]
+           "REASON"]
 
 
 def _table():
@@ -75,10 +75,3 @@ def cobs_decode(data):
         if code < 255 and i < len(data):
             out.append(0)
     return bytes(out)
-
-
-def packets(stream):
-    """The packets between zero bytes of a byte stream (COBS-decoded; None for one that is
-    no encoding), and the bytes after the last zero."""
-    parts = bytes(stream).split(b"\0")
-    return [cobs_decode(part) for part in parts[:-1] if part], parts[-1]
