@@ -273,13 +273,14 @@ class CommandPathSpec(Elaboratable):
         good = (taken_qq & f["intact"] & ~f["address"][7] & (f["seq"] == seq) &
                 (registers._write_address == f["address"][:7]) &
                 (registers._write_data == f["data"]))
-        m.d.comb += Assert(~write | good, "a register is written only by an intact write "
-                                          "frame with the expected seq")
+        m.d.comb += Assert(
+            ~write | good,
+            "a register is written only by an intact write frame with the expected seq")
         # --- segments -------------------------------------------------------------------------
         pushed = write & (registers._write_address == SEGMENT_ADDRESS)
+        frame_end_point = ((decoder.segment_x == f["x"]) & (decoder.segment_y == f["y"]))
         m.d.comb += [
-            Assert(~pushed | (decoder.segment & (decoder.segment_x == f["x"]) &
-                              (decoder.segment_y == f["y"])),
+            Assert(~pushed | (decoder.segment & frame_end_point),
                    "a segment is queued with its frame's end point"),
             Assert(~decoder.segment | (registers.bus.write_en &
                                       (registers._write_address == SEGMENT_ADDRESS)),

@@ -213,8 +213,8 @@ class CorrectionLinkSpec(Elaboratable):
         connect(m, decoder.bus, regs.bus)
         for link in (decoder.spi_frames, decoder.uart_frames):
             m.d.comb += [link.valid.eq(AnySeq(1)),
-                         link.payload.word.eq(AnySeq(len(link.payload.word))),
-                         link.payload.bits.eq(AnySeq(len(link.payload.bits)))]
+                         link.payload.payload.eq(AnySeq(len(link.payload.payload))),
+                         link.payload.intact.eq(AnySeq(1))]
         for reply in (decoder.spi_replies, decoder.uart_replies):
             m.d.comb += reply.ready.eq(AnySeq(1))
         for port in (stage.positions_in.valid, stage.positions_out.ready):
@@ -282,7 +282,7 @@ class CorrectionLinkSpec(Elaboratable):
         m.d.comb += [
             Cover(stage._ram_write & changed,
                   "a write made after cor_dx changed while it waited"),
-            Cover(owed & decoder.write_refused &
+            Cover(owed & bus.write_en & ~bus.write_ok &
                   (regs._write_address == regmap["cor_write"].address),
                   "a cor_write refused while one waits"),
         ]

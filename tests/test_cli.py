@@ -119,11 +119,11 @@ def test_export_rejects_bad_clock(tmp_path):
 
 
 # Block RAMs each part takes: the spiral ROMs (2 × 128 × 16 bits), the vector queue (512 × 33
-# bits in 512 × 8 blocks), the UART reply queue (256 × 32 bits), the register file's copy and
-# reset values (2 × 128 × 16 bits) and a 17 × 17 correction table (289 × 32 bits in two
-# 256-deep halves).
-SPIRAL_RAMS, QUEUE_RAMS, REPLY_RAMS, REGISTER_RAMS, CORRECTION_RAMS = \
-    2, math.ceil(VectorCommand.size / 8), 2, 2, 4
+# bits in 512 × 8 blocks), the register file's copy and reset values (2 × 128 × 16 bits) and a
+# 17 × 17 correction table (289 × 32 bits in two 256-deep halves). The links hold no queue:
+# every frame is answered before the next is taken.
+SPIRAL_RAMS, QUEUE_RAMS, REGISTER_RAMS, CORRECTION_RAMS = \
+    2, math.ceil(VectorCommand.size / 8), 2, 4
 
 
 @pytest.mark.toolchain
@@ -137,7 +137,7 @@ def test_build_icebreaker(icebreaker_build):
     assert Path(report["bitstream"]).stat().st_size > 100_000   # a whole UP5K image
     assert report["meets_timing"] and report["fmax_mhz"] >= 24
     assert report["modes"] == ["spiral", "raster", "vector"] and report["correction_nodes"] == 17
-    assert report["brams"] == (SPIRAL_RAMS + QUEUE_RAMS + REPLY_RAMS + REGISTER_RAMS +
+    assert report["brams"] == (SPIRAL_RAMS + QUEUE_RAMS + REGISTER_RAMS +
                                CORRECTION_RAMS)
     assert 0 < report["luts"] <= 0.95 * report["luts_available"]
     # The build's record beside its netlist, for simulating it.
@@ -305,7 +305,7 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
     achieved, cells, rams = float(found.group(1)), int(found.group(2)), int(found.group(3))
     assert 12 <= achieved < 120
     # 512 × 16-bit ROMs take two blocks each; no vector queue, no correction table.
-    assert rams == 2 * SPIRAL_RAMS + REPLY_RAMS + REGISTER_RAMS
+    assert rams == 2 * SPIRAL_RAMS + REGISTER_RAMS
     assert cells < 0.5 * 5280
     # Nothing to flash, nor the routed design to pack one from; the record says why.
     assert not list(tmp_path.glob("*.bin")) and not list(tmp_path.glob("*.asc"))
