@@ -130,7 +130,9 @@ SPIRAL_RAMS, QUEUE_RAMS, REGISTER_RAMS, CORRECTION_RAMS = \
 @pytest.mark.xdist_group("icebreaker_build")
 def test_build_icebreaker(icebreaker_build):
     """The default bitstream (every mode, correction), started with a model table: it fits
-    in 95 % of the UP5K's cells and would meet 24 MHz (XY2-200's clock) on its 12 MHz one."""
+    in 97 % of the UP5K's cells and would meet 24 MHz (XY2-200's clock) on its 12 MHz one.
+    (The checked link took the 95 % this once allowed: some 300 cells for the CRCs, COBS,
+    the sequence and the answers; room for more is the ULX3S build's.)"""
     folder, code, report, _ = icebreaker_build
     print(report)
     assert code == 0
@@ -139,7 +141,7 @@ def test_build_icebreaker(icebreaker_build):
     assert report["modes"] == ["spiral", "raster", "vector"] and report["correction_nodes"] == 17
     assert report["brams"] == (SPIRAL_RAMS + QUEUE_RAMS + REGISTER_RAMS +
                                CORRECTION_RAMS)
-    assert 0 < report["luts"] <= 0.95 * report["luts_available"]
+    assert 0 < report["luts"] <= 0.97 * report["luts_available"]
     # The build's record beside its netlist, for simulating it.
     record = json.loads((folder / "galvoscan_icebreaker.build.json").read_text())
     assert record["clock_mhz"] == 12 and record["baud"] == report["baud"]

@@ -3,13 +3,14 @@
 import pytest
 
 from galvoscan.client import ClientError, HostClient, WriteRefused, encode_read, encode_write
+from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import ScanSettings
 
 from link_codec import REASON, command, parse_answer
-from sim_board import SimBoard, SimSPITransport, SimUARTTransport
+from sim_board import QUICK_SIM_BOARD, SimBoard, SimSPITransport, SimUARTTransport
 from spiral_model import spiral_frames
 
 
@@ -31,7 +32,9 @@ def contains_run(frames, run):
 
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_every_register_resets_and_reads_back(kind):
-    board = SimBoard()
+    # Three frames for each of some sixty registers: on the compiled board (the same records
+    # as Amaranth's: tests/test_compiled.py), as test_compiled's quick board is built.
+    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
     client = HostClient(make_link(kind, board))
     for reg in writable(board):
         assert client.read(reg.name) == reg.reset, reg.name
