@@ -41,6 +41,9 @@ __all__ = ["ClientError", "LinkLost", "WriteRefused", "HostClient", "SerialTrans
 #: Reasons for a refusal, by the number an answer carries.
 REASONS = {number: name for name, number in REFUSED.items()}
 _SEGMENT_ADDRESS = BY_NAME["vec_op"].address
+#: Write frames sent before their answers are checked: fewer than the 256 sequence numbers, so
+#: that ``link_seq`` tells unambiguously how many of a batch the board took.
+BATCH_FRAMES = 128
 
 
 class ClientError(Exception):
@@ -256,7 +259,7 @@ class HostClient:
     def _write_all(self, writes):
         """Send the writes, then check each answer; a write whose answer was lost is found
         out from ``link_seq`` and only those the board did not take are sent again. Returns
-        the last answer's data."""
+        the last answer's data, or None where it was lost."""
         done = 0
         last = None
         tries = 0
@@ -264,7 +267,10 @@ class HostClient:
             if self._seq is None:
                 self.sequence()
             start = self._seq
-            batch = writes[done:]
+            # At most half the sequence numbers a batch: how many the board took is then
+            # read unambiguously from link_seq, which counts modulo 256 (a batch of 300 whose
+            # answers were lost would read as 44 taken, and the rest sent again, taken twice).
+            batch = writes[done:done + BATCH_FRAMES]
             frames = [encode_command((start + i) & 0xFF, reg.address, data, x, y)
                       for i, (reg, data, x, y) in enumerate(batch)]
             answers = self._transact(frames)
@@ -288,7 +294,8 @@ class HostClient:
                 last = answer.data
                 self._seq = (seq + 1) & 0xFF
             else:
-                return last
+                done += len(batch)
+                continue
             # Something went wrong: how many did the board take?
             self._flush()
             taken = (self.sequence() - start) & 0xFF
@@ -296,6 +303,7 @@ class HostClient:
                 raise ClientError(f"the board took {taken} writes of {len(batch)} sent: another "
                                   f"host is writing to it")
             done += taken
+            last = None             # (its answer may be the one lost: the caller asks again)
             tries += 1
             if tries >= self.tries:
                 raise WriteRefused(

@@ -273,3 +273,31 @@ def test_the_bitstream_says_what_it_holds(build, caps, depth):
     assert client.read("caps") == caps
     assert client.read("vec_depth") == depth
     assert client.read("errors") == 0
+
+
+def test_a_long_write_whose_answers_are_lost_is_not_taken_twice():
+    """More segments than the 256 sequence numbers in one call, every answer of the first
+    batch lost on the line: the board took them all, and the host, reading link_seq, sends
+    none of them again (a batch of 300 would have read 44 taken and sent 256 again)."""
+    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
+
+    class LosingFirstAnswers(SimUARTTransport):
+        lost = False
+
+        def transact(self, frames):
+            answers = list(super().transact(frames))
+            if not self.lost and len(frames) > 1:
+                self.lost = True
+                return []
+            return answers
+
+    link = LosingFirstAnswers(board)
+    client = HostClient(link)
+    client.write("vec_flush", 1)
+    depth = client.read("fifo_free")
+    count = min(depth, 300)
+    free = client.queue_segments([(0, i, i) for i in range(count)])
+    # Each write taken once: vec_flush and the segments (the queue keeps the rest of them:
+    # the sequencer has taken the first).
+    assert link.lost and client.read("link_seq") == (1 + count) % 256
+    assert client.read("errors") == 0 and free == client.read("fifo_free") >= depth - count
