@@ -291,8 +291,8 @@ def recover_and_run_again(board, make_link):
 LINKS = {"uart": (FaultyUART, SimUARTTransport), "spi": (FaultySPI, SimSPITransport)}
 
 
-def check_fault(link, fault):
-    board = SimBoard.powered_up(**BOARD)
+def check_fault(link, fault, backend="compiled"):
+    board = SimBoard.powered_up(**dict(BOARD, backend=backend))
     faulty, clean = LINKS[link]
     transport = faulty(board, fault)
     outcome, result = run_job(board, transport)
@@ -400,3 +400,13 @@ def test_a_fault_on_the_uart(fault):
 @given(faults)
 def test_a_fault_on_spi(fault):
     check_fault("spi", fault)
+
+
+@pytest.mark.slow
+def test_a_fault_on_the_reference_simulator():
+    """The same checks on Amaranth's simulator, the reference the compiled board is held to
+    record for record (tests/test_compiled.py), for the first trial's worst case: vec_op's
+    address turned into mode's over SPI (the spiral ran over the field with the laser on). The
+    clean run it is compared with is the compiled board's. (Each case takes minutes on this
+    backend, a cut link's 200 ms of watchdog hours: the rest run on the compiled board.)"""
+    check_fault("spi", example_faults(clean_run("spi")[0])[3], backend="python")

@@ -228,7 +228,9 @@ def _cmd_mark(args):
                 (f"{', ' if len(parts) > 1 else ''}serial {serial}" if serial is not None
                  else "")
             say(f"{which + ': ' if which else ''}marked {report.segments} segments in "
-                f"{report.seconds:.1f} s (host time); {report.pulses} pulses; underruns "
+                f"{report.seconds:.1f} s (host time)" +
+                (": the part is done" if report.clean else "") +
+                f"; {report.pulses} pulses; underruns "
                 f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
                 f"{counters['vec_rejected']}, errors {counters['errors']}" +
                 (f" (damaged on the link and sent again {report.resent} time(s): every "
