@@ -60,7 +60,7 @@ def test_every_register_resets_and_reads_back(kind):
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_host_starts_stops_and_reshapes_the_spiral(kind):
     table = SpiralTable()
-    board = SimBoard(table=table)
+    board = SimBoard(table=table, backend="compiled")
     client = HostClient(make_link(kind, board))
 
     # Stop: the mirrors hold still.
