@@ -169,6 +169,20 @@ class HostClient:
         self.bad_answers = 0
         self.retries = 0
 
+    def now(self):
+        """Seconds on the link's clock: the transport's (a simulated board's own time), else
+        the host's."""
+        now = getattr(self.transport, "now", None)
+        return now() if now is not None else time.monotonic()
+
+    def sleep(self, seconds):
+        """Let ``seconds`` pass on the link's clock (a simulated board runs for them)."""
+        sleep = getattr(self.transport, "sleep", None)
+        if sleep is not None:
+            sleep(seconds)
+        else:
+            time.sleep(seconds)
+
     def _transact(self, frames):
         self.sent += len(frames)
         packets = list(self.transport.transact(frames))
@@ -348,7 +362,16 @@ class PacketTransport:
         return [buffer[i:i + ANSWER_BYTES] for i in range(0, len(buffer), ANSWER_BYTES)]
 
     def _now(self):
+        return self.now()
+
+    def now(self):
+        """The link's clock, in seconds: the host's (a simulated board's transport gives the
+        board's own time, so that every wait on it counts what the board did)."""
         return time.monotonic()
+
+    def sleep(self, seconds):
+        """Let ``seconds`` pass on the link's clock."""
+        time.sleep(seconds)
 
     def flush(self):
         """Start afresh: a zero byte ends whatever the board was gathering, and whatever comes
@@ -366,6 +389,14 @@ class ClockedTransport:
     those were clocked in."""
 
     FETCH = encode_command(0xFF, READ_FLAG | BY_NAME["link_seq"].address)
+
+    def now(self):
+        """The link's clock, in seconds (see :meth:`PacketTransport.now`)."""
+        return time.monotonic()
+
+    def sleep(self, seconds):
+        """Let ``seconds`` pass on the link's clock."""
+        time.sleep(seconds)
 
     def transact(self, frames):
         returned = [self.transfer(frame) for frame in [*frames, self.FETCH]]

@@ -339,17 +339,35 @@ def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_sim_vector_writes_its_vcd(tmp_path, capsys):
+@pytest.mark.parametrize("backend, vcd", [("python", True), ("compiled", False)])
+def test_sim_vector_waits_in_the_boards_time(backend, vcd, tmp_path, capsys, monkeypatch):
+    """``sim --mode vector`` on either backend (the Python one writing a waveform, which only
+    it can), with a host clock that runs a thousand times faster than real time: the host's
+    waits (the MO lead, the queue) count the board's time, so a slow simulator never looks
+    like a laser that did not become ready."""
+    import time
     job = tmp_path / "line.job"
     job.write_text("jump 30000 30000\nmark 30240 30000\n")
-    vcd = tmp_path / "waves" / "line.vcd"
-    from sim_board import quick_replay_job
-    with quick_replay_job():
-        code, out, _ = run(capsys, "sim", "--mode", "vector", "--job", str(job), "--vcd",
-                           str(vcd), "--json")
-    assert code == 0 and json.loads(out)["vcd"] == str(vcd)
-    text = vcd.read_text()
-    assert "$timescale" in text and "xy2_sync" in text and "laser_am" in text
+    real = time.monotonic
+    started = real()
+    monkeypatch.setattr(time, "monotonic", lambda: started + 1000 * (real() - started))
+    # At 4 MHz (a third of the clocks, the same frames), with a 1 ms MO lead: 5 s of the fast
+    # host clock are 5 ms of real time, which no backend simulates 1 ms of the board in.
+    import functools
+    import galvoscan.sim as module
+    monkeypatch.setattr(module, "replay_job", functools.partial(module.replay_job,
+                                                                clk_freq=4e6, mo_lead=1e-3))
+    waves = tmp_path / "waves" / "line.vcd"
+    code, out, err = run(capsys, "sim", "--mode", "vector", "--job", str(job),
+                         "--backend", backend, *(["--vcd", str(waves)] if vcd else []), "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    # The line is 240 units at the pitch of 60: a jump, then marks every pitch along it.
+    assert result["segments"] == 2 and result["marked_points"] >= 240 // 60
+    if vcd:
+        assert result["vcd"] == str(waves)
+        text = waves.read_text()
+        assert "$timescale" in text and "xy2_sync" in text and "laser_am" in text
 
 
 @pytest.mark.parametrize("argv, message", [

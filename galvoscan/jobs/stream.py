@@ -173,6 +173,11 @@ class JobStreamer:
         if not 1 <= batch <= QUEUE_DEPTH:
             raise ValueError(f"batch must be from 1 to {QUEUE_DEPTH}, not {batch!r}")
         self.board = board
+        # Every wait counts the link's clock: a simulated board's own time (its transport
+        # gives it), else the host's. A board without a clock of its own (a model) has the
+        # host's.
+        self._now = getattr(board, "now", time.monotonic)
+        self._sleep = getattr(board, "sleep", time.sleep)
         self.batch = batch
         self.poll_s = poll_s
         self.progress = progress
@@ -289,21 +294,21 @@ class JobStreamer:
 
     def wait_ready(self, timeout_s):
         """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""
-        deadline = time.monotonic() + timeout_s
+        deadline = self._now() + timeout_s
         while not self.status().laser_ready:
-            if time.monotonic() > deadline:
+            if self._now() > deadline:
                 raise JobAborted(f"the laser did not become ready within {timeout_s:g} s")
             self.keepalive()
-            time.sleep(self.poll_s)
+            self._sleep(self.poll_s)
 
     def wait_idle(self, timeout_s):
         """Wait until the vector queue is empty and the last point marked."""
-        deadline = time.monotonic() + timeout_s
+        deadline = self._now() + timeout_s
         while self.status().vector_busy:
-            if time.monotonic() > deadline:
+            if self._now() > deadline:
                 raise JobAborted(f"the board was still marking after {timeout_s:g} s")
             self.keepalive()
-            time.sleep(self.poll_s)
+            self._sleep(self.poll_s)
 
     def keepalive(self):
         """Feed the armed board's watchdog (status reads do not)."""
@@ -325,7 +330,7 @@ class JobStreamer:
             self.board.read("fifo_free")
         sent = 0
         started = False
-        deadline = time.monotonic() + timeout_s
+        deadline = self._now() + timeout_s
         while sent < len(segments):
             if free == 0:
                 self.status()
@@ -333,11 +338,11 @@ class JobStreamer:
                     self.keepalive()
                 free = self.board.read("fifo_free")
                 if free == 0:
-                    if time.monotonic() > deadline:
+                    if self._now() > deadline:
                         raise JobAborted(f"the queue did not move for {timeout_s:g} s")
-                    time.sleep(self.poll_s)
+                    self._sleep(self.poll_s)
                     continue
-                deadline = time.monotonic() + timeout_s
+                deadline = self._now() + timeout_s
             count = min(free, self.batch, len(segments) - sent)
             words = [segment_words(op, x, y, hold)
                      for (op, x, y), hold in zip(segments[sent:sent + count],
@@ -377,7 +382,7 @@ class JobStreamer:
         refuse a board not ready, count, disarm however it ends (saying how far it got),
         report the counters' rise. ``total``: the job's segments."""
         from ..client import ClientError, LinkLost
-        started = time.monotonic()
+        started = time.monotonic()      # the report's seconds: the host's
         self.check_ready()
         before = self.counters()
         self._count_pulses()
@@ -484,15 +489,15 @@ class JobStreamer:
             first = self.pulses
             self.verify(self.setup(registers))
             self._start(armed=True, ready_timeout_s=ready_timeout_s)
-            deadline = time.monotonic() + timeout_s
+            deadline = self._now() + timeout_s
             while self.pulses - first < pulses:
                 self.status()
                 if self.progress is not None:
                     self.progress(min(self.pulses - first, pulses))
-                if time.monotonic() > deadline:
+                if self._now() > deadline:
                     raise JobAborted(f"the laser fired {self.pulses - first} of {pulses} "
                                      f"pulses in {timeout_s:g} s")
                 self.keepalive()
-                time.sleep(self.poll_s)
+                self._sleep(self.poll_s)
             return 0
         return self._job(body)

@@ -337,8 +337,11 @@ class SimTransport(PacketTransport):
         self.timeout = timeout          # board seconds
         self.quiet_s = 200 * board.bit_time
 
-    def _now(self):
+    def now(self):
         return self.board.now
+
+    def sleep(self, seconds):
+        self.board.run_for(seconds)
 
     def _write(self, data):
         board = self.board
@@ -369,6 +372,13 @@ class SimSPITransport(ClockedTransport):
     def __init__(self, board, *, clocks_per_sck=12):
         self.board = board
         self.half_period = clocks_per_sck / board.clk_freq / 2
+
+    def now(self):
+        """The board's own time: a host's waits on a simulated board count what it did."""
+        return self.board.now
+
+    def sleep(self, seconds):
+        self.board.run_for(seconds)
 
     def transfer(self, frame):
         board = self.board
