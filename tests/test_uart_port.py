@@ -269,7 +269,9 @@ def test_pauses_do_not_end_a_frame():
     """Only a zero byte ends a frame: a host that stalls between bytes still gets through
     (pauses of one, four and twelve character times, which ended a frame before COBS)."""
     idles = [1, CHAR, 0, 4 * CHAR, 0, 0, 12 * CHAR, 0, 1, 0, 0, 4 * CHAR]
-    events = [(b, idle, False) for b, idle in zip(on_wire(GROUPS), idles, strict=True)]
+    groups = on_wire(GROUPS)
+    assert len(groups) == len(idles)
+    events = [(b, idle, False) for b, idle in zip(groups, idles)]
     frames, _, _ = run_port(events)
     assert frames == [(True, payload(GROUPS))]
 

@@ -113,7 +113,7 @@ def test_wheel_declares_the_projects_dependencies(installed):
     """The wheel's Requires-Dist is pyproject.toml's dependencies and extras, no more, no less
     (the venv above holds what it declares, so what it declares is what a user gets)."""
     try:
-        import tomllib
+        import tomllib  # novermin: tomli below where it is missing
     except ImportError:                          # Python < 3.11
         import tomli as tomllib
     from packaging.markers import Marker

@@ -161,7 +161,10 @@ def load_job_file(path):
     """``(job, entries, layers)``: the ``[job]`` settings and every other table, by
     section, as ``{dest: value}``; the layers as :class:`~galvoscan.jobs.layers.Layer` s
     and their tables. One line (and exit) for anything wrong."""
-    import tomllib
+    try:
+        import tomllib  # novermin: tomli below where it is missing
+    except ModuleNotFoundError:                  # Python < 3.11
+        import tomli as tomllib
     from .layers import layer_from_table
     path = Path(path)
     try:

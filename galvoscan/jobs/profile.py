@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Optional, Tuple
 
 try:
-    import tomllib
+    import tomllib  # novermin: tomli below where it is missing
 except ModuleNotFoundError:                      # Python < 3.11
     import tomli as tomllib
 

@@ -89,8 +89,8 @@ def load_counter(profile_source, *, start=None, step=None):
     """The counter beside the profile (``start``/``step``: the command line's, which replace
     the kept ones); one line (:class:`~.plan.PlanError`) for a damaged file."""
     try:
-        import tomllib
-    except ImportError:                 # Python < 3.11
+        import tomllib  # novermin: tomli below where it is missing
+    except ModuleNotFoundError:                 # Python < 3.11
         import tomli as tomllib
     path = counter_path(profile_source)
     kept = {}
