@@ -1,5 +1,6 @@
 # amaranth: UnusedElaboratable=no
-"""The README stays true: its pin table, commands and proof list match the code."""
+"""The README and the docs stay true: their pin tables, register map, commands, figures and
+tables match the code. Each test reads the page that holds its table."""
 
 from pathlib import Path
 import re
@@ -12,7 +13,19 @@ from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
 
 
 ROOT = Path(__file__).parent.parent
+DOCS = ROOT / "docs"
 README = (ROOT / "README.md").read_text()
+
+
+def page(name):
+    """The text of the docs page ``name`` (a path under docs/)."""
+    return (DOCS / name).read_text()
+
+
+def every_page():
+    """The README and every docs page: (path, text)."""
+    files = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+    return [(path, path.read_text()) for path in files if "_build" not in path.parts]
 
 
 def pmod_fpga_pin(number, pmod_pin):
@@ -23,14 +36,16 @@ def pmod_fpga_pin(number, pmod_pin):
 
 
 def test_pin_table_matches_the_platform():
-    rows = re.findall(r"^\| (\d+) \| (\d+) \| `xy2_(\w+)` \|$", README, re.M)
+    rows = re.findall(r"^\| (\d+) \| (\d+) \| `xy2_(\w+)` \|$", page("hardware/wiring.md"), re.M)
+    assert rows
     assert {signal: int(pmod) for pmod, _, signal in rows} == XY2_PMOD_PINS
     for pmod, fpga, _ in rows:
         assert pmod_fpga_pin(0, pmod) == int(fpga)
 
 
 def test_spi_pin_table_matches_the_platform():
-    rows = re.findall(r"^\| (\d+) \| (\d+) \| `spi_(\w+)`", README, re.M)
+    rows = re.findall(r"^\| (\d+) \| (\d+) \| `spi_(\w+)`", page("hardware/wiring.md"), re.M)
+    assert rows
     assert {signal: int(pmod) for pmod, _, signal in rows} == \
         {name: pin for name, (pin, _) in SPI_PMOD_PINS.items()}
     for pmod, fpga, _ in rows:
@@ -38,7 +53,7 @@ def test_spi_pin_table_matches_the_platform():
 
 
 def test_register_table_is_the_register_map():
-    assert register_table() in README
+    assert register_table() in page("reference/registers.md")
 
 
 def test_ci_runs_the_readme_test_command():
@@ -51,12 +66,20 @@ def test_ci_runs_the_readme_test_command():
 
 
 def test_pictures_exist():
-    for picture in re.findall(r"\]\((docs/[^)]+\.png)\)", README):
-        assert (ROOT / picture).is_file(), picture
+    """Every picture a page shows is in the repository (where the page's link says), and every
+    figure in docs/ is shown somewhere."""
+    shown = set()
+    for path, text in every_page():
+        for picture in re.findall(r"\]\(([^)\s]+\.png)\)", text):
+            assert (path.parent / picture).is_file(), (path, picture)
+            shown.add((path.parent / picture).resolve())
+    figures = {path.resolve() for path in DOCS.rglob("*.png") if "_build" not in path.parts}
+    assert shown == figures
 
 
 def test_laser_pin_table_matches_the_platform():
-    rows = re.findall(r"^\| PMOD(\w+) ([\d, ]+) \| ([\d, ]+) \| `(\w+)[^`]*`", README, re.M)
+    rows = re.findall(r"^\| PMOD(\w+) ([\d, ]+) \| ([\d, ]+) \| `(\w+)[^`]*`",
+                      page("hardware/wiring.md"), re.M)
     connectors = {"2": 2, "1A": 0, "1B": 1}
     seen = {}
     for connector, pmod_pins, fpga_pins, signal in rows:
@@ -73,7 +96,8 @@ def test_laser_pin_table_matches_the_platform():
 
 
 def test_sampling_table_is_what_the_analysis_measures():
-    """The README's Gaussian-against-uniform figures come from `galvoscan analyze`."""
+    """The results page's Gaussian-against-uniform figures come from `galvoscan analyze`."""
+    results = page("results/analyses.md")
     from galvoscan.analysis.study import Setup, run_spiral
     from galvoscan.gateware.sources.spiral_table import SpiralTable
     setup = Setup()
@@ -81,47 +105,73 @@ def test_sampling_table_is_what_the_analysis_measures():
     uniform = run_spiral(setup, table=SpiralTable(sampling="uniform"),
                          dwell=gaussian["dwell"]).metrics
     assert f"| 50 × 20 mm, dwell {gaussian['dwell']} ({gaussian['duration_s']:.2f} s a pattern)" \
-        in README
+        in results
     assert f"| CV of 1 mm blocks | **{gaussian['cv_1mm']:.2f}** | {uniform['cv_1mm']:.2f} |" \
-        in README
+        in results
     assert (f"| edge / centre dose (mean, p99) | {gaussian['edge_centre']:.2f}, "
             f"{gaussian['edge_peak']:.2f} | {uniform['edge_centre']:.2f}, "
-            f"{uniform['edge_peak']:.2f} |") in README
+            f"{uniform['edge_peak']:.2f} |") in results
 
 
 def test_correction_table_is_what_the_study_measures():
-    """The README's residual table and photo figures come from `galvoscan correct study`."""
+    """The correction page's residual table and photo figures come from `galvoscan correct
+    study`."""
+    correction = page("user/correction.md")
     from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
     study = run_study()
-    assert markdown_table(study) in README
+    assert markdown_table(study) in correction
     values = photo_sentence_values(study)
     assert (f"to within {values['PHOTO_MAX']} units (mean {values['PHOTO_MEAN']}; "
-            f"{values['PHOTO_UPP']} units a pixel)") in README
-    assert f"removes {values['PHOTO_REMOVED']} of the mean error" in README
+            f"{values['PHOTO_UPP']} units a pixel)") in correction
+    assert f"removes {values['PHOTO_REMOVED']} of the mean error" in correction
 
 
 def test_benchmark_table_is_what_bench_recorded():
-    """One benchmark table, written by `galvoscan bench --readme` from docs/bench.json."""
+    """One benchmark table, written by `galvoscan bench --docs` from docs/bench.json."""
     import json
-    from galvoscan.bench import readme_block
+    from galvoscan.bench import docs_block
     result = json.loads((ROOT / "docs" / "bench.json").read_text())
-    assert readme_block(result) in README
-    assert README.count("| what | figure |") == 1
+    assert docs_block(result) in page("reference/benchmarks.md")
+    assert sum(text.count("| what | figure |") for _, text in every_page()) == 1
 
 
 def test_every_port_of_the_top_is_listed():
     from galvoscan.gateware.top import GalvoScanTop
     top = GalvoScanTop(clk_freq=12e6)
-    paragraph = README[README.index("- **System top**"):]
+    architecture = page("design/architecture.md")
+    paragraph = architecture[architecture.index("- **System top**"):]
     paragraph = paragraph[:paragraph.index("\n\n")]
     for name in top.signature.members:
         assert f"`{name}" in paragraph, name
 
 
-def test_readme_cites_papers_not_private_files():
+def test_docs_cite_papers_not_private_files():
     """A reader can follow every reference: the papers by name, no files outside the repo."""
-    assert "SPEC" not in README
-    assert not re.search(r"\b00[0134]'s\b|\(00[0134]\)|\b00[0134] \(paper\)", README)
-    assert "## References" in README
+    for path, text in every_page():
+        assert "SPEC" not in text, path
+        assert not re.search(r"\b00[0134]'s\b|\(00[0134]\)|\b00[0134] \(paper\)", text), path
+    references = page("references.md")
     for author in ("Dai Jinyue", "Wan Hui", "Liao Ping", "Zhu Tieshuang"):
-        assert author in README
+        assert author in references
+
+
+def test_profile_page_lists_the_profiles_tables(tmp_path):
+    """The profile page's table has a row for each table `machine init` writes, and no other."""
+    import tomllib
+    from galvoscan.cli import main
+    written = tmp_path / "galvoscan.toml"
+    assert main(["machine", "init", str(written)]) == 0
+    tables = set(tomllib.loads(written.read_text()))
+    rows = re.findall(r"^\| `\[(\w+)\]` \|", page("user/profile.md"), re.M)
+    assert sorted(rows) == sorted(tables)
+
+
+def test_readme_links_to_every_page():
+    """The README's map of the docs names every page, and every file it links to is there."""
+    links = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", README)
+    local = [link for link in links if "://" not in link]
+    for link in local:
+        assert (ROOT / link).exists(), link
+    pages = {path.relative_to(ROOT).as_posix() for path in DOCS.rglob("*.md")
+             if "_build" not in path.parts and path.name != "index.md"}
+    assert pages <= set(local), pages - set(local)
