@@ -2,12 +2,22 @@
 """The README and the docs stay true: their pin tables, register map, commands, figures and
 tables match the code. Each test reads the page that holds its table."""
 
+import json
 from pathlib import Path
 import re
+import tomllib
+
+import pytest
 
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
+from galvoscan.analysis.study import Setup, run_spiral
+from galvoscan.bench import DOCS_END, DOCS_START, docs_block, write_docs
+from galvoscan.cli import main
 from galvoscan.cli.link import register_table
+from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
+from galvoscan.gateware.sources.spiral_table import SpiralTable
+from galvoscan.gateware.top import GalvoScanTop
 from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
                                            LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
 
@@ -98,8 +108,6 @@ def test_laser_pin_table_matches_the_platform():
 def test_sampling_table_is_what_the_analysis_measures():
     """The results page's Gaussian-against-uniform figures come from `galvoscan analyze`."""
     results = page("results/analyses.md")
-    from galvoscan.analysis.study import Setup, run_spiral
-    from galvoscan.gateware.sources.spiral_table import SpiralTable
     setup = Setup()
     gaussian = run_spiral(setup).metrics
     uniform = run_spiral(setup, table=SpiralTable(sampling="uniform"),
@@ -117,7 +125,6 @@ def test_correction_table_is_what_the_study_measures():
     """The correction page's residual table and photo figures come from `galvoscan correct
     study`."""
     correction = page("user/correction.md")
-    from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
     study = run_study()
     assert markdown_table(study) in correction
     values = photo_sentence_values(study)
@@ -128,15 +135,12 @@ def test_correction_table_is_what_the_study_measures():
 
 def test_benchmark_table_is_what_bench_recorded():
     """One benchmark table, written by `galvoscan bench --docs` from docs/bench.json."""
-    import json
-    from galvoscan.bench import docs_block
     result = json.loads((ROOT / "docs" / "bench.json").read_text())
     assert docs_block(result) in page("reference/benchmarks.md")
     assert sum(text.count("| what | figure |") for _, text in every_page()) == 1
 
 
 def test_every_port_of_the_top_is_listed():
-    from galvoscan.gateware.top import GalvoScanTop
     top = GalvoScanTop(clk_freq=12e6)
     architecture = page("design/architecture.md")
     paragraph = architecture[architecture.index("- **System top**"):]
@@ -157,8 +161,6 @@ def test_docs_cite_papers_not_private_files():
 
 def test_profile_page_lists_the_profiles_tables(tmp_path):
     """The profile page's table has a row for each table `machine init` writes, and no other."""
-    import tomllib
-    from galvoscan.cli import main
     written = tmp_path / "galvoscan.toml"
     assert main(["machine", "init", str(written)]) == 0
     tables = set(tomllib.loads(written.read_text()))
@@ -175,3 +177,32 @@ def test_readme_links_to_every_page():
     pages = {path.relative_to(ROOT).as_posix() for path in DOCS.rglob("*.md")
              if "_build" not in path.parts and path.name != "index.md"}
     assert pages <= set(local), pages - set(local)
+
+
+def test_bench_docs_rewrites_the_table_and_keeps_the_prose(tmp_path):
+    """`bench --docs PAGE` replaces what lies between the marker lines and nothing else."""
+    text = page("reference/benchmarks.md")
+    before, after = text[:text.index(DOCS_START)], text[text.index(DOCS_END) + len(DOCS_END):]
+    result = json.loads((DOCS / "bench.json").read_text())
+    result["date"] = "2031-01-02"
+    copy = tmp_path / "benchmarks.md"
+    copy.write_text(text)
+    write_docs(copy, result)
+    assert copy.read_text() == before + docs_block(result) + after
+    assert "on 2031-01-02:" in copy.read_text()
+
+
+@pytest.mark.parametrize("content, extra, message", [
+    ("# Benchmarks\n\nno table here\n", [], "has no benchmark table to rewrite"),
+    (None, ["--quick"], "--docs takes a full run's figures"),
+])
+def test_bench_docs_refuses_before_the_run(tmp_path, capsys, content, extra, message):
+    """A page without the marker lines, or a quick run, is one line before any measuring."""
+    target = tmp_path / "benchmarks.md"
+    target.write_text(page("reference/benchmarks.md") if content is None else content)
+    with pytest.raises(SystemExit) as exit:
+        main(["bench", "--docs", str(target), *extra])
+    assert exit.value.code not in (0, None)
+    err = capsys.readouterr().err
+    assert message in str(exit.value.code) + err
+    assert "bench:" not in err   # no step of the run was started
