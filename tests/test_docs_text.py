@@ -179,6 +179,21 @@ def test_readme_links_to_every_page():
     assert pages <= set(local), pages - set(local)
 
 
+def heading_anchors(text):
+    """The anchors MyST makes of a page's headings (``myst_heading_anchors``): lower case,
+    punctuation dropped, spaces as hyphens."""
+    return {re.sub(r"[^\w\- ]", "", title).strip().lower().replace(" ", "-")
+            for title in re.findall(r"^#{1,3} (.+)$", text, re.M)}
+
+
+def test_readme_anchors_into_the_docs_resolve():
+    """The README is not part of the Sphinx build, so its links to a heading are checked here."""
+    anchored = re.findall(r"\]\((docs/[^)#\s]+\.md)#([^)\s]+)\)", README)
+    assert anchored
+    for link, anchor in anchored:
+        assert anchor in heading_anchors((ROOT / link).read_text()), (link, anchor)
+
+
 def test_bench_docs_rewrites_the_table_and_keeps_the_prose(tmp_path):
     """`bench --docs PAGE` replaces what lies between the marker lines and nothing else."""
     text = page("reference/benchmarks.md")
