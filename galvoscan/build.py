@@ -34,7 +34,7 @@ BOARDS = {
 }
 
 #: Scan modes a board's bitstream has unless told otherwise: the UP5K holds all three with the
-#: correction stage (docs/design/fit-timing.md, "Fit").
+#: correction stage (README "Resources").
 DEFAULT_MODES = {
     "icebreaker": ("spiral", "raster", "vector"),
     "icestick": ICESTICK_MODES,
