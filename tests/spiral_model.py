@@ -1,5 +1,5 @@
-"""A plain Python model of the spiral scanner, written from Dai & Tang 2020 and README "What it
-does", not from the gateware.
+"""A plain Python model of the spiral scanner, written from Dai & Tang 2020 and the docs'
+architecture page (docs/design/architecture.md), not from the gateware.
 
 Given the two tables and the settings, it lists the positions a scan head receives, frame by
 frame from power-up.
@@ -7,7 +7,7 @@ frame from power-up.
 
 PARK = (32768, 32768)
 
-#: Longest dwell that is interpolated (README "Held points"): longer ones are held.
+#: Longest dwell that is interpolated (docs/results/analyses.md): longer ones are held.
 MAX_INTERPOLATED_DWELL = 255
 
 

@@ -264,7 +264,7 @@ def test_gaussian_default_beats_uniform_sampling_on_the_default_field():
 
 
 def test_interpolation_smooths_the_mirror_on_the_default_field():
-    """README "Held points": peak spot speed within 1.2 times the mean (from about 1.7), lower
+    """Results, "Held points": peak spot speed within 1.2 times the mean (from about 1.7), lower
     peak acceleration, 1 mm blocks no less even."""
     setup = Setup()
     held = run_spiral(setup, interpolation="off").metrics
@@ -332,7 +332,7 @@ def test_field_parser_takes_any_text(text):
 
 def test_delays_take_the_burnt_dot_and_the_corner_within_20_percent():
     """Through the JD1403 model at 1 m/s: without delays a burnt dot at the line's start (over
-    twice the mid-line dose); with the README's recommended delays (the defaults) the start,
+    twice the mid-line dose); with the docs' recommended delays (the defaults) the start,
     the corner and the end within 20 % of it, and the line's ends within a spot of their set
     points."""
     from galvoscan.analysis.delays import NONE, DelaySettings, corner_job_dose

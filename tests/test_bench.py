@@ -50,7 +50,7 @@ def test_suite_needs_a_checkout(tmp_path, capsys):
 
 
 def test_table_shows_seeds_proofs_and_suite():
-    """The README table's rows for the three placer seeds, all proofs and the suite, from
+    """The benchmark table's rows for the three placer seeds, all proofs and the suite, from
     figures typed here."""
     from galvoscan.bench import table
     board = {"modes": ["spiral"], "correction_nodes": 17, "clock_mhz": 12, "bit_rate_mhz": 2,

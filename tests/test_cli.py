@@ -316,7 +316,7 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
 
 
 def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
-    """A 512-point table (the README's advice for coverage): its register ranges come from the
+    """A 512-point table (the docs' advice for coverage): its register ranges come from the
     build's table, and the spiral from the simulated wires is the model's."""
     code, out, _ = run(capsys, "regs", "--table-points", "512", "--json")
     regs = {r["name"]: r for r in json.loads(out)}

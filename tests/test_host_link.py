@@ -117,7 +117,7 @@ def test_client_refuses_what_the_board_would_reject():
 
 
 def test_encoding_is_the_documented_frame():
-    # seq, address, data, x, y, CRC-16/CCITT: the tests' own encoder of the README's frame.
+    # seq, address, data, x, y, CRC-16/CCITT: the tests' own encoder of the host-link page's frame.
     assert encode_write("dwell", 0x1234, seq=9) == command(9, BY_NAME["dwell"].address, 0x1234)
     assert encode_read("errors", tag=3) == command(3, BY_NAME["errors"].address, read=True)
 @pytest.mark.parametrize("kind", ["uart", "spi"])

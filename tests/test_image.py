@@ -1,5 +1,5 @@
 """Job images (galvoscan/jobs/image.py): the bytes the player reads, checked field by field
-against the format as the README gives it, and bad files refused in one line."""
+against the format as docs/user/standalone.md gives it, and bad files refused in one line."""
 
 import struct
 import zlib

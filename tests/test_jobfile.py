@@ -167,7 +167,7 @@ def test_a_job_file_marks_the_wires_its_command_line_does(job_folder, capsys):
 
 
 def test_the_readmes_plate_plans(tmp_path, monkeypatch, capsys):
-    """docs/marking/plate.toml, the README's picture: it plans, in its three layers, the
+    """docs/marking/plate.toml, the marking page's picture: it plans, in its three layers, the
     serial counter left alone by a plan."""
     from pathlib import Path
     plate = Path(__file__).resolve().parents[1] / "docs" / "marking" / "plate.toml"

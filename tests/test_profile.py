@@ -136,7 +136,7 @@ def test_template_explains_every_key(section, key):
 
 
 def test_template_guide_comment_points_to_the_wiring():
-    assert "README's wiring table" in profile_text()
+    assert "the wiring table (docs/hardware/wiring.md)" in profile_text()
 
 
 def test_every_key_is_known():

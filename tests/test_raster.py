@@ -1,6 +1,6 @@
 # amaranth: UnusedElaboratable=no
 """Raster mode (gateware/sources/raster.py): the sequencer alone against a plain Python model
-written here from its docstring and the README's register table, and the whole board's raster
+written here from its docstring and the docs' register table, and the whole board's raster
 (the points decoded from the XY2-100 wires, the laser pulses counted on the DB25 pins) against
 the analysis model :func:`galvoscan.analysis.patterns.raster_frames`."""
 

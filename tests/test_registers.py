@@ -126,7 +126,7 @@ class RegisterModel:
 
     A write is taken if the register exists, is not read-only, and the value is in range (and,
     for ``mode``, a mode built); a queue write also needs room, and so does a write of 1 to
-    ``cor_write`` (its stage must not hold a waiting write: README register table). ``rw`` and
+    ``cor_write`` (its stage must not hold a waiting write: docs/reference/registers.md). ``rw`` and
     ``queue`` registers read back what was written; a strobe reads 0 and pulses for one clock
     after a write of 1; read-only registers read their inputs. Unknown addresses are refused
     both ways.

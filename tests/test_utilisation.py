@@ -1,5 +1,5 @@
 """Cells by block (galvoscan/utilisation.py), on a small build whose blocks' DSPs and RAMs the
-README states: one DSP per axis in the scale stage, the two spiral tables in block RAM."""
+the docs state: one DSP per axis in the scale stage, the two spiral tables in block RAM."""
 
 import pytest
 

@@ -100,7 +100,7 @@ def test_without_delays_the_laser_follows_the_points_as_before():
     assert len(edges) == 4                      # the square, then the dot
 
 
-# A typical 10 mm head (README "Laser and scanner delays"): the RTC's figures.
+# A typical 10 mm head (docs/design/modes.md, "Laser and scanner delays"): the RTC's figures.
 TYPICAL = {"on": 100, "off": 150, "mark": 200, "polygon": 100, "jump": 300}
 
 

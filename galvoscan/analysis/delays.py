@@ -1,7 +1,7 @@
 """What the RTC delays do to a marked line and a corner, through the galvo model.
 
-A vector job as the board runs it (Wan et al.'s points, each held for N pulses; README "Laser and
-scanner delays" for the delays), frame by frame, goes through :class:`~.galvo.GalvoModel`; the
+A vector job as the board runs it (Wan et al.'s points, each held for N pulses; the delays as
+docs/design/modes.md gives them), frame by frame, goes through :class:`~.galvo.GalvoModel`; the
 pulses fall where the mirror really is. The dose is taken along the marked path, at spot scale:
 a line's start and end and the corner between two lines against the dose mid-line.
 

@@ -166,7 +166,7 @@ def add_parsers(commands):
                             "one with --modes")
     build.add_argument("--modes", type=_modes, default=None, metavar="MODE,…",
                        help="scan modes to build: spiral, raster, vector (default: the "
-                            "board's, see README); fewer take less of the FPGA")
+                            "board's, see docs/reference/cli.md); fewer take less of the FPGA")
     correction = build.add_mutually_exclusive_group()
     correction.add_argument("--correction", metavar="FILE",
                             help="distortion correction table the bitstream starts with "

@@ -325,7 +325,7 @@ def add_parsers(commands):
                       help="plot the offsets (.png, .svg, .pdf, …)")
     show.set_defaults(run=_cmd_show)
 
-    study = steps.add_parser("study", help="the README's calibration study (synthetic head)",
+    study = steps.add_parser("study", help="the docs' calibration study (synthetic head)",
                              description="Calibrate a synthetic head every way galvoscan can "
                                          "and tabulate the residual errors.")
     study.add_argument("--nodes", type=_nodes, default=17, help=nodes_help)

@@ -10,8 +10,8 @@ __all__ = ["add_parsers", "register_table"]
 
 
 def register_table(registers=None):
-    """The register map as a Markdown table (``galvoscan regs``; the README carries the host's
-    view, the default)."""
+    """The register map as a Markdown table (``galvoscan regs``; docs/reference/registers.md
+    carries the host's view, the default)."""
     from ..gateware.host.regmap import REGISTERS
     lines = ["| address | name | access | reset | range | unit | description |",
              "|---|---|---|---|---|---|---|"]

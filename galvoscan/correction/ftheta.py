@@ -7,7 +7,7 @@ pincushion and Y into a barrel. Liao & Chen give where the spot really lands (:f
 the angle corrections that put it where it was asked (:func:`exact_compensation`) and a
 polynomial fitted to them (:func:`polynomial_compensation`), with eight points in their Table 1.
 
-Two findings from reproducing Table 1 (README "Distortion correction"):
+Two findings from reproducing Table 1 (docs/user/correction.md):
 
 * the exact-formula columns (Δφ'x, Δφ'y) are reproduced to the 4 digits printed;
 * with the coefficients as printed (−3.242e−8, −1.024e−7, 6.515e−8, −1.222e−5; x, y in mm) the

@@ -1,4 +1,4 @@
-"""The correction study the README reports: Zhu & Zhang's experiment on a synthetic scan head.
+"""The correction study in docs/user/correction.md: Zhu & Zhang's experiment on a synthetic head.
 
 A head with Liao & Chen's f-theta distortion, scaled to Zhu & Zhang's size (1400 units at
 worst over the 50 000-unit calibrated square), is calibrated with 3 × 3 … 11 × 11 grids of
@@ -75,7 +75,7 @@ def run_study(*, nodes=17, seed=1, photo_grid=9, progress=None):
 
 
 def photo_sentence_values(study):
-    """The photo figures the README quotes, formatted as it quotes them."""
+    """The photo figures the docs quote, formatted as it quotes them."""
     photo = study["photo"]
     return {"PHOTO_MAX": f"{photo['centre_error_max']:.0f}",
             "PHOTO_MEAN": f"{photo['centre_error_mean']:.0f}",
@@ -84,7 +84,7 @@ def photo_sentence_values(study):
 
 
 def markdown_table(study):
-    """The README's residual table."""
+    """The docs' residual table."""
     head = study["head"]
     lines = ["| calibration | max error | mean error | mean removed |",
              "|---|---:|---:|---:|",

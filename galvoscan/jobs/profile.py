@@ -100,7 +100,7 @@ class LaserSection:
 
 @dataclass(frozen=True)
 class GalvoSection:
-    """The head's delays as SCANLAB's RTC defines them (README "Laser and scanner delays"): the
+    """The head's delays as SCANLAB's RTC defines them (docs/design/modes.md): the
     defaults are what ``galvoscan analyze --delays`` finds for Wan et al.'s JD1403 galvo (a
     10 mm head lagging its set point by some 80 µs) at 1 m/s: a line's ends and corners within
     20 % of its mid-line dose."""

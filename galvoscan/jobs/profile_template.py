@@ -77,7 +77,7 @@ prr_khz = [{n(d.laser.prr_khz[0])}, {n(d.laser.prr_khz[1])}]
 spot_mm = {n(d.laser.spot_mm)}
 # true if the machine has a guide (red pointer) laser wired to the board's guide output
 # (laser_guide), to frame a job before marking; false if not. The guide laser's pin on
-# the DB25 differs between lasers: see the README's wiring table.
+# the DB25 differs between lasers: see the wiring table (docs/hardware/wiring.md).
 guide = {"true" if d.laser.guide else "false"}
 
 [galvo]
@@ -95,7 +95,7 @@ max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}
 # The laser and scanner delays of SCANLAB's RTC (EzCad's start, end and corner TC): the
 # mirrors lag the set point by their tracking error (about 100-200 µs on a 10 mm head), so
 # without them a line starts and ends with a burnt dot and corners over-dose. Tune them with
-# a test mark (README "Laser and scanner delays"). The laser delays are placed to the
+# a test mark (docs/design/modes.md, "Laser and scanner delays"). The laser delays are placed to the
 # board's clock; mark and polygon delays are rounded up to {FRAME_US} µs frames.
 # Laser on this long after a mark's first point; negative: that much before.
 # {s("galvo", "laser_on_delay_us")} µs.

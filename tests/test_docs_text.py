@@ -1,0 +1,227 @@
+# amaranth: UnusedElaboratable=no
+"""The README and the docs stay true: their pin tables, register map, commands, figures and
+tables match the code. Each test reads the page that holds its table."""
+
+import json
+from pathlib import Path
+import re
+
+import pytest
+
+from amaranth_boards.icebreaker import ICEBreakerPlatform
+
+from galvoscan.analysis.study import Setup, run_spiral
+from galvoscan.bench import DOCS_END, DOCS_START, docs_block, write_docs
+from galvoscan.cli import main
+from galvoscan.cli.link import register_table
+from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
+from galvoscan.gateware.sources.spiral_table import SpiralTable
+from galvoscan.gateware.top import GalvoScanTop
+
+try:
+    import tomllib  # novermin: tomli below where it is missing
+except ModuleNotFoundError:                      # Python < 3.11
+    import tomli as tomllib
+from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
+                                           LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
+
+
+ROOT = Path(__file__).parent.parent
+DOCS = ROOT / "docs"
+README = (ROOT / "README.md").read_text()
+
+
+def page(name):
+    """The text of the docs page ``name`` (a path under docs/)."""
+    return (DOCS / name).read_text()
+
+
+def every_page():
+    """The README and every docs page: (path, text)."""
+    files = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+    return [(path, path.read_text()) for path in files if "_build" not in path.parts]
+
+
+def pmod_fpga_pin(number, pmod_pin):
+    """FPGA pin of a PMOD pin, from amaranth-boards' iCEBreaker definition."""
+    connector, = (c for c in ICEBreakerPlatform.connectors
+                  if (c.name, c.number) == ("pmod", number))
+    return int(connector.mapping[str(pmod_pin)])
+
+
+def test_pin_table_matches_the_platform():
+    rows = re.findall(r"^\| (\d+) \| (\d+) \| `xy2_(\w+)` \|$", page("hardware/wiring.md"), re.M)
+    assert rows
+    assert {signal: int(pmod) for pmod, _, signal in rows} == XY2_PMOD_PINS
+    for pmod, fpga, _ in rows:
+        assert pmod_fpga_pin(0, pmod) == int(fpga)
+
+
+def test_spi_pin_table_matches_the_platform():
+    rows = re.findall(r"^\| (\d+) \| (\d+) \| `spi_(\w+)`", page("hardware/wiring.md"), re.M)
+    assert rows
+    assert {signal: int(pmod) for pmod, _, signal in rows} == \
+        {name: pin for name, (pin, _) in SPI_PMOD_PINS.items()}
+    for pmod, fpga, _ in rows:
+        assert pmod_fpga_pin(1, pmod) == int(fpga)
+
+
+def test_register_table_is_the_register_map():
+    assert register_table() in page("reference/registers.md")
+
+
+def test_ci_runs_the_readme_test_command():
+    commands = re.findall(r"```sh\n(.+?)\n```", README)
+    assert len(commands) == 2
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert commands[1] in ci
+    assert "pytest -W error" in commands[1]
+    assert "galvoscan build" in commands[0] and "galvoscan sim" in commands[0]
+
+
+def test_pictures_exist():
+    """Every picture a page shows is in the repository (where the page's link says), and every
+    figure in docs/ is shown somewhere."""
+    shown = set()
+    for path, text in every_page():
+        for picture in re.findall(r"\]\(([^)\s]+\.png)\)", text):
+            assert (path.parent / picture).is_file(), (path, picture)
+            shown.add((path.parent / picture).resolve())
+    figures = {path.resolve() for path in DOCS.rglob("*.png") if "_build" not in path.parts}
+    assert shown == figures
+
+
+def test_laser_pin_table_matches_the_platform():
+    rows = re.findall(r"^\| PMOD(\w+) ([\d, ]+) \| ([\d, ]+) \| `(\w+)[^`]*`",
+                      page("hardware/wiring.md"), re.M)
+    connectors = {"2": 2, "1A": 0, "1B": 1}
+    seen = {}
+    for connector, pmod_pins, fpga_pins, signal in rows:
+        pmod_pins = [int(p) for p in pmod_pins.split(",")]
+        fpga_pins = [int(p) for p in fpga_pins.split(",")]
+        number = connectors[connector]
+        for pmod, fpga in zip(pmod_pins, fpga_pins):
+            assert pmod_fpga_pin(number, pmod) == fpga
+        seen.setdefault(signal, []).extend((number, p) for p in pmod_pins)
+    for name, (number, pins, _) in LASER_PMOD_PINS.items():
+        assert seen[f"laser_{name}"] == [(number, int(p)) for p in pins.split()]
+    assert seen["interlock_open"] == [(INTERLOCK_PMOD_PIN[0], int(INTERLOCK_PMOD_PIN[1]))]
+    assert seen["laser_alarm"] == [(ALARM_PMOD_PINS[0], int(p)) for p in ALARM_PMOD_PINS[1].split()]
+
+
+def test_sampling_table_is_what_the_analysis_measures():
+    """The results page's Gaussian-against-uniform figures come from `galvoscan analyze`."""
+    results = page("results/analyses.md")
+    setup = Setup()
+    gaussian = run_spiral(setup).metrics
+    uniform = run_spiral(setup, table=SpiralTable(sampling="uniform"),
+                         dwell=gaussian["dwell"]).metrics
+    assert f"| 50 × 20 mm, dwell {gaussian['dwell']} ({gaussian['duration_s']:.2f} s a pattern)" \
+        in results
+    assert f"| CV of 1 mm blocks | **{gaussian['cv_1mm']:.2f}** | {uniform['cv_1mm']:.2f} |" \
+        in results
+    assert (f"| edge / centre dose (mean, p99) | {gaussian['edge_centre']:.2f}, "
+            f"{gaussian['edge_peak']:.2f} | {uniform['edge_centre']:.2f}, "
+            f"{uniform['edge_peak']:.2f} |") in results
+
+
+def test_correction_table_is_what_the_study_measures():
+    """The correction page's residual table and photo figures come from `galvoscan correct
+    study`."""
+    correction = page("user/correction.md")
+    study = run_study()
+    assert markdown_table(study) in correction
+    values = photo_sentence_values(study)
+    assert (f"to within {values['PHOTO_MAX']} units (mean {values['PHOTO_MEAN']}; "
+            f"{values['PHOTO_UPP']} units a pixel)") in correction
+    assert f"removes {values['PHOTO_REMOVED']} of the mean error" in correction
+
+
+def test_benchmark_table_is_what_bench_recorded():
+    """One benchmark table, written by `galvoscan bench --docs` from docs/bench.json."""
+    result = json.loads((ROOT / "docs" / "bench.json").read_text())
+    assert docs_block(result) in page("reference/benchmarks.md")
+    assert sum(text.count("| what | figure |") for _, text in every_page()) == 1
+
+
+def test_every_port_of_the_top_is_listed():
+    top = GalvoScanTop(clk_freq=12e6)
+    architecture = page("design/architecture.md")
+    paragraph = architecture[architecture.index("- **System top**"):]
+    paragraph = paragraph[:paragraph.index("\n\n")]
+    for name in top.signature.members:
+        assert f"`{name}" in paragraph, name
+
+
+def test_docs_cite_papers_not_private_files():
+    """A reader can follow every reference: the papers by name, no files outside the repo."""
+    for path, text in every_page():
+        assert "SPEC" not in text, path
+        assert not re.search(r"\b00[0134]'s\b|\(00[0134]\)|\b00[0134] \(paper\)", text), path
+    references = page("references.md")
+    for author in ("Dai Jinyue", "Wan Hui", "Liao Ping", "Zhu Tieshuang"):
+        assert author in references
+
+
+def test_profile_page_lists_the_profiles_tables(tmp_path):
+    """The profile page's table has a row for each table `machine init` writes, and no other."""
+    written = tmp_path / "galvoscan.toml"
+    assert main(["machine", "init", str(written)]) == 0
+    tables = set(tomllib.loads(written.read_text()))
+    rows = re.findall(r"^\| `\[(\w+)\]` \|", page("user/profile.md"), re.M)
+    assert sorted(rows) == sorted(tables)
+
+
+def test_readme_links_to_every_page():
+    """The README's map of the docs names every page, and every file it links to is there."""
+    links = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", README)
+    local = [link for link in links if "://" not in link]
+    for link in local:
+        assert (ROOT / link).exists(), link
+    pages = {path.relative_to(ROOT).as_posix() for path in DOCS.rglob("*.md")
+             if "_build" not in path.parts and path.name != "index.md"}
+    assert pages <= set(local), pages - set(local)
+
+
+def heading_anchors(text):
+    """The anchors MyST makes of a page's headings (``myst_heading_anchors``): lower case,
+    punctuation dropped, spaces as hyphens."""
+    return {re.sub(r"[^\w\- ]", "", title).strip().lower().replace(" ", "-")
+            for title in re.findall(r"^#{1,3} (.+)$", text, re.M)}
+
+
+def test_readme_anchors_into_the_docs_resolve():
+    """The README is not part of the Sphinx build, so its links to a heading are checked here."""
+    anchored = re.findall(r"\]\((docs/[^)#\s]+\.md)#([^)\s]+)\)", README)
+    assert anchored
+    for link, anchor in anchored:
+        assert anchor in heading_anchors((ROOT / link).read_text()), (link, anchor)
+
+
+def test_bench_docs_rewrites_the_table_and_keeps_the_prose(tmp_path):
+    """`bench --docs PAGE` replaces what lies between the marker lines and nothing else."""
+    text = page("reference/benchmarks.md")
+    before, after = text[:text.index(DOCS_START)], text[text.index(DOCS_END) + len(DOCS_END):]
+    result = json.loads((DOCS / "bench.json").read_text())
+    result["date"] = "2031-01-02"
+    copy = tmp_path / "benchmarks.md"
+    copy.write_text(text)
+    write_docs(copy, result)
+    assert copy.read_text() == before + docs_block(result) + after
+    assert "on 2031-01-02:" in copy.read_text()
+
+
+@pytest.mark.parametrize("content, extra, message", [
+    ("# Benchmarks\n\nno table here\n", [], "has no benchmark table to rewrite"),
+    (None, ["--quick"], "--docs takes a full run's figures"),
+])
+def test_bench_docs_refuses_before_the_run(tmp_path, capsys, content, extra, message):
+    """A page without the marker lines, or a quick run, is one line before any measuring."""
+    target = tmp_path / "benchmarks.md"
+    target.write_text(page("reference/benchmarks.md") if content is None else content)
+    with pytest.raises(SystemExit) as exit:
+        main(["bench", "--docs", str(target), *extra])
+    assert exit.value.code not in (0, None)
+    err = capsys.readouterr().err
+    assert message in str(exit.value.code) + err
+    assert "bench:" not in err   # no step of the run was started
