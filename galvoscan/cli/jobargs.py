@@ -5,8 +5,8 @@ import argparse
 import contextlib
 import sys
 
-from .args import (add_backend_option, baud, fail, number_in, open_transport, power_percent,
-                   prr_khz, simulated_board, speed_mm_s)
+from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
+from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -32,13 +32,8 @@ def pair_mm(what):
 def add_job_options(parser):
     """``--speed``, ``--power``, ``--prr``, ``--passes`` (defaults from the machine profile)."""
     job = parser.add_argument_group("laser and speed (defaults: the machine profile's)")
-    job.add_argument("--speed", type=speed_mm_s, metavar="MM_S",
-                     help="marking speed in mm/s")
-    job.add_argument("--power", type=power_percent, metavar="PERCENT",
-                     help="laser power in %% of the laser's maximum")
-    job.add_argument("--prr", type=prr_khz(), metavar="KHZ",
-                     help="pulse repetition rate in kHz (the board's 20 … 200; the profile's "
-                          "laser may allow less)")
+    for setting in (SPEED, POWER, PRR):
+        add_setting(job, setting, default_text="the profile's")
     return job
 
 
@@ -59,10 +54,8 @@ def add_job_link_options(parser):
                        help="run on the simulated board (see --backend for its speed)")
     link.add_argument("--baud", type=baud, default=None,
                       help="serial rate of the bitstream (default: the profile's)")
-    link.add_argument("--timeout", type=number_in("timeout", 0.01, 600), default=None,
-                      metavar="S", help="seconds to wait for an answer (default: the "
-                                        "profile's; with --sim, from the simulator's "
-                                        "measured speed)")
+    add_setting(link, TIMEOUT, default_text="the profile's; with --sim, from the simulator's "
+                                             "measured speed")
     add_backend_option(link, default=None)
 
 

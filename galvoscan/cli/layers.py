@@ -7,11 +7,10 @@ line."""
 import argparse
 
 from ..gateware.host.regmap import BY_NAME
-from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
 from ..jobs.profile_keys import DELAY_KEYS
-from .args import (contour_fill, fail, hatch_set, number_in, passes, power_percent, prr_khz,
-                   register_int, speed_mm_s)
+from ..settings.laser import JOB_SETTINGS
+from .args import contour_fill, fail, hatch_set, register_int, setting_type
 
 
 __all__ = ["add_layer_option", "layer_from_words", "layer_from_table", "LAYER_KEYS",
@@ -44,13 +43,12 @@ def _hatch(text):
 #: the laser, mark and polygon delays (else the profile's).
 _DELAYS = ("jump_delay", *DELAY_KEYS.values())
 
-#: key → (Layer field, the type that reads it, what it is). Delays are registers, their
+#: key → (Layer field, the type that reads it, what it is). The job's settings are
+#: :mod:`galvoscan.settings.laser`'s (their ranges and refusals); delays are registers, their
 #: ranges the register map's.
 LAYER_KEYS = {
-    "speed": ("speed_mm_s", speed_mm_s, "mm/s"),
-    "power": ("power_percent", power_percent, "% of the laser's maximum"),
-    "prr": ("prr_khz", prr_khz(), "kHz"),
-    "passes": ("passes", passes, "times the layer is marked"),
+    **{key: (setting.name, setting_type(setting), setting.unit or setting.help)
+       for key, setting in JOB_SETTINGS.items() if key in ("speed", "power", "prr", "passes")},
     "pulses": ("pulses_per_point", register_int("pulses_per_point", "pulses per point"),
                "laser pulses a point (the pitch then follows the speed)"),
     "hatch": ("hatch", _hatch, "SPACING[,ANGLE[,STEP[,OFFSET]]], repeated for more sets; "
@@ -58,9 +56,8 @@ LAYER_KEYS = {
     "hatch_lines": ("hatch_lines", _hatch_lines, "serpentine, oneway or joined"),
     "contour": ("contour", contour_fill, "SPACING[,COUNT]"),
     "outline": ("outline", _yes_no, "yes or no"),
-    "wobble": ("wobble_um", number_in("wobble", 0, 10_000), "µm across (0: none)"),
-    "wobble_along": ("wobble_along_um", number_in("wobble along", 0, 10_000), "µm"),
-    "wobble_hz": ("wobble_hz", number_in("wobble hz", 1, WOBBLE_MAX_HZ), "Hz"),
+    **{key: (setting.name, setting_type(setting), setting.unit)
+       for key, setting in JOB_SETTINGS.items() if key.startswith("wobble")},
     **{register: (register, register_int(register, register.replace("_", " ")),
                   BY_NAME[register].unit) for register in _DELAYS},
 }

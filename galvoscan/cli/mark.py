@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
-from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
-                   number_in, passes)
+from ..settings.laser import PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
+from .args import (add_setting, check_backend_needs_sim, contour_fill, fail, hatch_set,
+                   image_file, int_in, number_in)
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, pair_mm, progress_bar,
                       stopped_in_one_line)
@@ -302,8 +302,7 @@ def add_drawing_options(parser):
                              "(.toml, as --save writes); none, with --text, --code or --image")
     add_content_options(parser)
     add_job_options(parser)
-    parser.add_argument("--passes", type=passes, default=None,
-                        metavar="N", help="times the job is marked (default: the profile's)")
+    add_setting(parser, PASSES, default_text="the profile's")
     shape = parser.add_argument_group("drawing")
     add_layer_option(shape)
     shape.add_argument("--hatch", type=hatch_set, action="append",
@@ -322,19 +321,12 @@ def add_drawing_options(parser):
                             "apart (COUNT of them at most; default: until filled)")
     shape.add_argument("--no-outline", action="store_true",
                        help="mark the hatch only, not the outlines")
-    shape.add_argument("--tolerance", type=number_in("tolerance", 0.0005, 1), default=0.01,
-                       metavar="MM", help="curves as chords at most this far off "
-                                          "(default: 0.01 mm)")
+    add_setting(shape, TOLERANCE)
     wobble = parser.add_argument_group(
         "wobble (an ellipse laid over marked lines; needs a bitstream with the wobble stage; "
         "defaults: the profile's [wobble])")
-    wobble.add_argument("--wobble", type=number_in("wobble", 0, 10_000), metavar="UM",
-                        help="amplitude across the line (to each side), µm; a circle unless "
-                             "--wobble-along; 0: no wobble")
-    wobble.add_argument("--wobble-along", type=number_in("wobble-along", 0, 10_000),
-                        metavar="UM", help="amplitude along the line, µm (an ellipse)")
-    wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, WOBBLE_MAX_HZ), metavar="HZ",
-                        help="turns of the figure a second (default: the profile's, 1000)")
+    for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ):
+        add_setting(wobble, setting, default_text="the profile's")
     place = parser.add_argument_group("placement")
     place.add_argument("--origin", choices=["centre", "center", "lower-left", "page"],
                        default="centre", help="what of the drawing goes to --offset: its "

@@ -1,0 +1,64 @@
+"""The settings a job is marked at and a run talks to its board with, each declared once:
+marking speed, laser power, pulse repetition rate, passes, wobble, chord tolerance and the
+link's answer timeout.
+
+``mark``, ``clean``, ``store`` and ``test-grid`` build their options from these, a job file's
+``[job]`` and a layer's keys read with them, and the machine profile's ``[defaults]``,
+``[wobble]`` and ``[link] timeout_s`` check their values against the same ranges
+(:data:`PROFILE_KEYS`). Ranges a register fixes (the PRR, the wobble's frequency) are read
+from the register map, so that no setting can ask for what the board cannot hold.
+"""
+
+from ..gateware.host.regmap import BY_NAME
+from ..gateware.limits import WOBBLE_MAX_HZ
+from .schema import Setting
+
+
+__all__ = ["SPEED", "POWER", "PRR", "PASSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
+           "TOLERANCE", "TIMEOUT", "JOB_SETTINGS", "PROFILE_KEYS", "PRR_STEPS_PER_KHZ"]
+
+
+_PRR_REGISTER = BY_NAME["laser_prr"]
+#: Steps of ``laser_prr`` per kHz (its unit is 100 Hz).
+PRR_STEPS_PER_KHZ = 10
+assert _PRR_REGISTER.unit == "100 Hz", "laser_prr's unit changed: update PRR_STEPS_PER_KHZ"
+
+SPEED = Setting("speed_mm_s", "number", "mm/s", 0.1, 100_000, what="speed", flag="--speed",
+                key="speed", metavar="MM_S", help="marking speed")
+POWER = Setting("power_percent", "number", "%", 0, 100, what="power", flag="--power",
+                key="power", metavar="PERCENT", help="laser power, of the laser's maximum")
+PRR = Setting("prr_khz", "number", "kHz", _PRR_REGISTER.low / PRR_STEPS_PER_KHZ,
+              _PRR_REGISTER.high / PRR_STEPS_PER_KHZ, what="PRR (kHz)", flag="--prr",
+              key="prr", metavar="KHZ",
+              help="pulse repetition rate (the board's range; the profile's laser may allow "
+                   "less)")
+PASSES = Setting("passes", "integer", "", 1, 1000, what="passes", flag="--passes",
+                 key="passes", metavar="N", help="times the job is marked")
+WOBBLE = Setting("wobble_um", "number", "µm", 0, 10_000, what="wobble", flag="--wobble",
+                 key="wobble", metavar="UM",
+                 help="wobble amplitude across the line (to each side); a circle unless "
+                      "--wobble-along; 0: no wobble")
+WOBBLE_ALONG = Setting("wobble_along_um", "number", "µm", 0, 10_000, what="wobble-along",
+                       flag="--wobble-along", key="wobble_along", metavar="UM",
+                       help="wobble amplitude along the line (an ellipse)")
+WOBBLE_HZ = Setting("wobble_hz", "number", "Hz", BY_NAME["wob_freq"].low, WOBBLE_MAX_HZ,
+                    what="wobble-hz", flag="--wobble-hz", key="wobble_hz", metavar="HZ",
+                    help="turns of the wobble's figure a second")
+TOLERANCE = Setting("tolerance_mm", "number", "mm", 0.0005, 1, default=0.01,
+                    what="tolerance", flag="--tolerance", key="tolerance", metavar="MM",
+                    help="curves as chords at most this far off")
+#: Up to 600 s: the answer timeout ``board --sim`` advises for its slowest backend
+#: (:meth:`galvoscan.sim.board.SimulatedBoard.answer_timeout_s` is held to this range).
+TIMEOUT = Setting("timeout_s", "number", "s", 0.01, 600, what="timeout", flag="--timeout",
+                  metavar="S", help="seconds to wait for the board's answer")
+
+#: A job's own settings, which a layer may change: by the key a job file and a layer use.
+JOB_SETTINGS = {s.key: s for s in (SPEED, POWER, PRR, PASSES, WOBBLE, WOBBLE_ALONG,
+                                   WOBBLE_HZ)}
+
+#: The machine profile's keys that are these settings: ``(section, key)`` → setting.
+PROFILE_KEYS = {("defaults", "speed_mm_s"): SPEED, ("defaults", "power_percent"): POWER,
+                ("defaults", "prr_khz"): PRR, ("defaults", "passes"): PASSES,
+                ("laser", "prr_khz"): PRR, ("link", "timeout_s"): TIMEOUT,
+                ("wobble", "across_um"): WOBBLE, ("wobble", "along_um"): WOBBLE_ALONG,
+                ("wobble", "freq_hz"): WOBBLE_HZ}
