@@ -93,6 +93,15 @@ class Setting:
                                f"{number_text(self.high)}, not {text}")
         return value
 
+    def check(self, value):
+        """``value`` (a number a program gives) if it is in range, else the same
+        :class:`SettingError` as :meth:`parse` gives its text."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                (self.kind == "integer" and not isinstance(value, int)):
+            kind = "an integer" if self.kind == "integer" else "a number"
+            raise SettingError(f"{self.what} must be {kind}, not {value!r}")
+        return self.parse(repr(value))
+
     def described(self, default=None, default_text=None):
         """The help with the unit, range and default: ``marking speed (mm/s, 0.1 … 100e3;
         default: the profile's)``. ``default``: a command's own, in place of the setting's;
