@@ -139,9 +139,6 @@ class Job:
                 setting.check(value)
         for name in ("drawings", "texts", "codes", "photos", "layers", "hatch"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
-        if not (self.drawings or self.texts or self.codes or self.photos):
-            raise PlanError("a job needs something to mark: a drawing, a text, a code or a "
-                            "photo")
 
 
 # --- planning --------------------------------------------------------------------------------
@@ -274,6 +271,8 @@ def plan(job, profile=None, *, serial=None):
     in range. ``serial``: the part's number, for ``{serial}`` fields. Raises a
     :class:`ValueError` (one line) for anything that cannot be marked."""
     profile = profile or default_profile()
+    if not (job.drawings or job.texts or job.codes or job.photos):
+        raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
     settings = job_settings(job, profile)
     return plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
                         profile)

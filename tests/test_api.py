@@ -46,7 +46,7 @@ def test_job_settings_refused_as_the_command_line_does():
     with pytest.raises(SettingError, match=r"^passes must be an integer, not 1\.5$"):
         api.Job(texts=[drawing], passes=1.5)
     with pytest.raises(api.PlanError, match="something to mark"):
-        api.Job()
+        api.plan(api.Job())
 
 
 def test_text_and_code_planned_without_the_command_line():

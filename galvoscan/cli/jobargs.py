@@ -5,6 +5,7 @@ import argparse
 import contextlib
 import sys
 
+from ..api import load_lens_table
 from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
 from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board
 
@@ -87,20 +88,6 @@ def board_link(args, profile, *, wobble=False):
                                baud=baud_rate, timeout=args.timeout or profile.link.timeout_s)
     with transport:
         yield HostClient(transport), None
-
-
-def load_lens_table(client, profile, say):
-    """Write the profile's correction table into the board (at the board's node count), so
-    that the job is corrected with the table it was checked against. Nothing without one."""
-    from ..correction.upload import upload_table
-    table = profile.correction_table()
-    if table is None:
-        return
-    nodes = client.read("cor_nodes")
-    if nodes != table.n:
-        table = table.resampled(nodes)
-    say(f"loading the lens correction table ({nodes} x {nodes} nodes) into the board")
-    upload_table(client, table)
 
 
 @contextlib.contextmanager

@@ -13,7 +13,7 @@ from ..settings.laser import JOB_SETTINGS
 from .args import contour_fill, fail, hatch_set, register_int, setting_type
 
 
-__all__ = ["add_layer_option", "layer_from_words", "layer_from_table", "LAYER_KEYS",
+__all__ = ["LayerAction", "layer_from_words", "layer_from_table", "LAYER_KEYS",
            "layer_wobble", "add_wobble", "describe_layers"]
 
 
@@ -135,7 +135,10 @@ def _number_or_text(text):
     return {"yes": True, "no": False}.get(text.lower(), text)
 
 
-class _LayerAction(argparse.Action):
+class LayerAction(argparse.Action):
+    """``--layer MATCH KEY=VALUE …``: a :class:`~galvoscan.jobs.layers.Layer` appended to
+    ``layers``, and its words as a job file's ``[[layer]]`` table (for ``--save``)."""
+
     def __call__(self, parser, namespace, values, option_string=None):
         try:
             layer = layer_from_words(values)
@@ -155,16 +158,6 @@ class _LayerAction(argparse.Action):
         if getattr(namespace, "layer_tables", None) is None:
             namespace.layer_tables = []
         namespace.layer_tables.append(table)
-
-
-def add_layer_option(group):
-    group.add_argument(
-        "--layer", nargs="+", action=_LayerAction, default=[], dest="layers",
-        metavar=("MATCH", "KEY=VALUE"), help="settings of their own for the paths of one colour "
-        "(an SVG stroke, else fill: \"#ff0000\"; quote it) or one layer (an Inkscape layer's "
-        "label, a DXF layer's name); repeat it for more layers, run in that order, what none "
-        "matches last; keys: " + ", ".join(f"{key} ({unit})" for key, (_, _, unit) in
-                                            LAYER_KEYS.items()).replace("%", "%%"))
 
 
 def layer_wobble(layer, base):
