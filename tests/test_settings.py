@@ -3,14 +3,18 @@ same way wherever it is used (the command line of every command, a job file, a l
 machine profile), and ``--timeout`` one range that accepts what ``board --sim`` advises."""
 
 import argparse
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from hypothesis import given, strategies as st
 
 from galvoscan.cli import parser
+from galvoscan.cli.job_options import SECTIONS, job_file_table
 from galvoscan.jobs.profile import ProfileError, parse_profile
 from galvoscan.settings import laser
-from galvoscan.settings.schema import Setting, SettingError
+from galvoscan.settings.schema import Setting, SettingError, markdown_table
 
 
 def _option(argv_prefix, flag):
@@ -101,3 +105,37 @@ def test_profile_keys_are_the_settings(section, key):
     parse_profile(f"[{section}]\n{key} = {value}\n")
     with pytest.raises(ProfileError, match=f"{key} must be"):
         parse_profile(f"[{section}]\n{key} = {above!r}\n")
+
+
+def test_docs_table_is_the_settings():
+    """docs/settings.md's table is generated from the settings (never edited by hand)."""
+    docs = (Path(__file__).parent.parent / "docs" / "settings.md").read_text(encoding="utf-8")
+    assert markdown_table(laser.ALL) in docs
+
+
+def test_readme_job_file_table_is_the_options():
+    """The README's table of a job file's keys is generated from the job options; each key
+    it lists is one a job file takes."""
+    readme = (Path(__file__).parent.parent / "README.md").read_text(encoding="utf-8")
+    assert job_file_table() in readme
+    for section, keys in SECTIONS.items():
+        for key in keys:
+            assert f"`{key}`" in job_file_table()
+
+
+@pytest.mark.parametrize("importer, imported", [
+    ("galvoscan.settings", "galvoscan.cli"),          # the schema sits below the CLI
+    ("galvoscan.api", "galvoscan.cli"),               # the API needs no command line
+    ("galvoscan.cli.jobfile", "galvoscan.cli.mark"),  # job files read the option table
+    ("galvoscan.cli.job_options", "galvoscan.cli.mark"),
+])
+def test_imports_in_dependency_order(importer, imported):
+    """No import chain, at module top or in a function, from ``importer`` to ``imported``."""
+    grimp = pytest.importorskip("grimp")        # import-linter's graph
+    graph = grimp.build_graph("galvoscan")
+    importers = [m for m in graph.modules if m == importer or m.startswith(importer + ".")]
+    for module in importers:
+        for target in [m for m in graph.modules
+                       if m == imported or m.startswith(imported + ".")]:
+            assert graph.find_shortest_chain(importer=module, imported=target) is None, \
+                (module, target)

@@ -21,7 +21,8 @@ from .jobargs import pair_mm
 from .layers import LAYER_KEYS, LayerAction
 
 
-__all__ = ["Option", "OPTIONS", "SECTIONS", "GROUPS", "add_job_file_options", "defaults"]
+__all__ = ["Option", "OPTIONS", "SECTIONS", "GROUPS", "add_job_file_options", "defaults",
+           "job_file_table"]
 
 
 #: The ``--help`` groups, in the order they are listed: id → (title; None: the parser's
@@ -75,16 +76,12 @@ class Option:
         return self.argparse.get("action") == "store_true"
 
 
-def _setting(setting, group, section, *, default_text=None):
+def _setting(setting, group, section):
     """The option of a :mod:`galvoscan.settings` setting: its flag, type, placeholder and
-    help."""
+    help (unit, range, default)."""
     return Option(setting.flag, group, dict(
         type=setting_type(setting), default=setting.default, metavar=setting.metavar,
-        help=setting.described(None, default_text).replace("%", "%%")),
-        section=section, key=setting.key)
-
-
-_PROFILES = "the profile's"
+        help=setting.described().replace("%", "%%")), section=section, key=setting.key)
 
 #: Every job option, in ``--help``'s order.
 OPTIONS = (
@@ -180,9 +177,8 @@ OPTIONS = (
         action="store_true", help="every scan line left to right (default: each the other "
                                   "way from the last)"), section="image"),
     # the job's laser and speed
-    *(_setting(setting, "laser", "job", default_text=_PROFILES)
-      for setting in (SPEED, POWER, PRR)),
-    _setting(PASSES, "passes", "job", default_text=_PROFILES),
+    *(_setting(setting, "laser", "job") for setting in (SPEED, POWER, PRR)),
+    _setting(PASSES, "passes", "job"),
     # the drawing's fill
     Option("--layer", "drawing", dict(
         nargs="+", action=LayerAction, default=[], dest="layers", metavar=("MATCH", "KEY=VALUE"),
@@ -210,8 +206,7 @@ OPTIONS = (
         section="job", key="outline", inverted=True),
     _setting(TOLERANCE, "drawing", "job"),
     # wobble
-    *(_setting(setting, "wobble", "job", default_text=_PROFILES)
-      for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),
+    *(_setting(setting, "wobble", "job") for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),
     # placement
     Option("--origin", "placement", dict(
         choices=["centre", "center", "lower-left", "page"], default="centre",
@@ -268,3 +263,31 @@ def add_job_file_options(parser):
         if isinstance(keywords.get("default"), list):
             keywords["default"] = []    # --layer appends to it: a list of each parser's own
         target.add_argument(one.flag or one.dest, **keywords)
+
+
+def _key_said(key, one):
+    """A key as the README's table lists it: the option it stands for when named otherwise,
+    the form of its value when it is not one word or number."""
+    said = f"`{key}`"
+    if one is None:
+        return said
+    if one.inverted:
+        return f"{said} (true/false: `{one.flag}`)"
+    if one.argparse.get("action") == "append":
+        return f"{said} (a list)"
+    if one.flag is not None and one.flag != f"--{key.replace('_', '-')}":
+        return f"{said} (`{one.flag}`)"
+    if one.argparse.get("metavar") == "X,Y":
+        return f"{said} ([x, y])"
+    return said
+
+
+def job_file_table():
+    """The README's table of a job file's tables and their keys, from :data:`SECTIONS`."""
+    rows = ["| table | keys (the option each stands for) |", "|---|---|"]
+    for section, keys in SECTIONS.items():
+        name = f"[{section}]" if section == "job" else f"[[{section}]]"
+        rows.append(f"| `{name}` | " + ", ".join(_key_said(k, o) for k, o in keys.items()) +
+                    " |")
+    rows.append("| `[[layer]]` | `match` and the `--layer` keys |")
+    return "\n".join(rows)

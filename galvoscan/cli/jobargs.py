@@ -34,7 +34,7 @@ def add_job_options(parser):
     """``--speed``, ``--power``, ``--prr``, ``--passes`` (defaults from the machine profile)."""
     job = parser.add_argument_group("laser and speed (defaults: the machine profile's)")
     for setting in (SPEED, POWER, PRR):
-        add_setting(job, setting, default_text="the profile's")
+        add_setting(job, setting)
     return job
 
 

@@ -40,9 +40,12 @@ import difflib
 import os
 from enum import Enum
 from pathlib import Path
-import tomllib
 
 import tomli_w
+try:                    # Python 3.11's; tomli, the same parser, before (requires-python 3.9)
+    import tomllib
+except ImportError:     # pragma: no cover (CI runs 3.11)
+    import tomli as tomllib
 
 from ..jobs.fill import Contour, HatchSet
 from .args import fail

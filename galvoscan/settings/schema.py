@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 
 
-__all__ = ["Setting", "SettingError", "number_text"]
+__all__ = ["Setting", "SettingError", "number_text", "markdown_table"]
 
 
 class SettingError(ValueError):
@@ -45,7 +45,8 @@ class Setting:
     ``default``: the value when none is given (None: another source's, said in ``help``);
     ``help``: what it is, for ``--help`` and the docs; ``what``: the word a refusal starts
     with (``speed``); ``flag``: the command line's option (``--speed``); ``key``: a job
-    file's and a layer's key (``speed``); ``metavar``: the option's placeholder.
+    file's and a layer's key (``speed``); ``metavar``: the option's placeholder;
+    ``default_said``: where the value comes from when ``default`` is None (``the profile's``).
     """
     name: str
     kind: str
@@ -58,6 +59,7 @@ class Setting:
     flag: str = None
     key: str = None
     metavar: str = None
+    default_said: str = None
 
     def __post_init__(self):
         if self.kind not in ("number", "integer"):
@@ -108,6 +110,18 @@ class Setting:
         ``default_text``: where the value comes from when there is no default."""
         default = self.default if default is None else default
         unit = f"{self.unit}, " if self.unit else ""
+        default_text = default_text or self.default_said
         said = f"; default: {number_text(default)}" if default is not None else \
             (f"; default: {default_text}" if default_text else "")
         return f"{self.help} ({unit}{number_text(self.low)} … {number_text(self.high)}{said})"
+
+
+def markdown_table(settings):
+    """``settings`` as a Markdown table: the option, the job file's key, the unit, the range,
+    the default and what it is (the docs' table of them, generated, never written by hand)."""
+    rows = ["| option | job file key | unit | range | default | what |", "|---|---|---|---|---|---|"]
+    for s in settings:
+        default = number_text(s.default) if s.default is not None else s.default_said
+        rows.append(f"| `{s.flag}` | {f'`{s.key}`' if s.key else '—'} | {s.unit or '—'} | "
+                    f"{number_text(s.low)} … {number_text(s.high)} | {default} | {s.help} |")
+    return "\n".join(rows)
