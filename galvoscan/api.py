@@ -26,8 +26,9 @@ from datetime import datetime
 
 import numpy as np
 
-from .client import HostClient
+from .client import FTDISPITransport, HostClient, SerialTransport
 from .correction.upload import upload_table
+from .gateware.host.fields import WobbleShape
 from .jobs.codes import CodeFill, CodeKind, CodeSpec, code_object
 from .jobs.drawing import load_drawing
 from .jobs.fill import HatchSet, LineOrder
@@ -38,14 +39,16 @@ from .jobs.profile import default_profile, load_profile
 from .jobs.stream import JobAborted, JobStreamer, StreamReport
 from .jobs.text import TextSpec, text_drawing
 from .jobs.vector_job import JobSettings, MarkObject
-from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE
+from .jobs.wobble import WobbleSettings, wobble_registers
+from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
 from .sim.board import SimTransport, SimulatedBoard
 
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "HatchSet", "LineOrder", "Job",
            "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
-           "job_settings", "stream_layers", "load_lens_table", "load_profile",
-           "default_profile", "SimulatedBoard", "PlanError"]
+           "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table", "load_profile",
+           "default_profile", "SimulatedBoard", "HostClient", "SerialTransport", "FTDISPITransport",
+           "PlanError"]
 
 
 # --- what a job is made of -------------------------------------------------------------------
@@ -115,7 +118,9 @@ class Job:
     (:class:`~galvoscan.jobs.layers.Layer`), and its own settings: speed (mm/s), power (% of
     the laser's maximum), PRR (kHz) and passes (None: the profile's ``[defaults]``), the hatch
     sets (:class:`~galvoscan.jobs.fill.HatchSet`), their line order, a contour fill, whether
-    outlines are marked, and the chord tolerance (mm). The numbers are checked against their
+    outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
+    (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
+    ``[wobble]``; it needs a bitstream with the wobble stage). The numbers are checked against their
     settings (:mod:`galvoscan.settings.laser`) here."""
     drawings: tuple = ()
     texts: tuple = ()
@@ -131,9 +136,12 @@ class Job:
     contour: object = None
     outline: bool = True
     tolerance_mm: float = TOLERANCE.default
+    wobble_um: float = None
+    wobble_along_um: float = None
+    wobble_hz: float = None
 
     def __post_init__(self):
-        for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE):
+        for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
@@ -234,11 +242,13 @@ class Plan:
     """A planned job: ``vector_job`` (:class:`~galvoscan.jobs.vector_job.VectorJob`, of
     layers when the job has them), the ``profile`` it was planned for, and its first
     object's ``placement`` and ``drawing`` (to turn marks back into the drawing's own
-    coordinates)."""
+    coordinates); ``wobbles``: whether any of it wobbles (the board needs the wobble
+    stage)."""
     vector_job: object
     profile: object
     placement: object
     drawing: object
+    wobbles: bool = False
 
     @property
     def estimate_s(self):
@@ -274,8 +284,67 @@ def plan(job, profile=None, *, serial=None):
     if not (job.drawings or job.texts or job.codes or job.photos):
         raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
     settings = job_settings(job, profile)
-    return plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
-                        profile)
+    planned = plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
+                           profile)
+    planned.wobbles = apply_wobble(planned.vector_job, job_wobble(
+        job.wobble_um, job.wobble_along_um, job.wobble_hz, profile), profile)
+    return planned
+
+
+# --- wobble ---------------------------------------------------------------------------------
+
+def job_wobble(across_um, along_um, freq_hz, profile):
+    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: ``across_um`` (µm),
+    ``along_um`` (µm; None: ``across_um``'s, a circle) and ``freq_hz`` given, else the
+    profile's ``[wobble]``."""
+    section = profile.wobble
+    across = across_um if across_um is not None else section.across_um
+    along = along_um if along_um is not None else \
+        (across_um if across_um is not None else section.along_um)
+    hz = freq_hz if freq_hz is not None else section.freq_hz
+    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
+
+
+def layer_wobble(layer, base):
+    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
+    amplitudes and frequency in place of ``base``'s where it gives them."""
+    if layer is None:
+        return base
+    across = layer.wobble_um if layer.wobble_um is not None else base.across_um
+    along = layer.wobble_along_um if layer.wobble_along_um is not None else \
+        (layer.wobble_um if layer.wobble_um is not None else base.along_um)
+    hz = layer.wobble_hz if layer.wobble_hz is not None else base.freq_hz
+    return replace(base, across_um=across, along_um=along, freq_hz=hz)
+
+
+def apply_wobble(vector_job, base, profile):
+    """Each layer's ``wob_*`` registers (``base``, a
+    :class:`~galvoscan.jobs.wobble.WobbleSettings`, a layer's own in its place) into its
+    registers, its reach checked against the field; a layer that does not wobble among ones
+    that do turns it off. Returns whether anything wobbles; a
+    :class:`~galvoscan.jobs.plan.PlanError` (one line) for a figure past the field."""
+    parts = [(lj.layer, lj.job) for lj in vector_job.layers] if vector_job.layers else \
+        [(None, vector_job)]
+    found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+    if not any(found):
+        return False
+    for (layer, part), regs in zip(parts, found):
+        if not regs:
+            part.registers["wob_shape"] = WobbleShape.OFF.value
+            continue
+        # The figure reaches past the lines by its larger amplitude: that too must be in the
+        # field (the board would clamp it at the edge).
+        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
+        half = profile.field.size_mm / 2
+        xmin, ymin, xmax, ymax = part.bounds_mm
+        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
+            raise PlanError(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the "
+                            f"field (−{half:g}…{half:g} mm): move it towards the centre or "
+                            f"wobble less")
+        part.registers.update(regs)
+    if vector_job.layers:
+        vector_job.registers.update(vector_job.layers[0].job.registers)
+    return True
 
 
 # --- running ---------------------------------------------------------------------------------
@@ -342,7 +411,9 @@ class Report:
 
 def run(plan, board, *, timeout_s=None, progress=None, say=None):
     """Mark ``plan`` on ``board``: a :class:`~galvoscan.sim.board.SimulatedBoard` (run in
-    this process), or a :class:`~galvoscan.client.HostClient` of a real board's link. The
+    this process; ``SimulatedBoard(wobble=True)`` for a plan that ``wobbles``), or a
+    :class:`~galvoscan.client.HostClient` of a real board's link
+    (``HostClient(SerialTransport("/dev/ttyUSB1", baud=1_000_000))``). The
     profile's lens table is loaded first; the laser is disarmed at the end and on any fault
     (:class:`~galvoscan.jobs.stream.JobAborted`). ``timeout_s``: the longest the job may take
     (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments

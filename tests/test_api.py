@@ -62,3 +62,20 @@ def test_text_and_code_planned_without_the_command_line():
     assert plan.estimate_s > 0 and plan.mark_mm > 0
     with pytest.raises(api.PlanError, match=r"\{nope\} is not a field"):
         api.plan(api.Job(texts=[api.Text("{nope}")]))
+
+
+def test_wobble_from_the_job_else_the_profile():
+    """A job's wobble is its own (a circle when only across is given), else the profile's;
+    one that would reach past the field is refused in one line."""
+    text = api.Text("I", font="hershey", height_mm=2)
+    plan = api.plan(api.Job(texts=[text], wobble_um=100, wobble_hz=2000))
+    unit_um = default_profile().field.size_mm / 65536 * 1000
+    registers = plan.vector_job.registers
+    assert plan.wobbles
+    assert registers["wob_across"] == pytest.approx(100 / unit_um, abs=1)
+    assert registers["wob_along"] == registers["wob_across"]
+    assert registers["wob_freq"] == 2000
+    assert not api.plan(api.Job(texts=[text])).wobbles        # the default profile: none
+    edge = api.Text("I", font="hershey", height_mm=2, at_mm=(54.5, 0))
+    with pytest.raises(api.PlanError, match="reaches past the field"):
+        api.plan(api.Job(texts=[edge], wobble_um=2000))

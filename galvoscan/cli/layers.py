@@ -6,15 +6,17 @@ line."""
 
 import argparse
 
+from ..api import apply_wobble, job_wobble
 from ..gateware.host.regmap import BY_NAME
 from ..jobs.fill import LineOrder
+from ..jobs.plan import PlanError
 from ..jobs.profile_keys import DELAY_KEYS
 from ..settings.laser import JOB_SETTINGS
 from .args import contour_fill, fail, hatch_set, register_int, setting_type
 
 
-__all__ = ["LayerAction", "layer_from_words", "layer_from_table", "LAYER_KEYS",
-           "layer_wobble", "add_wobble", "describe_layers"]
+__all__ = ["LayerAction", "layer_from_words", "layer_from_table", "LAYER_KEYS", "add_wobble",
+           "describe_layers"]
 
 
 def _yes_no(text):
@@ -160,19 +162,6 @@ class LayerAction(argparse.Action):
         namespace.layer_tables.append(table)
 
 
-def layer_wobble(layer, base):
-    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
-    amplitudes and frequency in place of ``base``'s where it gives them."""
-    from dataclasses import replace
-    if layer is None:
-        return base
-    across = layer.wobble_um if layer.wobble_um is not None else base.across_um
-    along = layer.wobble_along_um if layer.wobble_along_um is not None else \
-        (layer.wobble_um if layer.wobble_um is not None else base.along_um)
-    hz = layer.wobble_hz if layer.wobble_hz is not None else base.freq_hz
-    return replace(base, across_um=across, along_um=along, freq_hz=hz)
-
-
 def _wobble_words(registers, profile):
     if not registers.get("wob_shape"):
         return ""
@@ -181,49 +170,16 @@ def _wobble_words(registers, profile):
             f"µm at {registers['wob_freq']} Hz")
 
 
-def _wobble(args, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
-    profile's [wobble]."""
-    from ..jobs.wobble import WobbleSettings
-    section = profile.wobble
-    across = args.wobble if args.wobble is not None else section.across_um
-    along = args.wobble_along if args.wobble_along is not None else \
-        (args.wobble if args.wobble is not None else section.along_um)
-    hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
-    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
-
-
 def add_wobble(job, args, profile):
     """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
-    place) into its registers, its reach checked against the field; a layer that does not
-    wobble among ones that do turns it off. Returns whether anything wobbles."""
-    from ..gateware.host.fields import WobbleShape
-    from ..jobs.plan import PlanError
-    from ..jobs.wobble import wobble_registers
-    base = _wobble(args, profile)
-    parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
+    place, else the profile's) into its registers, by the API (:func:`galvoscan.api.
+    apply_wobble`); one line for a wobble that reaches past the field. Returns whether
+    anything wobbles."""
     try:
-        found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+        return apply_wobble(job, job_wobble(args.wobble, args.wobble_along, args.wobble_hz,
+                                            profile), profile)
     except PlanError as error:
         fail(error)
-    if not any(found):
-        return False
-    for (layer, part), regs in zip(parts, found):
-        if not regs:
-            part.registers["wob_shape"] = WobbleShape.OFF.value
-            continue
-        # The figure reaches past the lines by its larger amplitude: that too must be in the
-        # field (the board would clamp it at the edge).
-        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
-        half = profile.field.size_mm / 2
-        xmin, ymin, xmax, ymax = part.bounds_mm
-        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
-            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
-                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
-        part.registers.update(regs)
-    if job.layers:
-        job.registers.update(job.layers[0].job.registers)
-    return True
 
 
 def describe_layers(job, profile):
