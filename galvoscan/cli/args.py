@@ -19,7 +19,7 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
            "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill",
-           "prr_khz", "setting_type", "add_setting", "speed_mm_s", "power_percent", "passes"]
+           "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s", "power_percent", "passes"]
 
 
 class CLIError(SystemExit):
@@ -74,14 +74,18 @@ def setting_type(setting):
     return parse
 
 
-def add_setting(group, setting, *, default=None, default_text=None):
-    """``setting``'s option in ``group``: its flag, type, placeholder and help (the unit, the
-    range and the default said). ``default``: the command's own, in place of the setting's;
-    ``default_text``: where a default left as None comes from (``the profile's``)."""
+def setting_keywords(setting, *, default=None, default_text=None):
+    """``add_argument``'s keywords for ``setting``: its type, placeholder, default and help
+    (the unit, the range and the default said). ``default``: the command's own, in place of
+    the setting's; ``default_text``: where a default left as None comes from."""
     default = setting.default if default is None else default
-    return group.add_argument(setting.flag, type=setting_type(setting), default=default,
-                              metavar=setting.metavar,
-                              help=setting.described(default, default_text).replace("%", "%%"))
+    return dict(type=setting_type(setting), default=default, metavar=setting.metavar,
+                help=setting.described(default, default_text).replace("%", "%%"))
+
+
+def add_setting(group, setting, **how):
+    """``setting``'s option (its flag, :func:`setting_keywords`) in ``group``."""
+    return group.add_argument(setting.flag, **setting_keywords(setting, **how))
 
 
 def prr_khz():

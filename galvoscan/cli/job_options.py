@@ -16,7 +16,7 @@ from ..jobs.photo import Dither
 from ..jobs.text import ALIGNMENTS
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ)
-from .args import contour_fill, hatch_set, int_in, number_in, setting_type
+from .args import contour_fill, hatch_set, int_in, number_in, setting_keywords
 from .jobargs import pair_mm
 from .layers import LAYER_KEYS, LayerAction
 
@@ -79,9 +79,8 @@ class Option:
 def _setting(setting, group, section):
     """The option of a :mod:`galvoscan.settings` setting: its flag, type, placeholder and
     help (unit, range, default)."""
-    return Option(setting.flag, group, dict(
-        type=setting_type(setting), default=setting.default, metavar=setting.metavar,
-        help=setting.described().replace("%", "%%")), section=section, key=setting.key)
+    return Option(setting.flag, group, setting_keywords(setting), section=section,
+                  key=setting.key)
 
 #: Every job option, in ``--help``'s order.
 OPTIONS = (
