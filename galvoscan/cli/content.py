@@ -4,7 +4,10 @@ the job."""
 
 from ..api import Code, Photo, Text, fields, mark_object
 from ..jobs.codes import CodeKind
+from ..jobs.drawing import DrawingError
 from ..jobs.photo import Dither
+from ..jobs.plan import PlanError
+from ..jobs.serial import load_counter, uses_serial
 
 
 __all__ = ["check_content_options", "content_objects", "content_item",
@@ -24,7 +27,6 @@ def has_content(args):
 def check_content_options(args):
     """Refuse an option of one kind of content given without it (``--font`` without
     ``--text``); one line (:class:`~galvoscan.jobs.plan.PlanError`)."""
-    from ..jobs.plan import PlanError
     for kind, options in _OPTIONS.items():
         given = [name for name in options if getattr(args, name, None) is not None]
         if getattr(args, kind, None) is None and given:
@@ -37,7 +39,6 @@ def content_item(kind, one):
     """An entry's options (``one``: the command line's, a job file's table over them) as the
     API's :class:`~galvoscan.api.Text`, :class:`~galvoscan.api.Photo` or
     :class:`~galvoscan.api.Code`; one line for what the command line gives incompletely."""
-    from ..jobs.plan import PlanError
     layer = one.get("layer") or None
     if kind == "text":
         return Text(one["text"], **({} if one.get("height") is None else
@@ -67,8 +68,6 @@ def content_objects(args, settings, profile, *, serial=None):
     and photos (each entry the options of one object, over ``args``' own), ``serial`` the
     part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line): each made by
     the API (:func:`galvoscan.api.mark_object`)."""
-    from ..jobs.drawing import DrawingError
-    from ..jobs.plan import PlanError
     objects = []
     for kind in ("text", "image", "code"):
         for entry in args.entries.get(kind, ()):
@@ -88,7 +87,6 @@ def part_serials(args, profile):
     """``(counter, serials)``: the serial counter and each part's number, when ``--text`` or
     ``--data`` holds ``{serial}`` (else ``(None, [None] × parts)``); one line for a damaged
     counter."""
-    from ..jobs.serial import load_counter, uses_serial
     parts = getattr(args, "repeat", 1) or 1
     entries = getattr(args, "entries", None)
     texts = [getattr(args, "text", None), getattr(args, "data", None)] if entries is None else \
@@ -96,7 +94,6 @@ def part_serials(args, profile):
     if not uses_serial(*texts):
         if getattr(args, "serial_start", None) is not None or \
                 getattr(args, "serial_step", None) is not None:
-            from ..jobs.plan import PlanError
             raise PlanError("--serial-start and --serial-step are for a {serial} field in "
                             "--text or --data")
         return None, [None] * parts

@@ -5,7 +5,13 @@ import argparse
 import contextlib
 import sys
 
+from tqdm import tqdm
+
 from ..api import load_lens_table
+from ..client import ClientError, HostClient, SerialTransport
+from ..jobs.stream import JobAborted, JobInterrupted
+from ..jobs.vector_job import frame_segments
+from ..sim.board import PTYServer
 from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
 from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board
 
@@ -68,10 +74,8 @@ def has_link(args, profile):
 def board_link(args, profile, *, wobble=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage)."""
-    from ..client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
-        from ..sim.board import PTYServer
         board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
         timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
@@ -96,8 +100,6 @@ def stopped_in_one_line(*, on_complete=None):
     streamer has already sent arm = 0). ``on_complete()``: called first when the job was
     marked to its end before it stopped (a part that is done: its serial number is taken);
     it returns words to add to the line."""
-    from ..client import ClientError
-    from ..jobs.stream import JobAborted, JobInterrupted
     try:
         yield
     except JobInterrupted as error:
@@ -113,7 +115,6 @@ def stopped_in_one_line(*, on_complete=None):
 def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):
     """Trace ``outline_mm`` (a closed outline) ``times`` times in vector mode with the guide
     laser on and the laser never armed (``registers``: the vector settings to walk it with)."""
-    from ..jobs.vector_job import frame_segments
     if not profile.laser.guide:
         fail("the machine profile says there is no guide laser ([laser] guide)")
     segments = frame_segments(outline_mm, profile.field.size_mm, times)
@@ -125,6 +126,5 @@ def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say
 
 def progress_bar(total, unit, *, disable=None):
     """A tqdm bar on stderr (off when stderr is not a terminal, unless asked)."""
-    from tqdm import tqdm
     return tqdm(total=total, unit=unit, file=sys.stderr, leave=False,
                 disable=(not sys.stderr.isatty()) if disable is None else disable)

@@ -5,10 +5,12 @@ line's, or the layer's own) into its registers; and the layered job's plan said 
 line."""
 
 import argparse
+import difflib
 
 from ..api import apply_wobble, job_wobble
 from ..gateware.host.regmap import BY_NAME
 from ..jobs.fill import LineOrder
+from ..jobs.layers import Layer
 from ..jobs.plan import PlanError
 from ..jobs.profile_keys import DELAY_KEYS
 from ..settings.laser import JOB_SETTINGS
@@ -68,9 +70,6 @@ LAYER_KEYS = {
 def _layer(match, pairs, where):
     """A :class:`~galvoscan.jobs.layers.Layer` from ``(key, value)`` pairs (values as text or
     TOML gives them); ValueError, one line naming ``where`` and the key."""
-    import difflib
-    from ..jobs.layers import Layer
-    from ..jobs.plan import PlanError
     fields, hatch, delays = {}, [], []
     for key, value in pairs:
         if key not in LAYER_KEYS:

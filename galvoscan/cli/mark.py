@@ -6,6 +6,7 @@ opened. ``--sim`` runs the job on the simulated board through the same link code
 ``--json`` reports what the scan head and the laser did.
 """
 
+import argparse
 import json
 import sys
 from pathlib import Path
@@ -13,16 +14,22 @@ from pathlib import Path
 import numpy as np
 
 from .. import api
+from ..job import JobError, parse_job
+from ..jobs.drawing import DrawingError
 from ..jobs.fill import LineOrder
-from .args import check_backend_needs_sim, fail, image_file, int_in
+from ..jobs.plan import PlanError
+from ..jobs.speed import path_length_mm
+from ..jobs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
+from ..jobs.vector_job import hull_outline, link_segments_per_s, plan_job_file
+from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
 from .content import check_content_options, content_objects, part_serials
 from .job_options import add_job_file_options
 from .jobfile import save_job_file, use_job_file
-from .job_reports import mark_estimate_record, sim_report
-from .layers import add_wobble
+from .job_reports import describe_job, mark_estimate_record, sim_report
+from .layers import add_wobble, describe_layers
 from .machine import add_machine_option, profile_from
 
 
@@ -43,11 +50,6 @@ def _plan(args, profile, serial=None):
     """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` (of layers, when ``--layer``
     gives them) and the placement, or one line and exit: the arguments mapped onto the API
     (:mod:`galvoscan.api`), which plans."""
-    from ..job import JobError, parse_job
-    from ..jobs.drawing import DrawingError
-    from ..jobs.plan import PlanError
-    from ..jobs.vector_job import plan_job_file
-    from .args import read_text
     entries = args.entries
     if not any(entries[kind] for kind in ("drawing", "text", "code", "image")):
         fail("give a drawing (FILE) or something to make (--text, --code, --image)")
@@ -80,8 +82,6 @@ def _plan(args, profile, serial=None):
 
 
 def _link_warning(job, baud):
-    from ..jobs.stream import QUEUE_DEPTH
-    from ..jobs.vector_job import link_segments_per_s
     if len(job.segments) <= QUEUE_DEPTH or job.estimate_s <= 0:
         return None
     needed = len(job.segments) / job.estimate_s
@@ -98,8 +98,6 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     checked (the wobble's reach too), its description said (not ``quiet``), the preview drawn.
     ``serial``: the part's number, for a ``{serial}`` field. Returns ``(job, placement,
     drawing, profile, wobbles, say)``; one line and exit on a fault."""
-    from .job_reports import describe_job
-    from .layers import describe_layers
     profile = profile or profile_from(args)
     job, placement, drawing = _plan(args, profile, serial)
     wobbles = add_wobble(job, args, profile)
@@ -123,8 +121,9 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
 
 def _draw_preview(args, job, drawing, profile):
     """The preview of one pass (each layer's in its colour), the title saying all passes'."""
+    # Here, not at the top: the preview draws with matplotlib, whose import would slow every
+    # command down by a third of a second; only --preview needs it.
     from ..jobs.preview import preview
-    from ..jobs.speed import path_length_mm
     source = args.file or getattr(args, "job_file", None)
     dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
     passes = max(lj.settings.passes for lj in job.layers) if job.layers else \
@@ -141,8 +140,6 @@ def _draw_preview(args, job, drawing, profile):
 
 
 def _cmd_mark(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer, StreamReport
     check_backend_needs_sim(args)
     if args.save and args.file and Path(args.file).suffix.lower() == ".job":
         fail("a .job is in galvo units and marked as it is: there is no job to --save")
@@ -219,7 +216,6 @@ def _cmd_mark(args):
                     if number == 0:
                         load_lens_table(client, profile, say)
                     if args.frame:
-                        from ..jobs.vector_job import hull_outline
                         frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
@@ -272,7 +268,6 @@ def _cmd_mark(args):
 
 
 def _job_file_path(text):
-    import argparse
     if not text.lower().endswith(".toml"):
         raise argparse.ArgumentTypeError(f"a job file ends in .toml, not {text!r}")
     return text

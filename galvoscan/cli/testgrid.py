@@ -1,8 +1,12 @@
 """``galvoscan test-grid``: a material test, a square for each speed and power, labelled."""
 
+import argparse
 import json
 import sys
 
+from ..jobs.plan import PlanError
+from ..jobs.stream import JobStreamer
+from ..jobs.test_grid import axis_values, plan_test_grid
 from ..settings.laser import POWER, PRR, SPEED
 from .args import fail, image_file, int_in, number_in, setting_type
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
@@ -15,7 +19,6 @@ __all__ = ["add_parsers"]
 
 def _axis(what, setting):
     """``A:B:N``: N values from A to B, each within ``setting``'s range."""
-    import argparse
 
     def parse(text):
         parts = text.split(":")
@@ -28,8 +31,6 @@ def _axis(what, setting):
         except (ValueError, IndexError):
             raise argparse.ArgumentTypeError(f"{what} must be A:B:N (from A to B in N steps) "
                                              f"or one value, not {text!r}")
-        from ..jobs.plan import PlanError
-        from ..jobs.test_grid import axis_values
         try:
             values = axis_values(low, high, count, what)
         except PlanError as error:
@@ -42,9 +43,6 @@ def _axis(what, setting):
 
 
 def _cmd_test_grid(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer
-    from ..jobs.test_grid import plan_test_grid
     profile = profile_from(args)
     prr = args.prr if args.prr is not None else profile.defaults.prr_khz
     try:
@@ -65,6 +63,8 @@ def _cmd_test_grid(args):
             f"{c.centre_mm[1]:g}) mm: {c.job.estimate_s:.2f} s, pitch "
             f"{c.job.pitch.pitch_mm * 1000:.1f} µm × {c.job.pitch.pulses_per_point}")
     if args.preview:
+        # Here, not at the top: matplotlib's import would slow every command; only
+        # --preview draws.
         from ..jobs.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,
