@@ -1,6 +1,7 @@
 """The Python API (``galvoscan/api.py``): its runnable example marks what geometry says it
 must, and a job built without the command line is refused with the command line's lines."""
 
+import json
 import re
 import subprocess
 import sys
@@ -9,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from galvoscan import api
+from galvoscan.cli import main
 from galvoscan.jobs.profile import default_profile
 from galvoscan.settings.schema import SettingError
 
@@ -79,3 +81,22 @@ def test_wobble_from_the_job_else_the_profile():
     edge = api.Text("I", font="hershey", height_mm=2, at_mm=(54.5, 0))
     with pytest.raises(api.PlanError, match="reaches past the field"):
         api.plan(api.Job(texts=[edge], wobble_um=2000))
+
+
+def test_mark_is_the_api(tmp_path, capsys, monkeypatch):
+    """``mark --estimate --json`` of a text and a code plans what the API plans for the same
+    job: the same segments, length, bounds and time."""
+    monkeypatch.chdir(tmp_path)                          # no machine profile: the default
+    assert main(["mark", "--text", "AB", "--font", "hershey", "--height", "4",
+                 "--text-at=-10,5", "--code", "datamatrix", "--data", "7", "--size", "6",
+                 "--code-at", "12,-8", "--speed", "800", "--passes", "2", "--estimate",
+                 "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    plan = api.plan(api.Job(texts=[api.Text("AB", font="hershey", height_mm=4,
+                                            at_mm=(-10, 5))],
+                            codes=[api.Code("datamatrix", "7", 6, at_mm=(12, -8))],
+                            speed_mm_s=800, passes=2))
+    assert record["segments"] == len(plan.segments)
+    assert record["mark_mm"] == pytest.approx(plan.mark_mm, abs=1e-3)
+    assert record["bounds_mm"] == pytest.approx(list(plan.vector_job.bounds_mm), abs=1e-3)
+    assert record["estimate_s"] == pytest.approx(plan.estimate_s, abs=1e-6)
