@@ -10,7 +10,7 @@ import math
 import os
 from pathlib import Path
 
-from ..settings.laser import PASSES, POWER, PRR, SPEED, TIMEOUT
+from ..settings.laser import BAUD, PASSES, POWER, PRR, SPEED, TIMEOUT
 from ..settings.schema import SettingError, number_text as _number
 
 
@@ -262,7 +262,7 @@ def settings_from(args, table, **overrides):
 
 def baud(text):
     """A UART rate in baud (``1e6``, ``3000000``)."""
-    value = number_in("baud", 300, 12e6)(text)
+    value = setting_type(BAUD)(text)
     if value != int(value):
         raise argparse.ArgumentTypeError(f"baud must be a whole number, not {text}")
     return int(value)

@@ -51,6 +51,11 @@ class ProfileError(ValueError):
     """A machine profile that cannot be used: one line naming the file and the key."""
 
 
+def _whole(bound):
+    """A bound as the template and the messages write it: 12000000, not 12000000.0."""
+    return int(bound) if float(bound).is_integer() else bound
+
+
 # --- the keys --------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -66,8 +71,8 @@ class _Key:
         """The key ``[section] name``, whose range and unit are its setting's
         (:data:`galvoscan.settings.laser.PROFILE_KEYS`)."""
         setting = settings.PROFILE_KEYS[section, name]
-        return cls(name, kind if setting.kind == "number" else "integer", setting.low,
-                   setting.high, setting.unit)
+        return cls(name, kind if setting.kind == "number" else "integer",
+                   _whole(setting.low), _whole(setting.high), setting.unit)
 
 
 #: Every section and its keys, in the template's order. The ranges here are the ones checked;
@@ -76,7 +81,7 @@ SECTIONS = {
     "field": (_Key("size_mm", "number", 1, 2000, "mm"),
               _Key("correction", "path")),
     "link": (_Key("port", "text"),
-             _Key("baud", "integer", 300, 12_000_000, "baud"),
+             _Key.of("link", "baud", "integer"),
              _Key("spi", "text"),
              _Key.of("link", "timeout_s")),
     "laser": (_Key("max_power_w", "number", 0.1, 10_000, "W"),

@@ -9,13 +9,14 @@ link's answer timeout.
 from the register map, so that no setting can ask for what the board cannot hold.
 """
 
+from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.limits import WOBBLE_MAX_HZ
-from .schema import Setting
+from .schema import Setting, number_text
 
 
 __all__ = ["SPEED", "POWER", "PRR", "PASSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
-           "TOLERANCE", "TIMEOUT", "ALL", "JOB_SETTINGS", "PROFILE_KEYS", "PRR_STEPS_PER_KHZ"]
+           "TOLERANCE", "TIMEOUT", "BAUD", "PRESS_TIMEOUT", "ALL", "JOB_SETTINGS", "PROFILE_KEYS", "PRR_STEPS_PER_KHZ"]
 
 
 _PRR_REGISTER = BY_NAME["laser_prr"]
@@ -62,16 +63,30 @@ TIMEOUT = Setting("timeout_s", "number", "s", 0.01, 600, what="timeout", flag="-
                   default_said="0.5 (read, send, …); a job's: the profile's [link], with "
                                "--sim the simulator's measured speed")
 
+#: The host link's serial rate: a number as a person writes it (``1e6``), whole. ``build``'s
+#: ``--baud`` (the bitstream's), the link options' and the profile's ``[link] baud``.
+BAUD = Setting("baud", "number", "baud", 300, 12e6, what="baud", flag="--baud", metavar="BAUD",
+               help="serial rate of the bitstream",
+               default_said=f"{number_text(DEFAULT_BAUD)} (build, read, send, …); a job's: the "
+                            f"profile's [link]")
+#: ``standalone --timeout``: not the link's answer timeout but the most of the simulated
+#: board's own time a press of its start input may take (whole seconds).
+PRESS_TIMEOUT = Setting("press_timeout_s", "integer", "s", 1, 3600, default=600,
+                        what="timeout", flag="--timeout", metavar="S",
+                        help="the most of the board's own time a press may take")
+
 #: A job's own settings, which a layer may change: by the key a job file and a layer use.
 JOB_SETTINGS = {s.key: s for s in (SPEED, POWER, PRR, PASSES, WOBBLE, WOBBLE_ALONG,
                                    WOBBLE_HZ)}
 
-#: Every setting here, in the docs' order.
-ALL = (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ, TIMEOUT)
+#: The settings docs/settings.md lists, in its order (``standalone``'s press timeout is that
+#: command's own).
+ALL = (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ, TIMEOUT, BAUD)
 
 #: The machine profile's keys that are these settings: ``(section, key)`` → setting.
 PROFILE_KEYS = {("defaults", "speed_mm_s"): SPEED, ("defaults", "power_percent"): POWER,
                 ("defaults", "prr_khz"): PRR, ("defaults", "passes"): PASSES,
                 ("laser", "prr_khz"): PRR, ("link", "timeout_s"): TIMEOUT,
+                ("link", "baud"): BAUD,
                 ("wobble", "across_um"): WOBBLE, ("wobble", "along_um"): WOBBLE_ALONG,
                 ("wobble", "freq_hz"): WOBBLE_HZ}
