@@ -46,7 +46,8 @@ from .sim.board import SimTransport, SimulatedBoard
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "HatchSet", "LineOrder", "Job",
            "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
-           "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table", "load_profile",
+           "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
+           "load_profile",
            "default_profile", "SimulatedBoard", "HostClient", "SerialTransport", "FTDISPITransport",
            "PlanError"]
 

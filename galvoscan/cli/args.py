@@ -19,7 +19,8 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
            "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill",
-           "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s", "power_percent", "passes"]
+           "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s",
+           "power_percent", "passes"]
 
 
 class CLIError(SystemExit):

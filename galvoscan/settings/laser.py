@@ -16,7 +16,8 @@ from .schema import Setting, number_text
 
 
 __all__ = ["SPEED", "POWER", "PRR", "PASSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
-           "TOLERANCE", "TIMEOUT", "BAUD", "PRESS_TIMEOUT", "ALL", "JOB_SETTINGS", "PROFILE_KEYS", "PRR_STEPS_PER_KHZ"]
+           "TOLERANCE", "TIMEOUT", "BAUD", "PRESS_TIMEOUT", "ALL", "JOB_SETTINGS", "PROFILE_KEYS",
+           "PRR_STEPS_PER_KHZ"]
 
 
 _PRR_REGISTER = BY_NAME["laser_prr"]

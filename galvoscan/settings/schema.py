@@ -119,7 +119,8 @@ class Setting:
 def markdown_table(settings):
     """``settings`` as a Markdown table: the option, the job file's key, the unit, the range,
     the default and what it is (the docs' table of them, generated, never written by hand)."""
-    rows = ["| option | job file key | unit | range | default | what |", "|---|---|---|---|---|---|"]
+    rows = ["| option | job file key | unit | range | default | what |",
+            "|---|---|---|---|---|---|"]
     for s in settings:
         default = number_text(s.default) if s.default is not None else s.default_said
         rows.append(f"| `{s.flag}` | {f'`{s.key}`' if s.key else '—'} | {s.unit or '—'} | "
