@@ -13,6 +13,7 @@ from galvoscan.cli import main
 from galvoscan.cli.testgrid import _axis
 from galvoscan.jobs.profile import default_profile
 from galvoscan.jobs.test_grid import plan_test_grid
+from galvoscan.settings.laser import SPEED
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 
@@ -77,7 +78,7 @@ def test_random_axes_parse_or_are_one_line(parts, separator):
     ArgumentTypeError) saying what is wrong; nothing else escapes."""
     text = separator.join(parts)
     try:
-        values = _axis("--speeds", 0.1, 100_000, "mm/s")(text)
+        values = _axis("--speeds", SPEED)(text)
     except argparse.ArgumentTypeError as error:
         assert "\n" not in str(error) and str(error)
         return

@@ -10,13 +10,17 @@ import math
 import os
 from pathlib import Path
 
+from ..settings.laser import BAUD, PASSES, POWER, PRR, SPEED, TIMEOUT
+from ..settings.schema import SettingError, number_text as _number
+
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
            "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill",
-           "prr_khz"]
+           "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s",
+           "power_percent", "passes"]
 
 
 class CLIError(SystemExit):
@@ -45,15 +49,6 @@ def int_in(low, high, what):
     return parse
 
 
-def _number(value):
-    """A bound as a person writes it: 16e6 rather than 1.6e+07."""
-    if abs(value) >= 1e5 and value == int(value):
-        for exponent in (9, 6, 3):
-            if value % 10 ** exponent == 0:
-                return f"{value / 10 ** exponent:g}e{exponent}"
-    return f"{value:g}"
-
-
 def number_in(what, low, high):
     """A finite number from ``low`` to ``high`` (``1e6`` and the like accepted)."""
     def parse(text):
@@ -68,26 +63,43 @@ def number_in(what, low, high):
     return parse
 
 
+def setting_type(setting):
+    """An argparse type reading ``setting`` (a :class:`~galvoscan.settings.schema.Setting`):
+    its range checked, its refusal its own one line."""
+    def parse(text):
+        try:
+            return setting.parse(text)
+        except SettingError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+    parse.__name__ = setting.what
+    return parse
+
+
+def setting_keywords(setting, *, default=None, default_text=None):
+    """``add_argument``'s keywords for ``setting``: its type, placeholder, default and help
+    (the unit, the range and the default said). ``default``: the command's own, in place of
+    the setting's; ``default_text``: where a default left as None comes from."""
+    default = setting.default if default is None else default
+    return dict(type=setting_type(setting), default=default, metavar=setting.metavar,
+                help=setting.described(default, default_text).replace("%", "%%"))
+
+
+def add_setting(group, setting, **how):
+    """``setting``'s option (its flag, :func:`setting_keywords`) in ``group``."""
+    return group.add_argument(setting.flag, **setting_keywords(setting, **how))
+
+
 def prr_khz():
     """``--prr`` of the board's laser, kHz: the ``laser_prr`` register's range (100 Hz
     steps)."""
-    from ..gateware.host.regmap import BY_NAME
-    reg = BY_NAME["laser_prr"]
-    return number_in("PRR (kHz)", reg.low / 10, reg.high / 10)
+    return setting_type(PRR)
 
 
 #: A job's marking speed (mm/s), power (% of the laser's maximum) and passes: the types of
 #: ``mark``'s options and of a layer's settings alike.
-def speed_mm_s(text):
-    return number_in("speed", 0.1, 100_000)(text)
-
-
-def power_percent(text):
-    return number_in("power", 0, 100)(text)
-
-
-def passes(text):
-    return int_in(1, 1000, "passes")(text)
+speed_mm_s = setting_type(SPEED)
+power_percent = setting_type(POWER)
+passes = setting_type(PASSES)
 
 
 def register_int(name, what=None):
@@ -251,7 +263,7 @@ def settings_from(args, table, **overrides):
 
 def baud(text):
     """A UART rate in baud (``1e6``, ``3000000``)."""
-    value = number_in("baud", 300, 12e6)(text)
+    value = setting_type(BAUD)(text)
     if value != int(value):
         raise argparse.ArgumentTypeError(f"baud must be a whole number, not {text}")
     return int(value)
@@ -276,8 +288,7 @@ def add_link_options(parser):
                                                     "(e.g. ftdi://ftdi:2232h/1)")
     link.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                       help="serial rate of the bitstream (default: %(default)s)")
-    link.add_argument("--timeout", type=number_in("timeout", 0.01, 60), default=0.5,
-                      metavar="S", help="seconds to wait for an answer (default: 0.5)")
+    add_setting(link, TIMEOUT, default=0.5)
     link.add_argument("--sck", type=number_in("SPI clock", 1e3, 30e6), default=1e6,
                       metavar="HZ", help="SPI clock, at most the board clock / 12 "
                                          "(default: 1e6)")

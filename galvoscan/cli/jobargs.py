@@ -5,8 +5,15 @@ import argparse
 import contextlib
 import sys
 
-from .args import (add_backend_option, baud, fail, number_in, open_transport, power_percent,
-                   prr_khz, simulated_board, speed_mm_s)
+from tqdm import tqdm
+
+from ..api import load_lens_table
+from ..client import ClientError, HostClient, SerialTransport
+from ..jobs.stream import JobAborted, JobInterrupted
+from ..jobs.vector_job import frame_segments
+from ..sim.board import PTYServer
+from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
+from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -32,13 +39,8 @@ def pair_mm(what):
 def add_job_options(parser):
     """``--speed``, ``--power``, ``--prr``, ``--passes`` (defaults from the machine profile)."""
     job = parser.add_argument_group("laser and speed (defaults: the machine profile's)")
-    job.add_argument("--speed", type=speed_mm_s, metavar="MM_S",
-                     help="marking speed in mm/s")
-    job.add_argument("--power", type=power_percent, metavar="PERCENT",
-                     help="laser power in %% of the laser's maximum")
-    job.add_argument("--prr", type=prr_khz(), metavar="KHZ",
-                     help="pulse repetition rate in kHz (the board's 20 … 200; the profile's "
-                          "laser may allow less)")
+    for setting in (SPEED, POWER, PRR):
+        add_setting(job, setting)
     return job
 
 
@@ -59,10 +61,8 @@ def add_job_link_options(parser):
                        help="run on the simulated board (see --backend for its speed)")
     link.add_argument("--baud", type=baud, default=None,
                       help="serial rate of the bitstream (default: the profile's)")
-    link.add_argument("--timeout", type=number_in("timeout", 0.01, 600), default=None,
-                      metavar="S", help="seconds to wait for an answer (default: the "
-                                        "profile's; with --sim, from the simulator's "
-                                        "measured speed)")
+    add_setting(link, TIMEOUT, default_text="the profile's; with --sim, from the simulator's "
+                                             "measured speed")
     add_backend_option(link, default=None)
 
 
@@ -74,10 +74,8 @@ def has_link(args, profile):
 def board_link(args, profile, *, wobble=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage)."""
-    from ..client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
-        from ..sim.board import PTYServer
         board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
         timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
@@ -96,28 +94,12 @@ def board_link(args, profile, *, wobble=False):
         yield HostClient(transport), None
 
 
-def load_lens_table(client, profile, say):
-    """Write the profile's correction table into the board (at the board's node count), so
-    that the job is corrected with the table it was checked against. Nothing without one."""
-    from ..correction.upload import upload_table
-    table = profile.correction_table()
-    if table is None:
-        return
-    nodes = client.read("cor_nodes")
-    if nodes != table.n:
-        table = table.resampled(nodes)
-    say(f"loading the lens correction table ({nodes} x {nodes} nodes) into the board")
-    upload_table(client, table)
-
-
 @contextlib.contextmanager
 def stopped_in_one_line(*, on_complete=None):
     """A job the board stopped, or a link that failed, as one line and a non-zero exit (the
     streamer has already sent arm = 0). ``on_complete()``: called first when the job was
     marked to its end before it stopped (a part that is done: its serial number is taken);
     it returns words to add to the line."""
-    from ..client import ClientError
-    from ..jobs.stream import JobAborted, JobInterrupted
     try:
         yield
     except JobInterrupted as error:
@@ -133,7 +115,6 @@ def stopped_in_one_line(*, on_complete=None):
 def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):
     """Trace ``outline_mm`` (a closed outline) ``times`` times in vector mode with the guide
     laser on and the laser never armed (``registers``: the vector settings to walk it with)."""
-    from ..jobs.vector_job import frame_segments
     if not profile.laser.guide:
         fail("the machine profile says there is no guide laser ([laser] guide)")
     segments = frame_segments(outline_mm, profile.field.size_mm, times)
@@ -145,6 +126,5 @@ def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say
 
 def progress_bar(total, unit, *, disable=None):
     """A tqdm bar on stderr (off when stderr is not a terminal, unless asked)."""
-    from tqdm import tqdm
     return tqdm(total=total, unit=unit, file=sys.stderr, leave=False,
                 disable=(not sys.stderr.isatty()) if disable is None else disable)

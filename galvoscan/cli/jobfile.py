@@ -38,32 +38,24 @@ and ``--repeat`` are the command line's: they belong to a run, not to the job::
 import argparse
 import difflib
 import os
+from enum import Enum
 from pathlib import Path
 
+import tomli_w
+try:                    # Python 3.11's; tomli, the same parser, before (requires-python 3.9)
+    import tomllib  # novermin: tomli below where it is missing
+except ImportError:     # pragma: no cover (CI runs 3.11)
+    import tomli as tomllib
+
+from ..jobs.fill import Contour, HatchSet
 from .args import fail
+from .job_options import OPTIONS, SECTIONS, defaults as option_defaults, option
+from .layers import layer_from_table
 
 
 __all__ = ["is_job_file", "use_job_file", "save_job_file", "content_entries", "SECTIONS"]
 
 
-#: Each table's keys → the ``mark`` option (its ``dest``) they stand for; ``not`` before a dest:
-#: the option is the key's opposite (``outline = false`` is ``--no-outline``).
-SECTIONS = {
-    "job": {"speed": "speed", "power": "power", "prr": "prr", "passes": "passes",
-            "hatch": "hatch", "hatch_lines": "hatch_lines", "contour": "contour",
-            "outline": "not no_outline", "tolerance": "tolerance", "wobble": "wobble",
-            "wobble_along": "wobble_along", "wobble_hz": "wobble_hz"},
-    "drawing": {"file": "file", "origin": "origin", "offset": "offset", "scale": "scale",
-                "rotate": "rotate"},
-    "text": {"text": "text", "font": "font", "height": "height", "at": "text_at",
-             "align": "align", "letter_spacing": "letter_spacing",
-             "line_height": "line_height", "layer": "layer"},
-    "code": {"kind": "code", "data": "data", "size": "size", "at": "code_at", "ec": "code_ec",
-             "fill": "code_fill", "quiet": "code_quiet", "height": "code_height",
-             "layer": "layer"},
-    "image": {"file": "image", "width": "width", "at": "image_at", "dither": "dither",
-              "line_spacing": "line_spacing", "one_way": "one_way", "layer": "layer"},
-}
 #: Tables that may come more than once (``[[text]]``); ``[job]`` once.
 _LISTS = ("drawing", "text", "code", "image", "layer")
 #: The options whose values are paths, relative to the job file.
@@ -76,17 +68,11 @@ def is_job_file(path):
     return path is not None and Path(path).suffix.lower() == ".toml"
 
 
-def _actions():
-    """``mark``'s options by dest, and their defaults (a parser of the drawing options)."""
-    from .mark import add_drawing_options
-    parser = argparse.ArgumentParser(prog="galvoscan mark")
-    add_drawing_options(parser)
-    return {a.dest: a for a in parser._actions}, parser.parse_args([])
-
-
-def _read(dest, value, action, where):
-    """A TOML value as the option ``dest`` reads it; ValueError naming ``where``."""
-    if action.nargs == 0:                           # a flag: true or false
+def _read(one, value, where):
+    """A TOML value as the option ``one`` (a :class:`~.job_options.Option`) reads it;
+    ValueError naming ``where``."""
+    dest, action = one.dest, one.argparse
+    if one.is_flag:                                 # a flag: true or false
         if not isinstance(value, bool):
             raise ValueError(f"{where} must be true or false, not {value!r}")
         return value
@@ -99,12 +85,12 @@ def _read(dest, value, action, where):
         value = ",".join(repr(float(v)) for v in value)
     text = str(value)
     try:
-        parsed = action.type(text) if action.type else text
+        parsed = action["type"](text) if action.get("type") else text
     except argparse.ArgumentTypeError as error:
         raise ValueError(f"{where}: {error}") from None
-    if action.choices is not None and parsed not in action.choices:
-        raise ValueError(f"{where} must be one of {', '.join(map(str, action.choices))}, not "
-                         f"{value!r}")
+    if action.get("choices") is not None and parsed not in action["choices"]:
+        raise ValueError(f"{where} must be one of {', '.join(map(str, action['choices']))}, "
+                         f"not {value!r}")
     return parsed
 
 
@@ -115,14 +101,12 @@ _NEEDED_WHAT = {"drawing": "the SVG, DXF or .job, relative to the job file",
                 "image": "the PNG or JPEG, relative to the job file"}
 
 
-def _entry(section, table, actions, folder, where, defaults, folder_name=""):
+def _entry(section, table, folder, where, folder_name=""):
     """A table as ``{dest: value}``, the options it leaves out at their defaults."""
     if not isinstance(table, dict):
         raise ValueError(f"{where} must be a table of settings")
     keys = SECTIONS[section]
-    entry = {} if section == "job" else {
-        dest.removeprefix("not "): getattr(defaults, dest.removeprefix("not "), None)
-        for dest in keys.values() if dest != "layer"}
+    entry = {} if section == "job" else {one.dest: one.default for one in keys.values() if one}
     if section != "job":
         needed = _NEEDED[section]
         if needed not in table:
@@ -137,23 +121,21 @@ def _entry(section, table, actions, folder, where, defaults, folder_name=""):
             raise ValueError(f"{where}: {key!r} is not a setting of [{section}]"
                              f"{f' (did you mean {near[0]!r}?)' if near else ''}; its "
                              f"settings: {', '.join(keys)}")
-        dest = keys[key]
-        if dest == "layer":
+        one = keys[key]
+        if one is None:                             # the layer it takes its settings from
             if not isinstance(value, str) or not value.strip():
                 raise ValueError(f"{where}.layer must be a layer's name")
             entry["layer"] = value
             continue
-        if dest == "hatch":
+        if one.dest == "hatch":
             values = value if isinstance(value, list) and value and \
                 isinstance(value[0], str) else [value]
-            entry["hatch"] = [_read(dest, v, actions[dest], f"{where}.hatch") for v in values]
+            entry["hatch"] = [_read(one, v, f"{where}.hatch") for v in values]
             continue
-        inverted = dest.startswith("not ")
-        dest = dest.removeprefix("not ")
-        parsed = _read(dest, value, actions[dest], f"{where}.{key}")
-        if dest in _PATHS:
+        parsed = _read(one, value, f"{where}.{key}")
+        if one.dest in _PATHS:
             parsed = str(folder / parsed)
-        entry[dest] = (not parsed) if inverted else parsed
+        entry[one.dest] = (not parsed) if one.inverted else parsed
     return entry
 
 
@@ -161,11 +143,6 @@ def load_job_file(path):
     """``(job, entries, layers)``: the ``[job]`` settings and every other table, by
     section, as ``{dest: value}``; the layers as :class:`~galvoscan.jobs.layers.Layer` s
     and their tables. One line (and exit) for anything wrong."""
-    try:
-        import tomllib  # novermin: tomli below where it is missing
-    except ModuleNotFoundError:                  # Python < 3.11
-        import tomli as tomllib
-    from .layers import layer_from_table
     path = Path(path)
     try:
         if path.stat().st_size > _MAX_BYTES:
@@ -181,7 +158,6 @@ def load_job_file(path):
         fail(f"{path}: cannot read ({error.strerror})")
     except tomllib.TOMLDecodeError as error:
         fail(f"{path}: not valid TOML ({error})")
-    actions, defaults = _actions()
     folder = path.parent
     entries, layers, tables = {section: [] for section in _LISTS}, [], []
     job = {}
@@ -194,7 +170,7 @@ def load_job_file(path):
                                  f"{f' (did you mean [{near[0]}]?)' if near else ''}; its "
                                  f"sections: {', '.join([*SECTIONS, 'layer'])}")
             if section == "job":
-                job = _entry("job", value, actions, folder, "[job]", defaults)
+                job = _entry("job", value, folder, "[job]")
                 continue
             tables_here = value if isinstance(value, list) else [value]
             for k, table in enumerate(tables_here, 1):
@@ -203,8 +179,8 @@ def load_job_file(path):
                     layers.append(layer_from_table(table, where))
                     tables.append(table)
                 else:
-                    entries[section].append(_entry(section, table, actions, folder, where,
-                                                   defaults, path.name))
+                    entries[section].append(_entry(section, table, folder, where,
+                                                   path.name))
     except ValueError as error:
         fail(f"{path}: {error}")
     if not any(entries[s] for s in ("drawing", "text", "code", "image")):
@@ -213,13 +189,13 @@ def load_job_file(path):
 
 
 #: What a job file holds: with one, these options are the file's, not the command line's
-#: (a run may change only its speed, power, PRR and passes).
-_FILE_ONLY = ("origin", "offset", "scale", "rotate", "text", "font", "height", "text_at",
-              "align", "letter_spacing", "line_height", "code", "data", "size", "code_at",
-              "code_ec", "code_fill", "code_quiet", "code_height", "image", "width",
-              "image_at", "dither", "line_spacing", "one_way", "layers", "hatch",
-              "hatch_lines", "contour", "no_outline", "tolerance", "wobble", "wobble_along",
-              "wobble_hz")
+#: (a run may change only its speed, power, PRR and passes): every option a table holds but
+#: the drawing's file, and the layers.
+_FILE_ONLY = tuple(
+    [o.dest for section in ("drawing", "text", "code", "image") for o in OPTIONS
+     if o.section == section and o.dest != "file"] + ["layers"] +
+    [o.dest for o in OPTIONS if o.section == "job" and
+     o.dest not in ("speed", "power", "prr", "passes")])
 #: A run's options, not a job's: a job file that names one is told where it goes.
 _RUN_OPTIONS = ("port", "spi", "sim", "baud", "timeout", "backend", "machine", "repeat",
                 "serial_start", "serial_step", "json", "preview", "estimate", "frame", "save")
@@ -233,16 +209,16 @@ def use_job_file(args):
     if not is_job_file(getattr(args, "file", None)):
         args.entries = content_entries(args)
         return
-    actions, defaults = _actions()
-    given = [d for d in _FILE_ONLY if getattr(args, d, None) != getattr(defaults, d, None)]
+    defaults = option_defaults()
+    given = [d for d in _FILE_ONLY if getattr(args, d, None) != defaults.get(d)]
     if given:
-        fail(f"{actions[given[0]].option_strings[0]} is the job file's: put it in "
+        fail(f"{option(given[0]).flag} is the job file's: put it in "
              f"{args.file} (a run may give only --speed, --power, --prr and --passes)")
     job, entries, layers, tables = load_job_file(args.file)
     for dest, value in job.items():
         if dest in ("speed", "power", "prr", "passes") and getattr(args, dest) is not None:
             continue
-        if getattr(args, dest, None) == getattr(defaults, dest, None):
+        if getattr(args, dest, None) == defaults.get(dest):
             setattr(args, dest, value)
     args.job_file, args.file = args.file, None
     args.layers, args.layer_tables = layers, tables
@@ -254,7 +230,7 @@ def content_entries(args):
     def pick(section, first):
         if getattr(args, first, None) is None:
             return []
-        dests = [d.removeprefix("not ") for d in SECTIONS[section].values() if d != "layer"]
+        dests = [one.dest for one in SECTIONS[section].values() if one]
         return [{d: getattr(args, d) for d in dests if hasattr(args, d)}]
     return {"drawing": pick("drawing", "file"), "text": pick("text", "text"),
             "code": pick("code", "code"), "image": pick("image", "image")}
@@ -262,8 +238,6 @@ def content_entries(args):
 
 def _toml(dest, value, folder):
     """An option's value as the job file writes it."""
-    from enum import Enum
-    from ..jobs.fill import Contour, HatchSet
     if isinstance(value, HatchSet):
         parts = [value.spacing_mm, value.angle_deg, value.step_deg, value.offset_mm]
         while len(parts) > 1 and parts[-1] == 0:
@@ -286,31 +260,29 @@ def _toml(dest, value, folder):
 
 def save_job_file(args, path):
     """Write the job ``args`` plan (as ``use_job_file`` left it) to ``path``, a job file."""
-    import tomli_w
-    _, defaults = _actions()
+    defaults = option_defaults()
     folder = Path(path).parent
 
     def table(section, entry):
         """A section's entry (``{dest: value}``) as its TOML table: the defaults said by
         saying nothing (a drawing's placement said whole)."""
         out = {}
-        for key, dest in SECTIONS[section].items():
-            inverted = dest.startswith("not ")
-            dest = dest.removeprefix("not ")
+        for key, one in SECTIONS[section].items():
+            dest = one.dest if one else "layer"
             value = entry.get(dest)
             if value is None or value == []:
                 continue
             if section != "drawing" and dest not in ("layer", "text", "code") and \
-                    value == getattr(defaults, dest, None):
+                    value == defaults.get(dest):
                 continue
             if dest == "hatch":
                 out[key] = [_toml(dest, h, folder) for h in value]
             else:
-                out[key] = (not value) if inverted else _toml(dest, value, folder)
+                out[key] = (not value) if one and one.inverted else _toml(dest, value, folder)
         return out
 
-    job = table("job", {dest.removeprefix("not "): getattr(args, dest.removeprefix("not "), None)
-                        for dest in SECTIONS["job"].values()})
+    job = table("job", {one.dest: getattr(args, one.dest, None)
+                        for one in SECTIONS["job"].values()})
     lists = {section: [table(section, e) for e in args.entries.get(section, [])]
              for section in ("drawing", "text", "code", "image")}
     lists["layer"] = [dict(t) for t in getattr(args, "layer_tables", None) or []]

@@ -5,17 +5,20 @@ line's, or the layer's own) into its registers; and the layered job's plan said 
 line."""
 
 import argparse
+import difflib
 
+from ..api import apply_wobble, job_wobble
 from ..gateware.host.regmap import BY_NAME
-from ..gateware.limits import WOBBLE_MAX_HZ
 from ..jobs.fill import LineOrder
+from ..jobs.layers import Layer
+from ..jobs.plan import PlanError
 from ..jobs.profile_keys import DELAY_KEYS
-from .args import (contour_fill, fail, hatch_set, number_in, passes, power_percent, prr_khz,
-                   register_int, speed_mm_s)
+from ..settings.laser import JOB_SETTINGS
+from .args import contour_fill, fail, hatch_set, register_int, setting_type
 
 
-__all__ = ["add_layer_option", "layer_from_words", "layer_from_table", "LAYER_KEYS",
-           "layer_wobble", "add_wobble", "describe_layers"]
+__all__ = ["LayerAction", "layer_from_words", "layer_from_table", "LAYER_KEYS", "add_wobble",
+           "describe_layers"]
 
 
 def _yes_no(text):
@@ -44,13 +47,12 @@ def _hatch(text):
 #: the laser, mark and polygon delays (else the profile's).
 _DELAYS = ("jump_delay", *DELAY_KEYS.values())
 
-#: key → (Layer field, the type that reads it, what it is). Delays are registers, their
+#: key → (Layer field, the type that reads it, what it is). The job's settings are
+#: :mod:`galvoscan.settings.laser`'s (their ranges and refusals); delays are registers, their
 #: ranges the register map's.
 LAYER_KEYS = {
-    "speed": ("speed_mm_s", speed_mm_s, "mm/s"),
-    "power": ("power_percent", power_percent, "% of the laser's maximum"),
-    "prr": ("prr_khz", prr_khz(), "kHz"),
-    "passes": ("passes", passes, "times the layer is marked"),
+    **{key: (setting.name, setting_type(setting), setting.unit or setting.help)
+       for key, setting in JOB_SETTINGS.items() if key in ("speed", "power", "prr", "passes")},
     "pulses": ("pulses_per_point", register_int("pulses_per_point", "pulses per point"),
                "laser pulses a point (the pitch then follows the speed)"),
     "hatch": ("hatch", _hatch, "SPACING[,ANGLE[,STEP[,OFFSET]]], repeated for more sets; "
@@ -58,9 +60,8 @@ LAYER_KEYS = {
     "hatch_lines": ("hatch_lines", _hatch_lines, "serpentine, oneway or joined"),
     "contour": ("contour", contour_fill, "SPACING[,COUNT]"),
     "outline": ("outline", _yes_no, "yes or no"),
-    "wobble": ("wobble_um", number_in("wobble", 0, 10_000), "µm across (0: none)"),
-    "wobble_along": ("wobble_along_um", number_in("wobble along", 0, 10_000), "µm"),
-    "wobble_hz": ("wobble_hz", number_in("wobble hz", 1, WOBBLE_MAX_HZ), "Hz"),
+    **{key: (setting.name, setting_type(setting), setting.unit)
+       for key, setting in JOB_SETTINGS.items() if key.startswith("wobble")},
     **{register: (register, register_int(register, register.replace("_", " ")),
                   BY_NAME[register].unit) for register in _DELAYS},
 }
@@ -69,9 +70,6 @@ LAYER_KEYS = {
 def _layer(match, pairs, where):
     """A :class:`~galvoscan.jobs.layers.Layer` from ``(key, value)`` pairs (values as text or
     TOML gives them); ValueError, one line naming ``where`` and the key."""
-    import difflib
-    from ..jobs.layers import Layer
-    from ..jobs.plan import PlanError
     fields, hatch, delays = {}, [], []
     for key, value in pairs:
         if key not in LAYER_KEYS:
@@ -138,7 +136,10 @@ def _number_or_text(text):
     return {"yes": True, "no": False}.get(text.lower(), text)
 
 
-class _LayerAction(argparse.Action):
+class LayerAction(argparse.Action):
+    """``--layer MATCH KEY=VALUE …``: a :class:`~galvoscan.jobs.layers.Layer` appended to
+    ``layers``, and its words as a job file's ``[[layer]]`` table (for ``--save``)."""
+
     def __call__(self, parser, namespace, values, option_string=None):
         try:
             layer = layer_from_words(values)
@@ -160,29 +161,6 @@ class _LayerAction(argparse.Action):
         namespace.layer_tables.append(table)
 
 
-def add_layer_option(group):
-    group.add_argument(
-        "--layer", nargs="+", action=_LayerAction, default=[], dest="layers",
-        metavar=("MATCH", "KEY=VALUE"), help="settings of their own for the paths of one colour "
-        "(an SVG stroke, else fill: \"#ff0000\"; quote it) or one layer (an Inkscape layer's "
-        "label, a DXF layer's name); repeat it for more layers, run in that order, what none "
-        "matches last; keys: " + ", ".join(f"{key} ({unit})" for key, (_, _, unit) in
-                                            LAYER_KEYS.items()).replace("%", "%%"))
-
-
-def layer_wobble(layer, base):
-    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
-    amplitudes and frequency in place of ``base``'s where it gives them."""
-    from dataclasses import replace
-    if layer is None:
-        return base
-    across = layer.wobble_um if layer.wobble_um is not None else base.across_um
-    along = layer.wobble_along_um if layer.wobble_along_um is not None else \
-        (layer.wobble_um if layer.wobble_um is not None else base.along_um)
-    hz = layer.wobble_hz if layer.wobble_hz is not None else base.freq_hz
-    return replace(base, across_um=across, along_um=along, freq_hz=hz)
-
-
 def _wobble_words(registers, profile):
     if not registers.get("wob_shape"):
         return ""
@@ -191,49 +169,16 @@ def _wobble_words(registers, profile):
             f"µm at {registers['wob_freq']} Hz")
 
 
-def _wobble(args, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
-    profile's [wobble]."""
-    from ..jobs.wobble import WobbleSettings
-    section = profile.wobble
-    across = args.wobble if args.wobble is not None else section.across_um
-    along = args.wobble_along if args.wobble_along is not None else \
-        (args.wobble if args.wobble is not None else section.along_um)
-    hz = args.wobble_hz if args.wobble_hz is not None else section.freq_hz
-    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
-
-
 def add_wobble(job, args, profile):
     """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
-    place) into its registers, its reach checked against the field; a layer that does not
-    wobble among ones that do turns it off. Returns whether anything wobbles."""
-    from ..gateware.host.fields import WobbleShape
-    from ..jobs.plan import PlanError
-    from ..jobs.wobble import wobble_registers
-    base = _wobble(args, profile)
-    parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
+    place, else the profile's) into its registers, by the API (:func:`galvoscan.api.
+    apply_wobble`); one line for a wobble that reaches past the field. Returns whether
+    anything wobbles."""
     try:
-        found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+        return apply_wobble(job, job_wobble(args.wobble, args.wobble_along, args.wobble_hz,
+                                            profile), profile)
     except PlanError as error:
         fail(error)
-    if not any(found):
-        return False
-    for (layer, part), regs in zip(parts, found):
-        if not regs:
-            part.registers["wob_shape"] = WobbleShape.OFF.value
-            continue
-        # The figure reaches past the lines by its larger amplitude: that too must be in the
-        # field (the board would clamp it at the edge).
-        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
-        half = profile.field.size_mm / 2
-        xmin, ymin, xmax, ymax = part.bounds_mm
-        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
-            fail(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the field "
-                 f"(−{half:g}…{half:g} mm): move it towards the centre or wobble less")
-        part.registers.update(regs)
-    if job.layers:
-        job.registers.update(job.layers[0].job.registers)
-    return True
 
 
 def describe_layers(job, profile):

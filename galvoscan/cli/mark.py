@@ -6,48 +6,57 @@ opened. ``--sim`` runs the job on the simulated board through the same link code
 ``--json`` reports what the scan head and the laser did.
 """
 
+import argparse
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from ..gateware.limits import WOBBLE_MAX_HZ
+from .. import api
+from ..job import JobError, parse_job
+from ..jobs.drawing import DrawingError
 from ..jobs.fill import LineOrder
-from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
-                   number_in, passes)
-from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
-                      job_settings_values, load_lens_table, pair_mm, progress_bar,
+from ..jobs.plan import PlanError
+from ..jobs.speed import path_length_mm
+from ..jobs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
+from ..jobs.vector_job import hull_outline, link_segments_per_s, plan_job_file
+from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
+from .jobargs import (add_job_link_options, board_link, frame_job, has_link,
+                      job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
-from .content import (add_content_options, check_content_options, content_objects,
-                      part_serials)
-from .job_reports import mark_estimate_record, sim_report
-from .layers import add_layer_option, add_wobble
+from .content import check_content_options, content_objects, part_serials
+from .job_options import add_job_file_options
+from .jobfile import save_job_file, use_job_file
+from .job_reports import describe_job, mark_estimate_record, sim_report
+from .layers import add_wobble, describe_layers
 from .machine import add_machine_option, profile_from
 
 
 __all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
 
 
+def job_from_args(args):
+    """The command line's (and its job file's) job settings and layers, as
+    :class:`~galvoscan.api.Job` takes them; its objects are made by :func:`_plan`, each
+    refused with the place (a job file's table) it came from."""
+    return dict(layers=tuple(args.layers or ()), speed_mm_s=args.speed,
+                power_percent=args.power, prr_khz=args.prr, passes=args.passes,
+                hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
+                contour=args.contour, outline=not args.no_outline, tolerance_mm=args.tolerance)
+
+
 def _plan(args, profile, serial=None):
     """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` (of layers, when ``--layer``
-    gives them) and the placement, or one line and exit."""
-    from ..job import JobError, parse_job
-    from ..jobs.drawing import DrawingError, load_drawing
-    from ..jobs.layers import merged, plan_layers
-    from ..jobs.plan import Placement, PlanError
-    from ..jobs.vector_job import JobSettings, MarkObject, plan_job_file
-    from .args import read_text
-    speed, power, prr = job_settings_values(args, profile)
-    settings = JobSettings(speed_mm_s=speed, power_percent=power, prr_khz=prr,
-                           passes=args.passes or profile.defaults.passes,
-                           hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
-                           contour=args.contour, outline=not args.no_outline)
+    gives them) and the placement, or one line and exit: the arguments mapped onto the API
+    (:mod:`galvoscan.api`), which plans."""
     entries = args.entries
     if not any(entries[kind] for kind in ("drawing", "text", "code", "image")):
         fail("give a drawing (FILE) or something to make (--text, --code, --image)")
     try:
         check_content_options(args)
+        job = api.Job(**job_from_args(args))
+        settings = api.job_settings(job, profile)
         objects = content_objects(args, settings, profile, serial=serial)
         if args.file is not None and Path(args.file).suffix.lower() == ".job":
             if objects or args.layers:
@@ -57,25 +66,22 @@ def _plan(args, profile, serial=None):
             return plan_job_file(segments, settings, profile), None, None
         drawings = []
         for entry in entries["drawing"]:
-            placement = Placement(origin=entry["origin"], offset_mm=entry["offset"],
-                                  scale=entry["scale"], rotate_deg=entry["rotate"])
+            drawing = api.Drawing(entry["file"], origin=entry["origin"],
+                                  offset_mm=entry["offset"], scale=entry["scale"],
+                                  rotate_deg=entry["rotate"])
             try:
-                drawing = load_drawing(entry["file"], tolerance_mm=args.tolerance)
+                drawings.append(api.mark_object(drawing, settings, profile,
+                                                tolerance_mm=args.tolerance))
             except DrawingError as error:
                 where = entry.get("_where")
                 raise DrawingError(f"{where}: {error}" if where else str(error)) from None
-            drawings.append(MarkObject(drawing, placement, settings))
-        objects[:0] = drawings
-        first = objects[0]
-        job = merged(plan_layers(objects, args.layers, settings, profile))
-        return job, first.placement, first.drawing
+        plan = api.plan_objects(drawings + objects, job, settings, profile)
+        return plan.vector_job, plan.placement, plan.drawing
     except (DrawingError, PlanError, JobError, ValueError) as error:
         fail(error)
 
 
 def _link_warning(job, baud):
-    from ..jobs.stream import QUEUE_DEPTH
-    from ..jobs.vector_job import link_segments_per_s
     if len(job.segments) <= QUEUE_DEPTH or job.estimate_s <= 0:
         return None
     needed = len(job.segments) / job.estimate_s
@@ -92,8 +98,6 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     checked (the wobble's reach too), its description said (not ``quiet``), the preview drawn.
     ``serial``: the part's number, for a ``{serial}`` field. Returns ``(job, placement,
     drawing, profile, wobbles, say)``; one line and exit on a fault."""
-    from .job_reports import describe_job
-    from .layers import describe_layers
     profile = profile or profile_from(args)
     job, placement, drawing = _plan(args, profile, serial)
     wobbles = add_wobble(job, args, profile)
@@ -117,8 +121,9 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
 
 def _draw_preview(args, job, drawing, profile):
     """The preview of one pass (each layer's in its colour), the title saying all passes'."""
+    # Here, not at the top: the preview draws with matplotlib, whose import would slow every
+    # command down by a third of a second; only --preview needs it.
     from ..jobs.preview import preview
-    from ..jobs.speed import path_length_mm
     source = args.file or getattr(args, "job_file", None)
     dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
     passes = max(lj.settings.passes for lj in job.layers) if job.layers else \
@@ -135,9 +140,6 @@ def _draw_preview(args, job, drawing, profile):
 
 
 def _cmd_mark(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer, StreamReport
-    from .jobfile import use_job_file
     check_backend_needs_sim(args)
     if args.save and args.file and Path(args.file).suffix.lower() == ".job":
         fail("a .job is in galvo units and marked as it is: there is no job to --save")
@@ -161,7 +163,6 @@ def _cmd_mark(args):
             bar.close()
     job, placement, drawing, profile, wobbles, say = parts[0]
     if args.save:
-        from .jobfile import save_job_file
         save_job_file(args, args.save)
         say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
     if counter is not None:
@@ -215,11 +216,10 @@ def _cmd_mark(args):
                     if number == 0:
                         load_lens_table(client, profile, say)
                     if args.frame:
-                        from ..jobs.vector_job import hull_outline
                         frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
-                    report, layer_starts = _run_layers(streamer, part, board, timeout)
+                    report, layer_starts = api.stream_layers(streamer, part, board, timeout)
                     reports.append(report)
             finally:
                 bar.close()
@@ -267,88 +267,16 @@ def _cmd_mark(args):
     return 0
 
 
-def _run_layers(streamer, job, board, timeout):
-    """Run ``job`` (its layers one after the other, each at its own settings): the reports
-    summed into one, and (on a simulated board) the index of each layer's first pulse."""
-    from ..jobs.stream import JobAborted, StreamReport
-    reports, starts = [], []
-    parts = [lj.job for lj in job.layers] if job.layers else [job]
-    for index, part in enumerate(parts):
-        starts.append(len(board.pulses) if board is not None else None)
-        try:
-            reports.append(streamer.run_vector(part.segments, part.registers,
-                                               timeout_s=timeout, ready_timeout_s=timeout))
-        except JobAborted as error:
-            # A layer marked whole is the part done only if it is the last.
-            error.complete = error.complete and index == len(parts) - 1
-            raise
-        if not reports[-1].clean:
-            break                           # said, and refused, by the caller
-    return StreamReport.total(reports), starts
-
-
 def _job_file_path(text):
-    import argparse
     if not text.lower().endswith(".toml"):
         raise argparse.ArgumentTypeError(f"a job file ends in .toml, not {text!r}")
     return text
 
 
 def add_drawing_options(parser):
-    """The drawing, its placement, hatch, wobble and the job's laser and speed: what ``mark``
-    and ``store`` plan a job from."""
-    parser.add_argument("file", metavar="FILE", nargs="?",
-                        help="the drawing (.svg, .dxf, or a .job in galvo units) or a job file "
-                             "(.toml, as --save writes); none, with --text, --code or --image")
-    add_content_options(parser)
-    add_job_options(parser)
-    parser.add_argument("--passes", type=passes, default=None,
-                        metavar="N", help="times the job is marked (default: the profile's)")
-    shape = parser.add_argument_group("drawing")
-    add_layer_option(shape)
-    shape.add_argument("--hatch", type=hatch_set, action="append",
-                       metavar="SPACING[,ANGLE[,STEP[,OFFSET]]]",
-                       help="fill closed shapes with lines SPACING mm apart at ANGLE degrees "
-                            "(holes by the even-odd rule), turned STEP degrees more each pass, "
-                            "moved OFFSET mm across; repeat it for more sets (0.05,0 and "
-                            "0.05,90: a cross-hatch)")
-    shape.add_argument("--hatch-lines", choices=[order.value for order in LineOrder],
-                       default=LineOrder.SERPENTINE.value,
-                       help="the hatch's lines each the other way from the last (serpentine, "
-                            "the default), all the same way (oneway), or serpentine and joined "
-                            "inside the shape where they can be (joined: fewer jumps)")
-    shape.add_argument("--contour", type=contour_fill, metavar="SPACING[,COUNT]",
-                       help="fill closed shapes with rings inward from their edges, SPACING mm "
-                            "apart (COUNT of them at most; default: until filled)")
-    shape.add_argument("--no-outline", action="store_true",
-                       help="mark the hatch only, not the outlines")
-    shape.add_argument("--tolerance", type=number_in("tolerance", 0.0005, 1), default=0.01,
-                       metavar="MM", help="curves as chords at most this far off "
-                                          "(default: 0.01 mm)")
-    wobble = parser.add_argument_group(
-        "wobble (an ellipse laid over marked lines; needs a bitstream with the wobble stage; "
-        "defaults: the profile's [wobble])")
-    wobble.add_argument("--wobble", type=number_in("wobble", 0, 10_000), metavar="UM",
-                        help="amplitude across the line (to each side), µm; a circle unless "
-                             "--wobble-along; 0: no wobble")
-    wobble.add_argument("--wobble-along", type=number_in("wobble-along", 0, 10_000),
-                        metavar="UM", help="amplitude along the line, µm (an ellipse)")
-    wobble.add_argument("--wobble-hz", type=number_in("wobble-hz", 1, WOBBLE_MAX_HZ), metavar="HZ",
-                        help="turns of the figure a second (default: the profile's, 1000)")
-    place = parser.add_argument_group("placement")
-    place.add_argument("--origin", choices=["centre", "center", "lower-left", "page"],
-                       default="centre", help="what of the drawing goes to --offset: its "
-                                              "bounding box's centre (default) or lower-left "
-                                              "corner, or (page) its own origin, the drawing "
-                                              "keeping its own coordinates (a DXF's 0,0; an "
-                                              "SVG's top-left corner)")
-    place.add_argument("--offset", type=pair_mm("--offset"), default=(0.0, 0.0),
-                       metavar="X,Y", help="where in the field, mm from its centre "
-                                           "(default: 0,0; a negative X as --offset=-5,2)")
-    place.add_argument("--scale", type=number_in("scale", 1e-3, 1e3), default=1.0, metavar="K",
-                       help="size factor, about the drawing's centre (default: 1)")
-    place.add_argument("--rotate", type=number_in("rotate", -360, 360), default=0.0,
-                       metavar="DEG", help="counter-clockwise, degrees")
+    """The drawing, its text, codes and photos, their placement, hatch, wobble and the job's
+    laser and speed: what ``mark`` and ``store`` plan a job from (:mod:`.job_options`)."""
+    add_job_file_options(parser)
 
 
 def add_plan_outputs(group):

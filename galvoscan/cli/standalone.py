@@ -11,7 +11,8 @@ import json
 import sys
 from pathlib import Path
 
-from .args import add_backend_option, fail, int_in, output_file, read_bytes
+from ..settings.laser import PRESS_TIMEOUT
+from .args import add_backend_option, add_setting, fail, int_in, output_file, read_bytes
 from .machine import add_machine_option, profile_from
 from .job_reports import FIELD_FRAME
 from .mark import add_drawing_options, add_plan_outputs, planned_job
@@ -271,9 +272,7 @@ def add_parsers(commands):
                                  "a whole 16 MiB flash image as `flash --to` writes it")
     standalone.add_argument("--presses", type=int_in(1, 100, "presses"), default=1,
                             metavar="N", help="presses of the start input (default 1)")
-    standalone.add_argument("--timeout", type=int_in(1, 3600, "timeout"), default=600,
-                            metavar="S", help="the most of the board's own time a press may "
-                                              "take (default 600 s)")
+    add_setting(standalone, PRESS_TIMEOUT)
     standalone.add_argument("--json", action="store_true",
                             help="print the marks off the wires, the pulses and the "
                                  "player's verdicts as JSON")

@@ -1,9 +1,14 @@
 """``galvoscan test-grid``: a material test, a square for each speed and power, labelled."""
 
+import argparse
 import json
 import sys
 
-from .args import fail, image_file, int_in, number_in, prr_khz
+from ..jobs.plan import PlanError
+from ..jobs.stream import JobStreamer
+from ..jobs.test_grid import axis_values, plan_test_grid
+from ..settings.laser import POWER, PRR, SPEED
+from .args import fail, image_file, int_in, number_in, setting_type
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
                       progress_bar, stopped_in_one_line)
 from .machine import add_machine_option, profile_from
@@ -12,9 +17,8 @@ from .machine import add_machine_option, profile_from
 __all__ = ["add_parsers"]
 
 
-def _axis(what, low_limit, high_limit, unit):
-    """``A:B:N``: N values from A to B, each within the limits."""
-    import argparse
+def _axis(what, setting):
+    """``A:B:N``: N values from A to B, each within ``setting``'s range."""
 
     def parse(text):
         parts = text.split(":")
@@ -27,23 +31,18 @@ def _axis(what, low_limit, high_limit, unit):
         except (ValueError, IndexError):
             raise argparse.ArgumentTypeError(f"{what} must be A:B:N (from A to B in N steps) "
                                              f"or one value, not {text!r}")
-        from ..jobs.plan import PlanError
-        from ..jobs.test_grid import axis_values
         try:
             values = axis_values(low, high, count, what)
         except PlanError as error:
             raise argparse.ArgumentTypeError(str(error))
-        if not all(low_limit <= v <= high_limit for v in values):
-            raise argparse.ArgumentTypeError(f"{what} must be from {low_limit:g} to "
-                                             f"{high_limit:g} {unit}, not {text}")
+        if not all(setting.low <= v <= setting.high for v in values):
+            raise argparse.ArgumentTypeError(f"{what} must be from {setting.low:g} to "
+                                             f"{setting.high:g} {setting.unit}, not {text}")
         return values
     return parse
 
 
 def _cmd_test_grid(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer
-    from ..jobs.test_grid import plan_test_grid
     profile = profile_from(args)
     prr = args.prr if args.prr is not None else profile.defaults.prr_khz
     try:
@@ -64,6 +63,8 @@ def _cmd_test_grid(args):
             f"{c.centre_mm[1]:g}) mm: {c.job.estimate_s:.2f} s, pitch "
             f"{c.job.pitch.pitch_mm * 1000:.1f} µm × {c.job.pitch.pulses_per_point}")
     if args.preview:
+        # Here, not at the top: matplotlib's import would slow every command; only
+        # --preview draws.
         from ..jobs.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,
@@ -115,12 +116,14 @@ def add_parsers(commands):
                     "single-line font; centred in the field. meerk40t calls it a material "
                     "test. Each speed is the nearest the machine makes (whole galvo units "
                     "and pulses a point), and its label says so.")
-    grid.add_argument("--speeds", type=_axis("--speeds", 0.1, 100_000, "mm/s"), required=True, metavar="A:B:N",
-                      help="marking speeds, mm/s: N from A to B (or one)")
-    grid.add_argument("--powers", type=_axis("--powers", 0, 100, "%"), required=True, metavar="A:B:N",
-                      help="laser powers, %%: N from A to B (or one)")
-    grid.add_argument("--prr", type=prr_khz(), default=None, metavar="KHZ",
-                      help="pulse repetition rate, kHz (default: the profile's)")
+    grid.add_argument("--speeds", type=_axis("--speeds", SPEED), required=True,
+                      metavar="A:B:N", help=f"marking speeds, {SPEED.unit}: N from A to B "
+                                            f"(or one)")
+    grid.add_argument("--powers", type=_axis("--powers", POWER), required=True,
+                      metavar="A:B:N", help=f"laser powers, {POWER.unit}%: N from A to B "
+                                            f"(or one)")
+    grid.add_argument("--prr", type=setting_type(PRR), default=None, metavar=PRR.metavar,
+                      help=f"pulse repetition rate, {PRR.unit} (default: the profile's)")
     grid.add_argument("--passes", type=int_in(1, 100, "passes"), default=1, metavar="N",
                       help="times each square is marked (default 1)")
     grid.add_argument("--cell", type=number_in("cell", 0.5, 100), default=5.0, metavar="MM",

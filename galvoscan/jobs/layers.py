@@ -15,6 +15,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..settings.laser import JOB_SETTINGS
+
 
 __all__ = ["PathStyle", "Layer", "split_by_layer", "preview_colour"]
 
@@ -27,6 +29,9 @@ class PathStyle:
     colour: str = None
     layer: str = None
 
+
+#: The unit of each of a layer's settings that is a job's (:mod:`galvoscan.settings.laser`).
+_UNITS = {setting.name: setting.unit for setting in JOB_SETTINGS.values()}
 
 _HEX = re.compile(r"#([0-9a-f]{3}|[0-9a-f]{6})")
 
@@ -106,12 +111,12 @@ class Layer:
     def changes(self):
         """What the layer sets, as a person reads it: ``"speed 500 mm/s, power 80 %"``."""
         out = []
-        units = {"speed_mm_s": ("speed", "mm/s"), "power_percent": ("power", "%"),
-                 "prr_khz": ("PRR", "kHz"), "passes": ("passes", ""),
-                 "pulses_per_point": ("pulses per point", ""), "wobble_um": ("wobble", "µm"),
-                 "wobble_along_um": ("wobble along", "µm"), "wobble_hz": ("wobble", "Hz")}
-        for name, (what, unit) in units.items():
+        words = {"speed_mm_s": "speed", "power_percent": "power", "prr_khz": "PRR",
+                 "passes": "passes", "pulses_per_point": "pulses per point",
+                 "wobble_um": "wobble", "wobble_along_um": "wobble along", "wobble_hz": "wobble"}
+        for name, what in words.items():
             value = getattr(self, name)
+            unit = _UNITS.get(name, "")             # the setting's (pulses: none)
             if value is not None:
                 out.append(f"{what} {value:g}{' ' + unit if unit else ''}")
         if self.hatch is not None:

@@ -21,7 +21,8 @@ import difflib
 import math
 import re
 
-from ..gateware.host.regmap import BY_NAME, FRAME_US, WOBBLE_MAX_HZ
+from ..gateware.host.regmap import BY_NAME, FRAME_US
+from ..settings import laser as settings
 
 
 # --- what the registers fix ------------------------------------------------------------------
@@ -30,9 +31,8 @@ _PRR = BY_NAME["laser_prr"]
 _POWER = BY_NAME["laser_power"]
 _JUMP = BY_NAME["jump_delay"]
 
-#: Steps of ``laser_prr`` per kHz (its unit is 100 Hz).
-_PRR_STEPS_PER_KHZ = 10
-assert _PRR.unit == "100 Hz", "laser_prr's unit changed: update _PRR_STEPS_PER_KHZ"
+#: Steps of ``laser_prr`` per kHz (its unit is 100 Hz): the setting's.
+_PRR_STEPS_PER_KHZ = settings.PRR_STEPS_PER_KHZ
 assert _JUMP.unit == "µs", "jump_delay's unit changed: update the profile"
 #: ``[galvo]`` keys that go to a delay register as they are, in µs: key → register.
 DELAY_KEYS = {"laser_on_delay_us": "laser_on_delay", "laser_off_delay_us": "laser_off_delay",
@@ -40,7 +40,7 @@ DELAY_KEYS = {"laser_on_delay_us": "laser_on_delay", "laser_off_delay_us": "lase
 assert all(BY_NAME[r].unit.startswith("µs") for r in DELAY_KEYS.values())
 
 #: The pulse repetition rates the board can make, in kHz (``laser_prr``'s range).
-PRR_RANGE_KHZ = (_PRR.low / _PRR_STEPS_PER_KHZ, _PRR.high / _PRR_STEPS_PER_KHZ)
+PRR_RANGE_KHZ = settings.PRR.range
 #: The jump delays the board can wait, in µs (``jump_delay``'s range).
 JUMP_DELAY_RANGE_US = (_JUMP.low, _JUMP.high)
 #: ``laser_power`` at 100 %.
@@ -49,6 +49,11 @@ POWER_REGISTER_MAX = _POWER.high
 
 class ProfileError(ValueError):
     """A machine profile that cannot be used: one line naming the file and the key."""
+
+
+def _whole(bound):
+    """A bound as the template and the messages write it: 12000000, not 12000000.0."""
+    return int(bound) if float(bound).is_integer() else bound
 
 
 # --- the keys --------------------------------------------------------------------------------
@@ -61,17 +66,26 @@ class _Key:
     high: float = None
     unit: str = ""
 
+    @classmethod
+    def of(cls, section, name, kind="number"):
+        """The key ``[section] name``, whose range and unit are its setting's
+        (:data:`galvoscan.settings.laser.PROFILE_KEYS`)."""
+        setting = settings.PROFILE_KEYS[section, name]
+        return cls(name, kind if setting.kind == "number" else "integer",
+                   _whole(setting.low), _whole(setting.high), setting.unit)
 
-#: Every section and its keys, in the template's order. The ranges here are the ones checked.
+
+#: Every section and its keys, in the template's order. The ranges here are the ones checked;
+#: the keys that are a job's or a run's settings take theirs from :mod:`galvoscan.settings`.
 SECTIONS = {
     "field": (_Key("size_mm", "number", 1, 2000, "mm"),
               _Key("correction", "path")),
     "link": (_Key("port", "text"),
-             _Key("baud", "integer", 300, 12_000_000, "baud"),
+             _Key.of("link", "baud", "integer"),
              _Key("spi", "text"),
-             _Key("timeout_s", "number", 0.01, 600, "s")),
+             _Key.of("link", "timeout_s")),
     "laser": (_Key("max_power_w", "number", 0.1, 10_000, "W"),
-              _Key("prr_khz", "prr_pair", *PRR_RANGE_KHZ, "kHz"),
+              _Key.of("laser", "prr_khz", "prr_pair"),
               _Key("spot_mm", "number", 0.001, 10, "mm"),
               _Key("guide", "bool")),
     "galvo": (_Key("jump_delay_us", "number", *JUMP_DELAY_RANGE_US, "µs"),
@@ -80,13 +94,9 @@ SECTIONS = {
               *(_Key(key, "number", BY_NAME[reg].low, BY_NAME[reg].high, "µs")
                 for key, reg in DELAY_KEYS.items()),
               _Key("polygon_scaled", "bool")),
-    "defaults": (_Key("speed_mm_s", "number", 0.1, 100_000, "mm/s"),
-                 _Key("power_percent", "number", 0, 100, "%"),
-                 _Key("prr_khz", "number", *PRR_RANGE_KHZ, "kHz"),
-                 _Key("passes", "integer", 1, 1000, "")),
-    "wobble": (_Key("across_um", "number", 0, 10_000, "µm"),
-               _Key("along_um", "number", 0, 10_000, "µm"),
-               _Key("freq_hz", "number", BY_NAME["wob_freq"].low, WOBBLE_MAX_HZ, "Hz")),
+    "defaults": tuple(_Key.of("defaults", name) for name in
+                      ("speed_mm_s", "power_percent", "prr_khz", "passes")),
+    "wobble": tuple(_Key.of("wobble", name) for name in ("across_um", "along_um", "freq_hz")),
 }
 
 

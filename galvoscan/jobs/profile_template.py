@@ -1,9 +1,10 @@
 """The commented machine profile template: :func:`profile_text`, the file ``galvoscan machine
 init`` writes (every key with its default, unit, range and purpose).
 
-The ranges are read from the key table (:data:`galvoscan.jobs.profile_keys.SECTIONS`) and the
-defaults from :func:`galvoscan.jobs.profile.default_profile`, so the template cannot disagree
-with what is checked. :mod:`galvoscan.jobs.profile` re-exports :func:`profile_text`.
+The ranges and their units are read from the key table
+(:data:`galvoscan.jobs.profile_keys.SECTIONS`) and the defaults from :func:`galvoscan.jobs.profile.default_profile`, so the template cannot disagree
+with what is checked (the keys that are a job's or a run's settings take theirs from
+:mod:`galvoscan.settings`). :mod:`galvoscan.jobs.profile` re-exports :func:`profile_text`.
 """
 
 from .profile_keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num
@@ -14,8 +15,10 @@ def _key(section, name):
 
 
 def _span(section, name):
+    """A key's range and unit, as its key table has them: ``1 … 2_000 mm``."""
     key = _key(section, name)
-    return f"{_toml_num(key.low)} … {_toml_num(key.high)}"
+    unit = f" {key.unit}" if key.unit else ""
+    return f"{_toml_num(key.low)} … {_toml_num(key.high)}{unit}"
 
 
 def profile_text():
@@ -45,7 +48,7 @@ def profile_text():
 # Side of the square marking field, in mm: the field of the f-theta lens, which the
 # whole galvo range (positions 0 … 65535 on each axis) spans. Take it from the lens's
 # data sheet (110 for the common F160 lens); a wrong value scales every job.
-# {s("field", "size_mm")} mm.
+# {s("field", "size_mm")}.
 size_mm = {n(d.field.size_mm)}
 # Distortion correction table for this lens: a galvoscan .json (`galvoscan correct`),
 # a SCANLAB .ctb or a JCZ (EzCad) .cor file. A relative path is relative to the folder
@@ -61,19 +64,19 @@ size_mm = {n(d.field.size_mm)}
 baud = {n(d.link.baud)}
 # Instead of port: the pyftdi URL of an FTDI SPI adapter wired to the board.
 # spi = "ftdi://ftdi:2232h/1"
-# Seconds to wait for the board to answer before giving up. {s("link", "timeout_s")} s.
+# Seconds to wait for the board to answer before giving up. {s("link", "timeout_s")}.
 timeout_s = {n(d.link.timeout_s)}
 
 [laser]
 # Average power of the laser at 100 % (laser_power register {POWER_REGISTER_MAX}), in W: its
-# rating. Jobs set power in %; it is shown in W from this. {s("laser", "max_power_w")} W.
+# rating. Jobs set power in %; it is shown in W from this. {s("laser", "max_power_w")}.
 max_power_w = {n(d.laser.max_power_w)}
 # Pulse repetition rates the laser accepts, in kHz: [lowest, highest]. The board makes
-# {s("laser", "prr_khz")} kHz; narrow it to your laser's data sheet (a job asking for a
+# {s("laser", "prr_khz")}; narrow it to your laser's data sheet (a job asking for a
 # rate outside it is refused).
 prr_khz = [{n(d.laser.prr_khz[0])}, {n(d.laser.prr_khz[1])}]
 # Spot diameter at focus, in mm (the lens data sheet, or measure the mark of single
-# pulses): what line spacings and previews are drawn from. {s("laser", "spot_mm")} mm.
+# pulses): what line spacings and previews are drawn from. {s("laser", "spot_mm")}.
 spot_mm = {n(d.laser.spot_mm)}
 # true if the machine has a guide (red pointer) laser wired to the board's guide output
 # (laser_guide), to frame a job before marking; false if not. The guide laser's pin on
@@ -83,14 +86,14 @@ guide = {"true" if d.laser.guide else "false"}
 [galvo]
 # Wait after every jump, laser off, for the mirrors to settle before marking resumes,
 # in µs. The board counts {FRAME_US} µs frames: rounded up to a whole frame.
-# {s("galvo", "jump_delay_us")} µs.
+# {s("galvo", "jump_delay_us")}.
 jump_delay_us = {n(d.galvo.jump_delay_us)}
 # Extra wait per mm of jump, in µs/mm, added to jump_delay_us: long jumps settle longer
 # (a variable jump delay). 0 = the same wait after every jump.
-# {s("galvo", "settle_us_per_mm")} µs/mm.
+# {s("galvo", "settle_us_per_mm")}.
 settle_us_per_mm = {n(d.galvo.settle_us_per_mm)}
 # Fastest marking or cleaning speed a job may ask for, in mm/s: faster is refused. Take
-# it from the scan head's data sheet. {s("galvo", "max_speed_mm_s")} mm/s.
+# it from the scan head's data sheet. {s("galvo", "max_speed_mm_s")}.
 max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}
 # The laser and scanner delays of SCANLAB's RTC (EzCad's start, end and corner TC): the
 # mirrors lag the set point by their tracking error (about 100-200 µs on a 10 mm head), so
@@ -98,15 +101,15 @@ max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}
 # a test mark (docs/design/modes.md, "Laser and scanner delays"). The laser delays are placed to the
 # board's clock; mark and polygon delays are rounded up to {FRAME_US} µs frames.
 # Laser on this long after a mark's first point; negative: that much before.
-# {s("galvo", "laser_on_delay_us")} µs.
+# {s("galvo", "laser_on_delay_us")}.
 laser_on_delay_us = {n(d.galvo.laser_on_delay_us)}
-# Laser stays on this long after a mark's last point. {s("galvo", "laser_off_delay_us")} µs.
+# Laser stays on this long after a mark's last point. {s("galvo", "laser_off_delay_us")}.
 laser_off_delay_us = {n(d.galvo.laser_off_delay_us)}
 # Mirrors hold a mark's end this long, laser off, before the next jump; keep it above
-# laser_off_delay_us (RTC's rule). {s("galvo", "mark_delay_us")} µs.
+# laser_off_delay_us (RTC's rule). {s("galvo", "mark_delay_us")}.
 mark_delay_us = {n(d.galvo.mark_delay_us)}
 # Mirrors hold each corner between two marks this long, laser on.
-# {s("galvo", "polygon_delay_us")} µs.
+# {s("galvo", "polygon_delay_us")}.
 polygon_delay_us = {n(d.galvo.polygon_delay_us)}
 # true: scale each corner's polygon delay by (1 - cos φ), φ the turn at the corner (RTC's
 # variable polygon delay: none straight on, the full delay at a right angle, twice it at a
@@ -115,10 +118,10 @@ polygon_scaled = {"true" if d.galvo.polygon_scaled else "false"}
 
 [defaults]
 # Job settings used when the command line does not give them.
-# Marking speed, in mm/s: at most [galvo] max_speed_mm_s. {s("defaults", "speed_mm_s")} mm/s.
+# Marking speed, in mm/s: at most [galvo] max_speed_mm_s. {s("defaults", "speed_mm_s")}.
 speed_mm_s = {n(d.defaults.speed_mm_s)}
 # Laser power, in % of max_power_w. Low on purpose: raise it per job, after a test
-# mark, rather than here. {s("defaults", "power_percent")} %.
+# mark, rather than here. {s("defaults", "power_percent")}.
 power_percent = {n(d.defaults.power_percent)}
 # Pulse repetition rate, in kHz: within [laser] prr_khz.
 prr_khz = {n(d.defaults.prr_khz)}
@@ -129,13 +132,13 @@ passes = {n(d.defaults.passes)}
 # A small ellipse laid over every marked line, to widen a weld or cleaning track (needs
 # a bitstream built with the wobble stage). `galvoscan mark --wobble` overrides these.
 # Amplitude across the line, to each side, in µm: the track grows by twice this.
-# 0 here and in along_um: no wobble. {s("wobble", "across_um")} µm (the board holds at
+# 0 here and in along_um: no wobble. {s("wobble", "across_um")} (the board holds at
 # most 4095 galvo units: 6.9 mm on a 110 mm field).
 across_um = {n(d.wobble.across_um)}
 # Amplitude along the line, forwards and back, in µm; equal to across_um: a circle.
-# {s("wobble", "along_um")} µm.
+# {s("wobble", "along_um")}.
 along_um = {n(d.wobble.along_um)}
 # Turns of the figure a second, in Hz: with the line speed v, the figure repeats every
-# v / freq_hz along the line. {s("wobble", "freq_hz")} Hz.
+# v / freq_hz along the line. {s("wobble", "freq_hz")}.
 freq_hz = {n(d.wobble.freq_hz)}
 """

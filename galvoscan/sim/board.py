@@ -19,6 +19,7 @@ from collections import deque
 from ..client import ClockedTransport, PacketTransport
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
+from ..settings.laser import TIMEOUT
 from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
 from .xy2_receiver import frame_of_each_pulse
 
@@ -214,8 +215,9 @@ class SimulatedBoard:
     def answer_timeout_s(self):
         """The answer timeout a host should give it, in seconds of the host's clock: 20 ms
         of the board's own time (a frame and its answer take well under 1 ms) at the speed
-        measured now, and 5 s at least, for a host busy with other work."""
-        return min(600.0, max(5.0, 20e-3 / self.speed()))
+        measured now, and 5 s at least, for a host busy with other work; at most the longest
+        ``--timeout`` a command takes, so that what ``board --sim`` advises is accepted."""
+        return min(TIMEOUT.high, max(5.0, 20e-3 / self.speed()))
 
     def close(self):
         """Free the backend's model (the compiled one's memory)."""

@@ -1,0 +1,435 @@
+"""galvoscan's Python API: a job built from drawings, text, codes and photos, planned for a
+machine (its profile), estimated, and run on a board (a real one over its link, or the
+simulated one), its report returned. What a program (a meerk40t device) uses without the
+command line; ``galvoscan mark`` maps its arguments onto it.
+
+A sketch (``docs/examples/first_job.py`` runs one whole)::
+
+    from galvoscan import api
+    job = api.Job(drawings=[api.Drawing("logo.svg")],
+                  texts=[api.Text("SN {serial:04d}", height_mm=3, at_mm=(-12, -10))],
+                  speed_mm_s=1000, power_percent=30)
+    plan = api.plan(job, serial=7)           # the default profile; or api.load_profile(path)
+    print(plan.estimate_s)                   # seconds, the board's own time
+    board = api.SimulatedBoard(backend="compiled")
+    report = api.run(plan, board)
+    print(report.segments, report.pulses, report.marks_mm[:3])
+
+Every value is checked where it is given, with the command line's one-line refusal
+(:class:`~galvoscan.settings.schema.SettingError`, :class:`~galvoscan.jobs.plan.PlanError`,
+:class:`~galvoscan.jobs.drawing.DrawingError`; all are :class:`ValueError`), and the whole
+job is planned and checked before any byte goes to a board.
+"""
+
+from dataclasses import dataclass, field, replace
+from datetime import datetime
+
+import numpy as np
+
+from .client import FTDISPITransport, HostClient, SerialTransport
+from .correction.upload import upload_table
+from .gateware.host.fields import WobbleShape
+from .jobs.codes import CodeFill, CodeKind, CodeSpec, code_object
+from .jobs.drawing import load_drawing
+from .jobs.fill import HatchSet, LineOrder
+from .jobs.layers import Layer, merged, plan_layers
+from .jobs.photo import Dither, PhotoSpec, photo_object
+from .jobs.plan import Placement, PlanError, from_galvo
+from .jobs.profile import default_profile, load_profile
+from .jobs.stream import JobAborted, JobStreamer, StreamReport
+from .jobs.text import TextSpec, text_drawing
+from .jobs.vector_job import JobSettings, MarkObject
+from .jobs.wobble import WobbleSettings, wobble_registers
+from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
+from .sim.board import SimTransport, SimulatedBoard
+
+
+__all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "HatchSet", "LineOrder", "Job",
+           "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
+           "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
+           "load_profile",
+           "default_profile", "SimulatedBoard", "HostClient", "SerialTransport", "FTDISPITransport",
+           "PlanError"]
+
+
+# --- what a job is made of -------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Drawing:
+    """An SVG or DXF drawing, ``origin`` (``centre``, ``lower-left`` or ``page``: the
+    drawing's own 0,0) placed at ``offset_mm`` from the field's centre, scaled by ``scale``
+    about its centre and turned ``rotate_deg`` counter-clockwise."""
+    path: str
+    origin: str = "centre"
+    offset_mm: tuple = (0.0, 0.0)
+    scale: float = 1.0
+    rotate_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Text:
+    """A text: ``height_mm`` the capital height, the first line's baseline at ``at_mm``
+    (its left end, centre or right end by ``align``), in an outline font (``font``: a family
+    or a .ttf/.otf; None: DejaVu Sans) filled, or a Hershey single-line font
+    (``hershey[:NAME]``). ``{serial}``, ``{date}`` and ``{time}`` fields are filled when
+    planned (:func:`fields`). ``layer``: the layer (by name) whose settings it takes."""
+    text: str
+    height_mm: float = 5.0
+    at_mm: tuple = (0.0, 0.0)
+    font: str = None
+    align: str = "left"
+    letter_spacing_mm: float = 0.0
+    line_height: float = 1.4
+    layer: str = None
+
+
+@dataclass(frozen=True)
+class Code:
+    """A code (``kind``: ``qr``, ``datamatrix`` or ``code128``) of ``data`` (fields filled),
+    ``size_mm`` wide, centred at ``at_mm``; ``ec``: QR error correction (L, M, Q, H; None:
+    M); ``fill``: ``hatch`` or ``dots``; ``quiet_modules``: None, the symbology's;
+    ``height_mm``: Code 128's bar height."""
+    kind: str
+    data: str
+    size_mm: float
+    at_mm: tuple = (0.0, 0.0)
+    ec: str = None
+    fill: str = CodeFill.HATCH.value
+    quiet_modules: int = None
+    height_mm: float = None
+    layer: str = None
+
+
+@dataclass(frozen=True)
+class Photo:
+    """A PNG or JPEG engraved ``width_mm`` wide, centred at ``at_mm``, as dithered scan lines
+    ``line_spacing_mm`` apart (None: the profile's spot)."""
+    path: str
+    width_mm: float
+    at_mm: tuple = (0.0, 0.0)
+    dither: str = Dither.FLOYD.value
+    line_spacing_mm: float = None
+    one_way: bool = False
+    layer: str = None
+
+
+@dataclass(frozen=True)
+class Job:
+    """A job: its drawings, texts, codes and photos, its layers
+    (:class:`~galvoscan.jobs.layers.Layer`), and its own settings: speed (mm/s), power (% of
+    the laser's maximum), PRR (kHz) and passes (None: the profile's ``[defaults]``), the hatch
+    sets (:class:`~galvoscan.jobs.fill.HatchSet`), their line order, a contour fill, whether
+    outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
+    (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
+    ``[wobble]``; it needs a bitstream with the wobble stage). The numbers are checked against their
+    settings (:mod:`galvoscan.settings.laser`) here."""
+    drawings: tuple = ()
+    texts: tuple = ()
+    codes: tuple = ()
+    photos: tuple = ()
+    layers: tuple = ()
+    speed_mm_s: float = None
+    power_percent: float = None
+    prr_khz: float = None
+    passes: int = None
+    hatch: tuple = ()
+    hatch_lines: LineOrder = LineOrder.SERPENTINE
+    contour: object = None
+    outline: bool = True
+    tolerance_mm: float = TOLERANCE.default
+    wobble_um: float = None
+    wobble_along_um: float = None
+    wobble_hz: float = None
+
+    def __post_init__(self):
+        for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ):
+            value = getattr(self, setting.name)
+            if value is not None:
+                setting.check(value)
+        for name in ("drawings", "texts", "codes", "photos", "layers", "hatch"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+
+
+# --- planning --------------------------------------------------------------------------------
+
+class _Moment:
+    """The time of marking as a field: ``{date:%d.%m.%Y}`` its strftime; bare ``{date}`` the
+    ISO date, ``{time}`` hours and minutes (not Python's microseconds)."""
+
+    def __init__(self, now, plain):
+        self.now, self.plain = now, plain
+
+    def __format__(self, spec):
+        return self.now.strftime(spec or self.plain)
+
+
+def fields(text, *, serial=None, what="--text"):
+    """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
+    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`, naming ``what``) for a field it
+    does not know or one written wrong."""
+    now = datetime.now()
+    values = {"serial": serial if serial is not None else 0,
+              "date": _Moment(now, "%Y-%m-%d"), "time": _Moment(now, "%H:%M")}
+    known = "{serial}, {serial:05d}, {date}, {date:%d.%m.%Y}, {time}, {time:%H:%M:%S}"
+    try:
+        return text.replace("\\n", "\n").format(**values)
+    except (KeyError, IndexError, AttributeError) as error:
+        raise PlanError(f"{what} {text!r}: {{{' '.join(str(error).split()).strip(chr(39))}}} "
+                        f"is not a field galvoscan knows ({known}; a brace itself as {{{{ "
+                        f"or }}}})") from None
+    except ValueError as error:
+        raise PlanError(f"{what} {text!r}: a field written wrong ({' '.join(str(error).split())}"
+                        f"); fields are {known}, a brace itself {{{{ or }}}}") from None
+
+
+def job_settings(job, profile):
+    """The :class:`~galvoscan.jobs.vector_job.JobSettings` of ``job``: its own, else the
+    profile's ``[defaults]``."""
+    defaults = profile.defaults
+    return JobSettings(
+        speed_mm_s=job.speed_mm_s if job.speed_mm_s is not None else defaults.speed_mm_s,
+        power_percent=job.power_percent if job.power_percent is not None
+        else defaults.power_percent,
+        prr_khz=job.prr_khz if job.prr_khz is not None else defaults.prr_khz,
+        passes=job.passes or defaults.passes, hatch=job.hatch,
+        hatch_lines=LineOrder(job.hatch_lines), contour=job.contour, outline=job.outline)
+
+
+def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.default):
+    """``item`` (a :class:`Drawing`, :class:`Text`, :class:`Code` or :class:`Photo`) as the
+    :class:`~galvoscan.jobs.vector_job.MarkObject` the planner places and fills."""
+    if isinstance(item, Drawing):
+        placement = Placement(origin=item.origin, offset_mm=tuple(item.offset_mm),
+                              scale=item.scale, rotate_deg=item.rotate_deg)
+        return MarkObject(load_drawing(item.path, tolerance_mm=tolerance_mm), placement,
+                          settings)
+    if isinstance(item, Text):
+        spec = TextSpec(fields(item.text, serial=serial), item.height_mm, font=item.font,
+                        align=item.align, letter_spacing_mm=item.letter_spacing_mm,
+                        line_spacing=item.line_height)
+        drawing = text_drawing(spec, tolerance_mm=tolerance_mm)
+        if spec.hershey:        # single strokes: the lines themselves, marked once
+            fill = replace(settings, hatch=(), contour=None, outline=True)
+        else:                   # glyphs filled: the job's fill, else lines half a spot apart
+            fill = settings if settings.hatch or settings.contour else replace(
+                settings, hatch=(HatchSet(profile.laser.spot_mm / 2),), outline=True)
+        made = MarkObject(drawing, Placement(origin="page", offset_mm=tuple(item.at_mm)),
+                          fill, own_fill=bool(spec.hershey))
+    elif isinstance(item, Code):
+        spec = CodeSpec(CodeKind(item.kind), fields(item.data, serial=serial, what="--data"),
+                        item.size_mm, ec_level=item.ec, fill=CodeFill(item.fill),
+                        quiet_modules=item.quiet_modules, height_mm=item.height_mm)
+        made = code_object(spec, settings, centre_mm=tuple(item.at_mm),
+                           spot_mm=profile.laser.spot_mm)
+    elif isinstance(item, Photo):
+        spec = PhotoSpec(item.path, item.width_mm,
+                         item.line_spacing_mm or profile.laser.spot_mm,
+                         dither=Dither(item.dither), bidirectional=not item.one_way)
+        made = photo_object(spec, settings, centre_mm=tuple(item.at_mm or (0.0, 0.0)))
+    else:
+        raise TypeError(f"not a drawing, text, code or photo: {item!r}")
+    return replace(made, layer=item.layer) if item.layer else made
+
+
+def mark_objects(job, settings, profile, *, serial=None):
+    """Every object of ``job``, in the order they are marked: drawings, texts, photos,
+    codes."""
+    return [mark_object(item, settings, profile, serial=serial, tolerance_mm=job.tolerance_mm)
+            for item in (*job.drawings, *job.texts, *job.photos, *job.codes)]
+
+
+@dataclass
+class Plan:
+    """A planned job: ``vector_job`` (:class:`~galvoscan.jobs.vector_job.VectorJob`, of
+    layers when the job has them), the ``profile`` it was planned for, and its first
+    object's ``placement`` and ``drawing`` (to turn marks back into the drawing's own
+    coordinates); ``wobbles``: whether any of it wobbles (the board needs the wobble
+    stage)."""
+    vector_job: object
+    profile: object
+    placement: object
+    drawing: object
+    wobbles: bool = False
+
+    @property
+    def estimate_s(self):
+        """Time to mark it, in seconds (every pass, jumps and delays)."""
+        return self.vector_job.estimate_s
+
+    @property
+    def mark_mm(self):
+        """Length marked, mm (one pass)."""
+        return self.vector_job.mark_mm
+
+    @property
+    def segments(self):
+        """``(op, x, y)`` segments in galvo units, as the board is sent them."""
+        return self.vector_job.segments
+
+
+def plan_objects(objects, job, settings, profile):
+    """``objects`` planned as ``job``'s (its layers, each a job of its own), checked against
+    ``profile``'s machine: a :class:`Plan`."""
+    if not objects:
+        raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
+    vector_job = merged(plan_layers(objects, list(job.layers), settings, profile))
+    return Plan(vector_job, profile, objects[0].placement, objects[0].drawing)
+
+
+def plan(job, profile=None, *, serial=None):
+    """Plan ``job`` for ``profile`` (a :class:`~galvoscan.jobs.profile.MachineProfile`;
+    None: the default one): placed, filled, ordered, inside the field, every register value
+    in range. ``serial``: the part's number, for ``{serial}`` fields. Raises a
+    :class:`ValueError` (one line) for anything that cannot be marked."""
+    profile = profile or default_profile()
+    if not (job.drawings or job.texts or job.codes or job.photos):
+        raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
+    settings = job_settings(job, profile)
+    planned = plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
+                           profile)
+    planned.wobbles = apply_wobble(planned.vector_job, job_wobble(
+        job.wobble_um, job.wobble_along_um, job.wobble_hz, profile), profile)
+    return planned
+
+
+# --- wobble ---------------------------------------------------------------------------------
+
+def job_wobble(across_um, along_um, freq_hz, profile):
+    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: ``across_um`` (µm),
+    ``along_um`` (µm; None: ``across_um``'s, a circle) and ``freq_hz`` given, else the
+    profile's ``[wobble]``."""
+    section = profile.wobble
+    across = across_um if across_um is not None else section.across_um
+    along = along_um if along_um is not None else \
+        (across_um if across_um is not None else section.along_um)
+    hz = freq_hz if freq_hz is not None else section.freq_hz
+    return WobbleSettings(across_um=across, along_um=along, freq_hz=hz)
+
+
+def layer_wobble(layer, base):
+    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
+    amplitudes and frequency in place of ``base``'s where it gives them."""
+    if layer is None:
+        return base
+    across = layer.wobble_um if layer.wobble_um is not None else base.across_um
+    along = layer.wobble_along_um if layer.wobble_along_um is not None else \
+        (layer.wobble_um if layer.wobble_um is not None else base.along_um)
+    hz = layer.wobble_hz if layer.wobble_hz is not None else base.freq_hz
+    return replace(base, across_um=across, along_um=along, freq_hz=hz)
+
+
+def apply_wobble(vector_job, base, profile):
+    """Each layer's ``wob_*`` registers (``base``, a
+    :class:`~galvoscan.jobs.wobble.WobbleSettings`, a layer's own in its place) into its
+    registers, its reach checked against the field; a layer that does not wobble among ones
+    that do turns it off. Returns whether anything wobbles; a
+    :class:`~galvoscan.jobs.plan.PlanError` (one line) for a figure past the field."""
+    parts = [(lj.layer, lj.job) for lj in vector_job.layers] if vector_job.layers else \
+        [(None, vector_job)]
+    found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
+    if not any(found):
+        return False
+    for (layer, part), regs in zip(parts, found):
+        if not regs:
+            part.registers["wob_shape"] = WobbleShape.OFF.value
+            continue
+        # The figure reaches past the lines by its larger amplitude: that too must be in the
+        # field (the board would clamp it at the edge).
+        reach = max(regs["wob_across"], regs["wob_along"]) * profile.mm_per_unit
+        half = profile.field.size_mm / 2
+        xmin, ymin, xmax, ymax = part.bounds_mm
+        if min(xmin, ymin) - reach < -half or max(xmax, ymax) + reach > half:
+            raise PlanError(f"with the wobble's {reach * 1000:.0f} µm the job reaches past the "
+                            f"field (−{half:g}…{half:g} mm): move it towards the centre or "
+                            f"wobble less")
+        part.registers.update(regs)
+    if vector_job.layers:
+        vector_job.registers.update(vector_job.layers[0].job.registers)
+    return True
+
+
+# --- running ---------------------------------------------------------------------------------
+
+def load_lens_table(client, profile, say=None):
+    """Write the profile's correction table into the board (at the board's node count), so
+    that the job is corrected with the table it was checked against. Nothing without one."""
+    table = profile.correction_table()
+    if table is None:
+        return
+    nodes = client.read("cor_nodes")
+    if nodes != table.n:
+        table = table.resampled(nodes)
+    if say is not None:
+        say(f"loading the lens correction table ({nodes} x {nodes} nodes) into the board")
+    upload_table(client, table)
+
+
+def stream_layers(streamer, vector_job, board, timeout_s):
+    """Run ``vector_job`` (its layers one after the other, each at its own settings) with
+    ``streamer``: the reports summed into one, and (``board``: a simulated board) the index
+    of each layer's first pulse."""
+    reports, starts = [], []
+    parts = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
+    for index, part in enumerate(parts):
+        starts.append(len(board.pulses) if board is not None else None)
+        try:
+            reports.append(streamer.run_vector(part.segments, part.registers,
+                                               timeout_s=timeout_s, ready_timeout_s=timeout_s))
+        except JobAborted as error:
+            # A layer marked whole is the part done only if it is the last.
+            error.complete = error.complete and index == len(parts) - 1
+            raise
+        if not reports[-1].clean:
+            break
+    return StreamReport.total(reports), starts
+
+
+@dataclass
+class Report:
+    """What a run did: ``segments`` sent, ``pulses`` the laser fired, the board's
+    ``counters`` (``vec_underruns``, ``vec_stalls``, ``vec_rejected``, ``errors``),
+    ``clean`` (marked as planned), and on a simulated board ``marks_mm``, the marked points
+    off the XY2-100 wires in field mm (None on a real board)."""
+    stream: StreamReport
+    marks_mm: np.ndarray = field(default=None)
+
+    @property
+    def segments(self):
+        return self.stream.segments
+
+    @property
+    def pulses(self):
+        return self.stream.pulses
+
+    @property
+    def counters(self):
+        return self.stream.counters
+
+    @property
+    def clean(self):
+        return self.stream.clean
+
+
+def run(plan, board, *, timeout_s=None, progress=None, say=None):
+    """Mark ``plan`` on ``board``: a :class:`~galvoscan.sim.board.SimulatedBoard` (run in
+    this process; ``SimulatedBoard(wobble=True)`` for a plan that ``wobbles``), or a
+    :class:`~galvoscan.client.HostClient` of a real board's link
+    (``HostClient(SerialTransport("/dev/ttyUSB1", baud=1_000_000))``). The
+    profile's lens table is loaded first; the laser is disarmed at the end and on any fault
+    (:class:`~galvoscan.jobs.stream.JobAborted`). ``timeout_s``: the longest the job may take
+    (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments
+    go. Returns a :class:`Report`."""
+    simulated = isinstance(board, SimulatedBoard)
+    client = HostClient(SimTransport(board)) if simulated else board
+    if timeout_s is None:
+        timeout_s = 1e4 if simulated else max(60.0, 10 * plan.estimate_s)
+    load_lens_table(client, plan.profile, say)
+    streamer = JobStreamer(client, progress=progress)
+    report, _ = stream_layers(streamer, plan.vector_job, board if simulated else None,
+                              timeout_s)
+    marks = None
+    if simulated:
+        points = [p for p in board.points() if p[2] > 0]
+        xy = np.array([(p[0], p[1]) for p in points], dtype=float).reshape(-1, 2)
+        marks = from_galvo(xy, plan.profile.field.size_mm)
+    return Report(report, marks)

@@ -1,0 +1,102 @@
+"""The Python API (``galvoscan/api.py``): its runnable example marks what geometry says it
+must, and a job built without the command line is refused with the command line's lines."""
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from galvoscan import api
+from galvoscan.cli import main
+from galvoscan.jobs.profile import default_profile
+from galvoscan.settings.schema import SettingError
+
+EXAMPLE = Path(__file__).parent.parent / "docs" / "examples" / "first_job.py"
+
+
+def test_first_job_example():
+    """The example's 10 mm square centred at (5, -3) mm, at 1000 mm/s: 40 mm of line, its
+    marks off the wires spanning 0 … 10 mm by -8 … 2 mm (to a galvo unit), and, the laser
+    pulsing all along it at the profile's PRR, as many pulses as 40 ms of it (to 5 %)."""
+    done = subprocess.run([sys.executable, str(EXAMPLE)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    out = done.stdout
+    planned = re.search(r"planned: (\d+) segments, ([\d.]+) mm marked, estimated ([\d.]+) s",
+                        out)
+    assert planned, out
+    assert float(planned[2]) == pytest.approx(4 * 10.0, abs=0.01)
+    assert float(planned[3]) >= 4 * 10.0 / 1000        # at least the marking itself
+    marked = re.search(r"marked: (\d+) segments, (\d+) pulses, as planned", out)
+    assert marked, out
+    prr_hz = default_profile().defaults.prr_khz * 1e3
+    assert int(marked[2]) == pytest.approx(40e-3 * prr_hz, rel=0.05)
+    bounds = re.search(r"marks: x (\S+) … (\S+) mm, y (\S+) … (\S+) mm", out)
+    assert bounds, out
+    unit_mm = default_profile().field.size_mm / 65536
+    assert [float(v) for v in bounds.groups()] == pytest.approx([0, 10, -8, 2],
+                                                                abs=2 * unit_mm)
+
+
+def test_job_settings_refused_as_the_command_line_does():
+    drawing = api.Text("A", font="hershey")
+    with pytest.raises(SettingError, match=r"^speed must be from 0\.1 to 100e3, not 0\.0$"):
+        api.Job(texts=[drawing], speed_mm_s=0.0)
+    with pytest.raises(SettingError, match=r"^passes must be an integer, not 1\.5$"):
+        api.Job(texts=[drawing], passes=1.5)
+    with pytest.raises(api.PlanError, match="something to mark"):
+        api.plan(api.Job())
+
+
+def test_text_and_code_planned_without_the_command_line():
+    """A Hershey text 5 mm high and a 10 mm QR code, planned: inside their places, the
+    serial filled in."""
+    job = api.Job(texts=[api.Text("SN {serial:03d}", height_mm=5, at_mm=(-20, 10),
+                                  font="hershey")],
+                  codes=[api.Code("qr", "{serial}", 10, at_mm=(15, -15))])
+    plan = api.plan(job, serial=7)
+    xmin, ymin, xmax, ymax = plan.vector_job.bounds_mm
+    assert xmin == pytest.approx(-20, abs=1) and ymax >= 10 + 4      # text from (-20, 10) up
+    assert xmax == pytest.approx(20, abs=0.5) and ymin == pytest.approx(-20, abs=0.5)
+    assert plan.estimate_s > 0 and plan.mark_mm > 0
+    with pytest.raises(api.PlanError, match=r"\{nope\} is not a field"):
+        api.plan(api.Job(texts=[api.Text("{nope}")]))
+
+
+def test_wobble_from_the_job_else_the_profile():
+    """A job's wobble is its own (a circle when only across is given), else the profile's;
+    one that would reach past the field is refused in one line."""
+    text = api.Text("I", font="hershey", height_mm=2)
+    plan = api.plan(api.Job(texts=[text], wobble_um=100, wobble_hz=2000))
+    unit_um = default_profile().field.size_mm / 65536 * 1000
+    registers = plan.vector_job.registers
+    assert plan.wobbles
+    assert registers["wob_across"] == pytest.approx(100 / unit_um, abs=1)
+    assert registers["wob_along"] == registers["wob_across"]
+    assert registers["wob_freq"] == 2000
+    assert not api.plan(api.Job(texts=[text])).wobbles        # the default profile: none
+    edge = api.Text("I", font="hershey", height_mm=2, at_mm=(54.5, 0))
+    with pytest.raises(api.PlanError, match="reaches past the field"):
+        api.plan(api.Job(texts=[edge], wobble_um=2000))
+
+
+def test_mark_is_the_api(tmp_path, capsys, monkeypatch):
+    """``mark --estimate --json`` of a text and a code plans what the API plans for the same
+    job: the same segments, length, bounds and time."""
+    monkeypatch.chdir(tmp_path)                          # no machine profile: the default
+    assert main(["mark", "--text", "AB", "--font", "hershey", "--height", "4",
+                 "--text-at=-10,5", "--code", "datamatrix", "--data", "7", "--size", "6",
+                 "--code-at", "12,-8", "--speed", "800", "--passes", "2", "--estimate",
+                 "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    plan = api.plan(api.Job(texts=[api.Text("AB", font="hershey", height_mm=4,
+                                            at_mm=(-10, 5))],
+                            codes=[api.Code("datamatrix", "7", 6, at_mm=(12, -8))],
+                            speed_mm_s=800, passes=2))
+    assert record["segments"] == len(plan.segments)
+    assert record["mark_mm"] == pytest.approx(plan.mark_mm, abs=1e-3)
+    assert record["bounds_mm"] == pytest.approx(list(plan.vector_job.bounds_mm), abs=1e-3)
+    assert record["estimate_s"] == pytest.approx(plan.estimate_s, abs=1e-6)
