@@ -34,7 +34,7 @@ BOARDS = {
 }
 
 #: Scan modes a board's bitstream has unless told otherwise: the UP5K holds all three with the
-#: correction stage (README "Resources").
+#: correction stage (the fit figures in the benchmarks, docs/bench.json).
 DEFAULT_MODES = {
     "icebreaker": ("spiral", "raster", "vector"),
     "icestick": ICESTICK_MODES,

@@ -27,7 +27,7 @@ from .host.command import CommandDecoder
 from .host.frames import PAYLOAD_BITS
 from .host.progress import ProgressFeed
 from .host.registers import RegisterFile
-from .host.fields import pack
+from .fields import pack
 from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
                           PlayerResult, PlayerState, PlayerStatus, register_map)
 from .host.spi_target import SPITarget
@@ -291,7 +291,7 @@ class GalvoScanTop(wiring.Component):
 
     def capabilities(self):
         """What this build holds, as the ``caps`` register reports it (a dict of the
-        :data:`~.host.fields.Capabilities` flags)."""
+        :data:`~.fields.Capabilities` flags)."""
         return {"spiral": "spiral" in self.modes, "raster": "raster" in self.modes,
                 "vector": "vector" in self.modes, "laser": self.laser,
                 "correction": self.correction is not None, "wobble": self.wobble,

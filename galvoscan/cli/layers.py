@@ -207,7 +207,7 @@ def add_wobble(job, args, profile):
     """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
     place) into its registers, its reach checked against the field; a layer that does not
     wobble among ones that do turns it off. Returns whether anything wobbles."""
-    from ..gateware.host.fields import WobbleShape
+    from ..gateware.fields import WobbleShape
     from ..jobs.plan import PlanError
     from ..jobs.wobble import wobble_registers
     base = _wobble(args, profile)

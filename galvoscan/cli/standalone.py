@@ -134,7 +134,7 @@ def _cmd_flash(args):
 def _cmd_standalone(args):
     from ..build import preset_top_options
     from ..client import HostClient
-    from ..gateware.host.fields import PlayerResult, PlayerState, PlayerStatus
+    from ..gateware.fields import PlayerResult, PlayerState, PlayerStatus
     from ..jobs.image import ImageError, read_image
     from ..sim.board import SimTransport
     from .args import simulated_board

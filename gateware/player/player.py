@@ -4,7 +4,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.fields import Mode, PlayerResult, PlayerState
+from ..fields import Mode, PlayerResult, PlayerState
 from ..host.registers import RegisterBus
 from ..host.regmap import BY_NAME
 from .crc32 import CRC32
