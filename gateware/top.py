@@ -14,7 +14,6 @@ with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``
 
 from amaranth.hdl import Cat, Module, Mux, ResetInserter, Signal
 from amaranth.lib import wiring
-from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
 from .build_config import MODES, BuildConfig
@@ -33,6 +32,7 @@ from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import UARTCommandPort
 from .laser.controller import LaserController
+from .laser.marking_select import MarkingSelect
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .player.player import JobPlayer
 from .player.start_input import StartInput
@@ -42,8 +42,8 @@ from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
 from .sources.laser_delays import LaserDelays
-from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VecOpWord,
-                             VectorCommand, VectorSequencer)
+from .sources.vector import DirectedVectorSequencer, VectorSequencer
+from .sources.vector_queue import VectorQueue
 from .sources.wobble import Wobble
 
 
@@ -381,8 +381,8 @@ class GalvoScanTop(wiring.Component):
             player.start.eq(start.pressed),
             player.grant.eq(arbiter.grant),
             player.host_took_over.eq(took_over),
-            player.queue_ready.eq(self._queue.w_stream.ready),
-            player.queue_empty.eq(self._queue.level == 0),
+            player.queue_ready.eq(self._queue.ready),
+            player.queue_empty.eq(self._queue.empty),
             player.vector_busy.eq(vector.busy),
             player.laser_ready.eq(laser_ready),
             player.fault.eq(fault),
@@ -405,36 +405,27 @@ class GalvoScanTop(wiring.Component):
 
     def _elaborate_vector_queue(self, m, regs, vector, status):
         """The queue between the ``vec_op`` register and the vector sequencer."""
-        # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
-        # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
-        layout = DelayedVectorCommand if self.config.vector_delays else VectorCommand
-        queue = SyncFIFOBuffered(width=layout.size, depth=self.config.vector_queue_depth)
+        queue = VectorQueue(depth=self.config.vector_queue_depth,
+                            delays=self.config.vector_delays)
         m.submodules.queue = ResetInserter(self._vector_flush)(queue)
-        command = Signal(layout)
-        if self.config.vector_delays:
-            word = VecOpWord(regs.vec_op)
-            m.d.comb += command.corner_frames.eq(word.corner_frames)
-            op = word.op
-        else:           # (vec_op is the op alone)
-            op = regs.vec_op[0]
-        # The host's segments carry their end point in the frame that queues them (one checked
-        # frame: never an old vec_x or vec_y); the player's come from vec_x and vec_y.
         decoder = self._decoder
         m.d.comb += [
-            command.op.eq(op),
-            command.x.eq(Mux(decoder.segment, decoder.segment_x, regs.vec_x)),
-            command.y.eq(Mux(decoder.segment, decoder.segment_y, regs.vec_y)),
-            queue.w_stream.payload.eq(command),
-            queue.w_stream.valid.eq(regs.vec_op_push),
-            regs.vec_op_ready.eq(queue.w_stream.ready),
-            regs.fifo_free.eq(self.config.vector_queue_depth - queue.level),
+            queue.vec_op.eq(regs.vec_op),
+            queue.push.eq(regs.vec_op_push),
+            queue.segment.eq(decoder.segment),
+            queue.segment_x.eq(decoder.segment_x),
+            queue.segment_y.eq(decoder.segment_y),
+            queue.vec_x.eq(regs.vec_x),
+            queue.vec_y.eq(regs.vec_y),
+            regs.vec_op_ready.eq(queue.ready),
+            regs.fifo_free.eq(queue.free),
             status.flags.vector_busy.eq(vector.busy),
             status.events.vec_rejected.eq(regs.vec_op_refused),
             status.events.vec_underruns.eq(vector.underrun),
             status.events.vec_stalls.eq(vector.stall),
             status.events.vec_taken.eq(vector.commands.valid & vector.commands.ready),
         ]
-        connect(m, queue.r_stream, vector.commands)
+        connect(m, queue.commands, vector.commands)
         self._queue = queue
 
     def _elaborate_laser(self, m, decoder, regs, phy, sources, select, status):
@@ -457,36 +448,21 @@ class GalvoScanTop(wiring.Component):
                      progress.player.eq(self._player_alive)]
         if "vector" in self.config.modes:
             m.d.comb += progress.pushed.eq(regs.vec_op_push)
-        selected = dict(zip(sources, select.selected))
-        marking = Signal()
-        if Mode.SPIRAL in sources:
-            # Spiral: marking while it runs, from its first point on (not while parked).
-            spiral_marking = Signal()
-            spiral = sources[Mode.SPIRAL]
-            with m.If(~spiral.run):
-                m.d.sync += spiral_marking.eq(0)
-            with m.Elif(spiral.points.valid & spiral.points.ready):
-                m.d.sync += spiral_marking.eq(1)
-            with m.If(selected[Mode.SPIRAL]):
-                m.d.comb += marking.eq(spiral_marking)
         if Mode.VECTOR in sources:
             m.d.comb += sources[Mode.VECTOR].pulse_ahead.eq(laser.pulse_ahead)
-        # Raster and vector: each frame's laser decision, from the moment that frame has been
-        # sent: two frame strobes after it was made.
-        framed = [mode for mode in (Mode.RASTER, Mode.VECTOR) if mode in sources and
-                  not (mode == Mode.VECTOR and self.config.vector_delays)]
-        if framed:
-            decided = Signal()
-            frame_marking = Signal()
-            with m.If(phy.frame_strobe):
-                m.d.sync += [
-                    decided.eq(Cat(selected[mode] & sources[mode].laser for mode in framed).any()),
-                    frame_marking.eq(decided),
-                ]
-            with m.If(select.mode != Mode.SPIRAL):
-                m.d.comb += marking.eq(frame_marking)
+        m.submodules.marking = marking = MarkingSelect(modes=sources,
+                                                       vector_delays=self.config.vector_delays)
+        m.d.comb += [marking.mode.eq(select.mode), marking.frame_strobe.eq(phy.frame_strobe)]
+        for mode, selected in zip(sources, select.selected):
+            m.d.comb += getattr(marking, f"{mode.label}_selected").eq(selected)
+        if Mode.SPIRAL in sources:
+            spiral = sources[Mode.SPIRAL]
+            m.d.comb += [marking.spiral_run.eq(spiral.run),
+                         marking.spiral_point.eq(spiral.points.valid & spiral.points.ready)]
+        for mode in marking.framed:
+            m.d.comb += getattr(marking, f"{mode.label}_laser").eq(sources[mode].laser)
         if self.config.vector_delays:
-            # Vector mode's laser through its delays instead: the same two frames, moved by
+            # Vector mode's laser through its delays: the frames' decisions moved by
             # laser_on_delay and laser_off_delay.
             vector = sources[Mode.VECTOR]
             delays = LaserDelays(clocks_per_us=int(self.config.clk_freq / 1e6),
@@ -498,9 +474,8 @@ class GalvoScanTop(wiring.Component):
                 delays.decision.eq(vector.laser),
                 delays.on_delay.eq(regs.laser_on_delay.as_signed()),
                 delays.off_delay.eq(regs.laser_off_delay),
+                marking.vector_delayed.eq(delays.marking),
             ]
-            with m.If(selected[Mode.VECTOR]):
-                m.d.comb += marking.eq(delays.marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),
             laser.power.eq(regs.laser_power),
@@ -510,7 +485,7 @@ class GalvoScanTop(wiring.Component):
             laser.link_fault.eq(decoder.refused),
             self._fault_latched.eq(laser.faults.as_value().any()),
             laser.fault_clear.eq(regs.fault_clear),
-            laser.marking.eq(marking),
+            laser.marking.eq(marking.marking),
             laser.interlock_open.eq(self.interlock_open),
             laser.guide.eq(regs.guide),
         ]
