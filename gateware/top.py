@@ -66,7 +66,7 @@ class GalvoScanTop(wiring.Component):
                                                  ┌─▶ spiral sequencer (ROMs) ─┐  source
         SPI ─┐                                   ├─▶ raster fill              ├─▶ select ─▶ scale ─▶ correction ─▶ XY2-100
         UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  (mode)     /offset   (n×n table)   PHY
-                           status block (flags, counters) ◀─┘  laser controller ◀── marking, pulse timing
+                           status block (flags, counters) ◀─┘  laser controller ◀── marking select (per mode), pulse timing
 
     Every option of the build (and the rules they keep) is its :attr:`config`; every register
     fact (which registers, their ranges and resets) comes from :attr:`regmap`, the

@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """One build configuration: its rules, what it implies, and that the boards, the presets and
 the simulated board all take it."""
 
