@@ -5,7 +5,7 @@ from amaranth.asserts import AnySeq
 from amaranth.hdl import (Assert, Cat, ClockDomain, Const, Cover, Elaboratable, Module, Mux,
                           ResetSignal, Signal)
 
-from ..gateware.host.fields import PlayerState
+from ..gateware.fields import PlayerState
 from ..gateware.player.image_format import FORMAT_VERSION, HEADER_BYTES, HEADER_WORDS, MAGIC
 
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from .client import FTDISPITransport, HostClient, SerialTransport
 from .correction.upload import upload_table
-from .gateware.host.fields import WobbleShape
+from .gateware.fields import WobbleShape
 from .jobs.codes import CodeFill, CodeKind, CodeSpec, code_object
 from .jobs.drawing import load_drawing
 from .jobs.fill import HatchSet, LineOrder

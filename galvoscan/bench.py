@@ -54,15 +54,17 @@ BUILDS = {
 
 
 def _build(label):
-    from .build import BuildError, build_bitstream, preset_build_options
+    from .build import PRESETS, BuildError, board_config, build_bitstream, preset_settings
     board, kwargs = BUILDS[label]
-    if "preset" in kwargs:
-        kwargs = preset_build_options(kwargs["preset"])
+    kwargs = dict(kwargs)
+    seed = kwargs.pop("seed", 1)
+    config = PRESETS[kwargs["preset"]] if "preset" in kwargs else board_config(board, **kwargs)
     with tempfile.TemporaryDirectory() as directory:
         # The bench records a slow build's figures rather than stopping at it, and a build
         # that fails (a placer that gives up) as a failure, with the others' figures kept.
         try:
-            report = build_bitstream(board, build_dir=directory, require_timing=False, **kwargs)
+            report = build_bitstream(board, config=config, settings=preset_settings(config),
+                                     build_dir=directory, require_timing=False, seed=seed)
         except BuildError as error:
             return label, {"board": board, "failed": str(error).split(";")[0]}
     return label, {"board": board, "luts": report.luts, "luts_available": report.luts_available,
@@ -71,19 +73,19 @@ def _build(label):
                    "modes": list(report.modes), "correction_nodes": report.correction_nodes,
                    "bit_rate_mhz": report.bit_rate_mhz, "build_s": report.seconds,
                    "placer": report.placer,
-                   "options": [name for name in ("delays", "wobble", "interpolation", "player")
-                               if kwargs.get(name)]}
+                   "options": [name for name, built in (("delays", config.vector_delays),
+                                                        ("wobble", config.wobble),
+                                                        ("interpolation",
+                                                         config.spiral_interpolation),
+                                                        ("player", config.player)) if built]}
 
 
 def _blocks():
     """Cells by block of the default iCEBreaker build's system top (:mod:`.utilisation`)."""
-    from .build import DEFAULT_MODES
+    from .build import PRESETS
     from .gateware.top import GalvoScanTop
-    from .platforms.icebreaker import ALARM_PMOD_PINS
     from .utilisation import block_utilisation
-    top = GalvoScanTop(clk_freq=12e6, modes=DEFAULT_MODES["icebreaker"],
-                       laser_alarms=len(ALARM_PMOD_PINS[1].split()), spiral_interpolation=False,
-                       vector_delays=False)
+    top = GalvoScanTop(PRESETS["default"])
     return "blocks", block_utilisation(top)
 
 

@@ -12,79 +12,69 @@ import time
 from .gateware.clocking import DEFAULT_BAUD
 from .placer import placed_by
 from .gateware.field.correction_table import CorrectionTable
-from .gateware.top import DEFAULT_CORRECTION_NODES, MODES
-from .platforms.icebreaker import (CRYSTAL_HZ, ICEBreakerScanner, icebreaker_platform,
-                                   system_clock)
-from .platforms.icestick import ICESTICK_MODES, ICEStickScanner, icestick_check, \
-    icestick_platform
+from .gateware.limits import DEFAULT_CORRECTION_NODES
+from .gateware.settings import ScanSettings
+from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform
+from .platforms.icestick import ICEStickScanner, icestick_platform
 from .toolchain import tool_env
 
 
-__all__ = ["BOARDS", "DEFAULT_MODES", "PRESETS", "BuildReport", "build_bitstream",
-           "preset_build_options", "preset_register_map", "preset_top_options"]
+__all__ = ["BOARDS", "PRESETS", "BuildReport", "build_bitstream", "board_config",
+           "preset_register_map", "preset_settings"]
 
 
-#: Boards ``galvoscan build`` knows: name → (platform factory, top-level factory, options for
-#: yosys' synth_ice40). The UP5K has DSP blocks: ``-dsp`` puts the scale stage's multipliers
-#: there instead of in logic cells. (``-dff``, ABC optimising the logic with its flip-flops,
-#: saves some 200 cells but overflows the WebAssembly build of ABC's stack on this design.)
+#: Boards ``galvoscan build`` knows: name → (platform factory, top-level, options for yosys'
+#: synth_ice40). The top-level's ``config(...)`` makes a build's configuration with the board's
+#: fit rules. The UP5K has DSP blocks: ``-dsp`` puts the scale stage's multipliers there
+#: instead of in logic cells. (``-dff``, ABC optimising the logic with its flip-flops, saves
+#: some 200 cells but overflows the WebAssembly build of ABC's stack on this design.)
 BOARDS = {
     "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
     "icestick": (icestick_platform, ICEStickScanner, "-dffe_min_ce_use 8"),
 }
 
-#: Scan modes a board's bitstream has unless told otherwise: the UP5K holds all three with the
-#: correction stage (README "Resources").
-DEFAULT_MODES = {
-    "icebreaker": ("spiral", "raster", "vector"),
-    "icestick": ICESTICK_MODES,
-}
+
+def board_config(board="icebreaker", **options):
+    """The :class:`~galvoscan.gateware.build_config.BuildConfig` of ``board``'s bitstream with
+    ``options`` (those of :func:`build_bitstream`: ``modes``, ``correction``, ``clock``,
+    ``bit_rate``, ``baud``, ``wobble``, ``interpolation``, ``delays``, ``player``); a
+    ``ValueError`` for what the board cannot hold. With no options, the board's default
+    bitstream: on the iCEBreaker all three modes with the correction stage (the fit figures in
+    the benchmarks, docs/bench.json)."""
+    if board not in BOARDS:
+        raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
+    return BOARDS[board][1].config(**options)
 
 
-#: One bitstream for each kind of machine (``galvoscan build --preset``): the options of
-#: :func:`build_bitstream` each takes.
+#: One bitstream for each kind of machine (``galvoscan build --preset``, ``board --sim
+#: --preset``), and the default one: the iCEBreaker's configurations.
 PRESETS = {
+    # What `galvoscan build` builds when told nothing.
+    "default": board_config("icebreaker"),
     # A marking station: vector mode with the RTC delays, the correction stage, and the job
     # player (stand-alone from the flash, started by a foot switch), on the PLL's 24 MHz.
-    "marker": {"modes": ("vector",), "delays": True, "player": True, "clock": 24e6},
+    "marker": board_config("icebreaker", modes=("vector",), delays=True, player=True,
+                           clock=24e6),
     # A cleaning head: the spiral with its interpolator, the raster fill and the correction
     # stage, on the crystal.
-    "cleaner": {"modes": ("spiral", "raster"), "interpolation": True},
+    "cleaner": board_config("icebreaker", modes=("spiral", "raster"), interpolation=True),
 }
-
-
-def preset_top_options(name):
-    """The :class:`~galvoscan.gateware.top.GalvoScanTop` options of preset ``name``'s
-    bitstream on the iCEBreaker (what a simulated board of it is built with)."""
-    preset = PRESETS[name]
-    options = ICEBreakerScanner.top_options(**{key: preset[key] for key in
-                                               ("wobble", "interpolation", "delays", "player")
-                                               if key in preset})
-    return {"modes": preset["modes"], **options}, preset.get("clock") or CRYSTAL_HZ
 
 
 def preset_register_map(name):
     """The register map of preset ``name``'s bitstream: what its register file takes (a job
     image for the marker's player is checked against it)."""
-    from .gateware.host.regmap import register_map
-    options, _ = preset_top_options(name)
-    settings = preset_build_options(name).get("settings")
-    return register_map(modes=options["modes"], wobble=options.get("wobble", False),
-                        spiral_interpolation=options.get("spiral_interpolation", True),
-                        vector_delays=options.get("vector_delays", False),
-                        player=options.get("player", False),
-                        resets=settings.register_resets() if settings else None)
+    config = PRESETS[name]
+    settings = preset_settings(config)
+    return config.register_map(resets=settings.register_resets() if settings else None)
 
 
-def preset_build_options(name):
-    """:func:`build_bitstream`'s options for preset ``name``'s bitstream (``bench`` builds it so),
-    its start settings among them: a build without the spiral starts, stopped, in its first
-    mode."""
-    from .gateware.settings import ScanSettings
-    options = dict(PRESETS[name])
-    if "spiral" not in options["modes"]:
-        options["settings"] = ScanSettings(mode=options["modes"][0], run=False)
-    return options
+def preset_settings(config):
+    """The scan settings a bitstream of ``config`` starts with: a build without the spiral
+    starts, stopped, in its first mode (None: the defaults)."""
+    if "spiral" in config.modes:
+        return None
+    return ScanSettings(mode=config.modes[0], run=False)
 
 
 @dataclass
@@ -142,21 +132,18 @@ class TimingError(BuildError):
                          f"{report.brams} of {report.brams_available} block RAMs)")
 
 
-def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settings=None,
-                    modes=None, correction="identity", clock=None, bit_rate=2_000_000,
-                    baud=DEFAULT_BAUD, seed=1, require_timing=True, wobble=False,
-                    interpolation=False, delays=False, player=False):
+def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table=None,
+                    settings=None, correction="identity", seed=1, require_timing=True,
+                    **options):
     """Synthesise, place and route and pack the full system for ``board``.
 
-    nextpnr runs with a fixed ``seed`` so builds are repeatable; ``modes`` (default: the board's,
-    :data:`DEFAULT_MODES`) picks the scan modes built, ``correction`` the correction table the
-    RAM starts with (``None``: no correction stage), ``clock`` the system clock in Hz (None:
-    the board's crystal; else from its PLL), ``bit_rate`` the XY2 bit rate (4 MHz: XY2-200),
-    ``baud`` the host serial port's rate, ``wobble`` adds the wobble stage to vector mode,
-    ``interpolation`` the spiral's interpolator (about 280 cells; not in the default build,
-    which it would not fit beside all three modes), ``delays`` vector mode's RTC delays (about
-    240 cells; likewise), ``player`` the job player (the iCEBreaker: stand-alone marking from
-    its flash, the SPI link's pins taken by the machine's lines).
+    ``config`` is the build's :class:`~galvoscan.gateware.build_config.BuildConfig` (one of
+    :data:`PRESETS`, or :func:`board_config`'s); None: :func:`board_config` of ``options``
+    (``modes``, ``clock``, ``bit_rate``, ``baud``, ``wobble``, ``interpolation``, ``delays``,
+    ``player``), checked against the board before anything is built. ``correction`` is the
+    correction table the RAM starts with (``None``: no correction stage), ``table`` and
+    ``settings`` the spiral table and the scan settings; nextpnr runs with a fixed ``seed``
+    so builds are repeatable.
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -166,55 +153,30 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
     make_platform, make_top, synth_opts = BOARDS[board]
     # What the board cannot run raises here, before anything is built.
-    if wobble and board == "icestick":
-        raise ValueError("the iCEstick has no room for the wobble stage")
-    if interpolation and board == "icestick":
-        raise ValueError("the iCEstick has no room for the spiral's interpolator")
-    if board == "icestick":
-        icestick_check(modes=modes, correction=correction, clock=clock, bit_rate=bit_rate,
-                       baud=baud)
+    if config is None:
+        config = make_top.config(correction=correction, **options)
+    elif options:
+        raise TypeError(f"give the build's options in its config, not as {', '.join(options)}")
+    if not config.correction:
         correction = None               # the build has no correction stage at all
-    else:
-        system_clock(clock, bit_rate, baud)
-    modes = DEFAULT_MODES[board] if modes is None else tuple(modes)
-    if wobble and len(set(modes)) == len(MODES):
-        raise ValueError("the wobble stage does not fit the UP5K beside all three scan modes: "
-                         "leave one out with --modes (spiral,vector fits)")
-    if delays and "vector" not in modes:
-        raise ValueError("the delays are vector mode's: build them with the vector mode")
-    if delays and len(set(modes)) == len(MODES):
-        raise ValueError("vector mode's delays do not fit the UP5K beside all three scan "
-                         "modes: leave one out with --modes (spiral,vector fits)")
-    if interpolation and len(set(modes)) == len(MODES):
-        raise ValueError("the spiral's interpolator does not fit the UP5K beside all three "
-                         "scan modes: leave one out with --modes (spiral,vector fits)")
-    if interpolation and "spiral" not in modes:
-        raise ValueError("the interpolator is the spiral's: build it with the spiral mode")
-    if player and board != "icebreaker":
-        raise ValueError("the job player reads the iCEBreaker's flash: build it for the "
-                         "iCEBreaker")
-    if player and "vector" not in modes:
-        raise ValueError("the job player plays vector jobs: build it with the vector mode")
-    if isinstance(correction, str) and correction == "identity":
+    elif isinstance(correction, str) and correction == "identity":
         correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
+    top_contents = {"correction": correction} if board == "icebreaker" else {}
+    clock = config.clk_freq
     platform = make_platform()
     build_dir = Path(build_dir)
     name = f"galvoscan_{board}"
 
     start = time.monotonic()
-    plan = platform.build(make_top(table=table, settings=settings, modes=modes,
-                                  correction=correction, clock=clock, bit_rate=bit_rate,
-                                  baud=baud, **({"wobble": True} if wobble else {}),
-                                  **({"interpolation": True} if interpolation else {}),
-                                  **({"delays": True} if delays else {}),
-                                  **({"player": True} if player else {})),
+    plan = platform.build(make_top(config, table=table, settings=settings, **top_contents),
                           name=name,
                           build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
                           # Timing is judged here, from the report, so that a slow design
                           # gives its figures rather than a failed subprocess.
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json "
                                        f"--timing-allow-fail" +
-                                       (f" --freq {clock / 1e6:g}" if clock else ""))
+                                       (f" --freq {clock / 1e6:g}"
+                                        if clock != platform.default_clk_frequency else ""))
     env = tool_env()
     # (Amaranth's build script names nextpnr's log after the design.)
     placer_file = placed_by(build_dir / f"{name}.tim")
@@ -236,7 +198,7 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
 
     bitstream = build_dir / f"{name}.bin"
     report = json.loads(products.get(f"{name}.report.json", mode="t"))
-    clock_mhz = (clock or platform.default_clk_frequency) / 1e6
+    clock_mhz = clock / 1e6
     # One clock domain: the slowest achieved figure is the system's Fmax.
     fmax_mhz = min(entry["achieved"] for entry in report["fmax"].values())
     utilisation = report["utilization"]
@@ -248,13 +210,14 @@ def build_bitstream(board="icebreaker", *, build_dir="build", table=None, settin
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
                        dsps_available=dsps_available, seconds=round(seconds, 1),
-                       modes=modes, correction_nodes=correction.n if correction else 0,
-                       bit_rate_mhz=bit_rate / 1e6, baud=baud, placer=placer,
-                       player=bool(player))
+                       modes=config.modes,
+                       correction_nodes=correction.n if correction else 0,
+                       bit_rate_mhz=config.bit_rate / 1e6, baud=config.baud, placer=placer,
+                       player=config.player)
     # The build's record beside its netlist (its clock, baud and options): what a simulation
     # of the netlist needs to know of it.
-    record = {**result.as_dict(), "interpolation": bool(interpolation), "delays": bool(delays),
-              "wobble": bool(wobble)}
+    record = {**result.as_dict(), "interpolation": config.spiral_interpolation,
+              "delays": config.vector_delays, "wobble": config.wobble}
     (build_dir / f"{name}.build.json").write_text(json.dumps(record, indent=1))
     if not result.meets_timing:
         # A bitstream that misses timing is never written where a user would flash it, nor

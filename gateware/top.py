@@ -14,10 +14,9 @@ with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``
 
 from amaranth.hdl import Cat, Module, Mux, ResetInserter, Signal
 from amaranth.lib import wiring
-from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
-from .clocking import XY2_100_BIT_RATE, check_clocks, default_baud
+from .build_config import MODES, BuildConfig
 from .field.correction import FieldCorrection
 from .field.correction_table import CorrectionTable
 from .field.scale import ScaleOffset
@@ -27,33 +26,29 @@ from .host.command import CommandDecoder
 from .host.frames import PAYLOAD_BITS
 from .host.progress import ProgressFeed
 from .host.registers import RegisterFile
-from .host.fields import pack
-from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Capabilities, Mode,
-                          PlayerResult, PlayerState, PlayerStatus, register_map)
+from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Mode, PlayerResult,
+                          PlayerState, PlayerStatus)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import UARTCommandPort
-from .laser.controller import MAX_ALARMS, LaserController
+from .laser.controller import LaserController
+from .laser.marking_select import MarkingSelect
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .player.player import JobPlayer
-from .player.start_input import DEFAULT_DEBOUNCE_MS, StartInput, debounce_ticks
+from .player.start_input import StartInput
 from .settings import ScanSettings
 from .sources.raster import RasterSequencer
 from .sources.select import SourceSelect
 from .sources.spiral import SpiralSequencer
 from .sources.spiral_table import SpiralTable
 from .sources.laser_delays import LaserDelays
-from .sources.vector import (DelayedVectorCommand, DirectedVectorSequencer, VecOpWord,
-                             VectorCommand, VectorSequencer)
+from .sources.vector import DirectedVectorSequencer, VectorSequencer
+from .sources.vector_queue import VectorQueue
 from .sources.wobble import Wobble
 
 
-__all__ = ["GalvoScanTop", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
+__all__ = ["GalvoScanTop", "BuildConfig", "ScanSettings", "MODES", "VECTOR_QUEUE_DEPTH",
            "DEFAULT_CORRECTION_NODES"]
-
-
-#: Names of the scan modes, in the order of their ``mode`` register values (:class:`Mode`).
-MODES = tuple(mode.label for mode in Mode)
 
 
 # The correction stage finishes a point within the shortest possible frame (two clocks per
@@ -71,68 +66,29 @@ class GalvoScanTop(wiring.Component):
                                                  ┌─▶ spiral sequencer (ROMs) ─┐  source
         SPI ─┐                                   ├─▶ raster fill              ├─▶ select ─▶ scale ─▶ correction ─▶ XY2-100
         UART ┴▶ command decoder ─▶ register file ┴─▶ vector queue ─▶ DDA ────┘  (mode)     /offset   (n×n table)   PHY
-                           status block (flags, counters) ◀─┘  laser controller ◀── marking, pulse timing
+                           status block (flags, counters) ◀─┘  laser controller ◀── marking select (per mode), pulse timing
 
-    Every register fact (which registers, their ranges and resets) comes from :attr:`regmap`,
-    the build's :func:`~.host.regmap.register_map`; the clock is checked once, by
-    :func:`~.clocking.check_clocks`.
+    Every option of the build (and the rules they keep) is its :attr:`config`; every register
+    fact (which registers, their ranges and resets) comes from :attr:`regmap`, the
+    configuration's :meth:`~.build_config.BuildConfig.register_map`.
 
     Parameters
     ----------
-    clk_freq : int or float
-        Frequency of ``clk`` in Hz.
-    bit_rate : int or float
-        XY2 bit rate in Hz (2 MHz: XY2-100). ``clk_freq / bit_rate`` must be an even integer.
-    baud : int or None
-        UART rate (8N1). None: 1 Mbaud (the boards' default), or on a clock too slow for it
-        (a simulation's few MHz) the fastest standard rate it carries
-        (:func:`~.clocking.default_baud`).
+    config : :class:`~.build_config.BuildConfig`, optional
+        The build's options (modes, clock, links, laser, player …), checked there. None: one
+        made of ``options``.
     table : :class:`SpiralTable`
         Spiral angle tables (default: 128 Gaussian-sampled points).
     settings : :class:`ScanSettings`
         What the scan registers reset to.
-    mo_lead : float
-        Seconds the laser's master oscillator leads emission (5 ms, as the paper).
-    modes : tuple of str
-        Scan modes built in (some of ``"spiral"``, ``"raster"``, ``"vector"``).
-    correction : :class:`CorrectionTable` or None
-        Distortion correction table the RAM starts with (default: the identity on
-        :data:`DEFAULT_CORRECTION_NODES` nodes per axis); ``None`` builds no correction stage.
-    multiplier : str
-        The scale stage's products: ``"dsp"`` (one DSP block per axis) or ``"serial"``
-        (shift-and-add, for FPGAs without DSPs; needs ``correction=None``).
-    links : tuple of str
-        Host links built: ``"spi"`` and/or ``"uart"``. The pins of a link left out do nothing.
-    laser : bool
-        Build the laser controller. Without it the laser pins stay low, its registers are
-        unknown addresses, and vector mode (timed by the laser's pulses) cannot be built.
-    register_reads : str
-        How the register file reads back what it holds: ``"ram"``, from a copy in block RAM
-        (two RAMs, some 90 cells fewer on the full build), or ``"mux"``, through a multiplexer
-        (the smallest boards).
-    laser_alarms : int
-        Laser alarm inputs, 0 … 4 (each latches an alarm fault while armed).
-    vector_queue_depth : int
-        Segments the vector queue holds (:data:`VECTOR_QUEUE_DEPTH`, the build's). A
-        simulation may build a shorter queue, so that filling it costs a few dozen segments;
-        the host learns the depth from ``fifo_free`` while the queue is empty.
-    wobble : bool
-        Build the wobble stage on vector mode's marked points (:class:`~.sources.wobble.Wobble`)
-        and its ``wob_*`` registers; needs vector mode. Without it those registers are unknown
-        addresses.
-    spiral_interpolation : bool
-        Build the spiral's linear interpolation between points and its ``spiral_interp``
-        register (about 280 cells on the UP5K; False leaves both out).
-    vector_delays : bool
-        Build vector mode's RTC delays (laser-on, laser-off, mark, polygon; README "Laser and
-        scanner delays"). Without them their registers are left out and ``vec_op`` takes
-        only 0 and 1. They need a clock of a whole number of MHz.
-    player : bool
-        Build the job player (:class:`~.player.player.JobPlayer`), its flash reader and start
-        input: a press of ``start_n`` plays the job image in the flash, with no host. Needs
-        vector mode and the laser.
-    start_debounce_ms : int
-        How long a change of ``start_n`` must last, ms.
+    correction : :class:`CorrectionTable` or str or None
+        Distortion correction table the RAM starts with (``"identity"``, the default: the
+        identity on :data:`DEFAULT_CORRECTION_NODES` nodes per axis). Without ``config``,
+        ``None`` builds no correction stage; with one, the table is used only if the
+        configuration has the stage.
+    options
+        Without ``config``: :class:`~.build_config.BuildConfig`'s options (``clk_freq``,
+        ``modes`` …), for a top built here and there in tests and simulations.
 
     Interface attributes
     --------------------
@@ -168,19 +124,22 @@ class GalvoScanTop(wiring.Component):
 
     Attributes
     ----------
+    config : :class:`~.build_config.BuildConfig`
+        This build's options.
     regmap : :class:`~.host.regmap.RegisterMap`
         This build's registers.
-    clocking : :class:`~.clocking.ClockPlan`
-        Clocks per XY2 bit and per UART bit.
     """
 
-    def __init__(self, *, clk_freq, bit_rate=XY2_100_BIT_RATE, baud=None, table=None,
-                 settings=None, mo_lead=5e-3, modes=MODES, correction="identity",
-                 multiplier="dsp", links=("spi", "uart"), laser=True,
-                 laser_alarms=2, register_reads="ram",
-                 vector_queue_depth=VECTOR_QUEUE_DEPTH, wobble=False,
-                 spiral_interpolation=True, vector_delays=False, player=False,
-                 start_debounce_ms=DEFAULT_DEBOUNCE_MS):
+    def __init__(self, config=None, *, table=None, settings=None, correction="identity",
+                 **options):
+        if config is None:
+            config = BuildConfig(correction=correction is not None, **options)
+        elif options:
+            raise TypeError(f"give the build's options in its BuildConfig, not as "
+                            f"{', '.join(options)}")
+        if not isinstance(config, BuildConfig):
+            raise TypeError(f"config must be a BuildConfig, not {config!r}")
+        self.config = config
         self.table = SpiralTable() if table is None else table
         self.settings = ScanSettings() if settings is None else settings
         if not isinstance(self.table, SpiralTable):
@@ -188,89 +147,21 @@ class GalvoScanTop(wiring.Component):
         if not isinstance(self.settings, ScanSettings):
             raise TypeError(f"settings must be ScanSettings, not {self.settings!r}")
         self.settings.check_ranges(self.table.points)
-        modes = tuple(mode.label if isinstance(mode, Mode) else mode for mode in modes)
-        if not modes or any(mode not in MODES for mode in modes) or len(set(modes)) != len(modes):
-            raise ValueError(f"modes must be some of {', '.join(MODES)}, each once, not {modes!r}")
-        if self.settings.mode not in modes:
+        if self.settings.mode not in config.modes:
             raise ValueError(f"the settings start in {self.settings.mode} mode, which modes "
-                             f"{modes!r} leaves out")
-        self.modes = modes
-        # Checked here so that a bad clock shows at construction, not deep in elaboration.
-        baud = default_baud(clk_freq) if baud is None else baud
-        self.clocking = check_clocks(clk_freq, bit_rate, baud)
-        if isinstance(correction, str) and correction == "identity":
+                             f"{config.modes!r} leaves out")
+        if not config.correction:
+            correction = None
+        elif isinstance(correction, str) and correction == "identity":
             correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
-        if correction is not None and not isinstance(correction, CorrectionTable):
+        elif not isinstance(correction, CorrectionTable):
             raise TypeError(f"correction must be a CorrectionTable or None, not {correction!r}")
         self.correction = correction
-        if multiplier not in ("dsp", "serial"):
-            raise ValueError(f"multiplier must be dsp or serial, not {multiplier!r}")
-        if multiplier == "serial" and correction is not None:
-            raise ValueError("the serial multiplier is for FPGAs without DSP blocks, where the "
-                             "correction stage does not fit: build it with correction=None")
-        self.multiplier = multiplier
-        links = tuple(links)
-        if not links or any(link not in ("spi", "uart") for link in links) or \
-                len(set(links)) != len(links):
-            raise ValueError(f"links must be some of spi, uart, each once, not {links!r}")
-        self.links = links
-        self.laser = bool(laser)
-        if register_reads not in ("ram", "mux"):
-            raise ValueError(f"register_reads must be ram or mux, not {register_reads!r}")
-        self.register_reads = register_reads
-        if not self.laser and "vector" in modes:
-            raise ValueError("vector mode times its points by the laser's pulses: it needs the "
-                             "laser controller")
-        if not mo_lead > 0:
-            raise ValueError(f"mo_lead must be a positive time in seconds, not {mo_lead!r}")
-        self.mo_lead = mo_lead
-        if not isinstance(laser_alarms, int) or isinstance(laser_alarms, bool) or \
-                not 0 <= laser_alarms <= MAX_ALARMS:
-            raise ValueError(f"laser_alarms must be a whole number from 0 to {MAX_ALARMS}, "
-                             f"not {laser_alarms!r}")
-        self.laser_alarms = laser_alarms if self.laser else 0
-        if not isinstance(vector_queue_depth, int) or isinstance(vector_queue_depth, bool) or \
-                not 2 <= vector_queue_depth <= VECTOR_QUEUE_DEPTH:
-            raise ValueError(f"vector_queue_depth must be a whole number from 2 to "
-                             f"{VECTOR_QUEUE_DEPTH}, not {vector_queue_depth!r}")
-        self.vector_queue_depth = vector_queue_depth
-        self.wobble = bool(wobble)
-        if self.wobble and "vector" not in modes:
-            raise ValueError("the wobble stage works on vector points: it needs vector mode")
-        if self.wobble:
-            Wobble.check_frame_rate(bit_rate / FRAME_BITS)
-        self.spiral_interpolation = bool(spiral_interpolation) and "spiral" in modes
-        self.vector_delays = bool(vector_delays) and "vector" in modes
-        self.player = bool(player)
-        if self.player and not ("vector" in modes and self.laser):
-            raise ValueError("the job player plays vector jobs: it needs vector mode and the "
-                             "laser controller")
-        self.start_debounce_ms = start_debounce_ms
-        if self.player:
-            debounce_ticks(start_debounce_ms, FRAME_BITS * 1e6 / bit_rate)  # (checked now)
-        #: µs an XY2 frame lasts (10 at XY2-100), and system clocks per µs.
-        self.frame_us = FRAME_BITS * 1e6 / bit_rate
-        if self.vector_delays:
-            clocks_per_us = clk_freq / 1e6
-            if self.frame_us != int(self.frame_us) or clocks_per_us != int(clocks_per_us):
-                raise ValueError(f"the vector delays count whole µs: they need a clock of a "
-                                 f"whole number of MHz and frames of whole µs, not "
-                                 f"{clk_freq:g} Hz and {self.frame_us:g} µs (build with "
-                                 f"vector_delays=False)")
-        self.clk_freq = clk_freq
-        self.bit_rate = bit_rate
-        self.baud = baud
         #: This build's registers: what the register file holds and the host may write.
-        self.regmap = register_map(
+        self.regmap = config.register_map(
             table_points=self.table.points,
             correction_nodes=None if correction is None else correction.n,
-            modes=modes, laser=self.laser, wobble=self.wobble,
-            spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            player=self.player, resets=self.settings.register_resets(),
-            fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
-                                                 in self.capabilities().items()}),
-                   "vec_depth": self.vector_queue_depth if "vector" in self.modes else 0,
-                   **({} if correction is None else {"cor_nodes": correction.n})})
+            resets=self.settings.register_resets())
         members = {
             "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1),
             "spi_sck": In(1), "spi_cs_n": In(1, init=1), "spi_copi": In(1), "spi_cipo": Out(1),
@@ -280,41 +171,31 @@ class GalvoScanTop(wiring.Component):
             "laser_guide": Out(1),
             "interlock_open": In(1, init=1),
         }
-        if self.laser_alarms:
-            members["laser_alarm"] = In(self.laser_alarms, init=2 ** self.laser_alarms - 1)
-        if self.player:
+        if self.config.laser_alarms:
+            alarms = self.config.laser_alarms
+            members["laser_alarm"] = In(alarms, init=2 ** alarms - 1)
+        if self.config.player:
             members.update({"flash_cs_n": Out(1, init=1), "flash_clk": Out(1),
                             "flash_copi": Out(1), "flash_cipo": In(1, init=1),
                             "start_n": In(2, init=0b11), "busy": Out(1), "ready": Out(1),
                             "player_led": Out(1)})
         super().__init__(members)
 
-    def capabilities(self):
-        """What this build holds, as the ``caps`` register reports it (a dict of the
-        :data:`~.host.fields.Capabilities` flags)."""
-        return {"spiral": "spiral" in self.modes, "raster": "raster" in self.modes,
-                "vector": "vector" in self.modes, "laser": self.laser,
-                "correction": self.correction is not None, "wobble": self.wobble,
-                "delays": self.vector_delays,
-                "interpolation": "spiral" in self.modes and self.spiral_interpolation,
-                "uart": "uart" in self.links, "spi": "spi" in self.links,
-                "player": self.player}
-
     def elaborate(self, platform):
         m = Module()
 
         # --- host link ----------------------------------------------------------------------
         m.submodules.decoder = decoder = self._decoder = CommandDecoder()
-        regs = RegisterFile(self.regmap, reads_from_ram=self.register_reads == "ram")
+        regs = RegisterFile(self.regmap, reads_from_ram=self.config.register_reads == "ram")
         # `soft_reset` returns the registers (and below, the vector path and the counters) to
         # their power-up values; the link's own state (its sequence number, its error count)
         # and the laser's latched faults stay.
         m.submodules.registers = ResetInserter(regs.soft_reset)(regs)
         # A segment's end point is all a build without vector mode would not use of a frame.
-        kept_bytes = PAYLOAD_BITS // 8 if "vector" in self.modes else 4
+        kept_bytes = PAYLOAD_BITS // 8 if "vector" in self.config.modes else 4
         # A link left out of the build: its pins are unused (the outputs idle) and the decoder
         # never hears from it.
-        if "spi" in self.links:
+        if "spi" in self.config.links:
             m.submodules.spi = spi = SPITarget(kept_bits=kept_bytes * 8)
             m.d.comb += [
                 spi.sck.eq(self.spi_sck),
@@ -326,15 +207,16 @@ class GalvoScanTop(wiring.Component):
             connect(m, decoder.spi_replies, spi.replies)
         else:
             m.d.comb += decoder.spi_replies.ready.eq(1)
-        if "uart" in self.links:
-            m.submodules.uart = uart = UARTCommandPort(divisor=self.clocking.uart_divisor,
-                                                       kept_bytes=kept_bytes)
+        if "uart" in self.config.links:
+            m.submodules.uart = uart = UARTCommandPort(
+                divisor=self.config.clocking.uart_divisor,
+                kept_bytes=kept_bytes)
             m.d.comb += [uart.rx.eq(self.uart_rx), self.uart_tx.eq(uart.tx)]
             connect(m, uart.frames, decoder.uart_frames)
             connect(m, decoder.uart_replies, uart.replies)
         else:
             m.d.comb += [decoder.uart_replies.ready.eq(1), self.uart_tx.eq(1)]
-        if self.player:
+        if self.config.player:
             # The player writes registers on the clocks without a host frame.
             m.submodules.arbiter = arbiter = BusArbiter()
             connect(m, decoder.bus, arbiter.host)
@@ -364,21 +246,22 @@ class GalvoScanTop(wiring.Component):
         # With a correction stage, it holds the point between frames, and the scale stage is
         # combinational in front of it: either way one point waits for the PHY, never two.
         m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None,
-                                                 multiplier=self.multiplier)
-        m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq, bit_rate=self.bit_rate)
+                                                 multiplier=self.config.multiplier)
+        m.submodules.phy = phy = XY2Transmitter(clk_freq=self.config.clk_freq,
+                                                bit_rate=self.config.bit_rate)
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
 
         sources = {}
-        if "spiral" in self.modes:
+        if "spiral" in self.config.modes:
             m.submodules.spiral = sources[Mode.SPIRAL] = spiral = SpiralSequencer(
-                self.table, interpolation=self.spiral_interpolation)
+                self.table, interpolation=self.config.spiral_interpolation)
             # Registers and ports of the same name.
             for name in ("dwell", "x_first", "x_last", "y_first", "y_last"):
                 m.d.comb += getattr(spiral, name).eq(getattr(regs, name))
-            if self.spiral_interpolation:
+            if self.config.spiral_interpolation:
                 m.d.comb += spiral.interpolate.eq(regs.spiral_interp)
-        if "raster" in self.modes:
+        if "raster" in self.config.modes:
             m.submodules.raster = sources[Mode.RASTER] = raster = RasterSequencer()
             m.d.comb += [
                 raster.x.eq(regs.ras_x), raster.y.eq(regs.ras_y),
@@ -387,17 +270,17 @@ class GalvoScanTop(wiring.Component):
                 raster.along_y.eq(regs.ras_flags[0]), raster.one_way.eq(regs.ras_flags[1]),
                 raster.turn_gate.eq(regs.ras_turn_gate),
             ]
-        if "vector" in self.modes:
-            sequencer = DirectedVectorSequencer if self.wobble else VectorSequencer
-            vector = sources[Mode.VECTOR] = sequencer(frame_us=int(self.frame_us),
-                                                      delays=self.vector_delays)
+        if "vector" in self.config.modes:
+            sequencer = DirectedVectorSequencer if self.config.wobble else VectorSequencer
+            vector = sources[Mode.VECTOR] = sequencer(frame_us=int(self.config.frame_us),
+                                                      delays=self.config.vector_delays)
             # vec_flush (and soft_reset) start the vector path afresh: queue, sequencer (and
             # the wobble and the laser delays, below).
             self._vector_flush = flush = Signal()
             m.d.comb += flush.eq(regs.vec_flush | regs.soft_reset)
             m.submodules.vector = ResetInserter(flush)(vector)
             names = ("pitch", "pulses_per_point", "jump_delay")
-            if self.vector_delays:
+            if self.config.vector_delays:
                 names += ("mark_delay", "polygon_delay", "polygon_scaled")
             for name in names:
                 m.d.comb += getattr(vector, name).eq(getattr(regs, name))
@@ -411,8 +294,8 @@ class GalvoScanTop(wiring.Component):
         # Each mode's points: the vector sequencer's through the wobble stage, if built.
         streams = {mode: source.points for mode, source in sources.items()}
         clipped = scale.clipped
-        if self.wobble:
-            wobble = Wobble(frame_rate=self.bit_rate / FRAME_BITS)
+        if self.config.wobble:
+            wobble = Wobble(frame_rate=self.config.bit_rate / FRAME_BITS)
             m.submodules.wobble = ResetInserter(self._vector_flush)(wobble)
             connect(m, vector.points, wobble.line_points)
             m.d.comb += [
@@ -461,17 +344,18 @@ class GalvoScanTop(wiring.Component):
         # A build without the laser controller (the smallest boards) leaves the laser pins
         # low: nothing can switch a laser on.
         self._player_alive = Signal()
-        if self.laser:
+        if self.config.laser:
             laser = self._elaborate_laser(m, decoder, regs, phy, sources, select, status)
-        if self.player:
+        if self.config.player:
             self._elaborate_player(m, arbiter, regs, phy, sources[Mode.VECTOR], laser, status)
         return m
 
     def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):
         """The job player, its flash reader and start input, and the PLC's lines."""
-        m.submodules.flash = flash = SPIFlashReader(clk_freq=self.clk_freq)
-        m.submodules.start = start = StartInput(inputs=2, debounce_ms=self.start_debounce_ms,
-                                                tick_us=int(self.frame_us))
+        m.submodules.flash = flash = SPIFlashReader(clk_freq=self.config.clk_freq)
+        m.submodules.start = start = StartInput(inputs=2,
+                                                debounce_ms=self.config.start_debounce_ms,
+                                                tick_us=int(self.config.frame_us))
         m.submodules.player = player = JobPlayer()
         # What the player hears of the laser and the host, and what it tells the flash
         # reader, a clock late: it waits on all of them anyway, and the flip-flops take the
@@ -497,8 +381,8 @@ class GalvoScanTop(wiring.Component):
             player.start.eq(start.pressed),
             player.grant.eq(arbiter.grant),
             player.host_took_over.eq(took_over),
-            player.queue_ready.eq(self._queue.w_stream.ready),
-            player.queue_empty.eq(self._queue.level == 0),
+            player.queue_ready.eq(self._queue.ready),
+            player.queue_empty.eq(self._queue.empty),
             player.vector_busy.eq(vector.busy),
             player.laser_ready.eq(laser_ready),
             player.fault.eq(fault),
@@ -521,36 +405,27 @@ class GalvoScanTop(wiring.Component):
 
     def _elaborate_vector_queue(self, m, regs, vector, status):
         """The queue between the ``vec_op`` register and the vector sequencer."""
-        # A write of vec_op queues (op, vec_x, vec_y); the register file refuses it when the
-        # queue is full, and the refusal is counted. (vec_op is the value pushed while it is.)
-        layout = DelayedVectorCommand if self.vector_delays else VectorCommand
-        queue = SyncFIFOBuffered(width=layout.size, depth=self.vector_queue_depth)
+        queue = VectorQueue(depth=self.config.vector_queue_depth,
+                            delays=self.config.vector_delays)
         m.submodules.queue = ResetInserter(self._vector_flush)(queue)
-        command = Signal(layout)
-        if self.vector_delays:
-            word = VecOpWord(regs.vec_op)
-            m.d.comb += command.corner_frames.eq(word.corner_frames)
-            op = word.op
-        else:           # (vec_op is the op alone)
-            op = regs.vec_op[0]
-        # The host's segments carry their end point in the frame that queues them (one checked
-        # frame: never an old vec_x or vec_y); the player's come from vec_x and vec_y.
         decoder = self._decoder
         m.d.comb += [
-            command.op.eq(op),
-            command.x.eq(Mux(decoder.segment, decoder.segment_x, regs.vec_x)),
-            command.y.eq(Mux(decoder.segment, decoder.segment_y, regs.vec_y)),
-            queue.w_stream.payload.eq(command),
-            queue.w_stream.valid.eq(regs.vec_op_push),
-            regs.vec_op_ready.eq(queue.w_stream.ready),
-            regs.fifo_free.eq(self.vector_queue_depth - queue.level),
+            queue.vec_op.eq(regs.vec_op),
+            queue.push.eq(regs.vec_op_push),
+            queue.segment.eq(decoder.segment),
+            queue.segment_x.eq(decoder.segment_x),
+            queue.segment_y.eq(decoder.segment_y),
+            queue.vec_x.eq(regs.vec_x),
+            queue.vec_y.eq(regs.vec_y),
+            regs.vec_op_ready.eq(queue.ready),
+            regs.fifo_free.eq(queue.free),
             status.flags.vector_busy.eq(vector.busy),
             status.events.vec_rejected.eq(regs.vec_op_refused),
             status.events.vec_underruns.eq(vector.underrun),
             status.events.vec_stalls.eq(vector.stall),
             status.events.vec_taken.eq(vector.commands.valid & vector.commands.ready),
         ]
-        connect(m, queue.r_stream, vector.commands)
+        connect(m, queue.commands, vector.commands)
         self._queue = queue
 
     def _elaborate_laser(self, m, decoder, regs, phy, sources, select, status):
@@ -558,11 +433,12 @@ class GalvoScanTop(wiring.Component):
         # Pulse-synchronous sources count the PRR clock ahead by the two frames a point takes
         # to reach the head (into the scale stage's buffer, then onto the wires), plus the
         # clock modulation takes to follow `marking`.
-        frame_clocks = FRAME_BITS * self.clocking.clocks_per_bit
+        frame_clocks = FRAME_BITS * self.config.clocking.clocks_per_bit
         lookahead = 2 * frame_clocks + 1 if Mode.VECTOR in sources else 0
-        m.submodules.laser = laser = LaserController(clk_freq=self.clk_freq,
-                                                     mo_lead=self.mo_lead, lookahead=lookahead,
-                                                     alarms=self.laser_alarms)
+        m.submodules.laser = laser = LaserController(clk_freq=self.config.clk_freq,
+                                                     mo_lead=self.config.mo_lead,
+                                                     lookahead=lookahead,
+                                                     alarms=self.config.laser_alarms)
         # The watchdog is fed by progress only: a segment the host queued, its keepalive, the
         # player's next word; reading registers is no sign that a job goes on. It hears a
         # clock later: that takes the register file's checks off the path into the laser's
@@ -570,42 +446,27 @@ class GalvoScanTop(wiring.Component):
         m.submodules.progress = progress = ProgressFeed()
         m.d.comb += [progress.segment.eq(decoder.segment), progress.keepalive.eq(regs.keepalive),
                      progress.player.eq(self._player_alive)]
-        if "vector" in self.modes:
+        if "vector" in self.config.modes:
             m.d.comb += progress.pushed.eq(regs.vec_op_push)
-        selected = dict(zip(sources, select.selected))
-        marking = Signal()
-        if Mode.SPIRAL in sources:
-            # Spiral: marking while it runs, from its first point on (not while parked).
-            spiral_marking = Signal()
-            spiral = sources[Mode.SPIRAL]
-            with m.If(~spiral.run):
-                m.d.sync += spiral_marking.eq(0)
-            with m.Elif(spiral.points.valid & spiral.points.ready):
-                m.d.sync += spiral_marking.eq(1)
-            with m.If(selected[Mode.SPIRAL]):
-                m.d.comb += marking.eq(spiral_marking)
         if Mode.VECTOR in sources:
             m.d.comb += sources[Mode.VECTOR].pulse_ahead.eq(laser.pulse_ahead)
-        # Raster and vector: each frame's laser decision, from the moment that frame has been
-        # sent: two frame strobes after it was made.
-        framed = [mode for mode in (Mode.RASTER, Mode.VECTOR) if mode in sources and
-                  not (mode == Mode.VECTOR and self.vector_delays)]
-        if framed:
-            decided = Signal()
-            frame_marking = Signal()
-            with m.If(phy.frame_strobe):
-                m.d.sync += [
-                    decided.eq(Cat(selected[mode] & sources[mode].laser for mode in framed).any()),
-                    frame_marking.eq(decided),
-                ]
-            with m.If(select.mode != Mode.SPIRAL):
-                m.d.comb += marking.eq(frame_marking)
-        if self.vector_delays:
-            # Vector mode's laser through its delays instead: the same two frames, moved by
+        m.submodules.marking = marking = MarkingSelect(modes=sources,
+                                                       vector_delays=self.config.vector_delays)
+        m.d.comb += [marking.mode.eq(select.mode), marking.frame_strobe.eq(phy.frame_strobe)]
+        for mode, selected in zip(sources, select.selected):
+            m.d.comb += getattr(marking, f"{mode.label}_selected").eq(selected)
+        if Mode.SPIRAL in sources:
+            spiral = sources[Mode.SPIRAL]
+            m.d.comb += [marking.spiral_run.eq(spiral.run),
+                         marking.spiral_point.eq(spiral.points.valid & spiral.points.ready)]
+        for mode in marking.framed:
+            m.d.comb += getattr(marking, f"{mode.label}_laser").eq(sources[mode].laser)
+        if self.config.vector_delays:
+            # Vector mode's laser through its delays: the frames' decisions moved by
             # laser_on_delay and laser_off_delay.
             vector = sources[Mode.VECTOR]
-            delays = LaserDelays(clocks_per_us=int(self.clk_freq / 1e6),
-                                 lead_us=2 * int(self.frame_us))
+            delays = LaserDelays(clocks_per_us=int(self.config.clk_freq / 1e6),
+                                 lead_us=2 * int(self.config.frame_us))
             m.submodules.laser_delays = ResetInserter(self._vector_flush)(delays)
             m.d.comb += [
                 delays.frame_strobe.eq(phy.frame_strobe),
@@ -613,9 +474,8 @@ class GalvoScanTop(wiring.Component):
                 delays.decision.eq(vector.laser),
                 delays.on_delay.eq(regs.laser_on_delay.as_signed()),
                 delays.off_delay.eq(regs.laser_off_delay),
+                marking.vector_delayed.eq(delays.marking),
             ]
-            with m.If(selected[Mode.VECTOR]):
-                m.d.comb += marking.eq(delays.marking)
         m.d.comb += [
             laser.arm.eq(regs.arm),
             laser.power.eq(regs.laser_power),
@@ -625,11 +485,11 @@ class GalvoScanTop(wiring.Component):
             laser.link_fault.eq(decoder.refused),
             self._fault_latched.eq(laser.faults.as_value().any()),
             laser.fault_clear.eq(regs.fault_clear),
-            laser.marking.eq(marking),
+            laser.marking.eq(marking.marking),
             laser.interlock_open.eq(self.interlock_open),
             laser.guide.eq(regs.guide),
         ]
-        if self.laser_alarms:
+        if self.config.laser_alarms:
             m.d.comb += [laser.alarm.eq(self.laser_alarm),
                          status.flags.alarm.eq(self.laser_alarm.any())]
         for name in ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr",

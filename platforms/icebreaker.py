@@ -78,6 +78,7 @@ from amaranth.lib import io
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
 from ..gateware.clocking import DEFAULT_BAUD, check_clocks
+from ..gateware.build_config import LINKS, MODES, BuildConfig
 from ..gateware.top import GalvoScanTop
 from .pll import ICE40PLL, pll_settings
 
@@ -163,55 +164,74 @@ def system_clock(clock, bit_rate, baud=DEFAULT_BAUD):
 
 
 class ICEBreakerScanner(Elaboratable):
-    """The system top on the iCEBreaker's 12 MHz clock.
+    """The system top on the iCEBreaker (crystal 12 MHz, or a clock from its PLL).
 
     Parameters
     ----------
-    table, settings, modes, correction, bit_rate, baud, wobble
-        As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``modes`` None: all;
-        ``correction`` ``"identity"``: the default identity table).
-    interpolation : bool
-        Build the spiral's interpolator (``GalvoScanTop(spiral_interpolation=...)``); off by
-        default: beside all three modes it does not fit the UP5K.
-    delays : bool
-        Build vector mode's RTC delays (``GalvoScanTop(vector_delays=...)``); off by default,
-        for the same reason.
-    clock : float or None
-        System clock in Hz: None runs on the 12 MHz crystal, anything else from the PLL
-        (:func:`~galvoscan.platforms.pll.pll_settings` must reach it exactly).
-    player : bool
-        Build the job player (``GalvoScanTop(player=True)``): the flash read after
-        configuration, the machine's lines on PMOD1B in place of the SPI link.
+    config : :class:`~galvoscan.gateware.build_config.BuildConfig`
+        The build (:meth:`config` makes one that fits the UP5K).
+    table, settings, correction
+        As for :class:`~galvoscan.gateware.top.GalvoScanTop` (``correction`` ``"identity"``:
+        the default identity table).
     """
 
-    def __init__(self, *, table=None, settings=None, modes=None, correction="identity",
-                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD, wobble=False,
-                 interpolation=False, delays=False, player=False):
-        self.delays = delays
-        self.player = player
+    def __init__(self, config, *, table=None, settings=None, correction="identity"):
+        self.config = config
         self.table = table
-        self.wobble = wobble
-        self.interpolation = interpolation
         self.settings = settings
-        self.modes = modes
         self.correction = correction
-        self.bit_rate = bit_rate
-        self.baud = baud
-        self.clk_freq, self.pll = system_clock(clock, bit_rate, baud)
+        self.clk_freq, self.pll = system_clock(
+            None if config.clk_freq == CRYSTAL_HZ else config.clk_freq, config.bit_rate,
+            config.baud)
+
+    @staticmethod
+    def config(*, modes=None, correction="identity", clock=None, bit_rate=2_000_000,
+               baud=DEFAULT_BAUD, wobble=False, interpolation=False, delays=False,
+               player=False):
+        """The :class:`~galvoscan.gateware.build_config.BuildConfig` of an iCEBreaker
+        bitstream with these options; ``ValueError`` for one the UP5K cannot hold (checked
+        before anything is built).
+
+        ``modes`` None: all three; ``correction``: the table the correction stage starts with
+        (None: no correction stage); ``clock``: the
+        system clock in Hz (None: the 12 MHz crystal; else from the PLL, which must reach it
+        exactly); ``interpolation`` the spiral's interpolator and ``delays`` vector mode's RTC
+        delays (off by default: beside all three modes neither fits the UP5K); ``player`` the
+        job player (the flash read after configuration, the machine's lines on PMOD1B in place
+        of the SPI link).
+        """
+        clk_freq, _ = system_clock(None if clock == CRYSTAL_HZ else clock, bit_rate, baud)
+        modes = MODES if modes is None else tuple(modes)
+        if wobble and len(set(modes)) == len(MODES):
+            raise ValueError("the wobble stage does not fit the UP5K beside all three scan "
+                             "modes: leave one out with --modes (spiral,vector fits)")
+        if delays and "vector" not in modes:
+            raise ValueError("the delays are vector mode's: build them with the vector mode")
+        if delays and len(set(modes)) == len(MODES):
+            raise ValueError("vector mode's delays do not fit the UP5K beside all three scan "
+                             "modes: leave one out with --modes (spiral,vector fits)")
+        if interpolation and len(set(modes)) == len(MODES):
+            raise ValueError("the spiral's interpolator does not fit the UP5K beside all three "
+                             "scan modes: leave one out with --modes (spiral,vector fits)")
+        if interpolation and "spiral" not in modes:
+            raise ValueError("the interpolator is the spiral's: build it with the spiral mode")
+        if player and "vector" not in modes:
+            raise ValueError("the job player plays vector jobs: build it with the vector mode")
+        return BuildConfig(
+            modes=modes, clk_freq=clk_freq, bit_rate=bit_rate, baud=baud,
+            correction=correction is not None, laser_alarms=len(ALARM_PMOD_PINS[1].split()),
+            wobble=wobble, spiral_interpolation=interpolation, vector_delays=delays,
+            # The SPI link's pins are the player's machine lines.
+            player=player, links=("uart",) if player else LINKS)
 
     def elaborate(self, platform):
         m = Module()
-        extra = {} if self.modes is None else {"modes": self.modes}
         if self.pll is not None:
             m.domains.sync = sync = ClockDomain()
             crystal = platform.request(platform.default_clk, dir="-")
             m.submodules.pll = ICE40PLL(crystal, self.pll, sync)
         m.submodules.scanner = scanner = GalvoScanTop(
-            clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
-            settings=self.settings, correction=self.correction,
-            laser_alarms=len(ALARM_PMOD_PINS[1].split()),
-            **self.top_options(wobble=self.wobble, interpolation=self.interpolation,
-                               delays=self.delays, player=self.player), **extra)
+            self.config, table=self.table, settings=self.settings, correction=self.correction)
 
         # All four lines leave through the I/O cells' own flip-flops, so they change within
         # the pads' skew of each other, whatever the placement.
@@ -224,7 +244,7 @@ class ICEBreakerScanner(Elaboratable):
         uart = platform.request("uart", 0, dir="-")
         inputs = {"uart_rx": uart.rx}
         outputs = {"uart_tx": uart.tx}
-        if self.player:
+        if self.config.player:
             self._player_pins(m, platform, scanner)
         else:
             spi = platform.request("host_spi", 0, dir="-")
@@ -257,17 +277,6 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.led_pad = led = io.Buffer("o", platform.request("led_r", 0, dir="-"))
         m.d.comb += led.o.eq(running)
         return m
-
-    @staticmethod
-    def top_options(*, wobble=False, interpolation=False, delays=False, player=False):
-        """The :class:`~galvoscan.gateware.top.GalvoScanTop` options of a build with these
-        (what a simulated board of the bitstream is built with, beside its modes)."""
-        options = {"wobble": wobble, "spiral_interpolation": interpolation,
-                   "vector_delays": delays, "player": player}
-        if player:
-            # The SPI link's pins are the machine's lines.
-            options.update(links=("uart",))
-        return options
 
     def _player_pins(self, m, platform, scanner):
         """The flash, the start inputs, the PLC's lines and the green LED."""

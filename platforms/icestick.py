@@ -30,6 +30,7 @@ from amaranth.lib import io
 from amaranth_boards.icestick import ICEStickPlatform
 
 from ..gateware.clocking import DEFAULT_BAUD, check_clocks
+from ..gateware.build_config import BuildConfig
 from ..gateware.top import GalvoScanTop
 from .icebreaker import XY2_PMOD_PINS
 
@@ -84,31 +85,45 @@ class ICEStickScanner(Elaboratable):
 
     Parameters
     ----------
+    config : :class:`~galvoscan.gateware.build_config.BuildConfig`
+        The build (:meth:`config` makes one that fits the HX1K).
     table, settings
         As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
-    baud : int
-        UART rate (default 1 Mbaud).
-    modes, correction, clock, bit_rate
-        Accepted for the same call as the iCEBreaker's; anything but spiral mode, no
-        correction and the 12 MHz oscillator is refused.
     """
 
-    def __init__(self, *, table=None, settings=None, modes=None, correction=None,
-                 bit_rate=2_000_000, clock=None, baud=DEFAULT_BAUD):
-        self.clk_freq, _ = icestick_check(modes=modes, correction=correction, clock=clock,
-                                          bit_rate=bit_rate, baud=baud)
-        self.baud = baud
+    def __init__(self, config, *, table=None, settings=None):
+        self.config = config
         self.table = table
         self.settings = settings
-        self.bit_rate = bit_rate
+
+    @staticmethod
+    def config(*, modes=None, correction="identity", clock=None, bit_rate=2_000_000,
+               baud=DEFAULT_BAUD, wobble=False, interpolation=False, delays=False,
+               player=False):
+        """The :class:`~galvoscan.gateware.build_config.BuildConfig` of an iCEstick
+        bitstream, taking the iCEBreaker's options so that one call serves both; anything
+        but spiral mode without correction on the 12 MHz oscillator raises ``ValueError``
+        (checked before anything is built). ``correction`` may be ``"identity"`` (the
+        default table, which the build leaves out) or None."""
+        if wobble:
+            raise ValueError("the iCEstick has no room for the wobble stage")
+        if interpolation:
+            raise ValueError("the iCEstick has no room for the spiral's interpolator")
+        clk_freq, _ = icestick_check(modes=modes, correction=correction, clock=clock,
+                                     bit_rate=bit_rate, baud=baud)
+        if delays:
+            raise ValueError("the delays are vector mode's: build them with the vector mode")
+        if player:
+            raise ValueError("the job player reads the iCEBreaker's flash: build it for the "
+                             "iCEBreaker")
+        return BuildConfig(modes=ICESTICK_MODES, clk_freq=clk_freq, bit_rate=bit_rate,
+                           baud=baud, correction=False, multiplier="serial", links=("uart",),
+                           laser=False, register_reads="mux", spiral_interpolation=False)
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.scanner = scanner = GalvoScanTop(
-            clk_freq=self.clk_freq, bit_rate=self.bit_rate, baud=self.baud, table=self.table,
-            settings=self.settings, modes=ICESTICK_MODES, correction=None,
-            multiplier="serial", links=("uart",), laser=False,
-            register_reads="mux", spiral_interpolation=False)
+        m.submodules.scanner = scanner = GalvoScanTop(self.config, table=self.table,
+                                                      settings=self.settings)
 
         xy2 = platform.request("xy2", 0, dir="-")
         for name in XY2_PMOD_PINS:

@@ -4,7 +4,7 @@ real player, with what it is told of the flash, or what it writes, tampered with
 from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 
-from galvoscan.gateware.host.fields import PlayerState
+from galvoscan.gateware.fields import PlayerState
 from galvoscan.gateware.host.regmap import BY_NAME
 from galvoscan.gateware.player.image_format import MAGIC
 from galvoscan.gateware.player.player import JobPlayer

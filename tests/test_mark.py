@@ -203,7 +203,7 @@ def test_dxf_longer_than_the_queue_never_underruns(tmp_path, capsys):
                            str(PRR_KHZ), "--machine", str(machine), "--sim", *SIM_TIMEOUT,
                            "--json"], capsys)
     [board] = board_class.built
-    assert board.top.vector_queue_depth == SHORT_QUEUE
+    assert board.top.config.vector_queue_depth == SHORT_QUEUE
     assert result["segments"] > SHORT_QUEUE
     assert result["underruns"] == result["errors"] == result["rejected"] == 0
     assert abs(result["speed_mm_s"] - SPEED_MM_S) / SPEED_MM_S <= 0.02

@@ -45,9 +45,8 @@ def test_the_default_builds_netlist_behaves_as_its_design(icebreaker_build):
     folder, code, _, table_file = icebreaker_build
     assert code == 0
     netlist = SimulatedBoard(netlist=folder, backend="compiled")
-    # The design as ICEBreakerScanner builds it: one alarm input, no interpolator.
-    design = SimulatedBoard(backend="compiled", clk_freq=12e6, laser_alarms=1,
-                            spiral_interpolation=False,
+    # The design as ICEBreakerScanner builds it: the default bitstream's configuration.
+    design = SimulatedBoard(backend="compiled", config=PRESETS["default"],
                             correction=load_table(table_file, nodes=DEFAULT_CORRECTION_NODES))
     assert netlist.clk_freq == design.clk_freq and netlist.baud == design.baud
     # The spiral from power-up, with no host: the same frames, a fixed number of clocks late.

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from galvoscan.client import HostClient
-from galvoscan.gateware.host.fields import PlayerResult, PlayerState, PlayerStatus, Status
+from galvoscan.gateware.fields import PlayerResult, PlayerState, PlayerStatus, Status
 from galvoscan.gateware.player.image_format import CRC_BYTES, Word
 from galvoscan.gateware.top import ScanSettings
 from galvoscan.jobs.image import job_image

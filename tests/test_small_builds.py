@@ -72,4 +72,4 @@ def test_top_rejects_bad_small_options(kwargs, message):
 ])
 def test_icestick_refuses_what_does_not_fit(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        ICEStickScanner(**kwargs)
+        ICEStickScanner.config(**kwargs)

@@ -12,7 +12,7 @@ import pytest
 
 from galvoscan.client import ClientError, HostClient, WriteRefused
 from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
-from galvoscan.gateware.host.fields import pack
+from galvoscan.gateware.fields import pack
 from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
@@ -305,7 +305,7 @@ def test_vec_flush_empties_the_queue_and_stops_the_mode():
     """A job left half-queued (a host that died mid-job): vec_flush empties the queue and
     stops the sequencer where it is; the next job is taken and marks from its start."""
     from galvoscan.client import HostClient, WriteRefused
-    from galvoscan.gateware.host.fields import STATUS_BITS
+    from galvoscan.gateware.fields import STATUS_BITS
     from galvoscan.jobs.stream import JobStreamer
     from galvoscan.sim.board import SimTransport, SimulatedBoard
     board = SimulatedBoard(clk_freq=4e6, baud=500_000, modes=("vector",), links=("uart",),

@@ -1,5 +1,6 @@
 """``galvoscan board --sim``: a board without hardware, its serial port on a pseudo-terminal."""
 
+from dataclasses import replace
 import sys
 import time
 
@@ -10,14 +11,18 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
+    from ..build import PRESETS
     from ..sim.board import PTYServer
+    if args.preset not in PRESETS:
+        fail(f"--preset must be one of {', '.join(PRESETS)}, not {args.preset!r}")
     if args.netlist:
         if args.backend == "python":
             fail("--netlist runs on the compiled backend (Amaranth simulates designs, not "
                  "netlists)")
         board = simulated_board(args, netlist=args.netlist)
     else:
-        board = simulated_board(args, baud=args.baud)
+        # A bitstream's configuration, at the serial rate asked for (a build takes --baud too).
+        board = simulated_board(args, config=replace(PRESETS[args.preset], baud=args.baud))
     speed = board.speed()
     timeout = board.answer_timeout_s()
     server = PTYServer(board)
@@ -25,6 +30,9 @@ def _cmd_board(args):
         f"{board.backend} backend"
     print(f"simulated board ({board.clk_freq / 1e6:g} MHz, {board.baud:,} baud, {what}) on "
           f"{server.port}", flush=True)
+    if board.config is not None:
+        print(f"  the {args.preset} bitstream (build --preset {args.preset}): "
+              f"{board.config.summary()}", flush=True)
     print(f"  it runs at {_fraction(speed)} of real time: give clients --timeout "
           f"{timeout:.0f} or more; Ctrl-C stops it", flush=True)
     print(f"  e.g. galvoscan read status --port {server.port} --baud {board.baud} "
@@ -57,13 +65,19 @@ def add_parsers(commands):
     from ..gateware.clocking import DEFAULT_BAUD
     board = commands.add_parser(
         "board", help="serve a simulated board on a pseudo-terminal",
-        description="Serve the simulated system top (the default iCEBreaker build: every "
-                    "mode, correction, laser controller) on a pseudo-terminal, so that send, "
-                    "read, mark and clean run against it with --port. It runs until Ctrl-C.")
+        description="Serve a simulated iCEBreaker bitstream (by default the default build: "
+                    "every mode, correction, laser controller; or a --preset's) on a "
+                    "pseudo-terminal, so that send, read, mark and clean run against it with "
+                    "--port. It runs until Ctrl-C.")
     board.add_argument("--sim", action="store_true", required=True,
                        help="simulate the board (the only kind this command serves)")
     board.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                        help="the simulated bitstream's serial rate (default: %(default)s)")
+    # (Checked when it runs: the presets are build configurations, which the parser does not
+    # load.)
+    board.add_argument("--preset", default="default",
+                       help="the bitstream simulated: that of build --preset PRESET "
+                            "(default: %(default)s, what build builds when told nothing)")
     add_backend_option(board)
     board.add_argument("--netlist", metavar="BUILD_DIR",
                        help="serve the synthesized netlist of the build in BUILD_DIR (what "

@@ -55,15 +55,17 @@ def _apply_preset(args):
     if args.board != "icebreaker":
         fail(f"the {args.preset} preset is the iCEBreaker's")
     preset = PRESETS[args.preset]
-    if args.modes and tuple(args.modes) != preset["modes"]:
-        fail(f"--preset {args.preset} builds {','.join(preset['modes'])}: leave out --modes, "
+    if args.modes and tuple(args.modes) != preset.modes:
+        fail(f"--preset {args.preset} builds {','.join(preset.modes)}: leave out --modes, "
              f"or the preset")
-    args.modes = preset["modes"]
-    for name in ("delays", "interpolation", "wobble"):
-        setattr(args, name, getattr(args, name) or preset.get(name, False))
-    args.player = preset.get("player", False)
+    args.modes = preset.modes
+    for name, built in (("delays", preset.vector_delays),
+                        ("interpolation", preset.spiral_interpolation),
+                        ("wobble", preset.wobble)):
+        setattr(args, name, getattr(args, name) or built)
+    args.player = preset.player
     if args.clock is None:
-        args.clock = preset.get("clock")
+        args.clock = preset.clk_freq
 
 
 def _cmd_build(args):

@@ -116,7 +116,7 @@ def _cmd_read(args):
 
 def _cmd_reset(args):
     from ..client import ClientError, HostClient
-    from ..gateware.host.fields import Capabilities, Status
+    from ..gateware.fields import Capabilities, Status
     with open_link(args) as link:
         board = HostClient(link)
         try:

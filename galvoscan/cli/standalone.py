@@ -133,9 +133,9 @@ def _cmd_flash(args):
 
 
 def _cmd_standalone(args):
-    from ..build import preset_top_options
+    from ..build import PRESETS
     from ..client import HostClient
-    from ..gateware.host.fields import PlayerResult, PlayerState, PlayerStatus
+    from ..gateware.fields import PlayerResult, PlayerState, PlayerStatus
     from ..jobs.image import ImageError, read_image
     from ..sim.board import SimTransport
     from .args import simulated_board
@@ -160,9 +160,8 @@ def _cmd_standalone(args):
               file=sys.stderr)
     profile = profile_from(args)
     from ..gateware.settings import ScanSettings
-    options, clock = preset_top_options("marker")
-    options["settings"] = ScanSettings(mode="vector", run=False)
-    board = simulated_board(args, clk_freq=clock, flash=image, **options)
+    board = simulated_board(args, config=PRESETS["marker"],
+                            settings=ScanSettings(mode="vector", run=False), flash=image)
     client = HostClient(SimTransport(board))
     presses = []
     step = 2e-3

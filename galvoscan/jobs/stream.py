@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 from ..gateware.host.regmap import (BY_NAME, VECTOR_QUEUE_DEPTH, Capabilities, Mode, Status,
                                     VectorOp)
-from ..gateware.host.fields import pack
+from ..gateware.fields import pack
 from ..gateware.sources.vector import VecOpWord
 from .corners import corner_frames
 

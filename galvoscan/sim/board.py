@@ -38,6 +38,9 @@ class SimulatedBoard:
 
     Parameters
     ----------
+    config : :class:`~galvoscan.gateware.build_config.BuildConfig`, optional
+        The build simulated (a board's bitstream: ``galvoscan.build.PRESETS``); its clock and
+        baud are the board's. None: one of ``clk_freq``, ``baud`` and ``top_kwargs``.
     clk_freq : float
         System clock (12 MHz, the iCEBreaker's).
     baud : int or None
@@ -70,7 +73,8 @@ class SimulatedBoard:
         built here (the compiled backend; the clock and baud are the build's).
         :attr:`top` is then None.
     top_kwargs
-        More :class:`~galvoscan.gateware.top.GalvoScanTop` parameters (``mo_lead`` …).
+        More :class:`~galvoscan.gateware.top.GalvoScanTop` parameters (``table``,
+        ``settings``; without ``config``, its options: ``mo_lead`` …).
 
     Attributes
     ----------
@@ -101,7 +105,8 @@ class SimulatedBoard:
         gets CIPO's bit as SCK rises for each bit, then ``"done"`` (appended to only).
     """
 
-    def __init__(self, *, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python", say=None,
+    def __init__(self, *, config=None, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python",
+                 say=None,
                  record_samples=False, record_pins=False, machine_period_s=MACHINE_PERIOD_S,
                  interlock_closed=True, alarms_clear=True, flash=None, vcd=None, netlist=None,
                  **top_kwargs):
@@ -112,12 +117,16 @@ class SimulatedBoard:
                                 record_pins=record_pins, machine_period_s=machine_period_s,
                                 machine=(interlock_closed, alarms_clear), extra=top_kwargs)
             return
-        self.clk_freq = clk_freq
-        self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
+        if config is None:
+            self.top = GalvoScanTop(clk_freq=clk_freq, baud=baud, **top_kwargs)
+        else:           # (the build's clock and baud)
+            self.top = GalvoScanTop(config, **top_kwargs)
+        self.config = self.top.config
+        self.clk_freq = self.config.clk_freq
         self._flash_at_power_up = flash
-        if flash is not None and not self.top.player:
+        if flash is not None and not self.config.player:
             raise ValueError("a flash is read by the job player: build it with player=True")
-        self.baud = self.top.baud
+        self.baud = self.config.baud
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = (interlock_closed, alarms_clear)
         self._power_up_records()
@@ -127,7 +136,7 @@ class SimulatedBoard:
         self.engine = (PythonEngine(self, vcd=vcd, **records) if vcd else
                        self._engine(backend, say or (lambda line: None), **records))
         self.backend = self.engine.name
-        self.run_for(1 / clk_freq)      # start the processes in this thread
+        self.run_for(1 / self.clk_freq)     # start the processes in this thread
 
     def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
                        **records):
@@ -138,7 +147,7 @@ class SimulatedBoard:
         record = build_record(netlist) or {}
         self.clk_freq = float(record.get("clock_mhz", 12)) * 1e6
         self.baud = int(record.get("baud", DEFAULT_BAUD))
-        self.top = None
+        self.top = self.config = None
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = machine
         self._power_up_records()
@@ -164,7 +173,7 @@ class SimulatedBoard:
         self.interlock_closed, self.alarms_clear = self._machine_at_power_up
         self.start_pressed = False
         self.flash = None
-        if getattr(self.top, "player", False):
+        if self.config is not None and self.config.player:
             from .spi_flash import SPIFlashModel
             flash = self._flash_at_power_up
             if isinstance(flash, SPIFlashModel):

@@ -11,7 +11,7 @@ from ..field.scale import AMP_ONE
 from ..points import FIELD_CENTRE, FIELD_MAX
 from ..limits import (LASER_DELAY_MAX_US, LASER_ON_LEAD_US, SCANNER_DELAY_MAX_US,
                       WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX)
-from .fields import Capabilities, Mode, PlayerStatus, Status, WobbleShape
+from ..fields import Capabilities, Mode, PlayerStatus, Status, WobbleShape
 
 
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",

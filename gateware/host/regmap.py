@@ -1,5 +1,5 @@
 """The register map: every register declared once (in :mod:`.register_list`, what the values
-mean in :mod:`.fields`; both re-exported here), and the map of one build made from them. The
+mean in :mod:`..fields`; both re-exported here), and the map of one build made from them. The
 gateware, the host client, ``galvoscan regs`` and the README's table are all made from (or
 checked against) it.
 
@@ -24,15 +24,16 @@ write when the queue is full is refused (counted in ``errors`` and in the queue'
 from dataclasses import replace
 
 from ..field.correction_table import TABLE_SIZES
-from ..sources.spiral_table import MAX_POINTS
 # The map's two parts, re-exported here: what the values mean, and every register.
 from .. import limits
 from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NODES,
                       DEFAULT_TABLE_POINTS, FRAME_US, LASER_DELAY_MAX_US, LASER_ON_LEAD_US,
+                      MAX_TABLE_POINTS,
                       SCANNER_DELAY_MAX_US, VECTOR_QUEUE_DEPTH, WOBBLE_MAX_AMPLITUDE,
                       WOBBLE_MAX_HZ, WORD_MAX)
-from . import fields, register_list
-from .fields import (STATUS_BITS, Capabilities, Mode, PlayerResult, PlayerState, PlayerStatus,
+from .. import fields
+from . import register_list
+from ..fields import (STATUS_BITS, Capabilities, Mode, PlayerResult, PlayerState, PlayerStatus,
                      Status, VectorOp, WobbleShape, pack)
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, PLAYER_REGISTERS,
@@ -40,7 +41,7 @@ from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, INTERPOLATION
                             all_registers)
 
 
-__all__ = ["READ_FLAG", "RegisterMap", "register_map", "MAX_TABLE_POINTS",
+__all__ = ["READ_FLAG", "RegisterMap", "register_map",
            "HOST_MAP", "REGISTERS", "BY_NAME", "BY_ADDRESS", *fields.__all__, *limits.__all__,
            *(name for name in register_list.__all__ if name != "all_registers")]
 
@@ -194,10 +195,6 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                        table_points=table_points, correction_nodes=correction_nodes,
                        modes=modes, laser=bool(laser), wobble=bool(wobble),
                        vector_delays=bool(vector_delays) and Mode.VECTOR in modes)
-
-
-#: Largest spiral table a build may have (samples per axis).
-MAX_TABLE_POINTS = MAX_POINTS
 
 
 def _host_map():

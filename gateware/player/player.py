@@ -1,23 +1,29 @@
-"""The job player: runs a job image from the flash as a host would, on each start."""
+"""The job player: runs a job image from the flash as a host would, on each start.
+
+Three stages::
+
+    flash reader ─▶ image reader ─▶ state machine ─▶ register writer ─▶ bus arbiter
+     (bytes)        (words, CRC)    (check, play)    (one write a time)
+
+:class:`~.image_reader.ImageReader` puts the flash's bytes into words and a CRC-32;
+:class:`JobPlayer`, the state machine, checks the words and plays them; it asks
+:class:`~.register_writer.RegisterWriter` for each register write.
+"""
 
 from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.fields import Mode, PlayerResult, PlayerState
+from ..fields import Mode, PlayerResult, PlayerState
 from ..host.registers import RegisterBus
 from ..host.regmap import BY_NAME
-from .crc32 import CRC32
+from .image_reader import ImageReader
+from .register_writer import TARGETS, RegisterWriter
 from .image_format import (FORMAT_VERSION, HEADER_BYTES, HEADER_WORDS, JOB_OFFSET,
                            MAGIC_WORDS, MAX_IMAGE_BYTES, PLAYER_OWNED, SEGMENT_WORDS, Word)
 
 
 __all__ = ["JobPlayer"]
-
-
-#: The registers the player writes, by the code it names them with: None, a setting's own
-#: address; from "vec_x" on, the value is the word read.
-_TARGETS = ("arm", "mode", "run", "vec_flush", None, "vec_x", "vec_y", "vec_op")
 
 
 class _Section(enum.Enum, shape=2):
@@ -97,14 +103,18 @@ class JobPlayer(wiring.Component):
                              f"24-bit flash addresses")
         self.max_image_bytes = max_image_bytes
         self.offset = offset
-        self._crc = CRC32(bits_per_clock=crc_bits_per_clock)
+        self._reader = ImageReader(crc_bits_per_clock=crc_bits_per_clock)
+        self._writer = RegisterWriter()
+        # The reader's, by the names the proof's helper invariants use (formal/player.py).
+        self._crc = self._reader.crc_core
+        self._byte_high = self._reader.byte_high
+        self._word_valid = self._reader.words.valid
+        self._word = self._reader.words.payload
         words_max = max_image_bytes // 2
         # Made here, so that the proof's helper invariants can name them (formal/player.py).
         self._live = Signal(name="live")                # the second reading, which writes
         self._position = Signal(range(words_max + 1), name="position")
         self._length = Signal(range(words_max + 1), name="length")
-        self._byte_high = Signal(name="byte_high")
-        self._word_valid = Signal(name="word_valid")
         self._expected_crc = Signal(32, name="expected_crc")
         self._parsing = Signal(name="parsing")          # reading the image through
         self._writing = Signal(name="writing")          # a write given, not yet done
@@ -114,7 +124,12 @@ class JobPlayer(wiring.Component):
         self._took = Signal(name="took")
         self._reading = Signal(name="reading")          # starting a read
         self._repeating = Signal(name="repeating")      # reading the segments again
-        self._word = Signal(16, name="word")
+        self._repeats_left = Signal(16, name="repeats_left")
+        self._settings_left = Signal(8, name="settings_left")    # (address, value) pairs to come
+        self._setting_address = Signal(7, name="setting_address")
+        self._setting_value_next = Signal(name="setting_value_next")  # the next is a value
+        self._segment_word = Signal(range(SEGMENT_WORDS), name="segment_word")
+        self._segments_from = Signal(range(words_max + 1), name="segments_from")  # 1st segment
         super().__init__({
             "read_address": Out(24), "read_start": Out(1), "read_stop": Out(1),
             "read_data": In(stream.Signature(8)), "read_idle": In(1),
@@ -127,94 +142,63 @@ class JobPlayer(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.crc = crc = self._crc
-        words_max = self.max_image_bytes // 2
+        m.submodules.reader = reader = self._reader
 
         # --- the image, a word at a time ---------------------------------------------------------
         live = self._live
         section = self._section
         position = self._position       # words taken since the image's start
         length = self._length           # the image's length, in words
-        byte_high = self._byte_high     # the next byte is a word's high byte
-        word = self._word
+        word = self._word               # the word being taken, while word_valid
         word_valid = self._word_valid
         expected_crc = self._expected_crc
-        repeats_left = Signal(16)
-        settings_left = Signal(8)       # (address, value) pairs still to come
-        setting_address = Signal(7)
-        setting_value_next = Signal()   # the next settings word is a value
-        segment_word = Signal(range(SEGMENT_WORDS))
-        segments_from = Signal.like(position)           # the first segment's word
+        repeats_left = self._repeats_left
+        setting_address = self._setting_address
+        setting_value_next = self._setting_value_next
+        segment_word = self._segment_word
+        segments_from = self._segments_from
         repeating = self._repeating     # reading the segments again
         result = self.result            # how this start ends (NONE while it runs)
 
         # --- its writes to the register file, one at a time -------------------------------------
-        # A write waits for a clock the arbiter grants, and is done (or refused) on the next.
-        # The value is the word it came in (the next word is not taken meanwhile) or a small
-        # constant; the register is named by a code (a setting's, or one the player drives).
-        write_target = Signal(range(len(_TARGETS)))
-        write_constant = Signal(2)
-        write_waiting = Signal()        # given, not yet granted
-        write_checking = Signal()       # granted: done or refused on this clock
-        write_refused = Signal()        # the last write was refused
-        write_free = ~write_waiting & ~write_checking
-        m.d.comb += self._writing.eq(~write_free)
-        address = Signal(7)
-        with m.Switch(write_target):
-            for code, name in enumerate(_TARGETS):
-                with m.Case(code):
-                    m.d.comb += address.eq(setting_address if name is None else
-                                           BY_NAME[name].address)
-        from_word = write_target >= _TARGETS.index(None)
+        m.submodules.writer = writer = self._writer
+        write_free, write_refused = writer.free, writer.refused
         m.d.comb += [
-            self.bus.address.eq(address),
-            self.bus.write_data.eq(Mux(from_word, word, write_constant)),
-            self.bus.write_en.eq(write_checking),
+            self._writing.eq(~write_free),
+            writer.word.eq(word), writer.setting_address.eq(setting_address),
+            writer.grant.eq(self.grant),
         ]
-        wrote = Signal()                # a write of its own done: progress
+        wiring.connect(m, writer.bus, wiring.flipped(self.bus))
         waiting_on_machine = Signal()   # waiting for the machine, which is at work
-        m.d.comb += [wrote.eq(write_checking & self.bus.write_ok),
-                     self.alive.eq(wrote | waiting_on_machine)]
-        with m.If(write_waiting & self.grant):
-            m.d.sync += [write_waiting.eq(0), write_checking.eq(1)]
-        with m.If(write_checking):
-            m.d.sync += [write_checking.eq(0), write_refused.eq(~self.bus.write_ok)]
+        m.d.comb += self.alive.eq(writer.wrote | waiting_on_machine)
 
         def write(target, value=0):
-            m.d.sync += [write_target.eq(_TARGETS.index(target)), write_constant.eq(value),
-                         write_waiting.eq(1), write_refused.eq(0)]
+            m.d.comb += [writer.request.valid.eq(1),
+                         writer.request.payload.target.eq(TARGETS.index(target)),
+                         writer.request.payload.constant.eq(value)]
 
         # Bytes from the flash into words (low byte first), and into the CRC, which reads its
         # own four bytes as zero. A word's bytes come while ``position`` is its index.
-        take_byte = Signal()
         in_crc_field = (section == _Section.HEADER) & \
             ((position[:4] == Word.CRC_LOW) | (position[:4] == Word.CRC_HIGH))
+        wiring.connect(m, wiring.flipped(self.read_data), reader.data)
         m.d.comb += [
-            self.read_data.ready.eq(take_byte),
-            crc.data.eq(Mux(in_crc_field, 0, self.read_data.payload)),
-            crc.strobe.eq(self.read_data.valid & take_byte),
+            reader.zero_byte.eq(in_crc_field),
             # The image from its start, or (a repeat) from its first segment.
             self.read_address.eq(self.offset + Mux(repeating, segments_from << 1, 0)),
         ]
-        with m.If(self.read_data.valid & take_byte):
-            m.d.sync += byte_high.eq(~byte_high)
-            with m.If(byte_high):
-                m.d.sync += [word[8:].eq(self.read_data.payload), word_valid.eq(1)]
-            with m.Else():
-                m.d.sync += word[:8].eq(self.read_data.payload)
 
         def begin(*, repeat=False):
             """Read the image (or, a repeat, its segments), after a clock with the reader
             stopped."""
-            m.d.comb += self.read_stop.eq(1)
-            m.d.sync += [byte_high.eq(0), word_valid.eq(0), segment_word.eq(0),
-                         repeating.eq(repeat)]
+            m.d.comb += [self.read_stop.eq(1), reader.clear.eq(1)]
+            m.d.sync += [segment_word.eq(0), repeating.eq(repeat)]
             if repeat:
                 m.d.sync += position.eq(segments_from)
             else:
                 m.d.sync += [section.eq(_Section.HEADER), position.eq(0),
                              setting_value_next.eq(0)]
-                m.d.comb += crc.clear.eq(1)
+                m.d.comb += reader.crc_clear.eq(1)
             m.next = "READ"
 
         def stop(code):
@@ -266,18 +250,16 @@ class JobPlayer(wiring.Component):
                 queue_wait = live & (section == _Section.SEGMENTS) & (segment_word == 2) & \
                     ~self.queue_ready
                 # (In the check, a byte waits for the CRC to take the last one.)
-                m.d.comb += [take_byte.eq(~word_valid & write_free & ~took & ~ended &
-                                          ~(crc.busy & ~live)),
+                m.d.comb += [reader.enable.eq(write_free & ~took & ~ended),
+                             reader.wait_crc.eq(~live),
                              self._parsing.eq(~live),
                              waiting_on_machine.eq(queue_wait & self.armed)]
                 with m.If(write_free & write_refused):
                     stop(PlayerResult.REFUSED)
                 with m.Elif(write_free & word_valid & ~queue_wait & ~ended):
-                    m.d.sync += [word_valid.eq(0), position.eq(position + 1), took.eq(1)]
-                    self._take_word(m, live, section, position, length, word, expected_crc,
-                               repeats_left, settings_left, setting_address,
-                               setting_value_next, segment_word, segments_from, owned, write,
-                               stop, words_max)
+                    m.d.comb += reader.words.ready.eq(1)
+                    m.d.sync += [position.eq(position + 1), took.eq(1)]
+                    self._take_word(m, owned=owned, write=write, stop=stop)
                 with m.Elif(write_free & ended):
                     # The last word is in: it must end the settings, or a segment.
                     m.d.comb += self.read_stop.eq(1)
@@ -296,8 +278,8 @@ class JobPlayer(wiring.Component):
 
             with m.State("VERDICT"):
                 m.d.comb += self._parsing.eq(1)
-                with m.If(~crc.busy):
-                    with m.If(crc.crc == expected_crc):
+                with m.If(~reader.crc_busy):
+                    with m.If(reader.crc == expected_crc):
                         # Checked: vector mode, stopped, then the image read again and played.
                         m.d.sync += live.eq(1)
                         write("run", 0)
@@ -378,10 +360,17 @@ class JobPlayer(wiring.Component):
             with m.Else():
                 m.next = "END"
 
-    def _take_word(self, m, live, section, position, length, word, expected_crc, repeats_left,
-              settings_left, setting_address, setting_value_next, segment_word,
-              segments_from, owned, write, stop, words_max):
-        """What one word of the image does, in the check and in the playing."""
+    def _take_word(self, m, *, owned, write, stop):
+        """What one word of the image does, in the check and in the playing: ``owned``, the
+        setting being read addresses a register the player drives; ``write`` and ``stop``, the
+        state machine's."""
+        live, section, position, length = self._live, self._section, self._position, \
+            self._length
+        word, expected_crc, repeats_left = self._word, self._expected_crc, self._repeats_left
+        settings_left, setting_address = self._settings_left, self._setting_address
+        setting_value_next, segment_word = self._setting_value_next, self._segment_word
+        segments_from = self._segments_from
+        words_max = self.max_image_bytes // 2
         def enter_segments():
             m.d.sync += [section.eq(_Section.SEGMENTS), segments_from.eq(position + 1)]
 

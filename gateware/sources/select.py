@@ -4,7 +4,7 @@ from amaranth.hdl import Const, Module
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.fields import Mode
+from ..fields import Mode
 from ..points import OffsetPoint
 
 

@@ -18,7 +18,7 @@ the simulation models and the analysis.
 from statistics import NormalDist
 import math
 
-from ..limits import DEFAULT_TABLE_POINTS
+from ..limits import DEFAULT_TABLE_POINTS, MAX_TABLE_POINTS, MIN_TABLE_POINTS
 
 
 __all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE", "DEFAULT_POINTS",
@@ -27,8 +27,8 @@ __all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE", "DE
 #: Samples per sine period: the paper's 128 by default; a multiple of 4 (the quarter-period
 #: symmetry) within these bounds (the ROM address registers are 12 bits at most).
 DEFAULT_POINTS = DEFAULT_TABLE_POINTS
-MIN_POINTS = 8
-MAX_POINTS = 4096
+MIN_POINTS = MIN_TABLE_POINTS
+MAX_POINTS = MAX_TABLE_POINTS
 
 
 #: Sampling kinds: ``"triangle"`` spaces the amplitudes evenly (the mirror swept at constant

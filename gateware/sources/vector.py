@@ -32,7 +32,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..host.fields import VectorOp
+from ..fields import VectorOp
 from ..points import FIELD_CENTRE, OffsetPoint
 from .dda import DIRECTION_BITS, Direction, LineDDA
 

@@ -30,7 +30,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..host.fields import WobbleShape
+from ..fields import WobbleShape
 from ..limits import WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ
 from ..points import OffsetPoint
 from .dda import DIRECTION_BITS, Direction

@@ -1,8 +1,9 @@
 """What the registers' values mean: the scan modes, vector operations and wobble shapes as
 enums, the ``status`` and ``caps`` bits as layouts, and :func:`pack`, the host's side of a
-word read through a layout (part of the register map, :mod:`.regmap`, which re-exports them
-with the limits of :mod:`..limits`). Imports nothing of the project's: the datapath cores
-take their enums from here without the map."""
+word read through a layout (part of the register map, :mod:`.host.regmap`, which re-exports
+them with the limits of :mod:`.limits`). Imports nothing of the project's: the datapath cores
+(:mod:`.sources`, :mod:`.player`) take their enums from here without the map, so no package
+below gateware reaches into another's for them."""
 
 from enum import Enum
 
