@@ -69,7 +69,7 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
     """Command throughput over SPI and UART (write frames with their answers), and
     command → XY2 latency for a vector jump (one segment frame)."""
     from cobs import cobs
-    from .client import encode_command
+    from .link.client import encode_command
     from .gateware.host.regmap import BY_NAME
     from .gateware.top import GalvoScanTop, ScanSettings
     from .sim import XY2Receiver
@@ -158,9 +158,9 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", 
     The rate is the link's: any clock that carries the baud gives it to within the few clocks
     a ``fifo_free`` answer takes (``clk_freq``: 12 MHz, the board's; the quick bench's 8 MHz,
     the slowest that carries 1 Mbaud, is two thirds of the clocks to simulate)."""
-    from .client import HostClient
+    from .link.client import HostClient
     from .gateware.clocking import DEFAULT_BAUD
-    from .jobs.stream import JobStreamer
+    from .outputs.stream import JobStreamer
     from .sim.board import SimTransport, SimulatedBoard
     board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD, backend=backend,
                            **top_kwargs)

@@ -4,7 +4,7 @@ out here, independently of the loader."""
 import ezdxf
 import numpy as np
 
-from galvoscan.jobs.drawing import load_drawing
+from galvoscan.inputs.drawings import load_drawing
 
 
 # svgelements converts mm with 96 px/in × 0.0393701 in/mm (not 1/25.4): 0.54 ppm off, so SVG

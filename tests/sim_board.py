@@ -217,7 +217,7 @@ class SimBoard:
 class SimUARTTransport:
     """The host's serial port on the simulated pins: each frame COBS-encoded (the tests' own
     encoder) with a zero byte after it, back to back on ``uart_rx``; answers read off
-    ``uart_tx``, six bytes each. Plugs into the real :class:`~galvoscan.client.HostClient`.
+    ``uart_tx``, six bytes each. Plugs into the real :class:`~galvoscan.link.client.HostClient`.
 
     ``queue_writes``: :meth:`transact` only queues its bytes and returns no answers (as an
     OS that has taken them); they go out as the simulation runs."""

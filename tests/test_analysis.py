@@ -336,7 +336,7 @@ def test_delays_take_the_burnt_dot_and_the_corner_within_20_percent():
     the corner and the end within 20 % of it, and the line's ends within a spot of their set
     points."""
     from galvoscan.analysis.delays import NONE, DelaySettings, corner_job_dose
-    from galvoscan.jobs.profile import default_profile
+    from galvoscan.profile.machine import default_profile
     without = corner_job_dose(NONE)
     assert without["start"] > 2
     galvo = default_profile().galvo

@@ -14,7 +14,7 @@ import pytest
 # serves only the command's own work, not its start-up.
 CLIENT = """
 import runpy, sys
-import galvoscan.cli, galvoscan.client, galvoscan.gateware.host.regmap, serial
+import galvoscan.cli, galvoscan.link.client, galvoscan.gateware.host.regmap, serial
 sys.argv = ["galvoscan", *sys.argv[1:], "--port", sys.stdin.readline().strip()]
 runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
 """

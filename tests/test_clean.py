@@ -7,9 +7,9 @@ import math
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.area import plan_area_job
-from galvoscan.jobs.plan import PlanError
-from galvoscan.jobs.profile import default_profile
+from galvoscan.plan.area import plan_area_job
+from galvoscan.geometry.field import PlanError
+from galvoscan.profile.machine import default_profile
 
 from sim_board import quick_sim_board
 

@@ -85,7 +85,7 @@ def test_send_refuses_bad_values_before_sending(bridge):
 def test_a_board_that_answers_late_or_not_at_all_is_told_apart():
     """No byte back: the port, the baud rate, or a slow board's --timeout. Bytes that are no
     answer (a wrong baud rate, a damaged line): said as such, never taken as a value."""
-    from galvoscan.client import HostClient, LinkLost, SerialTransport
+    from galvoscan.link.client import HostClient, LinkLost, SerialTransport
     master, slave = pty.openpty()
     tty.setraw(slave)
     try:
@@ -120,7 +120,7 @@ def test_reset_empties_a_half_queued_job(capsys):
     bridge = SerialBridge(board)
     try:
         link = ["--port", bridge.port, "--baud", "500000", "--timeout", "5"]
-        from galvoscan.client import HostClient, SerialTransport
+        from galvoscan.link.client import HostClient, SerialTransport
         with SerialTransport(bridge.port, baud=500_000, timeout=5) as serial:
             HostClient(serial).queue_segments([(1, 30000, 30000), (1, 31000, 30000)])
         with pytest.raises(SystemExit, match="vec_op queues a segment"):

@@ -13,7 +13,8 @@ from galvoscan.cli.args import CLIError
 from galvoscan.cli.machine import add_machine_option, profile_from
 from galvoscan.correction.files import save_table
 from galvoscan.gateware.field.correction_table import CorrectionTable
-from galvoscan.jobs.profile import default_profile, profile_text
+from galvoscan.profile.machine import default_profile
+from galvoscan.profile.template import profile_text
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import pytest
 from galvoscan.cli import main
 from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
 from galvoscan.gateware.player.image_format import JOB_OFFSET
-from galvoscan.jobs.image import read_image
+from galvoscan.outputs.image import read_image
 from galvoscan.sim.spi_flash import FLASH_BYTES, SPIFlashModel
 
 

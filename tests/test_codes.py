@@ -1,4 +1,4 @@
-"""Codes (galvoscan/jobs/codes.py, `mark --code`): the modules zxing-cpp makes, as shapes;
+"""Codes (galvoscan/inputs/codes.py, `mark --code`): the modules zxing-cpp makes, as shapes;
 and the marks the simulated board puts on the XY2-100 wires, drawn at the spot's size and
 read back by zxing-cpp's decoder (a reader written apart from the encoder's use here)."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.codes import CodeSpec, code_drawing, code_modules
-from galvoscan.jobs.plan import PlanError
+from galvoscan.inputs.codes import CodeSpec, code_drawing, code_modules
+from galvoscan.geometry.field import PlanError
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 

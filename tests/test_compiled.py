@@ -1,4 +1,4 @@
-"""The compiled backend of the simulated board (galvoscan.compiled) against the reference,
+"""The compiled backend of the simulated board (galvoscan.sim.compiled) against the reference,
 Amaranth's simulator: the same stimulus through both gives the same records to the clock
 (frames off the XY2-100 wires, SYNC rises, laser pulses and pin changes, UART bytes both
 ways, framing errors). The full spiral, too long for the reference, is checked on the
@@ -14,9 +14,9 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from galvoscan.cli import main
-from galvoscan.client import HostClient, encode_read, encode_write
-from galvoscan.compiled import CompileError, Compiler, compiled_model
-from galvoscan.compiled import model as model_module
+from galvoscan.link.client import HostClient, encode_read, encode_write
+from galvoscan.sim.compiled import CompileError, Compiler, compiled_model
+from galvoscan.sim.compiled import model as model_module
 from galvoscan.gateware.host.regmap import Mode
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 from galvoscan.sim.board import SimSPITransport, SimTransport, SimulatedBoard
@@ -130,7 +130,7 @@ JOB_REGISTERS = {"pitch": 40, "pulses_per_point": 2, "laser_prr": 500, "jump_del
 def test_a_vector_job_with_delays_and_wobble_is_the_same_on_both_backends():
     """The job streamer (the host client's, as ``mark`` runs it) with a host that answers in
     the board's own time: the same frames, pulses and pins to the clock."""
-    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.outputs.stream import JobStreamer
     compiled, python = both(**QUICK_SIM_BOARD, **VECTOR_BOARD, vector_delays=True,
                             wobble=True)
     reports = []
@@ -174,7 +174,7 @@ def test_random_spi_frames_with_the_machine_toggling(frames, machine):
 @pytest.mark.slow
 def test_a_job_stopped_by_ctrl_c_is_the_same_on_both_backends():
     """Ctrl-C while the streamer feeds the queue: it disarms, and both boards stop alike."""
-    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.outputs.stream import JobStreamer
     from galvoscan.sim.board import LASER_PINS
     job = [("jump", 30000, 30000)] + [("mark", 30000 + 300 * (k % 2), 30000 + 40 * k)
                                       for k in range(40)]
@@ -284,7 +284,7 @@ def test_correction_table_writes_are_the_same_on_both_backends():
 def test_a_failing_compile_falls_back_to_python_with_one_line(monkeypatch, tmp_path):
     monkeypatch.setenv("GALVOSCAN_CACHE_DIR", str(tmp_path))
     broken = Compiler(("false",), "a compiler that fails")
-    monkeypatch.setattr("galvoscan.compiled.model.find_compiler", lambda: broken)
+    monkeypatch.setattr("galvoscan.sim.compiled.model.find_compiler", lambda: broken)
     said = []
     board = SimulatedBoard(backend="auto", say=said.append, **QUICK_SIM_BOARD,
                            **VECTOR_BOARD)
@@ -294,17 +294,17 @@ def test_a_failing_compile_falls_back_to_python_with_one_line(monkeypatch, tmp_p
         SimulatedBoard(backend="compiled", **QUICK_SIM_BOARD, **VECTOR_BOARD)
     # A compiler killed (out of memory, say) is named by its signal, not an exit status.
     killed = Compiler(("sh", "-c", "kill -9 $$", "sh"), "a compiler that is killed")
-    monkeypatch.setattr("galvoscan.compiled.model.find_compiler", lambda: killed)
+    monkeypatch.setattr("galvoscan.sim.compiled.model.find_compiler", lambda: killed)
     with pytest.raises(CompileError, match=r"failed: stopped by signal 9 \(SIGKILL\)$"):
         SimulatedBoard(backend="compiled", **QUICK_SIM_BOARD, **VECTOR_BOARD)
 
 
 def test_no_compiler_at_all_is_one_line(monkeypatch):
-    from galvoscan.compiled import CompilerError
+    from galvoscan.sim.compiled import CompilerError
 
     def none():
         raise CompilerError("no C++ compiler: none on PATH")
-    monkeypatch.setattr("galvoscan.compiled.model.find_compiler", none)
+    monkeypatch.setattr("galvoscan.sim.compiled.model.find_compiler", none)
     with pytest.raises(CompileError, match="no C\\+\\+ compiler"):
         compiled_model(GalvoScanTop(clk_freq=8e6, **VECTOR_BOARD))
 
@@ -368,7 +368,7 @@ def test_a_model_that_crashes_ends_the_command_with_one_line(tmp_path):
 def test_the_minutes_of_zigs_first_run_are_told_only_before_it(monkeypatch, tmp_path):
     """zig builds its C++ library on its first run alone (minutes, where a compile after it
     takes seconds): the compile's line says so only while zig's cache is empty."""
-    from galvoscan.compiled.model import _zig_cache_is_empty
+    from galvoscan.sim.compiled.model import _zig_cache_is_empty
     monkeypatch.setenv("ZIG_GLOBAL_CACHE_DIR", str(tmp_path / "zig"))
     assert _zig_cache_is_empty()                    # not there at all
     (tmp_path / "zig").mkdir()
@@ -381,7 +381,7 @@ def test_the_job_player_from_the_flash_is_the_same_on_both_backends():
     """The stand-alone board: the flash (the C++ model in board.cc, the Python one in
     galvoscan/sim/spi_flash.py, both from the datasheet), the foot switch, the player; a good
     image played twice and a damaged one refused, the same to the clock."""
-    from galvoscan.jobs.image import job_image
+    from galvoscan.outputs.image import job_image
     from test_player import JOB, PLAYER_BOARD, REGISTERS
     good = job_image(JOB, REGISTERS, repeats=2)
     damaged = bytearray(good)

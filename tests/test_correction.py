@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 from hypothesis import given, settings, strategies as st, HealthCheck, Phase
 
-from galvoscan.client import HostClient, WriteRefused
+from galvoscan.link.client import HostClient, WriteRefused
 from galvoscan.correction.upload import upload_table
 from galvoscan.gateware.field.correction import FieldCorrection
 from galvoscan.gateware.field.correction_table import TABLE_SIZES, CorrectionTable

@@ -19,7 +19,7 @@ from galvoscan.correction.model import ScanHeadModel, ftheta_table, synthetic_he
 from galvoscan.correction.photo import PhotoError, apply_homography, calibration_job, \
     find_marks, homography, measure_photo, render_photo, table_from_photo
 from galvoscan.gateware.field.correction_table import CorrectionTable
-from galvoscan.job import parse_job
+from galvoscan.inputs.job_file import parse_job
 
 
 # --- Liao & Chen 2016: the f-theta model ---------------------------------------------------------

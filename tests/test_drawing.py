@@ -1,4 +1,4 @@
-"""Loading drawings (galvoscan/jobs/drawing.py): SVG files with known geometry, checked against
+"""Loading drawings (galvoscan/inputs/drawings.py, svg.py): SVG files with known geometry, checked against
 the analytic shapes (not against the libraries), and bad SVG and DXF files, which must give a
 DrawingError and nothing else. The DXF reader's geometry is in test_dxf.py."""
 
@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from galvoscan.jobs.drawing import Drawing, DrawingError, load_drawing
+from galvoscan.geometry.drawing import Drawing, DrawingError
+from galvoscan.inputs.drawings import load_drawing
 
 from drawings import (SVG_ATOL, SVG_MM, bezier, chord_midpoints, distance_to_curve, load_svg,
                       new_dxf, svg)
@@ -245,7 +246,8 @@ def _huge_curves(folder):
 _CAPPED_LOADS = """
 import resource, sys
 resource.setrlimit(resource.RLIMIT_AS, (2 ** 30, 2 ** 30))
-from galvoscan.jobs.drawing import DrawingError, load_drawing
+from galvoscan.geometry.drawing import DrawingError
+from galvoscan.inputs.drawings import load_drawing
 for path in sys.argv[1:]:
     try:
         load_drawing(path)

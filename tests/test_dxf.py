@@ -1,4 +1,4 @@
-"""The DXF reader (galvoscan/jobs/dxf.py): entities with known geometry, checked against their
+"""The DXF reader (galvoscan/inputs/dxf.py): entities with known geometry, checked against their
 equations and the curves written out in tests/drawings.py, not against ezdxf's own evaluation."""
 
 import math
@@ -283,7 +283,7 @@ def test_dxf_text_in_a_missing_font_or_with_missing_characters(tmp_path):
 def test_a_drawing_too_large_names_the_units_the_file_gives(tmp_path):
     """ezdxf's new files are in metres: a 30 mm line drawn as 30 is 30 m, and the refusal
     says the file's units, not only 'check the drawing's units'."""
-    from galvoscan.jobs.drawing import DrawingError
+    from galvoscan.geometry.drawing import DrawingError
     doc, msp = new_dxf(units=6)
     msp.add_line((0, 0), (30, 0))
     with pytest.raises(DrawingError, match=r"check the drawing's units \(DXF units m "

@@ -1,4 +1,4 @@
-"""Fills (galvoscan/jobs/fill.py): hatch sets in their line orders, cross-hatch and the angle
+"""Fills (galvoscan/geometry/fill.py): hatch sets in their line orders, cross-hatch and the angle
 step a pass, contour rings; checked against the shapes' own geometry, worked out here."""
 
 import math
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from galvoscan.jobs.fill import Contour, HatchSet, LineOrder, contour_rings, hatch_strokes
-from galvoscan.jobs.plan import PlanError
+from galvoscan.geometry.fill import Contour, HatchSet, LineOrder, contour_rings, hatch_strokes
+from galvoscan.geometry.field import PlanError
 
 
 def square(half, centre=(0.0, 0.0)):
@@ -117,9 +117,10 @@ def test_any_hatch_or_contour_argument_is_a_fill_or_one_line(text, capsys):
 def test_a_job_turns_its_hatch_each_pass(tmp_path):
     """plan_vector_job with a set turned 90° a pass: pass 1 horizontal lines, pass 2 vertical,
     pass 3 horizontal again, each after the outline; without a step every pass is the same."""
-    from galvoscan.jobs.plan import Placement
-    from galvoscan.jobs.profile import default_profile
-    from galvoscan.jobs.vector_job import JobSettings, plan_vector_job
+    from galvoscan.geometry.field import Placement
+    from galvoscan.profile.machine import default_profile
+    from galvoscan.plan.objects import JobSettings
+    from galvoscan.plan.vector_job import plan_vector_job
     from drawings import load_svg
     drawing = load_svg(tmp_path, '<rect x="10" y="10" width="10" height="10"/>')
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from galvoscan.client import ClientError, HostClient, WriteRefused, encode_read, encode_write
+from galvoscan.link.client import ClientError, HostClient, WriteRefused, encode_read, encode_write
 from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.gateware.sources.spiral import PARK_FRAMES

@@ -1,4 +1,4 @@
-"""Job images (galvoscan/jobs/image.py): the bytes the player reads, checked field by field
+"""Job images (galvoscan/outputs/image.py): the bytes the player reads, checked field by field
 against the format as the README gives it, and bad files refused in one line."""
 
 import struct
@@ -7,7 +7,7 @@ import zlib
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from galvoscan.jobs.image import ImageError, job_image, read_image
+from galvoscan.outputs.image import ImageError, job_image, read_image
 
 
 JOB = [("jump", 1000, 2000), ("mark", 3000, 2000), ("mark", 3000, 4000)]

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from galvoscan.cli import main
-from galvoscan.job import JobError, parse_job
+from galvoscan.inputs.job_file import JobError, parse_job
 
 from sim_board import quick_replay_job
 from vector_model import job_model

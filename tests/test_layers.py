@@ -1,4 +1,4 @@
-"""Layers (galvoscan/jobs/layers.py, cli/layers.py, `mark --layer`): paths picked by SVG colour,
+"""Layers (galvoscan/plan/layers.py, cli/layers.py, `mark --layer`): paths picked by SVG colour,
 Inkscape layer and DXF layer; the layer options' one-line refusals; and, on the simulated
 board, each layer's speed and pulses per point measured on the XY2-100 and DB25 wires."""
 
@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.drawing import load_drawing
-from galvoscan.jobs.layers import Layer, PathStyle, split_by_layer
+from galvoscan.inputs.drawings import load_drawing
+from galvoscan.plan.layers import Layer, split_by_layer
+from galvoscan.geometry.drawing import PathStyle
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient
-from galvoscan.jobs.stream import JobAborted, JobStreamer, job_segments
+from galvoscan.link.client import ClientError, HostClient
+from galvoscan.outputs.stream import JobAborted, JobStreamer, job_segments
 
 from link_codec import command, parse_answer
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport, SimUARTTransport

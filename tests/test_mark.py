@@ -394,7 +394,7 @@ def test_the_profiles_lens_table_is_loaded_at_the_boards_size(tmp_path):
     from galvoscan.cli.jobargs import load_lens_table
     from galvoscan.correction.files import save_table
     from galvoscan.gateware.field.correction_table import CorrectionTable
-    from galvoscan.jobs.profile import load_profile
+    from galvoscan.profile.machine import load_profile
     table = CorrectionTable.identity(5).with_node(2, 2, 40, -7)
     save_table(tmp_path / "lens.json", table)
     (tmp_path / "m.toml").write_text('[field]\ncorrection = "lens.json"\n')

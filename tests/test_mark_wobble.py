@@ -12,10 +12,11 @@ from hypothesis import given, settings, strategies as st
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.plan import PlanError
-from galvoscan.jobs.profile import ProfileError, default_profile, parse_profile, profile_text
-from galvoscan.jobs.stream import JobAborted, JobStreamer
-from galvoscan.jobs.wobble import WobbleSettings, wobble_registers
+from galvoscan.geometry.field import PlanError
+from galvoscan.profile.machine import ProfileError, default_profile, parse_profile
+from galvoscan.profile.template import profile_text
+from galvoscan.outputs.stream import JobAborted, JobStreamer
+from galvoscan.plan.wobble import WobbleSettings, wobble_registers
 
 from sim_board import quick_sim_board
 from test_stream import FakeBoard, job

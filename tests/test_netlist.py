@@ -1,4 +1,4 @@
-"""The bitstream's own logic, gate by gate (galvoscan.compiled.netlist): the default build's
+"""The bitstream's own logic, gate by gate (galvoscan.sim.compiled.netlist): the default build's
 synthesized netlist, on the compiled board with Yosys' iCE40 cell models, against the design
 it was built from, on the same board. What the chip adds shows as it does on the board: the
 power-on reset holds the design a fixed number of clocks, and the XY2-100 and laser lines
@@ -8,9 +8,9 @@ import re
 
 import pytest
 
-from galvoscan.client import HostClient
-from galvoscan.compiled import CompileError
-from galvoscan.compiled.netlist import netlist_design
+from galvoscan.link.client import HostClient
+from galvoscan.sim.compiled import CompileError
+from galvoscan.sim.compiled.netlist import netlist_design
 from galvoscan.correction.files import load_table
 from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
 from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
@@ -113,7 +113,7 @@ def test_what_is_no_netlist_is_one_line(tmp_path):
 def test_only_the_cells_a_netlist_uses_are_read():
     """Yosys' cell models of the netlist's cells, with what they instantiate and the file's
     defines; none of the others (the UltraPlus SPRAM's alone costs Yosys some 50 s)."""
-    from galvoscan.compiled.netlist import cell_models
+    from galvoscan.sim.compiled.netlist import cell_models
     text = cell_models({"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K", "$buf"})
     modules = set(re.findall(r"(?m)^module\s+(\w+)", text))
     assert {"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K"} <= modules

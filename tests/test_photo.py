@@ -1,4 +1,4 @@
-"""Photos (galvoscan/jobs/photo.py, `mark --image`): the dithered grid against Pillow's own
+"""Photos (galvoscan/inputs/photo.py, `mark --image`): the dithered grid against Pillow's own
 dithering and against the grey it stands for, and the marks off the simulated board's XY2-100
 wires against the grid: each lit cell is a dark one, each dark cell is lit."""
 
@@ -9,9 +9,9 @@ import pytest
 from PIL import Image, ImageDraw
 
 from galvoscan.cli import main
-from galvoscan.jobs.drawing import DrawingError
-from galvoscan.jobs.photo import Dither, PhotoSpec, photo_bitmap, photo_drawing
-from galvoscan.jobs.plan import PlanError
+from galvoscan.geometry.drawing import DrawingError
+from galvoscan.inputs.photo import Dither, PhotoSpec, photo_bitmap, photo_drawing
+from galvoscan.geometry.field import PlanError
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 
@@ -78,7 +78,7 @@ def test_bad_images_are_one_line(tmp_path, make, words):
 
 
 def test_huge_images_are_refused_before_decoding(tmp_path, monkeypatch):
-    import galvoscan.jobs.photo as photo
+    import galvoscan.inputs.photo as photo
     Image.new("L", (400, 300), 0).save(tmp_path / "big.png")
     monkeypatch.setattr(photo, "MAX_PIXELS", 100_000)
     with pytest.raises(DrawingError, match="400 × 300 pixels, more than"):

@@ -1,4 +1,4 @@
-"""Planning (galvoscan/jobs/plan.py): placement, hatching, path order, galvo units and the field
+"""Planning (galvoscan/geometry/field.py, hatch.py, order.py): placement, hatching, path order, galvo units and the field
 check, each checked against geometry worked out here (own ray casting, analytic shapes). The
 pitch choice and the estimates are in test_speed.py."""
 
@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from galvoscan.jobs.drawing import Drawing, load_drawing
-from galvoscan.jobs.plan import (Placement, PlanError, field_check, from_galvo, hatch,
-                                 order_paths, place, to_galvo)
+from galvoscan.geometry.drawing import Drawing
+from galvoscan.inputs.drawings import load_drawing
+from galvoscan.geometry.field import Placement, PlanError, field_check, from_galvo, place, to_galvo
+from galvoscan.geometry.hatch import hatch
+from galvoscan.geometry.order import order_paths
 
 
 def ring(points):

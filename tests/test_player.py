@@ -7,12 +7,12 @@ import zlib
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 from galvoscan.gateware.host.fields import PlayerResult, PlayerState, PlayerStatus, Status
 from galvoscan.gateware.player.image_format import CRC_BYTES, Word
 from galvoscan.gateware.top import ScanSettings
-from galvoscan.jobs.image import job_image
-from galvoscan.jobs.stream import JobStreamer
+from galvoscan.outputs.image import job_image
+from galvoscan.outputs.stream import JobStreamer
 from galvoscan.sim.board import SimTransport, SimulatedBoard
 
 

@@ -7,7 +7,7 @@ import matplotlib
 import numpy as np
 import pytest
 
-from galvoscan.jobs.preview import preview
+from galvoscan.plan.preview import preview
 
 
 SQUARE = np.array([[10.0, 10], [20, 10], [20, 20], [10, 20], [10, 10]])

@@ -1,4 +1,4 @@
-"""The machine profile (``galvoscan/jobs/profile.py``): the template is the defaults, every key's
+"""The machine profile (``galvoscan/profile/machine.py``): the template is the defaults, every key's
 range is enforced at its edges, typos are caught with a suggestion, and nothing a user can put
 in the file escapes as anything but a one-line ProfileError."""
 
@@ -11,8 +11,9 @@ import pytest
 
 from galvoscan.correction.files import save_table
 from galvoscan.gateware.field.correction_table import CorrectionTable
-from galvoscan.jobs.profile import DEFAULT_PROFILE_NAME, ProfileError, \
-    default_profile, load_profile, parse_profile, profile_text
+from galvoscan.profile.machine import (DEFAULT_PROFILE_NAME, ProfileError, default_profile,
+                                       load_profile, parse_profile)
+from galvoscan.profile.template import profile_text
 
 
 # What the profile must accept, written out here rather than imported, so that a change of a

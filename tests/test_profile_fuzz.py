@@ -1,4 +1,4 @@
-"""The machine profile (``galvoscan/jobs/profile.py``) against random input: random documents,
+"""The machine profile (``galvoscan/profile/machine.py``) against random input: random documents,
 random values of the known keys, random bytes and random edits of the template all load or
 give one ProfileError line that names the file, and nothing else escapes."""
 
@@ -9,8 +9,9 @@ import re
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from galvoscan.jobs.profile import DEFAULT_PROFILE_NAME, ProfileError, load_profile, \
-    parse_profile, profile_text
+from galvoscan.profile.machine import (DEFAULT_PROFILE_NAME, ProfileError, load_profile,
+                                       parse_profile)
+from galvoscan.profile.template import profile_text
 
 from test_profile import DEFAULTS, toml
 

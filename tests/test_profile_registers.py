@@ -1,4 +1,4 @@
-"""The machine profile's derived numbers (``galvoscan/jobs/profile.py``): kHz, %, µs and mm
+"""The machine profile's derived numbers (``galvoscan/profile/machine.py``): kHz, %, µs and mm
 turned into register values by hand-worked examples, out-of-range values refused in one line,
 and the profile as JSON and as a frozen, hashable value."""
 
@@ -7,7 +7,8 @@ import math
 
 import pytest
 
-from galvoscan.jobs.profile import MachineProfile, default_profile, parse_profile, profile_text
+from galvoscan.profile.machine import MachineProfile, default_profile, parse_profile
+from galvoscan.profile.template import profile_text
 
 
 def test_register_conversions_by_hand():

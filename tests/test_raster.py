@@ -13,7 +13,7 @@ from hypothesis import example, given, settings, strategies as st
 import pytest
 
 from galvoscan.analysis.patterns import raster_frames
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 from galvoscan.gateware.sources.raster import RasterSequencer
 from galvoscan.gateware.top import ScanSettings
 

@@ -1,4 +1,4 @@
-"""Serial numbers (galvoscan/jobs/serial.py; `{serial}` in `mark --text` and `--data`): the
+"""Serial numbers (galvoscan/inputs/serial.py; `{serial}` in `mark --text` and `--data`): the
 counter file beside the profile, read, refused when damaged, advanced only for a part marked
 to its end, through the real serial link into a served simulated board."""
 
@@ -10,8 +10,8 @@ import sys
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.plan import PlanError
-from galvoscan.jobs.serial import counter_path, load_counter, uses_serial
+from galvoscan.geometry.field import PlanError
+from galvoscan.inputs.serial import counter_path, load_counter, uses_serial
 
 from test_board import BOARD, CLIENT      # a command through a served simulated board
 
@@ -90,7 +90,7 @@ def test_each_part_marked_on_a_board_takes_its_number(tmp_path):
 def test_a_counter_that_cannot_be_kept_is_one_line(tmp_path):
     """A counter whose folder is gone (or cannot be written) is refused before a part is
     marked; one that fails after a part is marked says the number to go on from."""
-    from galvoscan.jobs.serial import SerialCounter
+    from galvoscan.inputs.serial import SerialCounter
     lost = SerialCounter(path=tmp_path / "gone" / "station.serial.toml", next=41)
     with pytest.raises(PlanError, match="the serial counter cannot be written .*nothing was "
                                         "sent"):

@@ -4,7 +4,7 @@ import random
 
 import pytest
 
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 
 from sim_board import SimBoard, SimUARTTransport
 

@@ -1,4 +1,4 @@
-"""Speed and time (galvoscan/jobs/speed.py): the pitch and pulses per point for a speed,
+"""Speed and time (galvoscan/geometry/speed.py): the pitch and pulses per point for a speed,
 against a brute force over every choice, and the time and lengths of segments, against sums
 worked out by hand."""
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from galvoscan.jobs.plan import PlanError
-from galvoscan.jobs.speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
+from galvoscan.geometry.field import PlanError
+from galvoscan.geometry.speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
 
 
 def brute_force(speed, prr, units_per_mm, max_pitch_mm, max_point_hz=100e3):

@@ -1,4 +1,4 @@
-"""The job streamer (galvoscan/jobs/stream.py): against a fake board for its protocol, and
+"""The job streamer (galvoscan/outputs/stream.py): against a fake board for its protocol, and
 against the simulated board over a pseudo-terminal for what the laser pins do when a job is
 stopped."""
 
@@ -9,9 +9,9 @@ import time
 
 import pytest
 
-from galvoscan.client import ClientError, HostClient, SerialTransport
+from galvoscan.link.client import ClientError, HostClient, SerialTransport
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
-from galvoscan.jobs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
+from galvoscan.outputs.stream import QUEUE_DEPTH, JobAborted, JobStreamer
 
 # The simulated boards here run vector jobs alone (VECTOR_BOARD: vector mode only, no
 # correction stage; the job's CPU 15-20 % less than on the default build, whose vector path the
@@ -140,7 +140,7 @@ def test_scaled_polygon_delay_rides_in_vec_op():
 
 
 def test_corner_frames_refuses_a_bad_delay_and_caps_at_the_field():
-    from galvoscan.jobs.corners import corner_frames
+    from galvoscan.geometry.corners import corner_frames
     for bad in (-1, float("nan"), "100", True):
         with pytest.raises(ValueError):
             corner_frames([("mark", 1, 1)], bad)
@@ -329,7 +329,7 @@ def disarmed_at(bytes_in, since):
 @pytest.mark.slow
 def test_framing_traces_the_box_with_the_guide_laser_and_the_laser_off():
     """`--frame`: the job's bounding box walked with the guide laser on, never armed."""
-    from galvoscan.jobs.vector_job import box_outline, frame_segments
+    from galvoscan.plan.vector_job import box_outline, frame_segments
     from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
     board = SimulatedBoard(**QUICK_SIM_BOARD, **VECTOR_BOARD)
     client = HostClient(SimTransport(board))
@@ -357,7 +357,7 @@ def test_the_frame_is_the_jobs_convex_hull():
     and the diagonal across its notch, not the bounding box's corner in the notch; a line is
     walked there and back."""
     import numpy as np
-    from galvoscan.jobs.vector_job import hull_outline
+    from galvoscan.plan.vector_job import hull_outline
     ell = [np.array([(0, 0), (4, 0), (4, 1), (1, 1), (1, 3), (0, 3), (0, 0)], dtype=float)]
     hull = hull_outline(ell)
     assert np.array_equal(hull[0], hull[-1])                 # closed

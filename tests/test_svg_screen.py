@@ -1,11 +1,11 @@
-"""SVG elements that are errors by the specification (galvoscan/jobs/svg_screen.py): left out,
+"""SVG elements that are errors by the specification (galvoscan/inputs/svg_screen.py): left out,
 each named in a note, the rest of the drawing read as a browser draws it."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from galvoscan.jobs.drawing import DrawingError
+from galvoscan.geometry.drawing import DrawingError
 
 from drawings import load_svg
 

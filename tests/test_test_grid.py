@@ -1,4 +1,4 @@
-"""`galvoscan test-grid` (galvoscan/jobs/test_grid.py, cli/testgrid.py): a square for each
+"""`galvoscan test-grid` (galvoscan/plan/test_grid.py, cli/testgrid.py): a square for each
 speed and power, each at its own settings, labelled; planned, refused, and marked on the
 simulated board square by square."""
 
@@ -11,8 +11,8 @@ from hypothesis import given, settings, strategies as st
 
 from galvoscan.cli import main
 from galvoscan.cli.testgrid import _axis
-from galvoscan.jobs.profile import default_profile
-from galvoscan.jobs.test_grid import plan_test_grid
+from galvoscan.profile.machine import default_profile
+from galvoscan.plan.test_grid import plan_test_grid
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 

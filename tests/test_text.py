@@ -1,4 +1,4 @@
-"""Text (galvoscan/jobs/text.py, `mark --text`): capital height, alignment, spacing and lines
+"""Text (galvoscan/inputs/text.py, `mark --text`): capital height, alignment, spacing and lines
 measured on the shapes; the marks off the simulated board's wires against matplotlib's own
 rendering of the same font (Agg fills the glyph curves itself: none of our flattening,
 hatching, placement or board is in it); and an SVG's <text> (text.svg_text_outlines, read by
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.jobs.plan import PlanError
-from galvoscan.jobs.text import TextSpec, text_drawing
+from galvoscan.geometry.field import PlanError
+from galvoscan.inputs.text import TextSpec, text_drawing
 
 from drawings import load_svg
 from sim_board import VECTOR_BOARD, quick_sim_board

@@ -10,7 +10,7 @@ import bisect
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient, WriteRefused
+from galvoscan.link.client import ClientError, HostClient, WriteRefused
 from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
 from galvoscan.gateware.host.fields import pack
 from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
@@ -304,9 +304,9 @@ def test_the_words_the_host_packs_are_the_registers_documented_bits():
 def test_vec_flush_empties_the_queue_and_stops_the_mode():
     """A job left half-queued (a host that died mid-job): vec_flush empties the queue and
     stops the sequencer where it is; the next job is taken and marks from its start."""
-    from galvoscan.client import HostClient, WriteRefused
+    from galvoscan.link.client import HostClient, WriteRefused
     from galvoscan.gateware.host.fields import STATUS_BITS
-    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.outputs.stream import JobStreamer
     from galvoscan.sim.board import SimTransport, SimulatedBoard
     board = SimulatedBoard(clk_freq=4e6, baud=500_000, modes=("vector",), links=("uart",),
                            settings=ScanSettings(mode="vector", run=False), correction=None,

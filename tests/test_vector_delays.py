@@ -8,7 +8,7 @@ SCANLAB's delay definitions (tests/vector_delay_model.py); bad delay values refu
 from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient, encode_write, WriteRefused
+from galvoscan.link.client import ClientError, HostClient, encode_write, WriteRefused
 from galvoscan.gateware.top import ScanSettings
 
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport

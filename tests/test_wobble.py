@@ -13,7 +13,7 @@ import math
 from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient
+from galvoscan.link.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMPLITUDE,
                                              WOBBLE_MAX_HZ)
 from galvoscan.gateware.sources.wobble import Wobble

@@ -34,9 +34,9 @@ def _passes(passes):
 
 
 def _cmd_clean(args):
-    from ..jobs.area import plan_area_job
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer
+    from ..plan.area import plan_area_job
+    from ..geometry.field import PlanError
+    from ..outputs.stream import JobStreamer
     check_backend_needs_sim(args)
     profile = profile_from(args)
     speed, power, prr = job_settings_values(args, profile)
@@ -76,7 +76,7 @@ def _cmd_clean(args):
         with stopped_in_one_line():
             load_lens_table(client, profile, say)
             if args.frame:
-                from ..jobs.vector_job import box_outline
+                from ..plan.vector_job import box_outline
                 frame_job(streamer, profile, box_outline(job.bounds_mm), args.frame,
                           _frame_registers(profile, registers["laser_prr"]),
                           timeout_s=1e4 if args.sim else 60, say=say, what="area")

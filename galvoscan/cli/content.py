@@ -1,10 +1,10 @@
 """The content ``mark`` and ``store`` make themselves, beside or instead of a drawing: text
-(``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of
+(``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.plan.objects.MarkObject` of
 the job."""
 
-from ..jobs.codes import QR_LEVELS, CodeFill, CodeKind
-from ..jobs.photo import Dither
-from ..jobs.text import ALIGNMENTS
+from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
+from ..inputs.photo import Dither
+from ..inputs.text import ALIGNMENTS
 from .args import int_in, number_in
 from .jobargs import pair_mm
 
@@ -115,10 +115,10 @@ class _Moment:
 
 def fields(text, *, serial=None, what="--text"):
     """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
-    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`) for a field it does not know
+    (now); one line (:class:`~galvoscan.geometry.field.PlanError`) for a field it does not know
     or one written wrong."""
     from datetime import datetime
-    from ..jobs.plan import PlanError
+    from ..geometry.field import PlanError
     now = datetime.now()
     values = {"serial": serial if serial is not None else 0,
               "date": _Moment(now, "%Y-%m-%d"), "time": _Moment(now, "%H:%M")}
@@ -136,8 +136,8 @@ def fields(text, *, serial=None, what="--text"):
 
 def check_content_options(args):
     """Refuse an option of one kind of content given without it (``--font`` without
-    ``--text``); one line (:class:`~galvoscan.jobs.plan.PlanError`)."""
-    from ..jobs.plan import PlanError
+    ``--text``); one line (:class:`~galvoscan.geometry.field.PlanError`)."""
+    from ..geometry.field import PlanError
     for kind, options in _OPTIONS.items():
         given = [name for name in options if getattr(args, name, None) is not None]
         if getattr(args, kind, None) is None and given:
@@ -147,13 +147,13 @@ def check_content_options(args):
 
 
 def content_objects(args, settings, profile, *, serial=None):
-    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s of ``args.entries``' text, codes
+    """The :class:`~galvoscan.plan.objects.MarkObject` s of ``args.entries``' text, codes
     and photos (each entry the options of one object, over ``args``' own), ``serial`` the
-    part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line)."""
+    part's number (raises :class:`~galvoscan.geometry.field.PlanError`, one line)."""
     import argparse
     from dataclasses import replace
-    from ..jobs.drawing import DrawingError
-    from ..jobs.plan import PlanError
+    from ..geometry.drawing import DrawingError
+    from ..geometry.field import PlanError
     objects = []
     for kind, make in (("text", _text_object), ("image", _image_object),
                        ("code", _code_object)):
@@ -170,9 +170,10 @@ def content_objects(args, settings, profile, *, serial=None):
 
 
 def _code_object(args, settings, profile, serial):
-    """``--code`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`."""
-    from ..jobs.codes import CodeSpec, code_object
-    from ..jobs.plan import PlanError
+    """``--code`` as a :class:`~galvoscan.plan.objects.MarkObject`."""
+    from ..inputs.codes import CodeSpec
+    from ..plan.objects import code_object
+    from ..geometry.field import PlanError
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
     if args.code_height is not None and CodeKind(args.code) is not CodeKind.CODE128:
@@ -186,9 +187,10 @@ def _code_object(args, settings, profile, serial):
 
 
 def _image_object(args, settings, profile, serial=None):
-    """``--image`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`."""
-    from ..jobs.photo import PhotoSpec, photo_object
-    from ..jobs.plan import PlanError
+    """``--image`` as a :class:`~galvoscan.plan.objects.MarkObject`."""
+    from ..inputs.photo import PhotoSpec
+    from ..plan.objects import photo_object
+    from ..geometry.field import PlanError
     if args.width is None:
         raise PlanError("--image needs --width MM")
     spec = PhotoSpec(args.image, args.width, args.line_spacing or profile.laser.spot_mm,
@@ -198,14 +200,14 @@ def _image_object(args, settings, profile, serial=None):
 
 
 def _text_object(args, settings, profile, serial):
-    """``--text`` as a :class:`~galvoscan.jobs.vector_job.MarkObject`: an outline font's
+    """``--text`` as a :class:`~galvoscan.plan.objects.MarkObject`: an outline font's
     glyphs filled by the job's hatch sets (or, none given, lines at most half the spot apart)
     and outlined; a Hershey font's strokes marked once."""
     from dataclasses import replace
-    from ..jobs.fill import HatchSet
-    from ..jobs.plan import Placement
-    from ..jobs.text import TextSpec, text_drawing
-    from ..jobs.vector_job import MarkObject
+    from ..geometry.fill import HatchSet
+    from ..geometry.field import Placement
+    from ..inputs.text import TextSpec, text_drawing
+    from ..plan.objects import MarkObject
     text = fields(args.text, serial=serial)
     spec = TextSpec(text, args.height or 5.0, font=args.font, align=args.align,
                     letter_spacing_mm=args.letter_spacing, line_spacing=args.line_height)
@@ -223,7 +225,7 @@ def part_serials(args, profile):
     """``(counter, serials)``: the serial counter and each part's number, when ``--text`` or
     ``--data`` holds ``{serial}`` (else ``(None, [None] × parts)``); one line for a damaged
     counter."""
-    from ..jobs.serial import load_counter, uses_serial
+    from ..inputs.serial import load_counter, uses_serial
     parts = getattr(args, "repeat", 1) or 1
     entries = getattr(args, "entries", None)
     texts = [getattr(args, "text", None), getattr(args, "data", None)] if entries is None else \
@@ -231,7 +233,7 @@ def part_serials(args, profile):
     if not uses_serial(*texts):
         if getattr(args, "serial_start", None) is not None or \
                 getattr(args, "serial_step", None) is not None:
-            from ..jobs.plan import PlanError
+            from ..geometry.field import PlanError
             raise PlanError("--serial-start and --serial-step are for a {serial} field in "
                             "--text or --data")
         return None, [None] * parts

@@ -202,7 +202,7 @@ def _cmd_study(args):
 
 
 def _cmd_upload(args):
-    from ..client import ClientError, HostClient
+    from ..link.client import ClientError, HostClient
     from ..correction.upload import upload_table
     table = _load(args.table)
     with open_link(args) as link:

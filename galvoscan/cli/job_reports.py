@@ -159,7 +159,7 @@ def sim_report(board, job, placement, drawing, profile, report, *, layer_starts=
     job of layers, each layer's speed and pulses per point on them; ``layer_starts``: the
     index of each layer's first pulse)."""
     import numpy as np
-    from ..jobs.plan import from_galvo
+    from ..geometry.field import from_galvo
     points = board.points()
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)

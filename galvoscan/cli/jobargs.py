@@ -74,7 +74,7 @@ def has_link(args, profile):
 def board_link(args, profile, *, wobble=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage)."""
-    from ..client import HostClient, SerialTransport
+    from ..link.client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
         from ..sim.board import PTYServer
@@ -116,8 +116,8 @@ def stopped_in_one_line(*, on_complete=None):
     streamer has already sent arm = 0). ``on_complete()``: called first when the job was
     marked to its end before it stopped (a part that is done: its serial number is taken);
     it returns words to add to the line."""
-    from ..client import ClientError
-    from ..jobs.stream import JobAborted, JobInterrupted
+    from ..link.client import ClientError
+    from ..outputs.stream import JobAborted, JobInterrupted
     try:
         yield
     except JobInterrupted as error:
@@ -133,7 +133,7 @@ def stopped_in_one_line(*, on_complete=None):
 def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):
     """Trace ``outline_mm`` (a closed outline) ``times`` times in vector mode with the guide
     laser on and the laser never armed (``registers``: the vector settings to walk it with)."""
-    from ..jobs.vector_job import frame_segments
+    from ..plan.vector_job import frame_segments
     if not profile.laser.guide:
         fail("the machine profile says there is no guide laser ([laser] guide)")
     segments = frame_segments(outline_mm, profile.field.size_mm, times)

@@ -159,7 +159,7 @@ def _entry(section, table, actions, folder, where, defaults, folder_name=""):
 
 def load_job_file(path):
     """``(job, entries, layers)``: the ``[job]`` settings and every other table, by
-    section, as ``{dest: value}``; the layers as :class:`~galvoscan.jobs.layers.Layer` s
+    section, as ``{dest: value}``; the layers as :class:`~galvoscan.plan.layers.Layer` s
     and their tables. One line (and exit) for anything wrong."""
     import tomllib
     from .layers import layer_from_table
@@ -260,7 +260,7 @@ def content_entries(args):
 def _toml(dest, value, folder):
     """An option's value as the job file writes it."""
     from enum import Enum
-    from ..jobs.fill import Contour, HatchSet
+    from ..geometry.fill import Contour, HatchSet
     if isinstance(value, HatchSet):
         parts = [value.spacing_mm, value.angle_deg, value.step_deg, value.offset_mm]
         while len(parts) > 1 and parts[-1] == 0:

@@ -8,8 +8,8 @@ import argparse
 
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.limits import WOBBLE_MAX_HZ
-from ..jobs.fill import LineOrder
-from ..jobs.profile_keys import DELAY_KEYS
+from ..geometry.fill import LineOrder
+from ..profile.keys import DELAY_KEYS
 from .args import (contour_fill, fail, hatch_set, number_in, passes, power_percent, prr_khz,
                    register_int, speed_mm_s)
 
@@ -67,11 +67,11 @@ LAYER_KEYS = {
 
 
 def _layer(match, pairs, where):
-    """A :class:`~galvoscan.jobs.layers.Layer` from ``(key, value)`` pairs (values as text or
+    """A :class:`~galvoscan.plan.layers.Layer` from ``(key, value)`` pairs (values as text or
     TOML gives them); ValueError, one line naming ``where`` and the key."""
     import difflib
-    from ..jobs.layers import Layer
-    from ..jobs.plan import PlanError
+    from ..plan.layers import Layer
+    from ..geometry.field import PlanError
     fields, hatch, delays = {}, [], []
     for key, value in pairs:
         if key not in LAYER_KEYS:
@@ -171,7 +171,7 @@ def add_layer_option(group):
 
 
 def layer_wobble(layer, base):
-    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
+    """The :class:`~galvoscan.plan.wobble.WobbleSettings` of a layer (None: the rest), its
     amplitudes and frequency in place of ``base``'s where it gives them."""
     from dataclasses import replace
     if layer is None:
@@ -192,9 +192,9 @@ def _wobble_words(registers, profile):
 
 
 def _wobble(args, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: the command line's, else the
+    """The job's :class:`~galvoscan.plan.wobble.WobbleSettings`: the command line's, else the
     profile's [wobble]."""
-    from ..jobs.wobble import WobbleSettings
+    from ..plan.wobble import WobbleSettings
     section = profile.wobble
     across = args.wobble if args.wobble is not None else section.across_um
     along = args.wobble_along if args.wobble_along is not None else \
@@ -208,8 +208,8 @@ def add_wobble(job, args, profile):
     place) into its registers, its reach checked against the field; a layer that does not
     wobble among ones that do turns it off. Returns whether anything wobbles."""
     from ..gateware.host.fields import WobbleShape
-    from ..jobs.plan import PlanError
-    from ..jobs.wobble import wobble_registers
+    from ..geometry.field import PlanError
+    from ..plan.wobble import wobble_registers
     base = _wobble(args, profile)
     parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
     try:

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..gateware.limits import WOBBLE_MAX_HZ
-from ..jobs.fill import LineOrder
+from ..geometry.fill import LineOrder
 from .args import (check_backend_needs_sim, contour_fill, fail, hatch_set, image_file, int_in,
                    number_in, passes)
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
@@ -30,13 +30,15 @@ __all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_jo
 
 
 def _plan(args, profile, serial=None):
-    """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` (of layers, when ``--layer``
+    """The planned :class:`~galvoscan.plan.vector_job.VectorJob` (of layers, when ``--layer``
     gives them) and the placement, or one line and exit."""
-    from ..job import JobError, parse_job
-    from ..jobs.drawing import DrawingError, load_drawing
-    from ..jobs.layers import merged, plan_layers
-    from ..jobs.plan import Placement, PlanError
-    from ..jobs.vector_job import JobSettings, MarkObject, plan_job_file
+    from ..inputs.job_file import JobError, parse_job
+    from ..geometry.drawing import DrawingError
+    from ..inputs.drawings import load_drawing
+    from ..plan.layers import merged, plan_layers
+    from ..geometry.field import Placement, PlanError
+    from ..plan.objects import JobSettings, MarkObject
+    from ..plan.vector_job import plan_job_file
     from .args import read_text
     speed, power, prr = job_settings_values(args, profile)
     settings = JobSettings(speed_mm_s=speed, power_percent=power, prr_khz=prr,
@@ -74,8 +76,8 @@ def _plan(args, profile, serial=None):
 
 
 def _link_warning(job, baud):
-    from ..jobs.stream import QUEUE_DEPTH
-    from ..jobs.vector_job import link_segments_per_s
+    from ..outputs.stream import QUEUE_DEPTH
+    from ..outputs.stream import link_segments_per_s
     if len(job.segments) <= QUEUE_DEPTH or job.estimate_s <= 0:
         return None
     needed = len(job.segments) / job.estimate_s
@@ -117,8 +119,8 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
 
 def _draw_preview(args, job, drawing, profile):
     """The preview of one pass (each layer's in its colour), the title saying all passes'."""
-    from ..jobs.preview import preview
-    from ..jobs.speed import path_length_mm
+    from ..plan.preview import preview
+    from ..geometry.speed import path_length_mm
     source = args.file or getattr(args, "job_file", None)
     dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
     passes = max(lj.settings.passes for lj in job.layers) if job.layers else \
@@ -135,8 +137,8 @@ def _draw_preview(args, job, drawing, profile):
 
 
 def _cmd_mark(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer, StreamReport
+    from ..geometry.field import PlanError
+    from ..outputs.stream import JobStreamer, StreamReport
     from .jobfile import use_job_file
     check_backend_needs_sim(args)
     if args.save and args.file and Path(args.file).suffix.lower() == ".job":
@@ -215,7 +217,7 @@ def _cmd_mark(args):
                     if number == 0:
                         load_lens_table(client, profile, say)
                     if args.frame:
-                        from ..jobs.vector_job import hull_outline
+                        from ..plan.vector_job import hull_outline
                         frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
@@ -270,7 +272,7 @@ def _cmd_mark(args):
 def _run_layers(streamer, job, board, timeout):
     """Run ``job`` (its layers one after the other, each at its own settings): the reports
     summed into one, and (on a simulated board) the index of each layer's first pulse."""
-    from ..jobs.stream import JobAborted, StreamReport
+    from ..outputs.stream import JobAborted, StreamReport
     reports, starts = [], []
     parts = [lj.job for lj in job.layers] if job.layers else [job]
     for index, part in enumerate(parts):

@@ -61,7 +61,7 @@ def _marking_speed(points, pitch):
 
 
 def _sim_vector(args):
-    from ..job import JobError, parse_job
+    from ..inputs.job_file import JobError, parse_job
 
     if args.points is not None:
         fail("--points is for the spiral; a vector job is as long as its file")
@@ -140,8 +140,8 @@ def _netlist_settings(args):
     """``(settings, clocks per XY2 bit)`` of the build whose netlist ``--netlist`` names: its
     register resets (the default ones: ``galvoscan build`` takes none) and its spiral's
     interpolator, built or not; options that would change the design are refused."""
-    from ..compiled import CompileError
-    from ..compiled.netlist import build_record
+    from ..sim.compiled import CompileError
+    from ..sim.compiled.netlist import build_record
     from ..gateware.settings import ScanSettings
     for option in ("dwell", "interp", "correction", "vcd"):
         if getattr(args, option) is not None:
@@ -274,7 +274,7 @@ def _cmd_sim(args):
 
 
 def _compiled_or_one_line(command, args):
-    from ..compiled import CompileError
+    from ..sim.compiled import CompileError
     try:
         return command(args)
     except CompileError as error:

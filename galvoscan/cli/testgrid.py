@@ -27,8 +27,8 @@ def _axis(what, low_limit, high_limit, unit):
         except (ValueError, IndexError):
             raise argparse.ArgumentTypeError(f"{what} must be A:B:N (from A to B in N steps) "
                                              f"or one value, not {text!r}")
-        from ..jobs.plan import PlanError
-        from ..jobs.test_grid import axis_values
+        from ..geometry.field import PlanError
+        from ..plan.test_grid import axis_values
         try:
             values = axis_values(low, high, count, what)
         except PlanError as error:
@@ -41,9 +41,9 @@ def _axis(what, low_limit, high_limit, unit):
 
 
 def _cmd_test_grid(args):
-    from ..jobs.plan import PlanError
-    from ..jobs.stream import JobStreamer
-    from ..jobs.test_grid import plan_test_grid
+    from ..geometry.field import PlanError
+    from ..outputs.stream import JobStreamer
+    from ..plan.test_grid import plan_test_grid
     profile = profile_from(args)
     prr = args.prr if args.prr is not None else profile.defaults.prr_khz
     try:
@@ -64,7 +64,7 @@ def _cmd_test_grid(args):
             f"{c.centre_mm[1]:g}) mm: {c.job.estimate_s:.2f} s, pitch "
             f"{c.job.pitch.pitch_mm * 1000:.1f} µm × {c.job.pitch.pulses_per_point}")
     if args.preview:
-        from ..jobs.preview import preview
+        from ..plan.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,
                 title=f"test grid: {len(cells)} squares")

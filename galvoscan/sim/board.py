@@ -16,10 +16,11 @@ import threading
 import time
 from collections import deque
 
-from ..client import ClockedTransport, PacketTransport
+from ..link.client import ClockedTransport, PacketTransport
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.top import GalvoScanTop
-from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
+from .contract import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from .board_engine import PythonEngine
 from .xy2_receiver import frame_of_each_pulse
 
 
@@ -44,7 +45,7 @@ class SimulatedBoard:
         clock).
     backend : str
         ``"python"``: Amaranth's simulator (the reference); ``"compiled"``: the top compiled to
-        native code (:mod:`galvoscan.compiled`, built once per design and cached), some
+        native code (:mod:`galvoscan.sim.compiled`, built once per design and cached), some
         hundreds of times faster; ``"auto"``: the compiled one where it can be built, else the
         Python one, with a line to ``say`` saying why. Both give the same records.
     say : callable, optional
@@ -130,8 +131,8 @@ class SimulatedBoard:
 
     def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
                        **records):
-        from ..compiled import CompiledEngine, compiled_model
-        from ..compiled.netlist import build_record, netlist_design
+        from .compiled import CompiledEngine, compiled_model
+        from .compiled.netlist import build_record, netlist_design
         if backend == "python" or extra or records.get("record_pins") == "every clock":
             raise ValueError("a netlist runs on the compiled backend alone, as it was built")
         record = build_record(netlist) or {}
@@ -175,7 +176,7 @@ class SimulatedBoard:
     def _engine(self, backend, say, **records):
         if backend == "python" or records.get("record_pins") == "every clock":
             return PythonEngine(self, **records)
-        from ..compiled import CompileError, CompiledEngine
+        from .compiled import CompileError, CompiledEngine
         try:
             return CompiledEngine(self, say=say, **records)
         except CompileError as error:

@@ -58,7 +58,7 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         return _replay_on_board(frames=frames, clk_freq=None, progress=progress,
                                 backend="compiled", say=say, netlist=netlist)
     if backend != "python":
-        from ..compiled import CompileError
+        from .compiled import CompileError
         if vcd:
             raise ValueError("a waveform (vcd) needs the Python backend")
         try:
