@@ -25,6 +25,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from shapely.geometry import LineString, Polygon
+import shapely
 
 from .field import PlanError
 from .hatch import hatch, hatch_extent
@@ -84,8 +86,6 @@ def shapes(paths, closed):
     """The closed paths grouped into shapes: each outline with the holes inside it (by the
     even-odd rule: a ring inside an odd number of others is a hole of the smallest of them
     that is inside an even number). Lists of indices into ``paths``, one a shape."""
-    import shapely
-    from shapely.geometry import Polygon
     rings = [i for i, (p, c) in enumerate(zip(paths, closed)) if c and len(p) >= 4]
     polygons = [shapely.make_valid(Polygon(np.asarray(paths[i], dtype=float)))
                 for i in rings]
@@ -217,8 +217,6 @@ def oriented(block, here, order):
 
 def _region(paths, closed):
     """The closed shapes as one shapely area, by the even-odd rule (symmetric difference)."""
-    import shapely
-    from shapely.geometry import Polygon
     region = None
     for path, is_closed in zip(paths, closed):
         if not is_closed or len(path) < 3:
@@ -231,7 +229,6 @@ def _region(paths, closed):
 def _joined(strokes, paths, closed, spacing_mm):
     """Consecutive strokes joined where the step between them is short (at most two spacings)
     and lies inside the shapes, so it can be marked."""
-    from shapely.geometry import LineString
     region = _region(paths, closed)
     if region is None or region.is_empty:
         return strokes

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from .field import CENTRE, PlanError
+
 
 __all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths", "path_length_mm",
            "settled_jumps"]
@@ -61,7 +63,6 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
         ``"range"``: the closest when the speed is inside the reachable range, refused only
         outside it); the message gives the reachable range, or the two speeds either side.
     """
-    from .field import PlanError             # here: .plan imports this module
 
     values = (speed_mm_s, prr_hz, units_per_mm, max_pitch_mm, max_prr_per_point_hz)
     if not all(v > 0 and math.isfinite(v) for v in values):
@@ -109,7 +110,6 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
 
 def _walk(segments):
     """Lengths (galvo units) and ops of the segments, from the field centre."""
-    from .field import CENTRE                # here: .plan imports this module
 
     here, out = (CENTRE, CENTRE), []
     for op, x, y in segments:

@@ -14,6 +14,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
+from shapely.geometry import box
+import zxingcpp
 
 from ..geometry.drawing import Drawing
 from ..geometry.field import PlanError
@@ -80,7 +83,6 @@ class CodeSpec:
 def code_modules(spec):
     """The symbol's modules, ``True`` dark, row 0 at the top: ``(rows, columns)`` (Code 128:
     one row, a column a module). One line for data the symbology cannot encode."""
-    import zxingcpp
     formats = {CodeKind.QR: zxingcpp.BarcodeFormat.QRCode,
                CodeKind.DATAMATRIX: zxingcpp.BarcodeFormat.DataMatrix,
                CodeKind.CODE128: zxingcpp.BarcodeFormat.Code128}
@@ -125,8 +127,6 @@ def code_drawing(spec):
     if boxes:
         # The dark modules as one area (touching modules merged): its edges are the outline,
         # its holes the light modules inside it.
-        import shapely
-        from shapely.geometry import box
         area = shapely.unary_union([box(*b) for b in boxes])
         for polygon in getattr(area, "geoms", [area]):
             for ring in [polygon.exterior, *polygon.interiors]:

@@ -14,8 +14,15 @@ from logging.handlers import BufferingHandler
 import math
 
 import numpy as np
+from ezdxf import colors, recover, units
+from ezdxf.addons import MTextExplode, text2path
+from ezdxf.document import Drawing
+from ezdxf.entities.boundary_paths import EdgePath, PolylinePath
+from ezdxf.fonts import fonts
+from ezdxf.lldxf.tagger import binary_tags_loader
+from ezdxf.math import bulge_to_arc, ConstructionArc
 
-from ..geometry.drawing import DrawingError
+from ..geometry.drawing import DrawingError, PathStyle
 from .reading import _chords, _counted, _one_line, _round_chords
 
 
@@ -93,7 +100,6 @@ def _hatch_boundaries(hatch, tolerance):
     marking's): ``[(points, True), …]``. Arcs and ellipses are flattened on the curve itself,
     as the entities are (ezdxf's paths would make them Bézier curves, some 0.03 % of the
     radius off); a boundary's pieces are joined end to end."""
-    from ezdxf.entities.boundary_paths import EdgePath, PolylinePath
     ocs, elevation = hatch.ocs(), hatch.dxf.elevation.z
     found = []
     for boundary in hatch.paths:
@@ -116,7 +122,6 @@ def _hatch_boundaries(hatch, tolerance):
 
 def _bulge_pieces(vertices, tolerance):
     """A polyline boundary's ``(x, y, bulge)`` vertices as lines and arcs, closed."""
-    from ezdxf.math import ConstructionArc, bulge_to_arc
     pieces = []
     for (x0, y0, bulge), (x1, y1, _) in zip(vertices, vertices[1:] + vertices[:1]):
         if bulge:
@@ -204,7 +209,6 @@ def _entity_colour(entity, document, block_colour=None):
     """An entity's colour as ``#rrggbb``: its true colour, else its ACI colour (ezdxf's table:
     1 red, 5 blue, 7 white …); BYLAYER its layer's (inside a block, on layer 0, the
     reference's, as CAD draws it); BYBLOCK the reference's; None where there is none."""
-    from ezdxf import colors
 
     def hex_of(rgb):
         return "#{:02x}{:02x}{:02x}".format(*rgb)
@@ -235,7 +239,6 @@ def _text_outlines(entity, tolerance, skipped):
     MTextExplode, in a scratch block of the document's own). A font that is not installed is
     said (ezdxf marks it in another); a text with characters its font lacks is left out,
     naming them (it would be marked as boxes)."""
-    from ezdxf.addons import MTextExplode, text2path
     if entity.dxftype() == "MTEXT":
         scratch = entity.doc.blocks.new_anonymous_block()
         with MTextExplode(scratch) as explode:
@@ -264,7 +267,6 @@ def _text_outlines(entity, tolerance, skipped):
 def _font_misses(text, skipped):
     """Why ``text`` cannot be marked in the font ezdxf takes for it (characters it lacks), or
     None; a style's font that is not installed counted in ``skipped`` as a note."""
-    from ezdxf.fonts import fonts
     style = text.doc.styles.get(text.dxf.get("style", "Standard")) if text.doc else None
     asked = style.dxf.get("font", "") if style is not None else ""
     face = fonts.get_entity_font_face(text)
@@ -322,7 +324,6 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0, block_col
 
 
 def _read_dxf(data, tolerance_mm):
-    from ezdxf import recover, units
 
     # recover reads damaged text files in any encoding; binary DXF it does not (it takes the
     # sentinel for a group code), so that is loaded as ezdxf.readfile loads it, then audited.
@@ -334,8 +335,6 @@ def _read_dxf(data, tolerance_mm):
     propagate, logger.propagate = logger.propagate, False
     try:
         if data.startswith(_BINARY_SENTINEL):
-            from ezdxf.document import Drawing
-            from ezdxf.lldxf.tagger import binary_tags_loader
             try:
                 document = Drawing.load(binary_tags_loader(data))
             except Exception as error:      # struct's and ezdxf's words for a cut-off file
@@ -366,7 +365,6 @@ def _read_dxf(data, tolerance_mm):
             factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
         except (TypeError, ValueError):
             raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm") from None
-    from ..geometry.drawing import PathStyle
     out, styles, skipped = [], [], Counter()
     hidden = {layer.dxf.name.lower() for layer in document.layers
               if layer.is_off() or layer.is_frozen()}

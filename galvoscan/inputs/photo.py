@@ -21,8 +21,10 @@ from enum import Enum
 from pathlib import Path
 
 import numpy as np
+from PIL import Image, ImageOps, UnidentifiedImageError
 
 from ..geometry.drawing import Drawing, DrawingError
+from ..geometry.field import PlanError
 
 
 __all__ = ["Dither", "PhotoSpec", "photo_bitmap", "photo_drawing", 
@@ -53,7 +55,6 @@ class PhotoSpec:
     bidirectional: bool = True
 
     def __post_init__(self):
-        from ..geometry.field import PlanError
         if not (math.isfinite(self.width_mm) and 0.1 <= self.width_mm <= 1000):
             raise PlanError(f"image width {self.width_mm} mm: must be from 0.1 to 1000")
         if not (math.isfinite(self.line_spacing_mm) and 0.001 <= self.line_spacing_mm <= 10):
@@ -68,7 +69,6 @@ class PhotoSpec:
 def _grey(spec):
     """The file as a grey Pillow image (0 black … 255 white), transparency as white, turned as
     its EXIF orientation says; one line for a file that is missing, unreadable or huge."""
-    from PIL import Image, ImageOps, UnidentifiedImageError
     path = Path(spec.path)
     try:
         with Image.open(path) as image:
@@ -114,7 +114,6 @@ def photo_bitmap(spec):
 
 def _bitmap(spec):
     """The dithered grid and the picture's width in pixels."""
-    from PIL import Image
     grey = _grey(spec)
     pixels = grey.width
     columns = max(1, round(spec.width_mm / spec.line_spacing_mm))

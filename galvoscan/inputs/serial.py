@@ -10,6 +10,12 @@ number, never a torn one; a part that stops early (a fault, Ctrl-C) does not adv
 import os
 from dataclasses import dataclass
 from pathlib import Path
+import string
+
+try:
+    import tomllib
+except ModuleNotFoundError:                      # Python < 3.11
+    import tomli as tomllib
 
 from ..geometry.field import PlanError
 
@@ -23,7 +29,6 @@ MAX_SERIAL = 10 ** 12 - 1
 
 def uses_serial(*texts):
     """Whether any of ``texts`` holds a ``{serial}`` field."""
-    import string
     for text in texts:
         if text:
             try:
@@ -88,10 +93,6 @@ class SerialCounter:
 def load_counter(profile_source, *, start=None, step=None):
     """The counter beside the profile (``start``/``step``: the command line's, which replace
     the kept ones); one line (:class:`~.plan.PlanError`) for a damaged file."""
-    try:
-        import tomllib
-    except ImportError:                 # Python < 3.11
-        import tomli as tomllib
     path = counter_path(profile_source)
     kept = {}
     if path.exists():

@@ -9,11 +9,13 @@ font's own kerning kept where it is 0). Curves of the outlines are flattened to
 ``tolerance_mm``, as a drawing's are.
 """
 
+import logging
 import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from HersheyFonts import HersheyFonts
 import numpy as np
 
 from ..geometry.drawing import Drawing
@@ -111,11 +113,13 @@ def text_drawing(spec, *, tolerance_mm=0.01):
 def _font(font):
     """matplotlib's FontProperties of a family name or a font file, by its file (the family's
     found here, once); one line if missing."""
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.font_manager import FontProperties
     if font and (os.sep in font or font.lower().endswith((".ttf", ".otf", ".ttc")) or
                  Path(font).is_file()):
         if not Path(font).is_file():
             raise PlanError(f"font file {font}: not found")
+        # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
         from matplotlib.font_manager import get_font
         try:
             get_font(font)
@@ -134,7 +138,7 @@ def _font(font):
 def _installed(family, weight="normal", style="normal"):
     """The file of an installed font of ``family`` (its face of that weight and style, as
     matplotlib finds it), or None: no other family's in its place."""
-    import logging
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.font_manager import FontProperties, findfont
     logger = logging.getLogger("matplotlib.font_manager")
     level, logger.level = logger.level, logging.ERROR   # (its "not found" warning)
@@ -149,6 +153,7 @@ def _installed(family, weight="normal", style="normal"):
 
 def missing_characters(text, font_file):
     """The characters of ``text`` (spaces aside) that the font file has no glyph for."""
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.font_manager import get_font
     face = get_font(font_file)
     return "".join(dict.fromkeys(ch for ch in text if not ch.isspace() and
@@ -157,6 +162,7 @@ def missing_characters(text, font_file):
 
 def _outline_line(line, spec, font, tolerance_mm):
     """One line's glyph outlines, baseline at y = 0, from x = 0."""
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.textpath import TextPath
     missing = missing_characters(line, font.get_file())
     if missing:
@@ -173,6 +179,7 @@ def _outline_line(line, spec, font, tolerance_mm):
         else:
             # Letter by letter: each at the font's advances and kerning so far (as its layout
             # puts them), plus the spacing asked.
+            # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
             from matplotlib.font_manager import get_font
             from matplotlib.ft2font import Kerning
             face = get_font(font.get_file())
@@ -199,6 +206,7 @@ def _outline_line(line, spec, font, tolerance_mm):
 def _flattened(path, scale, tolerance_mm):
     """A matplotlib path's contours as polylines in mm: each quadratic and cubic piece in
     enough equal steps that the chords stay within the tolerance (``h²/8 · max |B''|``)."""
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.path import Path as MPath
     contours, current = [], []
     vertices = np.asarray(path.vertices, dtype=float) * scale
@@ -243,7 +251,6 @@ def _flattened(path, scale, tolerance_mm):
 
 def _hershey_line(line, spec):
     """One line's strokes in a Hershey font, baseline at y = 0, from x = 0."""
-    from HersheyFonts import HersheyFonts
     font = HersheyFonts()
     if spec.hershey not in font.default_font_names:
         raise PlanError(f"Hershey font {spec.hershey!r}: one of "
@@ -289,6 +296,7 @@ def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
     advance it starts at. ``families`` is the CSS list (``"'Arial', sans-serif"``): the
     first installed wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
     is installed."""
+    # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath, TextToPath
     names = [name.strip().strip("'\"") for name in str(families or "sans-serif").split(",")]

@@ -26,6 +26,7 @@ import time
 # that a receiver finds the next frame after a lost or extra byte; the maintained package
 # (C, with a pure-Python fallback) rather than an encoder of our own.
 from cobs import cobs
+import serial
 
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.host.frames import ANSWER_BYTES, COMMAND_BYTES, CRC_INIT, REFUSED
@@ -386,7 +387,6 @@ class SerialTransport(PacketTransport):
     """
 
     def __init__(self, port, *, baud=DEFAULT_BAUD, timeout=0.5):
-        import serial   # pyserial
         self._serial = serial.Serial(port, baudrate=baud, timeout=timeout)
         self.timeout = timeout
         try:

@@ -25,11 +25,12 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ..gateware.host.regmap import (BY_NAME, VECTOR_QUEUE_DEPTH, Capabilities, Mode, Status,
-                                    VectorOp)
+from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
+                                    VECTOR_QUEUE_DEPTH, VectorOp)
 from ..gateware.host.fields import pack
 from ..gateware.sources.vector import VecOpWord
 from ..geometry.corners import corner_frames
+from ..link.client import ClientError, encode_write, LinkLost
 
 
 __all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
@@ -226,7 +227,6 @@ class JobStreamer:
         """What the board's bitstream holds (its ``caps`` register, read once): asked, not
         tried, so that ``errors`` counts only the board's real refusals."""
         if self._capabilities is None:
-            from ..link.client import ClientError
             try:
                 self._capabilities = Capabilities.from_bits(self.board.read("caps"))
             except ClientError as error:
@@ -257,7 +257,6 @@ class JobStreamer:
     def disarm(self):
         """``arm = 0`` then ``run = 0`` and the guide laser off; best effort (the link may be
         what failed)."""
-        from ..link.client import LinkLost
         for name in ("arm", "run", "guide"):
             try:
                 self.board.write(name, 0)
@@ -271,7 +270,6 @@ class JobStreamer:
     def setup(self, registers):
         """Write ``{name: value}`` (checked against the map before the first is sent); returns
         them."""
-        from ..link.client import encode_write
         for name, value in registers.items():
             encode_write(name, value)
         caps = self.capabilities()
@@ -290,7 +288,6 @@ class JobStreamer:
 
     def verify(self, registers):
         """Read back every setting of ``registers``: a difference refuses to arm."""
-        from ..gateware.host.regmap import BY_NAME
         caps = self.capabilities()
         for name, value in registers.items():
             if BY_NAME[name].access != "rw" or (name == "wob_shape" and not caps.wobble):
@@ -377,7 +374,6 @@ class JobStreamer:
 
     def _taken(self):
         """``vec_taken`` now, or None (no vector mode, or no answer)."""
-        from ..link.client import ClientError
         if not self.capabilities().vector:
             return None
         try:
@@ -389,7 +385,6 @@ class JobStreamer:
         """What every job does around its ``body()`` (which returns the segments it sent):
         refuse a board not ready, count, disarm however it ends (saying how far it got),
         report the counters' rise. ``total``: the job's segments."""
-        from ..link.client import ClientError, LinkLost
         started = time.monotonic()
         self.check_ready()
         before = self.counters()
@@ -428,7 +423,6 @@ class JobStreamer:
 
     def _ending(self, error, taken_before, total):
         """``error`` as a :class:`JobAborted` that says how far the job got."""
-        from ..link.client import LinkLost
         watchdog = getattr(self, "_watchdog_ms", None)
         if isinstance(error, LinkLost):
             bound = f"within {watchdog} ms of the last segment it took" if watchdog else \
@@ -455,7 +449,6 @@ class JobStreamer:
     def _without_missing_delays(self, registers):
         """``registers`` less the RTC delays if the board has none (the default bitstream:
         ``galvoscan build --delays`` builds them), with one line saying so."""
-        from ..gateware.host.regmap import DELAY_REGISTERS
         delays = [name for name in registers if name in DELAY_REGISTERS]
         if delays and not self.capabilities().delays:
             print("galvoscan: note: the board has no laser or scanner delays (its bitstream "

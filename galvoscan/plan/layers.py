@@ -14,6 +14,13 @@ import re
 from dataclasses import dataclass, replace
 
 import numpy as np
+from matplotlib.colors import CSS4_COLORS
+
+from ..geometry.drawing import Drawing
+from ..geometry.field import place, Placement, PlanError
+from ..geometry.order import jump_length
+from ..geometry.speed import jump_mark_lengths
+from .vector_job import check_clear, plan_objects, VectorJob
 
 
 __all__ = ["Layer", "split_by_layer", "preview_colour"]
@@ -57,7 +64,6 @@ class Layer:
     delays_us: tuple = ()
 
     def __post_init__(self):
-        from ..geometry.field import PlanError
         if not str(self.match).strip():
             raise PlanError("a layer needs something to match: a colour (#rrggbb) or a "
                             "layer's name")
@@ -71,7 +77,6 @@ class Layer:
     def colour_name(self):
         """The colour a CSS colour name stands for (``red``: ``#ff0000``), else None: a name
         such as ``red`` matches paths of that colour as well as a layer of that name."""
-        from matplotlib.colors import CSS4_COLORS
         found = CSS4_COLORS.get(self.match.lower())
         return found.lower() if found else None
 
@@ -122,7 +127,6 @@ def split_by_layer(placed, layers):
     """``placed`` (a placed :class:`~.drawing.Drawing` with styles) as one drawing per layer
     (None where the layer holds none of its paths) and the rest (None: nothing left), each
     path in the first layer that matches it."""
-    from ..geometry.drawing import Drawing
     styles = placed.styles or (None,) * len(placed.paths)
     owner = []
     for style in styles:
@@ -194,8 +198,6 @@ def plan_layers(objects, layers, settings, profile):
     rest at ``settings``): one :class:`LayerJob` a layer that holds something, in the
     layers' order, the rest last. A layer that matches nothing is refused (a typo, most
     likely), naming what the drawings hold."""
-    from ..geometry.field import Placement, PlanError, place
-    from .vector_job import check_clear, plan_objects
     if layers:
         # Across every object: the layers' own plans check only the objects each holds.
         check_clear(objects)
@@ -263,9 +265,6 @@ def merged(layer_jobs):
     """The layers' jobs as one :class:`~.vector_job.VectorJob` for its totals, preview and
     outline (its ``layers`` the :class:`LayerJob` s; its registers and pitch the first
     layer's); one job without layers as it is."""
-    from ..geometry.order import jump_length
-    from ..geometry.speed import jump_mark_lengths
-    from .vector_job import VectorJob
     if len(layer_jobs) == 1 and layer_jobs[0].layer is None:
         return layer_jobs[0].job
     jobs = [lj.job for lj in layer_jobs]

@@ -2,6 +2,10 @@
 in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display)."""
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from ..geometry.speed import path_length_mm
 
@@ -90,10 +94,6 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
     ValueError
         When matplotlib cannot write the file (an unknown suffix, a folder that does not exist).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
 
     paths = [np.asarray(p, dtype=float).reshape(-1, 2) for p in paths_mm]
     paths = [p for p in paths if len(p)]

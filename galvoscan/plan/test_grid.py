@@ -14,6 +14,7 @@ from ..geometry.field import Placement, PlanError
 from ..inputs.text import TextSpec, text_drawing
 from .objects import JobSettings, MarkObject
 from .vector_job import plan_objects
+from ..geometry.speed import choose_pitch
 
 
 __all__ = ["GridCell", "axis_values", "plan_test_grid"]
@@ -68,7 +69,6 @@ def plan_test_grid(speeds, powers, profile, *, prr_khz, cell_mm=5.0, gap_mm=2.0,
                        (-half, -half)])
     # Each speed as the machine makes it (whole galvo units, whole pulses a point): the label
     # says the speed marked.
-    from ..geometry.speed import choose_pitch
     speeds = [choose_pitch(v, prr_khz * 1e3, profile.units_per_mm,
                            max_pitch_mm=profile.laser.spot_mm / 2, strict="range").speed_mm_s
               for v in speeds]

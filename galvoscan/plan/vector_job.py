@@ -6,6 +6,7 @@ and timed; every register value it needs worked out and checked before anything 
 from dataclasses import dataclass, field
 
 import numpy as np
+from shapely.geometry import box, LineString, MultiPoint, Point
 
 from ..gateware.host.regmap import BY_NAME, DEFAULT_CLOCK_HZ
 from ..gateware.points import FIELD_CENTRE
@@ -151,7 +152,6 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
 
 def plan_job_file(segments, settings, profile):
     """A ``.job`` (galvo units, already placed and ordered) for this machine."""
-    from ..geometry.field import from_galvo
     paths, current = [], None
     here = (FIELD_CENTRE, FIELD_CENTRE)
     for op, x, y in segments:
@@ -229,7 +229,6 @@ def _check_clear(objects, placed):
     for i, (o, drawing) in enumerate(zip(objects, placed)):
         if not o.keep_clear_mm:
             continue
-        from shapely.geometry import LineString, Point, box
         xmin, ymin, xmax, ymax = drawing.bounds()
         m = o.keep_clear_mm
         zone = box(xmin - m, ymin - m, xmax + m, ymax + m)
@@ -277,7 +276,6 @@ def box_outline(bounds_mm):
 def hull_outline(paths_mm):
     """The convex hull of every point of ``paths_mm`` as a closed outline, mm: what a part's
     fixture must clear (a line's hull is the line there and back, a dot's the dot)."""
-    from shapely.geometry import MultiPoint
     hull = MultiPoint(np.concatenate([np.asarray(p, dtype=float) for p in paths_mm])).convex_hull
     if hull.geom_type == "Polygon":
         return np.asarray(hull.exterior.coords)

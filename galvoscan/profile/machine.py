@@ -48,6 +48,7 @@ from ..gateware.points import FIELD_MAX
 from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
                    SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
                    _unknown_key, _unknown_section)
+from ..correction.files import load_table
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
@@ -283,7 +284,6 @@ def _resolve(text, folder):
 
 
 def _load_correction(path, where):
-    from ..correction.files import load_table
     # A name with control characters in it is shown escaped: the message stays one line.
     shown = str(path) if str(path).isprintable() else repr(str(path))
     if not path.exists():

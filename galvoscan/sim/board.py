@@ -15,12 +15,18 @@ import select
 import threading
 import time
 from collections import deque
+import pty
+import tty
 
-from ..link.client import ClockedTransport, PacketTransport
 from ..gateware.clocking import DEFAULT_BAUD
+from ..gateware.player.image_format import JOB_OFFSET
 from ..gateware.top import GalvoScanTop
-from .contract import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from ..link.client import ClockedTransport, PacketTransport
 from .board_engine import PythonEngine
+from .compiled import CompiledEngine, CompileError, compiled_model
+from .compiled.netlist import build_record, netlist_design
+from .contract import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
 
@@ -131,8 +137,6 @@ class SimulatedBoard:
 
     def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
                        **records):
-        from .compiled import CompiledEngine, compiled_model
-        from .compiled.netlist import build_record, netlist_design
         if backend == "python" or extra or records.get("record_pins") == "every clock":
             raise ValueError("a netlist runs on the compiled backend alone, as it was built")
         record = build_record(netlist) or {}
@@ -165,18 +169,15 @@ class SimulatedBoard:
         self.start_pressed = False
         self.flash = None
         if getattr(self.top, "player", False):
-            from .spi_flash import SPIFlashModel
             flash = self._flash_at_power_up
             if isinstance(flash, SPIFlashModel):
                 self.flash = flash
             else:
-                from ..gateware.player.image_format import JOB_OFFSET
                 self.flash = SPIFlashModel({JOB_OFFSET: flash} if flash else None)
 
     def _engine(self, backend, say, **records):
         if backend == "python" or records.get("record_pins") == "every clock":
             return PythonEngine(self, **records)
-        from .compiled import CompileError, CompiledEngine
         try:
             return CompiledEngine(self, say=say, **records)
         except CompileError as error:
@@ -262,8 +263,6 @@ class PTYServer:
     """
 
     def __init__(self, board, *, step=100e-6):
-        import pty
-        import tty
         self.board = board
         self.step = step
         self._master, self._slave = pty.openpty()

@@ -13,7 +13,8 @@ import csv
 from amaranth.sim import Simulator
 
 from ..gateware.top import GalvoScanTop
-from .xy2_receiver import XY2Receiver
+from .xy2_receiver import XY2Frame, XY2Receiver
+from .board import SimulatedBoard
 
 
 __all__ = ["SIM_CLOCKS_PER_BIT", "replay_spiral", "write_csv"]
@@ -102,8 +103,6 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
 
 def _replay_on_board(*, frames, clk_freq, progress, backend, say, **top_kwargs):
     """The first ``frames`` frames off the simulated board's wires (the compiled backend)."""
-    from .board import SimulatedBoard
-    from .xy2_receiver import XY2Frame
     if top_kwargs.get("netlist"):
         board = SimulatedBoard(backend=backend, say=say, **top_kwargs)
     else:

