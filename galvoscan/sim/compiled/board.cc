@@ -298,7 +298,7 @@ struct Board {
                (uint32_t(top.GS_PORT_laser_guide.get<bool>()) << GUIDE);
     }
 
-    // The tests' pins (tests/sim_board.py): mo, am, prr, interlock_open, latch, power[8],
+    // The tests' pins (tests/support/sim_board.py): mo, am, prr, interlock_open, latch, power[8],
     // enable, alarm[GS_ALARM_BITS], guide, xy2_sync, from bit 0 up.
     int64_t all_pins() const {
         int64_t pins = int64_t(top.GS_PORT_laser_mo.get<bool>()) |
@@ -481,7 +481,7 @@ struct Board {
         rx_sampling = false;
     }
 
-    // The steps of a transfer (tests/sim_board.py's SPI host): after the phase, cs_n low;
+    // The steps of a transfer (tests/support/sim_board.py's SPI host): after the phase, cs_n low;
     // for each bit, COPI set, half a period, SCK high and CIPO sampled, half a period, SCK
     // low; half a period; cs_n high; four half periods; done.
     void spi_host() {

@@ -13,7 +13,7 @@ from galvoscan.cli import main
 from galvoscan.geometry.field import PlanError
 from galvoscan.inputs.serial import counter_path, load_counter, uses_serial
 
-from test_board import BOARD, CLIENT      # a command through a served simulated board
+from cli_processes import BOARD, CLIENT      # a command through a served simulated board
 
 
 def test_the_counter_beside_the_profile(tmp_path):

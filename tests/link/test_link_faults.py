@@ -405,7 +405,7 @@ def test_a_fault_on_spi(fault):
 @pytest.mark.slow
 def test_a_fault_on_the_reference_simulator():
     """The same checks on Amaranth's simulator, the reference the compiled board is held to
-    record for record (tests/test_compiled.py), for the first trial's worst case: vec_op's
+    record for record (tests/sim/test_compiled.py), for the first trial's worst case: vec_op's
     address turned into mode's over SPI (the spiral ran over the field with the laser on). The
     clean run it is compared with is the compiled board's. (Each case takes minutes on this
     backend, a cut link's 200 ms of watchdog hours: the rest run on the compiled board.)"""

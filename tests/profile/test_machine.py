@@ -15,6 +15,8 @@ from galvoscan.profile.machine import (DEFAULT_PROFILE_NAME, ProfileError, defau
                                        load_profile, parse_profile)
 from galvoscan.profile.template import profile_text
 
+from profile_files import DEFAULTS, toml
+
 
 # What the profile must accept, written out here rather than imported, so that a change of a
 # range in the module is a test failure to look at. (section, key): (low, high, whole number).
@@ -53,27 +55,6 @@ COMPANIONS = {
     ("defaults", "speed_mm_s"): {("galvo", "max_speed_mm_s"): "100000"},
     ("galvo", "max_speed_mm_s"): {("defaults", "speed_mm_s"): "0.5"},
 }
-DEFAULTS = {
-    "field": {"size_mm": 110.0, "correction": None},
-    "link": {"port": None, "baud": 1_000_000, "spi": None, "timeout_s": 0.5},
-    "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
-    "galvo": {"jump_delay_us": 500.0, "settle_us_per_mm": 0.0, "max_speed_mm_s": 10_000.0,
-              "laser_on_delay_us": 100.0, "laser_off_delay_us": 50.0, "mark_delay_us": 100.0,
-              "polygon_delay_us": 0.0, "polygon_scaled": True},
-    "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
-    "wobble": {"across_um": 0.0, "along_um": 0.0, "freq_hz": 1000.0},
-}
-
-
-def toml(entries):
-    """A profile's text from ``{(section, key): "TOML value"}``."""
-    sections = {}
-    for (section, key), value in entries.items():
-        sections.setdefault(section, []).append(f"{key} = {value}")
-    return "".join(f"[{section}]\n" + "".join(f"{line}\n" for line in lines)
-                   for section, lines in sections.items())
-
-
 def with_value(section, key, value):
     entries = dict(COMPANIONS.get((section, key), {}))
     entries[(section, key)] = value

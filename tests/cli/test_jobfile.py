@@ -170,7 +170,7 @@ def test_the_readmes_plate_plans(tmp_path, monkeypatch, capsys):
     """docs/marking/plate.toml, the README's picture: it plans, in its three layers, the
     serial counter left alone by a plan."""
     from pathlib import Path
-    plate = Path(__file__).resolve().parents[1] / "docs" / "marking" / "plate.toml"
+    plate = Path(__file__).resolve().parents[2] / "docs" / "marking" / "plate.toml"
     monkeypatch.chdir(tmp_path)
     assert main(["mark", str(plate), "--estimate", "--json"]) == 0
     record = json.loads(capsys.readouterr().out)

@@ -1,5 +1,5 @@
 """The DXF reader (galvoscan/inputs/dxf.py): entities with known geometry, checked against their
-equations and the curves written out in tests/drawings.py, not against ezdxf's own evaluation."""
+equations and the curves written out in tests/support/drawings.py, not against ezdxf's own evaluation."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""The tests' simulated board itself (tests/sim_board.py): what it records is what the pins did."""
+"""The tests' simulated board itself (tests/support/sim_board.py): what it records is what the pins did."""
 
 import random
 

@@ -13,7 +13,7 @@ from galvoscan.profile.machine import (DEFAULT_PROFILE_NAME, ProfileError, load_
                                        parse_profile)
 from galvoscan.profile.template import profile_text
 
-from test_profile import DEFAULTS, toml
+from profile_files import DEFAULTS, toml
 
 
 _KNOWN = {s: list(keys) for s, keys in DEFAULTS.items()}

@@ -350,7 +350,7 @@ def test_a_model_that_crashes_ends_the_command_with_one_line(tmp_path):
     child = tmp_path / "child.py"
     child.write_text(
         "import sys\n"
-        "sys.path.insert(0, 'tests')\n"
+        "sys.path.insert(0, 'tests/support')\n"
         "from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD\n"
         "from galvoscan.sim.board import PTYServer, SimulatedBoard\n"
         "board = SimulatedBoard(backend='compiled', **QUICK_SIM_BOARD, **VECTOR_BOARD)\n"
@@ -358,7 +358,7 @@ def test_a_model_that_crashes_ends_the_command_with_one_line(tmp_path):
         "print(server.port, flush=True)\n"
         "board.engine.crash()\n")
     run = subprocess.run([sys.executable, str(child)], capture_output=True, text=True,
-                         timeout=300, cwd=str(__import__("pathlib").Path(__file__).parent.parent))
+                         timeout=300, cwd=str(__import__("pathlib").Path(__file__).parents[2]))
     assert run.returncode == 128 + signal.SIGSEGV
     assert run.stderr.strip().splitlines() == [
         "galvoscan: error: the compiled simulated board crashed (run it with --backend "

@@ -50,6 +50,8 @@ HATCH_MM = 0.125
 # board's time, a minute of a busy machine's (the command line's 60 s is for a machine to
 # itself).
 SIM_TIMEOUT = ["--timeout", "600"]
+#: The tests' shared helpers (sim_board), for a child process's sys.path.
+SUPPORT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "support")
 # A port that cannot be opened: an error about the drawing or the profile, not about the port,
 # shows the job was refused before the link was touched.
 NOPORT = ["--port", "/nonexistent/ttyUSB9"]
@@ -341,7 +343,7 @@ def test_ctrl_c_through_the_command_line_exits_130(tmp_path):
     import time
     path = tmp_path / "shape.svg"
     path.write_text(SVG)
-    process = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, os.path.dirname(__file__),
+    process = subprocess.Popen([sys.executable, "-c", CTRL_C_CHILD, SUPPORT,
                                 "mark", str(path), "--sim", *SIM_TIMEOUT, "--speed", "1000",
                                 "--prr", "50",
                                 "--passes", "20"],

@@ -33,7 +33,7 @@ def contains_run(frames, run):
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_every_register_resets_and_reads_back(kind):
     # Three frames for each of some sixty registers: on the compiled board (the same records
-    # as Amaranth's: tests/test_compiled.py), as test_compiled's quick board is built.
+    # as Amaranth's: tests/sim/test_compiled.py), as test_compiled's quick board is built.
     board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
     client = HostClient(make_link(kind, board))
     for reg in writable(board):

@@ -19,7 +19,7 @@ from galvoscan.outputs.stream import JobAborted, JobStreamer
 from galvoscan.plan.wobble import WobbleSettings, wobble_registers
 
 from sim_board import quick_sim_board
-from test_stream import FakeBoard, job
+from fake_board import FakeBoard, job
 
 
 # A 2 mm line along X, SVG units = mm (Y down in the file).

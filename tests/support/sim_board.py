@@ -37,7 +37,7 @@ def _arguments_key(value):
 class SimBoard:
     """The tests' board: galvoscan's :class:`~galvoscan.sim.board.SimulatedBoard` on the
     ``backend`` asked for (Amaranth's by default; the long simulations, the fuzz and the
-    random jobs, ask for the compiled one, which tests/test_compiled.py holds to the same
+    random jobs, ask for the compiled one, which tests/sim/test_compiled.py holds to the same
     records), with the tests' own view of it: the XY2-100 wires'
     samples decoded by the tests' reader (:func:`wires.frames_from_samples`), the pins made
     into one entry a clock, and the host's UART and SPI transports below."""
