@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from .galvo import FRAME_PERIOD, FULL_RANGE, GalvoModel
 from .figures import _pyplot
+from .galvo import FRAME_PERIOD, FULL_RANGE, GalvoModel
 
 
 __all__ = ["DelaySettings", "corner_job_dose", "delay_study", "NONE"]

@@ -9,12 +9,12 @@ from tqdm import tqdm
 
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
+from . import figures
 from .dose import Laser
 from .galvo import GalvoModel
 from .patterns import INTERPOLATIONS, ScanHead
 from .study import (PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
                     sigma_sweep, spiral_vs_raster)
-from . import figures
 from .wobble import WOBBLE_AMPLITUDES_UM, WOBBLE_FREQUENCIES_HZ, wobble_study
 
 

@@ -9,6 +9,14 @@ import argparse
 import math
 import os
 from pathlib import Path
+import sys
+
+from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
+from ..gateware.host.regmap import BY_NAME, register_map
+from ..gateware.sources.spiral_table import (DEFAULT_POINTS, DEFAULT_SIGMA, MAX_POINTS, MIN_POINTS,
+                                             SAMPLINGS, SpiralTable)
+from ..geometry.field import PlanError
+from ..geometry.fill import Contour, HatchSet
 
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
@@ -71,7 +79,6 @@ def number_in(what, low, high):
 def prr_khz():
     """``--prr`` of the board's laser, kHz: the ``laser_prr`` register's range (100 Hz
     steps)."""
-    from ..gateware.host.regmap import BY_NAME
     reg = BY_NAME["laser_prr"]
     return number_in("PRR (kHz)", reg.low / 10, reg.high / 10)
 
@@ -92,7 +99,6 @@ def passes(text):
 
 def register_int(name, what=None):
     """An integer in the writable range of register ``name``, as the register map declares it."""
-    from ..gateware.host.regmap import BY_NAME
     reg = BY_NAME[name]
     return int_in(reg.low, reg.high, what or name.replace("_", " "))
 
@@ -129,7 +135,6 @@ def _writable_folder(folder, what):
 
 def table_points(text):
     """Samples per period of the spiral table: a multiple of 4 in the table's bounds."""
-    from ..gateware.sources.spiral_table import MAX_POINTS, MIN_POINTS
     value = int_in(MIN_POINTS, MAX_POINTS, "table points")(text)
     if value % 4:
         raise argparse.ArgumentTypeError(f"table points must be a multiple of 4, not {value}")
@@ -156,8 +161,10 @@ def output_file(text):
 
 def image_file(text):
     """A picture to write, in a format the plots can be saved as (by its suffix)."""
+    # Here: matplotlib takes 0.4 s to import; `galvoscan --help` need not wait.
     import matplotlib
     matplotlib.use("Agg")
+    # Here: matplotlib.figure takes 0.9 s to import; `galvoscan --help` need not wait.
     from matplotlib.figure import Figure
     formats = Figure().canvas.get_supported_filetypes()
     suffix = Path(text).suffix.lower().lstrip(".")
@@ -202,8 +209,6 @@ def read_bytes(path, what="file"):
 # --- spiral tables -------------------------------------------------------------------------------
 
 def add_table_options(parser):
-    from ..gateware.sources.spiral_table import (DEFAULT_POINTS, DEFAULT_SIGMA, MAX_POINTS,
-                                                 MIN_POINTS, SAMPLINGS)
     group = parser.add_argument_group("spiral tables")
     group.add_argument("--sampling", choices=SAMPLINGS, default="gaussian",
                        help="how one sine period is sampled (default: %(default)s)")
@@ -216,7 +221,6 @@ def add_table_options(parser):
 
 
 def table_from(args):
-    from ..gateware.sources.spiral_table import SpiralTable
     try:
         return SpiralTable(points=args.table_points, sampling=args.sampling, sigma=args.sigma)
     except ValueError as error:
@@ -231,7 +235,7 @@ def settings_from(args, table, **overrides):
     """The scan settings a build or simulation starts with, for ``table``'s size: the resets
     its register map gives (the paper's ranges, X over the whole table, Y one short at each
     end), the dwell if given."""
-    from ..gateware.host.regmap import register_map
+    # Here: gateware.top takes 0.3 s to import; `galvoscan --help` need not wait.
     from ..gateware.top import ScanSettings
     regmap = register_map(table_points=table.points)
     settings = dict(x_range=(regmap["x_first"].reset, regmap["x_last"].reset),
@@ -260,7 +264,6 @@ def baud(text):
 def add_baud_option(parser, *, clock_option="--clock"):
     """``--baud`` of a build: the rate the bitstream's serial port runs at (``clock_option``:
     the command's option for the system clock)."""
-    from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
     parser.add_argument("--baud", type=baud, default=DEFAULT_BAUD, metavar="BAUD",
                         help=f"host serial port rate (default: {_number(DEFAULT_BAUD)}; the "
                              f"FT2232H makes {', '.join(map(_number, FTDI_BAUDS))} exactly; "
@@ -268,7 +271,6 @@ def add_baud_option(parser, *, clock_option="--clock"):
 
 
 def add_link_options(parser):
-    from ..gateware.clocking import DEFAULT_BAUD
     link = parser.add_argument_group("link (one of)")
     where = link.add_mutually_exclusive_group(required=True)
     where.add_argument("--port", help="serial port of the board (e.g. /dev/ttyUSB1, COM4)")
@@ -285,8 +287,8 @@ def add_link_options(parser):
 
 def open_transport(*, port=None, spi=None, baud=None, timeout=0.5, sck=1e6):
     """A serial (``port``) or FTDI SPI (``spi``) transport, opened; one line if it cannot be."""
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, FTDISPITransport, SerialTransport
-    from ..gateware.clocking import DEFAULT_BAUD
     try:
         if spi:
             return FTDISPITransport(spi, frequency=sck)
@@ -308,6 +310,7 @@ def open_link(args):
 def add_backend_option(parser, *, default="auto", what="the simulator"):
     """``--backend``: which simulator runs the simulated board. ``default=None``: auto, and a
     command can tell whether it was given (see :func:`check_backend_needs_sim`)."""
+    # Here: sim.board takes 2.7 s to import; `galvoscan --help` need not wait.
     from ..sim.board import BACKENDS
     parser.add_argument("--backend", choices=BACKENDS, default=default,
                         help=f"{what}: compiled (the design as native code, built once "
@@ -326,7 +329,7 @@ def check_backend_needs_sim(args):
 def simulated_board(args, **kwargs):
     """The :class:`~galvoscan.sim.board.SimulatedBoard` ``--backend`` asks for (a compile's
     progress and a fallback's reason on stderr); one line if the compiled one cannot be had."""
-    import sys
+    # Here: sim.compiled takes 2.8 s to import; `galvoscan --help` need not wait.
     from ..sim.compiled import CompileError
     from ..sim.board import SimulatedBoard
 
@@ -345,8 +348,6 @@ def simulated_board(args, **kwargs):
 def hatch_set(text):
     """``SPACING[,ANGLE[,STEP[,OFFSET]]]``: mm, degrees, degrees a pass, mm: a
     :class:`~galvoscan.geometry.fill.HatchSet`."""
-    from ..geometry.fill import HatchSet
-    from ..geometry.field import PlanError
     parts = text.replace(" ", "").split(",")
     try:
         if not 1 <= len(parts) <= 4:
@@ -363,8 +364,6 @@ def hatch_set(text):
 
 def contour_fill(text):
     """``SPACING[,COUNT]``: mm, rings: a :class:`~galvoscan.geometry.fill.Contour`."""
-    from ..geometry.fill import Contour
-    from ..geometry.field import PlanError
     parts = text.replace(" ", "").split(",")
     try:
         if not 1 <= len(parts) <= 2:

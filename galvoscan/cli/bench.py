@@ -11,6 +11,7 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_bench(args):
+    # Here: bench takes 2.0 s to import; `galvoscan --help` need not wait.
     from ..bench import README_END, README_START, run_bench, table, write_readme
     full = not args.quick
 

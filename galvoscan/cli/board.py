@@ -3,6 +3,7 @@
 import sys
 import time
 
+from ..gateware.clocking import DEFAULT_BAUD
 from .args import add_backend_option, baud, fail, simulated_board
 
 
@@ -10,6 +11,7 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
+    # Here: sim.board takes 2.7 s to import; `galvoscan --help` need not wait.
     from ..sim.board import PTYServer
     if args.netlist:
         if args.backend == "python":
@@ -54,7 +56,6 @@ def _fraction(speed):
 
 
 def add_parsers(commands):
-    from ..gateware.clocking import DEFAULT_BAUD
     board = commands.add_parser(
         "board", help="serve a simulated board on a pseudo-terminal",
         description="Serve the simulated system top (the default iCEBreaker build: every "

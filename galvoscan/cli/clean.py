@@ -5,6 +5,8 @@ import json
 import math
 import sys
 
+from ..geometry.field import PlanError
+from ..plan.area import plan_area_job
 from .args import fail, field_mm, int_in, number_in
 from .args import check_backend_needs_sim
 from .jobargs import (add_job_link_options, add_job_options, board_link, frame_job, has_link,
@@ -34,8 +36,7 @@ def _passes(passes):
 
 
 def _cmd_clean(args):
-    from ..plan.area import plan_area_job
-    from ..geometry.field import PlanError
+    # Here: outputs.stream takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..outputs.stream import JobStreamer
     check_backend_needs_sim(args)
     profile = profile_from(args)
@@ -76,6 +77,7 @@ def _cmd_clean(args):
         with stopped_in_one_line():
             load_lens_table(client, profile, say)
             if args.frame:
+                # Here: plan.vector_job takes 0.1 s to import; `galvoscan --help` need not wait.
                 from ..plan.vector_job import box_outline
                 frame_job(streamer, profile, box_outline(job.bounds_mm), args.frame,
                           _frame_registers(profile, registers["laser_prr"]),

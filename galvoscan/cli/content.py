@@ -2,9 +2,18 @@
 (``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.plan.objects.MarkObject` of
 the job."""
 
-from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
-from ..inputs.photo import Dither
-from ..inputs.text import ALIGNMENTS
+from dataclasses import replace
+from datetime import datetime
+import argparse
+
+from ..geometry.drawing import DrawingError
+from ..geometry.field import Placement, PlanError
+from ..geometry.fill import HatchSet
+from ..inputs.codes import CodeFill, CodeKind, CodeSpec, QR_LEVELS
+from ..inputs.photo import Dither, PhotoSpec
+from ..inputs.serial import load_counter, uses_serial
+from ..inputs.text import ALIGNMENTS, text_drawing, TextSpec
+from ..plan.objects import code_object, MarkObject, photo_object
 from .args import int_in, number_in
 from .jobargs import pair_mm
 
@@ -117,8 +126,6 @@ def fields(text, *, serial=None, what="--text"):
     """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
     (now); one line (:class:`~galvoscan.geometry.field.PlanError`) for a field it does not know
     or one written wrong."""
-    from datetime import datetime
-    from ..geometry.field import PlanError
     now = datetime.now()
     values = {"serial": serial if serial is not None else 0,
               "date": _Moment(now, "%Y-%m-%d"), "time": _Moment(now, "%H:%M")}
@@ -137,7 +144,6 @@ def fields(text, *, serial=None, what="--text"):
 def check_content_options(args):
     """Refuse an option of one kind of content given without it (``--font`` without
     ``--text``); one line (:class:`~galvoscan.geometry.field.PlanError`)."""
-    from ..geometry.field import PlanError
     for kind, options in _OPTIONS.items():
         given = [name for name in options if getattr(args, name, None) is not None]
         if getattr(args, kind, None) is None and given:
@@ -150,10 +156,6 @@ def content_objects(args, settings, profile, *, serial=None):
     """The :class:`~galvoscan.plan.objects.MarkObject` s of ``args.entries``' text, codes
     and photos (each entry the options of one object, over ``args``' own), ``serial`` the
     part's number (raises :class:`~galvoscan.geometry.field.PlanError`, one line)."""
-    import argparse
-    from dataclasses import replace
-    from ..geometry.drawing import DrawingError
-    from ..geometry.field import PlanError
     objects = []
     for kind, make in (("text", _text_object), ("image", _image_object),
                        ("code", _code_object)):
@@ -171,9 +173,6 @@ def content_objects(args, settings, profile, *, serial=None):
 
 def _code_object(args, settings, profile, serial):
     """``--code`` as a :class:`~galvoscan.plan.objects.MarkObject`."""
-    from ..inputs.codes import CodeSpec
-    from ..plan.objects import code_object
-    from ..geometry.field import PlanError
     if args.data is None or args.size is None:
         raise PlanError("--code needs --data TEXT and --size MM")
     if args.code_height is not None and CodeKind(args.code) is not CodeKind.CODE128:
@@ -188,9 +187,6 @@ def _code_object(args, settings, profile, serial):
 
 def _image_object(args, settings, profile, serial=None):
     """``--image`` as a :class:`~galvoscan.plan.objects.MarkObject`."""
-    from ..inputs.photo import PhotoSpec
-    from ..plan.objects import photo_object
-    from ..geometry.field import PlanError
     if args.width is None:
         raise PlanError("--image needs --width MM")
     spec = PhotoSpec(args.image, args.width, args.line_spacing or profile.laser.spot_mm,
@@ -203,11 +199,6 @@ def _text_object(args, settings, profile, serial):
     """``--text`` as a :class:`~galvoscan.plan.objects.MarkObject`: an outline font's
     glyphs filled by the job's hatch sets (or, none given, lines at most half the spot apart)
     and outlined; a Hershey font's strokes marked once."""
-    from dataclasses import replace
-    from ..geometry.fill import HatchSet
-    from ..geometry.field import Placement
-    from ..inputs.text import TextSpec, text_drawing
-    from ..plan.objects import MarkObject
     text = fields(args.text, serial=serial)
     spec = TextSpec(text, args.height or 5.0, font=args.font, align=args.align,
                     letter_spacing_mm=args.letter_spacing, line_spacing=args.line_height)
@@ -225,7 +216,6 @@ def part_serials(args, profile):
     """``(counter, serials)``: the serial counter and each part's number, when ``--text`` or
     ``--data`` holds ``{serial}`` (else ``(None, [None] × parts)``); one line for a damaged
     counter."""
-    from ..inputs.serial import load_counter, uses_serial
     parts = getattr(args, "repeat", 1) or 1
     entries = getattr(args, "entries", None)
     texts = [getattr(args, "text", None), getattr(args, "data", None)] if entries is None else \
@@ -233,7 +223,6 @@ def part_serials(args, profile):
     if not uses_serial(*texts):
         if getattr(args, "serial_start", None) is not None or \
                 getattr(args, "serial_step", None) is not None:
-            from ..geometry.field import PlanError
             raise PlanError("--serial-start and --serial-step are for a {serial} field in "
                             "--text or --data")
         return None, [None] * parts

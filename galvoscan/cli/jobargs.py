@@ -5,6 +5,9 @@ import argparse
 import contextlib
 import sys
 
+from tqdm import tqdm
+
+from ..correction.upload import upload_table
 from .args import (add_backend_option, baud, fail, number_in, open_transport, power_percent,
                    prr_khz, simulated_board, speed_mm_s)
 
@@ -74,9 +77,11 @@ def has_link(args, profile):
 def board_link(args, profile, *, wobble=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage)."""
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import HostClient, SerialTransport
     baud_rate = args.baud or profile.link.baud
     if args.sim:
+        # Here: sim.board takes 2.7 s to import; `galvoscan --help` need not wait.
         from ..sim.board import PTYServer
         board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
         timeout = args.timeout or board.answer_timeout_s()
@@ -99,7 +104,6 @@ def board_link(args, profile, *, wobble=False):
 def load_lens_table(client, profile, say):
     """Write the profile's correction table into the board (at the board's node count), so
     that the job is corrected with the table it was checked against. Nothing without one."""
-    from ..correction.upload import upload_table
     table = profile.correction_table()
     if table is None:
         return
@@ -116,6 +120,7 @@ def stopped_in_one_line(*, on_complete=None):
     streamer has already sent arm = 0). ``on_complete()``: called first when the job was
     marked to its end before it stopped (a part that is done: its serial number is taken);
     it returns words to add to the line."""
+    # Here: outputs.stream takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError
     from ..outputs.stream import JobAborted, JobInterrupted
     try:
@@ -133,6 +138,7 @@ def stopped_in_one_line(*, on_complete=None):
 def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):
     """Trace ``outline_mm`` (a closed outline) ``times`` times in vector mode with the guide
     laser on and the laser never armed (``registers``: the vector settings to walk it with)."""
+    # Here: plan.vector_job takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..plan.vector_job import frame_segments
     if not profile.laser.guide:
         fail("the machine profile says there is no guide laser ([laser] guide)")
@@ -145,6 +151,5 @@ def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say
 
 def progress_bar(total, unit, *, disable=None):
     """A tqdm bar on stderr (off when stderr is not a terminal, unless asked)."""
-    from tqdm import tqdm
     return tqdm(total=total, unit=unit, file=sys.stderr, leave=False,
                 disable=(not sys.stderr.isatty()) if disable is None else disable)

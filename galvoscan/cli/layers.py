@@ -5,10 +5,15 @@ line's, or the layer's own) into its registers; and the layered job's plan said 
 line."""
 
 import argparse
+from dataclasses import replace
+import difflib
 
+from ..gateware.host.fields import WobbleShape
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.limits import WOBBLE_MAX_HZ
+from ..geometry.field import PlanError
 from ..geometry.fill import LineOrder
+from ..plan.wobble import wobble_registers, WobbleSettings
 from ..profile.keys import DELAY_KEYS
 from .args import (contour_fill, fail, hatch_set, number_in, passes, power_percent, prr_khz,
                    register_int, speed_mm_s)
@@ -69,9 +74,8 @@ LAYER_KEYS = {
 def _layer(match, pairs, where):
     """A :class:`~galvoscan.plan.layers.Layer` from ``(key, value)`` pairs (values as text or
     TOML gives them); ValueError, one line naming ``where`` and the key."""
-    import difflib
+    # Here: plan.layers takes 0.6 s to import; `galvoscan --help` need not wait.
     from ..plan.layers import Layer
-    from ..geometry.field import PlanError
     fields, hatch, delays = {}, [], []
     for key, value in pairs:
         if key not in LAYER_KEYS:
@@ -173,7 +177,6 @@ def add_layer_option(group):
 def layer_wobble(layer, base):
     """The :class:`~galvoscan.plan.wobble.WobbleSettings` of a layer (None: the rest), its
     amplitudes and frequency in place of ``base``'s where it gives them."""
-    from dataclasses import replace
     if layer is None:
         return base
     across = layer.wobble_um if layer.wobble_um is not None else base.across_um
@@ -194,7 +197,6 @@ def _wobble_words(registers, profile):
 def _wobble(args, profile):
     """The job's :class:`~galvoscan.plan.wobble.WobbleSettings`: the command line's, else the
     profile's [wobble]."""
-    from ..plan.wobble import WobbleSettings
     section = profile.wobble
     across = args.wobble if args.wobble is not None else section.across_um
     along = args.wobble_along if args.wobble_along is not None else \
@@ -207,9 +209,6 @@ def add_wobble(job, args, profile):
     """Each layer's ``wob_*`` registers (the command line's wobble, a layer's own in its
     place) into its registers, its reach checked against the field; a layer that does not
     wobble among ones that do turns it off. Returns whether anything wobbles."""
-    from ..gateware.host.fields import WobbleShape
-    from ..geometry.field import PlanError
-    from ..plan.wobble import wobble_registers
     base = _wobble(args, profile)
     parts = [(lj.layer, lj.job) for lj in job.layers] if job.layers else [(None, job)]
     try:

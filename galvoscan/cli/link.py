@@ -3,6 +3,11 @@ written and read over the serial port or SPI."""
 
 import json
 
+from cobs import cobs
+
+from ..gateware.field.correction_table import TABLE_SIZES
+from ..gateware.host.fields import Capabilities, Status
+from ..gateware.host.regmap import BY_NAME, register_map, REGISTERS
 from .args import add_link_options, fail, open_link, table_points
 
 
@@ -12,7 +17,6 @@ __all__ = ["add_parsers", "register_table"]
 def register_table(registers=None):
     """The register map as a Markdown table (``galvoscan regs``; the README carries the host's
     view, the default)."""
-    from ..gateware.host.regmap import REGISTERS
     lines = ["| address | name | access | reset | range | unit | description |",
              "|---|---|---|---|---|---|---|"]
     for r in REGISTERS if registers is None else registers:
@@ -24,7 +28,6 @@ def register_table(registers=None):
 
 
 def _cmd_regs(args):
-    from ..gateware.host.regmap import REGISTERS, register_map
     registers = REGISTERS
     if args.table_points is not None or args.correction_nodes is not None:
         # One build's map: its own ranges and resets (the board refuses anything else).
@@ -45,6 +48,7 @@ def _cmd_regs(args):
 
 def _assignments(items):
     """``[(name, value)]`` of NAME=VALUE items, every one checked against the map first."""
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, encode_write, parse_assignment
     try:
         assignments = [parse_assignment(item) for item in items]
@@ -59,7 +63,7 @@ def _assignments(items):
 
 
 def _cmd_encode(args):
-    from cobs import cobs
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, encode_read, encode_write
     try:
         if args.read:
@@ -76,6 +80,7 @@ def _cmd_encode(args):
 
 
 def _cmd_send(args):
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, HostClient
     # Every assignment is checked before the link is even opened: a typo in the last one must
     # not leave the first ones (arm=1, say) written.
@@ -95,8 +100,8 @@ def _cmd_send(args):
 
 
 def _cmd_read(args):
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, HostClient
-    from ..gateware.host.regmap import BY_NAME
     unknown = [name for name in args.names if name not in BY_NAME]
     if unknown:
         fail(f"no register named {', '.join(unknown)} (galvoscan regs lists them)")
@@ -115,8 +120,8 @@ def _cmd_read(args):
 
 
 def _cmd_reset(args):
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..link.client import ClientError, HostClient
-    from ..gateware.host.fields import Capabilities, Status
     with open_link(args) as link:
         board = HostClient(link)
         try:
@@ -141,7 +146,6 @@ def _cmd_reset(args):
 
 
 def add_parsers(commands):
-    from ..gateware.field.correction_table import TABLE_SIZES
     regs = commands.add_parser(
         "regs", help="print the register map",
         description="The register map: addresses, access, reset values, ranges and units. "

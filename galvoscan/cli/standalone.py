@@ -11,9 +11,17 @@ import json
 import sys
 from pathlib import Path
 
-from .args import add_backend_option, fail, int_in, output_file, read_bytes
-from .machine import add_machine_option, profile_from
+import numpy as np
+
+from ..flashing import flash_regions, FlashingError, ModelPort, open_icebreaker, program
+from ..gateware.host.fields import PlayerResult, PlayerState, PlayerStatus
+from ..gateware.settings import ScanSettings
+from ..geometry.field import from_galvo, PlanError
+from .args import add_backend_option, fail, int_in, output_file, read_bytes, simulated_board
+from .content import part_serials
 from .job_reports import FIELD_FRAME
+from .jobargs import progress_bar
+from .machine import add_machine_option, profile_from
 from .mark import add_drawing_options, add_plan_outputs, planned_job
 
 
@@ -22,11 +30,13 @@ __all__ = ["add_parsers"]
 
 def _player_map():
     """The register map of the bitstream that plays images: the marker preset's."""
+    # Here: build takes 0.7 s to import; `galvoscan --help` need not wait.
     from ..build import preset_register_map
     return preset_register_map("marker")
 
 
 def _cmd_store(args):
+    # Here: cli.jobfile imports this module (the job-file part of #35 ends that).
     from ..outputs.image import ImageError, job_image, read_image
     from ..outputs.stream import job_segments
     from .jobfile import use_job_file
@@ -36,8 +46,6 @@ def _cmd_store(args):
     if args.wobble:
         fail("the stand-alone bitstream (build --preset marker) has no wobble stage: it does "
              "not fit beside the job player; store the job without --wobble")
-    from ..geometry.field import PlanError
-    from .content import part_serials
     if args.repeat != 1:
         fail("an image holds one part: --repeats N plays it N times a start (the same serial "
              "each time)")
@@ -87,9 +95,8 @@ def _check_plays_jobs(bitstream):
 
 
 def _cmd_flash(args):
-    from ..flashing import FlashingError, ModelPort, flash_regions, open_icebreaker, program
+    # Here: outputs.image takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..outputs.image import ImageError, read_image
-    from .jobargs import progress_bar
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
     try:
@@ -132,15 +139,15 @@ def _cmd_flash(args):
 
 
 def _cmd_standalone(args):
+    # Here: sim.board takes 2.7 s to import; `galvoscan --help` need not wait.
     from ..build import preset_top_options
     from ..link.client import HostClient
-    from ..gateware.host.fields import PlayerResult, PlayerState, PlayerStatus
     from ..outputs.image import ImageError, read_image
     from ..sim.board import SimTransport
-    from .args import simulated_board
     if not args.sim:
         fail("a real stand-alone board runs on its own: press its start input (this command "
              "simulates one: give --sim)")
+    # Here: sim.spi_flash takes 1.4 s to import; `galvoscan --help` need not wait.
     from ..sim.spi_flash import FLASH_BYTES
     from ..outputs.image import JOB_OFFSET, image_in_flash
     image = read_bytes(args.flash, "job image")
@@ -158,7 +165,6 @@ def _cmd_standalone(args):
         print(f"galvoscan: note: {args.flash}: {error}; the board's player will refuse it",
               file=sys.stderr)
     profile = profile_from(args)
-    from ..gateware.settings import ScanSettings
     options, clock = preset_top_options("marker")
     options["settings"] = ScanSettings(mode="vector", run=False)
     board = simulated_board(args, clk_freq=clock, flash=image, **options)
@@ -197,8 +203,6 @@ def _cmd_standalone(args):
 
 def _report(board, profile, planned, presses, refused):
     """What ``mark --sim --json`` reports, off the wires, and the player's verdicts."""
-    import numpy as np
-    from ..geometry.field import from_galvo
     points = board.points()
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)

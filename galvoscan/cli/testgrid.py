@@ -2,7 +2,9 @@
 
 import json
 import sys
+import argparse
 
+from ..geometry.field import PlanError
 from .args import fail, image_file, int_in, number_in, prr_khz
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
                       progress_bar, stopped_in_one_line)
@@ -14,7 +16,6 @@ __all__ = ["add_parsers"]
 
 def _axis(what, low_limit, high_limit, unit):
     """``A:B:N``: N values from A to B, each within the limits."""
-    import argparse
 
     def parse(text):
         parts = text.split(":")
@@ -27,7 +28,7 @@ def _axis(what, low_limit, high_limit, unit):
         except (ValueError, IndexError):
             raise argparse.ArgumentTypeError(f"{what} must be A:B:N (from A to B in N steps) "
                                              f"or one value, not {text!r}")
-        from ..geometry.field import PlanError
+        # Here: plan.test_grid takes 0.1 s to import; `galvoscan --help` need not wait.
         from ..plan.test_grid import axis_values
         try:
             values = axis_values(low, high, count, what)
@@ -41,7 +42,7 @@ def _axis(what, low_limit, high_limit, unit):
 
 
 def _cmd_test_grid(args):
-    from ..geometry.field import PlanError
+    # Here: outputs.stream takes 0.1 s to import; `galvoscan --help` need not wait.
     from ..outputs.stream import JobStreamer
     from ..plan.test_grid import plan_test_grid
     profile = profile_from(args)
@@ -64,6 +65,7 @@ def _cmd_test_grid(args):
             f"{c.centre_mm[1]:g}) mm: {c.job.estimate_s:.2f} s, pitch "
             f"{c.job.pitch.pitch_mm * 1000:.1f} µm × {c.job.pitch.pulses_per_point}")
     if args.preview:
+        # Here: plan.preview takes 2.1 s to import; `galvoscan --help` need not wait.
         from ..plan.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,

@@ -25,9 +25,9 @@ import sys
 import time
 from dataclasses import dataclass, field
 
+from ..gateware.host.fields import pack
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH, VectorOp)
-from ..gateware.host.fields import pack
 from ..gateware.sources.vector import VecOpWord
 from ..geometry.corners import corner_frames
 from ..link.client import ClientError, encode_write, LinkLost

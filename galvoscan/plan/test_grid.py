@@ -9,12 +9,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..geometry.drawing import Drawing
-from ..geometry.fill import HatchSet
 from ..geometry.field import Placement, PlanError
+from ..geometry.fill import HatchSet
+from ..geometry.speed import choose_pitch
 from ..inputs.text import TextSpec, text_drawing
 from .objects import JobSettings, MarkObject
 from .vector_job import plan_objects
-from ..geometry.speed import choose_pitch
 
 
 __all__ = ["GridCell", "axis_values", "plan_test_grid"]

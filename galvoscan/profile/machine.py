@@ -43,12 +43,12 @@ try:
 except ModuleNotFoundError:                      # Python < 3.11
     import tomli as tomllib
 
+from ..correction.files import load_table
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.points import FIELD_MAX
 from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
                    SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
                    _unknown_key, _unknown_section)
-from ..correction.files import load_table
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",

@@ -13,8 +13,8 @@ import csv
 from amaranth.sim import Simulator
 
 from ..gateware.top import GalvoScanTop
-from .xy2_receiver import XY2Frame, XY2Receiver
 from .board import SimulatedBoard
+from .xy2_receiver import XY2Frame, XY2Receiver
 
 
 __all__ = ["SIM_CLOCKS_PER_BIT", "replay_spiral", "write_csv"]
