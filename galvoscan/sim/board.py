@@ -4,10 +4,17 @@ unchanged (``galvoscan board --sim``).
 
 The host's bytes are clocked into ``uart_rx`` at the baud rate, 8N1, and ``uart_tx`` is read
 back bit by bit, as the board's FTDI chip does; a scan head on the XY2-100 wires and a laser on
-the DB25 pins record what the board does. The simulation runs about a thousand times slower
-than the board: a host talking to it needs a long answer timeout (``--timeout 60``), and
-anything timed in seconds on the host (a cleaning run's duration) is counted in the board's
-own time (its laser pulses) rather than by the host's clock.
+the DB25 pins record what the board does.
+
+The board runs on one of two backends behind one contract (:mod:`.contract`): the compiled
+model (:mod:`.compiled`; the command line's default, ``--backend auto``, wherever a C++
+compiler can build it) some 14 times slower than the board itself, or Amaranth's simulator
+(:mod:`.board_engine`, the reference) some 4,000 times slower (``docs/bench.json``, on two
+cores: 840,000 and 3,000 of the board's 12 MHz clocks a second). A host talking to it needs an
+answer timeout to match: :meth:`SimulatedBoard.answer_timeout_s` works it out from the speed
+measured (``galvoscan board --sim`` prints it). Anything timed in seconds on the host (a
+cleaning run's duration) is counted in the board's own time (its laser pulses) rather than by
+the host's clock.
 """
 
 import os
