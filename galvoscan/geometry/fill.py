@@ -15,7 +15,7 @@ an angle step per loop. Here:
 * a contour fill is rings inward from the shapes' edges, ``spacing_mm`` apart, through
   shapely's ``buffer`` (LightBurn's offset fill).
 
-Shapes are filled by the even-odd rule (:func:`.plan.hatch`); the contour's region is the
+Shapes are filled by the even-odd rule (:func:`.hatch.hatch`); the contour's region is the
 shapes' symmetric difference, the same rule for shapes that do not cross themselves (shapely
 has no fill rule: a self-crossing outline is first made valid, its crossing kept).
 """

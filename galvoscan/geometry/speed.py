@@ -2,9 +2,7 @@
 (:func:`choose_pitch`), the time the board takes (:func:`estimate_seconds`) and the lengths
 marked and jumped (:func:`jump_mark_lengths`), for segments in galvo units.
 
-:mod:`.plan` re-exports all of these, so ``from .plan import choose_pitch`` keeps working. That
-is why this module takes :class:`.plan.PlanError` and ``CENTRE`` from :mod:`.plan` inside the
-functions that need them, not at import time: no import cycle.
+It is below planning: it takes :class:`~.field.PlanError` and ``CENTRE`` from :mod:`.field`.
 """
 
 from dataclasses import dataclass

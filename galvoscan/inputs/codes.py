@@ -98,8 +98,8 @@ def code_modules(spec):
 
 
 def code_drawing(spec):
-    """The code as a :class:`~.drawing.Drawing` in mm (Y up, its lower-left corner at 0,0,
-    its quiet zone outside that), and its module size, mm."""
+    """The code as a :class:`~galvoscan.geometry.drawing.Drawing` in mm (Y up, its lower-left
+    corner at 0,0, its quiet zone outside that), and its module size, mm."""
     dark = code_modules(spec)
     rows, columns = dark.shape
     module = spec.size_mm / columns

@@ -1,10 +1,10 @@
-"""The DXF reader of :mod:`.drawing`: a DXF file (ezdxf) as polylines in the drawing's units,
-then mm, with what is not marked counted.
+"""The DXF reader of :func:`.drawings.load_drawing`: a DXF file (ezdxf) as polylines in the
+drawing's units, then mm, with what is not marked counted.
 
-:func:`_read_dxf` is called only by :func:`.drawing.load_drawing`, which turns what it raises
-into a :class:`.drawing.DrawingError` naming the file and checks the polylines it returns. This
-module imports :class:`.drawing.DrawingError` and its helpers from :mod:`.drawing`;
-:mod:`.drawing` imports this module only inside ``load_drawing``, so there is no import cycle.
+:func:`_read_dxf` is called only by :func:`.drawings.load_drawing`, which turns what it raises
+into a :class:`~galvoscan.geometry.drawing.DrawingError` naming the file and checks the
+polylines it returns; the chord limits and wording it shares with the SVG reader are in
+:mod:`.reading`.
 """
 
 from collections import Counter

@@ -135,8 +135,8 @@ def _bitmap(spec):
 
 
 def photo_drawing(spec):
-    """The photo as a :class:`~.drawing.Drawing` of open marks in scan order (its lower-left
-    corner at 0,0, Y up), and its grid."""
+    """The photo as a :class:`~galvoscan.geometry.drawing.Drawing` of open marks in scan order (its
+    lower-left corner at 0,0, Y up), and its grid."""
     dark, pixels = _bitmap(spec)
     rows, columns = dark.shape
     s = spec.line_spacing_mm

@@ -92,7 +92,7 @@ class SerialCounter:
 
 def load_counter(profile_source, *, start=None, step=None):
     """The counter beside the profile (``start``/``step``: the command line's, which replace
-    the kept ones); one line (:class:`~.plan.PlanError`) for a damaged file."""
+    the kept ones); one line (:class:`~galvoscan.geometry.field.PlanError`) for a damaged file."""
     path = counter_path(profile_source)
     kept = {}
     if path.exists():

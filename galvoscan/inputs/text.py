@@ -72,9 +72,9 @@ class TextSpec:
 
 
 def text_drawing(spec, *, tolerance_mm=0.01):
-    """The text as a :class:`~.drawing.Drawing` in mm, Y up: closed outlines (an outline
-    font) or open strokes (Hershey). One line (:class:`~.plan.PlanError`) for a font that
-    cannot be found or read."""
+    """The text as a :class:`~galvoscan.geometry.drawing.Drawing` in mm, Y up: closed outlines (an
+    outline font) or open strokes (Hershey). One line
+    (:class:`~galvoscan.geometry.field.PlanError`) for a font that cannot be found or read."""
     lines = spec.text.split("\n")
     if spec.hershey:
         pieces = [_hershey_line(line, spec) for line in lines]
@@ -294,8 +294,8 @@ def svg_text_outlines(text, families, size, *, weight="normal", style="normal",
     units: the baseline at y = 0, the anchor (start, middle, end) at x = 0, Y up, ``size``
     the em; ``before``: the text of the line before it (a ``<tspan>`` that follows on), whose
     advance it starts at. ``families`` is the CSS list (``"'Arial', sans-serif"``): the
-    first installed wins. Returns ``(polylines, font file)``; one line (:class:`~.plan.PlanError`) when none
-    is installed."""
+    first installed wins. Returns ``(polylines, font file)``; one line
+    (:class:`~galvoscan.geometry.field.PlanError`) when none is installed."""
     # Here: matplotlib's fonts take 0.6 s to import; the CLI's parser imports this module.
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextPath, TextToPath

@@ -324,7 +324,8 @@ class JobStreamer:
 
         ``start()`` is called once, when the first batch is in (or the job is all in): it
         arms and starts the scan. ``corners``: each segment's corner hold in frames, sent in
-        ``vec_op`` bits 7:1 (:func:`~.corners.corner_frames`; for ``polygon_scaled``).
+        ``vec_op`` bits 7:1 (:func:`~galvoscan.geometry.corners.corner_frames`; for
+        ``polygon_scaled``).
         Returns the number of segments written."""
         segments = list(segments)
         for segment in segments:

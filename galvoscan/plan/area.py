@@ -64,7 +64,7 @@ def _units(head, mm):
 def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr_khz, profile,
                   passes=None, duration_s=None, dose_j_cm2=None):
     """Plan a cleaning job; exactly one of ``passes``, ``duration_s``, ``dose_j_cm2``.
-    Raises :class:`~.plan.PlanError` (one line) for what cannot run."""
+    Raises :class:`~galvoscan.geometry.field.PlanError` (one line) for what cannot run."""
     if sum(v is not None for v in (passes, duration_s, dose_j_cm2)) != 1:
         raise PlanError("give one of --passes, --duration and --dose")
     if pattern not in PATTERNS:

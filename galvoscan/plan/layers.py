@@ -90,7 +90,7 @@ class Layer:
             or (named is not None and style.colour == named)
 
     def settings(self, base):
-        """``base`` (a :class:`~.vector_job.JobSettings`) with this layer's settings in it."""
+        """``base`` (a :class:`~.objects.JobSettings`) with this layer's settings in it."""
         given = {name: getattr(self, name) for name in
                  ("speed_mm_s", "power_percent", "prr_khz", "passes", "pulses_per_point",
                   "hatch", "hatch_lines", "contour", "outline")
@@ -124,9 +124,9 @@ class Layer:
 
 
 def split_by_layer(placed, layers):
-    """``placed`` (a placed :class:`~.drawing.Drawing` with styles) as one drawing per layer
-    (None where the layer holds none of its paths) and the rest (None: nothing left), each
-    path in the first layer that matches it."""
+    """``placed`` (a placed :class:`~galvoscan.geometry.drawing.Drawing` with styles) as one
+    drawing per layer (None where the layer holds none of its paths) and the rest (None: nothing
+    left), each path in the first layer that matches it."""
     styles = placed.styles or (None,) * len(placed.paths)
     owner = []
     for style in styles:
@@ -180,7 +180,7 @@ def preview_colour(layer, index):
 @dataclass
 class LayerJob:
     """A layer planned: the :class:`Layer` (None: the rest, at the job's settings), its
-    settings (a :class:`~.vector_job.JobSettings`), its :class:`~.vector_job.VectorJob` and
+    settings (a :class:`~.objects.JobSettings`), its :class:`~.vector_job.VectorJob` and
     its preview colour."""
     layer: Layer
     settings: object
@@ -193,7 +193,7 @@ class LayerJob:
 
 
 def plan_layers(objects, layers, settings, profile):
-    """Plan :class:`~.vector_job.MarkObject` s in ``layers`` (each path of a drawing in the
+    """Plan :class:`~.objects.MarkObject` s in ``layers`` (each path of a drawing in the
     first layer that matches it; an object with a ``layer`` in the layer of that name; the
     rest at ``settings``): one :class:`LayerJob` a layer that holds something, in the
     layers' order, the rest last. A layer that matches nothing is refused (a typo, most

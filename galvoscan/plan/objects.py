@@ -50,7 +50,7 @@ DOT_OVERLAP = 0.75
 
 
 def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
-    """The code as a :class:`~.vector_job.MarkObject` of a job at ``settings``: centred on
+    """The code as a :class:`~.objects.MarkObject` of a job at ``settings``: centred on
     ``centre_mm`` (field mm), filled along its rows at the widest spacing that divides a
     module evenly and is at most half the spot (or as dots), its quiet zone kept clear."""
     drawing, module = code_drawing(spec)
@@ -76,7 +76,7 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
 
 
 def photo_object(spec, settings, *, centre_mm=(0.0, 0.0)):
-    """The photo as a :class:`~.vector_job.MarkObject` at ``settings``' speed and power,
+    """The photo as a :class:`~.objects.MarkObject` at ``settings``' speed and power,
     centred on ``centre_mm`` (field mm), its lines in scan order."""
     drawing, dark = photo_drawing(spec)
     fill = replace(settings, hatch=(), contour=None, outline=True)

@@ -37,7 +37,7 @@ class VectorJob:
         The marked paths in field mm, in marking order (one pass).
     jump_before_mm, jump_after_mm : float
         Jump length of one pass in the drawing's order and in the order chosen.
-    pitch : :class:`~.plan.Pitch`
+    pitch : :class:`~galvoscan.geometry.speed.Pitch`
     registers : dict
         What the board is set to for the job.
     estimate_s : float
@@ -102,7 +102,7 @@ def _machine_settings(settings, profile):
 
 def _finish(segments, paths_mm, before, after, settings, profile, notes, *, settle=True):
     """Registers, timing and bounds of a job's segments (``settle``: each jump held as long
-    as its length needs, :func:`~.speed.settled_jumps`)."""
+    as its length needs, :func:`~galvoscan.geometry.speed.settled_jumps`)."""
     prr_register, prr_hz, pitch = _machine_settings(settings, profile)
     units_per_mm = profile.units_per_mm
     table = profile.correction_table()
@@ -172,8 +172,9 @@ def plan_job_file(segments, settings, profile):
 
 
 def plan_vector_job(drawing, placement, settings, profile):
-    """Plan ``drawing`` for ``profile``'s machine; raises :class:`~.plan.PlanError` (one line)
-    for anything that cannot run, before any link is opened."""
+    """Plan ``drawing`` for ``profile``'s machine; raises
+    :class:`~galvoscan.geometry.field.PlanError` (one line) for anything that cannot run, before
+    any link is opened."""
     return plan_objects([MarkObject(drawing, placement, settings)], settings, profile)
 
 

@@ -39,7 +39,7 @@ def _units(um, what, profile):
 
 def wobble_registers(wobble, profile):
     """The ``wob_*`` register values for ``wobble`` on ``profile``'s machine (None: off), or a
-    :class:`~.plan.PlanError` (one line)."""
+    :class:`~galvoscan.geometry.field.PlanError` (one line)."""
     if wobble is None or (wobble.across_um == 0 and wobble.along_um == 0):
         return {}
     across = _units(wobble.across_um, "amplitude", profile)
