@@ -5,7 +5,7 @@ them without loading Amaranth."""
 
 __all__ = ["WORD_MAX", "VECTOR_QUEUE_DEPTH", "FRAME_US", "DEFAULT_CLOCK_HZ",
            "LASER_ON_LEAD_US", "LASER_DELAY_MAX_US", "SCANNER_DELAY_MAX_US",
-           "CORNER_FRAMES_MAX", "DEFAULT_TABLE_POINTS", "DEFAULT_CORRECTION_NODES",
+           "CORNER_FRAMES_MAX", "DEFAULT_TABLE_POINTS", "MIN_POINTS", "MAX_POINTS", "DEFAULT_CORRECTION_NODES",
            "WOBBLE_MAX_AMPLITUDE", "WOBBLE_MAX_HZ"]
 
 
@@ -30,6 +30,10 @@ SCANNER_DELAY_MAX_US = 4095
 CORNER_FRAMES_MAX = 127
 #: Samples per axis of the default spiral table (the paper's 128).
 DEFAULT_TABLE_POINTS = 128
+#: Samples per sine period of a spiral table, a multiple of 4 (the quarter-period symmetry)
+#: within these bounds (the ROM address registers are 12 bits at most).
+MIN_POINTS = 8
+MAX_POINTS = 4096
 #: Nodes per axis of the default (identity) correction table.
 DEFAULT_CORRECTION_NODES = 17
 #: Largest wobble amplitude, galvo units (≈ 6.9 mm on a 110 mm field): the figure's products

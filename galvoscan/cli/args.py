@@ -13,8 +13,8 @@ import sys
 
 from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
 from ..gateware.host.regmap import BY_NAME, register_map
-from ..gateware.sources.spiral_table import (DEFAULT_POINTS, DEFAULT_SIGMA, MAX_POINTS, MIN_POINTS,
-                                             SAMPLINGS, SpiralTable)
+from ..gateware.limits import MAX_POINTS, MIN_POINTS
+from ..gateware.sources.spiral_table import DEFAULT_POINTS, DEFAULT_SIGMA, SAMPLINGS, SpiralTable
 from ..geometry.field import PlanError
 from ..geometry.fill import Contour, HatchSet
 

@@ -18,17 +18,15 @@ the simulation models and the analysis.
 from statistics import NormalDist
 import math
 
-from ..limits import DEFAULT_TABLE_POINTS
+from ..limits import DEFAULT_TABLE_POINTS, MAX_POINTS, MIN_POINTS
 
 
 __all__ = ["SpiralTable", "SAMPLINGS", "DEFAULT_SIGMA", "OFFSET_FULL_SCALE", "DEFAULT_POINTS",
            "MIN_POINTS", "MAX_POINTS"]
 
-#: Samples per sine period: the paper's 128 by default; a multiple of 4 (the quarter-period
-#: symmetry) within these bounds (the ROM address registers are 12 bits at most).
+#: Samples per sine period: the paper's 128 by default; a multiple of 4 from MIN_POINTS to
+#: MAX_POINTS (declared with the other limits in :mod:`galvoscan.gateware.limits`).
 DEFAULT_POINTS = DEFAULT_TABLE_POINTS
-MIN_POINTS = 8
-MAX_POINTS = 4096
 
 
 #: Sampling kinds: ``"triangle"`` spaces the amplitudes evenly (the mirror swept at constant
