@@ -5,7 +5,7 @@ The frames are those of :mod:`galvoscan.gateware.host.frames`: a command frame o
 with a sequence number and a CRC-16, an answer of six for every frame. A transport moves
 frames and answers; the client knows the register map and the sequence::
 
-    from .client import HostClient, SerialTransport
+    from galvoscan.link.client import HostClient, SerialTransport
     with SerialTransport("/dev/ttyUSB1") as link:
         board = HostClient(link)
         board.write("dwell", 5)          # answered with what dwell now holds
@@ -429,6 +429,8 @@ class FTDISPITransport(ClockedTransport):
     """
 
     def __init__(self, url, *, frequency=1e6):
+        # Here: pyftdi loads libusb, for SPI over an FTDI adapter only (not the UART or the
+        # simulator).
         try:
             from pyftdi.spi import SpiController
         except ImportError:

@@ -14,6 +14,7 @@ from amaranth.sim import Simulator
 
 from ..gateware.top import GalvoScanTop
 from .board import SimulatedBoard
+from .compiled import CompileError
 from .xy2_receiver import XY2Frame, XY2Receiver
 
 
@@ -59,7 +60,6 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         return _replay_on_board(frames=frames, clk_freq=None, progress=progress,
                                 backend="compiled", say=say, netlist=netlist)
     if backend != "python":
-        from .compiled import CompileError
         if vcd:
             raise ValueError("a waveform (vcd) needs the Python backend")
         try:
