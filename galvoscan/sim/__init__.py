@@ -10,6 +10,10 @@ does and decodes the XY2-100 wires the way a scan head does:
 * :class:`Timed` and :func:`spi_transfer` — a clock counter beside a design, and one SPI frame
   into its pins;
 * :func:`write_csv`, :func:`plot_path`, :func:`plot_job` — what the CLI writes.
+
+The simulated board a host talks to is :mod:`.board`; it runs on either backend behind the
+contract of :mod:`.contract`: Amaranth's simulator (:mod:`.board_engine`) or the compiled model
+(:mod:`.compiled`, with the C++ board and I/O cell models it compiles in).
 """
 
 from .link import Timed, spi_transfer
