@@ -24,6 +24,7 @@ from galvoscan.sim.spiral import replay_spiral
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
 from link_codec import cobs_encode
+from player_board import JOB as PLAYER_JOB, PLAYER_BOARD, REGISTERS
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from spiral_model import spiral_frames
@@ -382,8 +383,7 @@ def test_the_job_player_from_the_flash_is_the_same_on_both_backends():
     galvoscan/sim/spi_flash.py, both from the datasheet), the foot switch, the player; a good
     image played twice and a damaged one refused, the same to the clock."""
     from galvoscan.outputs.image import job_image
-    from test_player import JOB, PLAYER_BOARD, REGISTERS
-    good = job_image(JOB, REGISTERS, repeats=2)
+    good = job_image(PLAYER_JOB, REGISTERS, repeats=2)
     damaged = bytearray(good)
     damaged[-1] ^= 0x40
     for image in (good, bytes(damaged)):
