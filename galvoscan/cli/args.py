@@ -17,6 +17,7 @@ from ..gateware.limits import MAX_POINTS, MIN_POINTS
 from ..gateware.sources.spiral_table import DEFAULT_POINTS, DEFAULT_SIGMA, SAMPLINGS, SpiralTable
 from ..geometry.field import PlanError
 from ..geometry.fill import Contour, HatchSet
+from ..sim.contract import BACKENDS
 
 
 __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
@@ -310,8 +311,6 @@ def open_link(args):
 def add_backend_option(parser, *, default="auto", what="the simulator"):
     """``--backend``: which simulator runs the simulated board. ``default=None``: auto, and a
     command can tell whether it was given (see :func:`check_backend_needs_sim`)."""
-    # Here: sim.board takes 2.7 s to import; `galvoscan --help` need not wait.
-    from ..sim.board import BACKENDS
     parser.add_argument("--backend", choices=BACKENDS, default=default,
                         help=f"{what}: compiled (the design as native code, built once "
                              f"per design and cached; some 300x faster), python (Amaranth's, "

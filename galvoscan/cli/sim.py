@@ -77,7 +77,8 @@ def _sim_vector(args):
         fail(error)
     correction = _correction(args)
     # The simulator only once every input is known good.
-    from ..sim import plot_job, replay_job
+    from ..sim.plots import plot_job
+    from ..sim.vector import replay_job
     start = time.monotonic()
     with _FrameBar() as bar:
         try:
@@ -195,7 +196,8 @@ def _say(line):
 
 def _sim_spiral(args):
     # Here: sim takes 2.9 s to import; `galvoscan --help` need not wait.
-    from ..sim import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
+    from ..sim.plots import plot_path
+    from ..sim.spiral import SIM_CLOCKS_PER_BIT, replay_spiral, write_csv
 
     if args.job:
         fail("--job is for --mode vector")

@@ -32,7 +32,7 @@ from ..link.client import ClockedTransport, PacketTransport
 from .board_engine import PythonEngine
 from .compiled import CompiledEngine, CompileError, compiled_model
 from .compiled.netlist import build_record, netlist_design
-from .contract import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from .contract import BACKENDS, LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
 from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
@@ -42,8 +42,6 @@ __all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport",
            "LASER_PINS", "PIN_FIELDS"]
 
 
-#: The simulated board's backends: ``auto`` is the compiled one where it can be built.
-BACKENDS = ("auto", "compiled", "python")
 
 
 class SimulatedBoard:

@@ -11,8 +11,12 @@ same records to the clock.
 from typing import Protocol
 
 
-__all__ = ["Engine", "LASER_PINS", "MACHINE_PERIOD_S", "SPI_IDLE_S", "PIN_FIELDS", "pack_pins"]
+__all__ = ["BACKENDS", "Engine", "LASER_PINS", "MACHINE_PERIOD_S", "SPI_IDLE_S", "PIN_FIELDS",
+           "pack_pins"]
 
+
+#: The simulated board's backends: ``auto`` is the compiled one where it can be built.
+BACKENDS = ("auto", "compiled", "python")
 
 # The laser pins recorded at every change, in this order.
 LASER_PINS = ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch", "laser_guide")
