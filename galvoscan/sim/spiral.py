@@ -51,7 +51,7 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
 
     Returns
     -------
-    list of :class:`~galvoscan.sim.XY2Frame`
+    list of :class:`~galvoscan.sim.xy2_receiver.XY2Frame`
     """
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
