@@ -16,8 +16,8 @@ A sketch (``docs/examples/first_job.py`` runs one whole)::
     print(report.segments, report.pulses, report.marks_mm[:3])
 
 Every value is checked where it is given, with the command line's one-line refusal
-(:class:`~galvoscan.settings.schema.SettingError`, :class:`~galvoscan.jobs.plan.PlanError`,
-:class:`~galvoscan.jobs.drawing.DrawingError`; all are :class:`ValueError`), and the whole
+(:class:`~galvoscan.settings.schema.SettingError`, :class:`~galvoscan.geometry.field.PlanError`,
+:class:`~galvoscan.geometry.drawing.DrawingError`; all are :class:`ValueError`), and the whole
 job is planned and checked before any byte goes to a board.
 """
 
@@ -26,20 +26,22 @@ from datetime import datetime
 
 import numpy as np
 
-from .client import FTDISPITransport, HostClient, SerialTransport
+from .link.client import FTDISPITransport, HostClient, SerialTransport
 from .correction.upload import upload_table
 from .gateware.fields import WobbleShape
-from .jobs.codes import CodeFill, CodeKind, CodeSpec, code_object
-from .jobs.drawing import load_drawing
-from .jobs.fill import HatchSet, LineOrder
-from .jobs.layers import Layer, merged, plan_layers
-from .jobs.photo import Dither, PhotoSpec, photo_object
-from .jobs.plan import Placement, PlanError, from_galvo
-from .jobs.profile import default_profile, load_profile
-from .jobs.stream import JobAborted, JobStreamer, StreamReport
-from .jobs.text import TextSpec, text_drawing
-from .jobs.vector_job import JobSettings, MarkObject
-from .jobs.wobble import WobbleSettings, wobble_registers
+from .inputs.codes import CodeFill, CodeKind, CodeSpec
+from .plan.objects import code_object
+from .inputs.drawings import load_drawing
+from .geometry.fill import HatchSet, LineOrder
+from .plan.layers import Layer, merged, plan_layers
+from .inputs.photo import Dither, PhotoSpec
+from .plan.objects import photo_object
+from .geometry.field import Placement, PlanError, from_galvo
+from .profile.machine import default_profile, load_profile
+from .outputs.stream import JobAborted, JobStreamer, StreamReport
+from .inputs.text import TextSpec, text_drawing
+from .plan.objects import JobSettings, MarkObject
+from .plan.wobble import WobbleSettings, wobble_registers
 from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
 from .sim.board import SimTransport, SimulatedBoard
 
@@ -116,9 +118,9 @@ class Photo:
 @dataclass(frozen=True)
 class Job:
     """A job: its drawings, texts, codes and photos, its layers
-    (:class:`~galvoscan.jobs.layers.Layer`), and its own settings: speed (mm/s), power (% of
+    (:class:`~galvoscan.plan.layers.Layer`), and its own settings: speed (mm/s), power (% of
     the laser's maximum), PRR (kHz) and passes (None: the profile's ``[defaults]``), the hatch
-    sets (:class:`~galvoscan.jobs.fill.HatchSet`), their line order, a contour fill, whether
+    sets (:class:`~galvoscan.geometry.fill.HatchSet`), their line order, a contour fill, whether
     outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
     (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
     ``[wobble]``; it needs a bitstream with the wobble stage). The numbers are checked against their
@@ -165,7 +167,7 @@ class _Moment:
 
 def fields(text, *, serial=None, what="--text"):
     """``text`` with its fields filled: ``{serial}`` (``serial``), ``{date:…}``, ``{time:…}``
-    (now); one line (:class:`~galvoscan.jobs.plan.PlanError`, naming ``what``) for a field it
+    (now); one line (:class:`~galvoscan.geometry.field.PlanError`, naming ``what``) for a field it
     does not know or one written wrong."""
     now = datetime.now()
     values = {"serial": serial if serial is not None else 0,
@@ -183,7 +185,7 @@ def fields(text, *, serial=None, what="--text"):
 
 
 def job_settings(job, profile):
-    """The :class:`~galvoscan.jobs.vector_job.JobSettings` of ``job``: its own, else the
+    """The :class:`~galvoscan.plan.objects.JobSettings` of ``job``: its own, else the
     profile's ``[defaults]``."""
     defaults = profile.defaults
     return JobSettings(
@@ -197,7 +199,7 @@ def job_settings(job, profile):
 
 def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.default):
     """``item`` (a :class:`Drawing`, :class:`Text`, :class:`Code` or :class:`Photo`) as the
-    :class:`~galvoscan.jobs.vector_job.MarkObject` the planner places and fills."""
+    :class:`~galvoscan.plan.objects.MarkObject` the planner places and fills."""
     if isinstance(item, Drawing):
         placement = Placement(origin=item.origin, offset_mm=tuple(item.offset_mm),
                               scale=item.scale, rotate_deg=item.rotate_deg)
@@ -240,7 +242,7 @@ def mark_objects(job, settings, profile, *, serial=None):
 
 @dataclass
 class Plan:
-    """A planned job: ``vector_job`` (:class:`~galvoscan.jobs.vector_job.VectorJob`, of
+    """A planned job: ``vector_job`` (:class:`~galvoscan.plan.vector_job.VectorJob`, of
     layers when the job has them), the ``profile`` it was planned for, and its first
     object's ``placement`` and ``drawing`` (to turn marks back into the drawing's own
     coordinates); ``wobbles``: whether any of it wobbles (the board needs the wobble
@@ -277,7 +279,7 @@ def plan_objects(objects, job, settings, profile):
 
 
 def plan(job, profile=None, *, serial=None):
-    """Plan ``job`` for ``profile`` (a :class:`~galvoscan.jobs.profile.MachineProfile`;
+    """Plan ``job`` for ``profile`` (a :class:`~galvoscan.profile.machine.MachineProfile`;
     None: the default one): placed, filled, ordered, inside the field, every register value
     in range. ``serial``: the part's number, for ``{serial}`` fields. Raises a
     :class:`ValueError` (one line) for anything that cannot be marked."""
@@ -295,7 +297,7 @@ def plan(job, profile=None, *, serial=None):
 # --- wobble ---------------------------------------------------------------------------------
 
 def job_wobble(across_um, along_um, freq_hz, profile):
-    """The job's :class:`~galvoscan.jobs.wobble.WobbleSettings`: ``across_um`` (µm),
+    """The job's :class:`~galvoscan.plan.wobble.WobbleSettings`: ``across_um`` (µm),
     ``along_um`` (µm; None: ``across_um``'s, a circle) and ``freq_hz`` given, else the
     profile's ``[wobble]``."""
     section = profile.wobble
@@ -307,7 +309,7 @@ def job_wobble(across_um, along_um, freq_hz, profile):
 
 
 def layer_wobble(layer, base):
-    """The :class:`~galvoscan.jobs.wobble.WobbleSettings` of a layer (None: the rest), its
+    """The :class:`~galvoscan.plan.wobble.WobbleSettings` of a layer (None: the rest), its
     amplitudes and frequency in place of ``base``'s where it gives them."""
     if layer is None:
         return base
@@ -320,10 +322,10 @@ def layer_wobble(layer, base):
 
 def apply_wobble(vector_job, base, profile):
     """Each layer's ``wob_*`` registers (``base``, a
-    :class:`~galvoscan.jobs.wobble.WobbleSettings`, a layer's own in its place) into its
+    :class:`~galvoscan.plan.wobble.WobbleSettings`, a layer's own in its place) into its
     registers, its reach checked against the field; a layer that does not wobble among ones
     that do turns it off. Returns whether anything wobbles; a
-    :class:`~galvoscan.jobs.plan.PlanError` (one line) for a figure past the field."""
+    :class:`~galvoscan.geometry.field.PlanError` (one line) for a figure past the field."""
     parts = [(lj.layer, lj.job) for lj in vector_job.layers] if vector_job.layers else \
         [(None, vector_job)]
     found = [wobble_registers(layer_wobble(layer, base), profile) for layer, _ in parts]
@@ -413,10 +415,10 @@ class Report:
 def run(plan, board, *, timeout_s=None, progress=None, say=None):
     """Mark ``plan`` on ``board``: a :class:`~galvoscan.sim.board.SimulatedBoard` (run in
     this process; ``SimulatedBoard(wobble=True)`` for a plan that ``wobbles``), or a
-    :class:`~galvoscan.client.HostClient` of a real board's link
+    :class:`~galvoscan.link.client.HostClient` of a real board's link
     (``HostClient(SerialTransport("/dev/ttyUSB1", baud=1_000_000))``). The
     profile's lens table is loaded first; the laser is disarmed at the end and on any fault
-    (:class:`~galvoscan.jobs.stream.JobAborted`). ``timeout_s``: the longest the job may take
+    (:class:`~galvoscan.outputs.stream.JobAborted`). ``timeout_s``: the longest the job may take
     (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments
     go. Returns a :class:`Report`."""
     simulated = isinstance(board, SimulatedBoard)

@@ -6,7 +6,7 @@ import time
 
 from amaranth.sim import Simulator
 
-from .sim import Timed, spi_transfer
+from .sim.link import Timed, spi_transfer
 
 
 __all__ = ["phy_rate", "link_figures", "stream_figures", "replay_figures", "backend_figures"]
@@ -21,7 +21,7 @@ def phy_rate(*, clk_freq=12e6, bit_rate=2e6, frames=30):
     SYNC, control bits and parity) and the positions must be the ones offered.
     """
     from .gateware.phy.xy2_100 import XY2Transmitter, clocks_per_bit
-    from .sim import XY2Receiver
+    from .sim.xy2_receiver import XY2Receiver
     phy = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate)
     counted = Timed(phy)
     sim = Simulator(counted)
@@ -69,10 +69,10 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
     """Command throughput over SPI and UART (write frames with their answers), and
     command → XY2 latency for a vector jump (one segment frame)."""
     from cobs import cobs
-    from .client import encode_command
+    from .link.client import encode_command
     from .gateware.host.regmap import BY_NAME
     from .gateware.top import GalvoScanTop, ScanSettings
-    from .sim import XY2Receiver
+    from .sim.xy2_receiver import XY2Receiver
     top = GalvoScanTop(clk_freq=clk_freq, baud=baud,
                        settings=ScanSettings(mode="vector", run=True))
     counted = Timed(top)
@@ -158,9 +158,9 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", 
     The rate is the link's: any clock that carries the baud gives it to within the few clocks
     a ``fifo_free`` answer takes (``clk_freq``: 12 MHz, the board's; the quick bench's 8 MHz,
     the slowest that carries 1 Mbaud, is two thirds of the clocks to simulate)."""
-    from .client import HostClient
+    from .link.client import HostClient
     from .gateware.clocking import DEFAULT_BAUD
-    from .jobs.stream import JobStreamer
+    from .outputs.stream import JobStreamer
     from .sim.board import SimTransport, SimulatedBoard
     board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD, backend=backend,
                            **top_kwargs)
@@ -182,7 +182,7 @@ def replay_figures(points=8064, backend="python"):
     """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``),
     on ``backend`` (its own path on Amaranth's, the simulated board on the compiled one)."""
     from .gateware.sources.spiral import PARK_FRAMES
-    from .sim import SIM_CLOCKS_PER_BIT, replay_spiral
+    from .sim.spiral import SIM_CLOCKS_PER_BIT, replay_spiral
     frames = PARK_FRAMES + 3 * points
     start = time.monotonic()
     said = []

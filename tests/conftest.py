@@ -36,21 +36,21 @@ LONGEST_FIRST = {
     "tests/test_formal.py::test_broken_player_fails_the_proof[byte_unchecked]": 120,
     "tests/test_formal.py::test_broken_player_fails_the_proof[length_short]": 120,
     "tests/test_formal.py::test_broken_player_fails_the_proof[magic_not_checked]": 110,
-    "tests/test_cli.py::test_build_icebreaker": 127,
-    "tests/test_netlist.py::test_the_default_builds_netlist_behaves_as_its_design": 127,
-    "tests/test_cli.py::test_build_xy2_200_on_the_pll": 126,
+    "tests/cli/test_cli.py::test_build_icebreaker": 127,
+    "tests/sim/test_netlist.py::test_the_default_builds_netlist_behaves_as_its_design": 127,
+    "tests/cli/test_cli.py::test_build_xy2_200_on_the_pll": 126,
     "tests/test_host_fuzz.py::test_spi_garbage": 67,
-    "tests/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 49,
+    "tests/cli/test_cli.py::test_build_that_misses_timing_is_one_line_and_writes_no_bitstream": 49,
     "tests/test_bench.py::test_bench_quick": 46,
     "tests/test_wobble.py::test_random_jobs_amplitudes_and_frequencies_match_the_model": 44,
-    "tests/test_mark.py::test_svg_marks_lie_on_the_drawing": 38,   # (with the marking)
-    "tests/test_mark.py::test_svg_corners_hit_speed_and_counters": 38,
+    "tests/cli/test_mark.py::test_svg_marks_lie_on_the_drawing": 38,   # (with the marking)
+    "tests/cli/test_mark.py::test_svg_corners_hit_speed_and_counters": 38,
     "tests/test_host_fuzz.py::test_uart_garbage": 37,
     "tests/test_formal.py::test_proof_holds_and_covers_are_reached[command_path_spi]": 35,
     "tests/test_spiral.py::test_full_pattern_replays_point_for_point": 35,
-    "tests/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 32,
-    "tests/test_host_link.py::test_every_register_resets_and_reads_back[spi]": 29,
-    "tests/test_host_link.py::test_every_register_resets_and_reads_back[uart]": 24,
+    "tests/cli/test_mark.py::test_dxf_longer_than_the_queue_never_underruns": 32,
+    "tests/link/test_client.py::test_every_register_resets_and_reads_back[spi]": 29,
+    "tests/link/test_client.py::test_every_register_resets_and_reads_back[uart]": 24,
 }
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from galvoscan import api
 from galvoscan.cli import main
-from galvoscan.jobs.profile import default_profile
+from galvoscan.profile.machine import default_profile
 from galvoscan.settings.schema import SettingError
 
 EXAMPLE = Path(__file__).parent.parent / "docs" / "examples" / "first_job.py"

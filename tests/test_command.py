@@ -32,7 +32,7 @@ And the decoder's timing, clock by clock, counted from the clock a frame is take
   while it was busy); an SPI answer the target does not take on that clock is lost and
   counted in ``errors`` (a refused frame whose answer is lost counts twice).
 
-Frames are built with the test-side codec (tests/link_codec.py): the payload a transport hands
+Frames are built with the test-side codec (tests/support/link_codec.py): the payload a transport hands
 the decoder is the first eight bytes of ``command(...)``."""
 
 from amaranth.hdl import Module

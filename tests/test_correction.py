@@ -10,7 +10,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 from hypothesis import given, settings, strategies as st, HealthCheck, Phase
 
-from galvoscan.client import HostClient, WriteRefused
+from galvoscan.link.client import HostClient, WriteRefused
 from galvoscan.correction.upload import upload_table
 from galvoscan.gateware.field.correction import FieldCorrection
 from galvoscan.gateware.field.correction_table import TABLE_SIZES, CorrectionTable
@@ -238,7 +238,7 @@ def test_correction_on_the_wires_through_the_host_link():
     table = random_table(5, rng, -1500, 1500)
     spiral = SpiralTable()
     settings_ = ScanSettings(dwell=1)
-    # On the compiled board (held to Amaranth's, tests/test_compiled.py): the new table's
+    # On the compiled board (held to Amaranth's, tests/sim/test_compiled.py): the new table's
     # hundred frames through the SPI pins took over a minute on Amaranth's.
     board = SimBoard(table=spiral, settings=settings_, correction=table, backend="compiled")
     client = HostClient(SimSPITransport(board))

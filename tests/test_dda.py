@@ -1,7 +1,7 @@
 # amaranth: UnusedElaboratable=no
 # (the signature check builds a DDA without elaborating it)
 
-"""The line DDA alone, against the exact model (tests/vector_model.py), on many lines."""
+"""The line DDA alone, against the exact model (tests/support/vector_model.py), on many lines."""
 
 import random
 

@@ -7,7 +7,7 @@ import pytest
 from amaranth.sim import Simulator
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.laser.controller import LaserController
 

@@ -4,7 +4,6 @@ written here from its docstring and the docs' register table, and the whole boar
 (the points decoded from the XY2-100 wires, the laser pulses counted on the DB25 pins) against
 the analysis model :func:`galvoscan.analysis.patterns.raster_frames`."""
 
-import bisect
 import itertools
 
 from amaranth.sim import Simulator
@@ -13,11 +12,12 @@ from hypothesis import example, given, settings, strategies as st
 import pytest
 
 from galvoscan.analysis.patterns import raster_frames
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 from galvoscan.gateware.sources.raster import RasterSequencer
 from galvoscan.gateware.top import ScanSettings
 
 from sim_board import SimBoard, SimSPITransport
+from vector_board import pulses_per_frame
 
 
 # --- the model ---------------------------------------------------------------------------------
@@ -239,23 +239,6 @@ def test_random_rectangles_against_the_model(x, y, width, height, spacing, step,
 
 
 # --- on the whole board (moved from tests/test_vector.py) --------------------------------------
-
-def pulses_per_frame(board):
-    """(position, pulses) per frame read off the pins: frames from the tests' XY2 reader, each
-    in force from the end of its frame (the rising SYNC edge that starts the next one); pulses
-    are rising PRR edges while modulation is on, given to the frame in force before them."""
-    frames = [f for _, f in board.xy2_frames()]
-    sync = board.sync_pins
-    starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
-    pins = board.laser_pins
-    counts = [0] * len(frames)
-    for clock in range(1, len(pins)):
-        if pins[clock][2] and not pins[clock - 1][2] and pins[clock][1]:
-            frame = bisect.bisect_left(starts, clock) - 2
-            assert frame >= 0, "a pulse before any frame was sent"
-            counts[frame] += 1
-    return list(zip(frames, counts))
-
 
 RASTER_CASES = [
     # corner, size, spacing, step, flags (bit 0 along y, bit 1 one way), turn gate

@@ -13,7 +13,7 @@ from hypothesis import given, strategies as st
 
 from galvoscan.cli import parser
 from galvoscan.cli.job_options import SECTIONS, job_file_table
-from galvoscan.jobs.profile import ProfileError, parse_profile
+from galvoscan.profile.machine import ProfileError, parse_profile
 from galvoscan.settings import laser
 from galvoscan.settings.schema import Setting, SettingError, markdown_table
 
@@ -133,7 +133,7 @@ def test_job_file_table_is_the_options():
 ])
 def test_imports_in_dependency_order(importer, imported):
     """No import chain, at module top or in a function, from ``importer`` to ``imported``."""
-    graph = grimp.build_graph("galvoscan")
+    graph = grimp.build_graph("galvoscan", cache_dir=None)
     importers = [m for m in graph.modules if m == importer or m.startswith(importer + ".")]
     for module in importers:
         for target in [m for m in graph.modules

@@ -5,7 +5,7 @@ link, no laser controller; on the system top's pins."""
 
 import pytest
 
-from galvoscan.client import HostClient, WriteRefused
+from galvoscan.link.client import HostClient, WriteRefused
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 from galvoscan.platforms.icestick import ICEStickScanner

@@ -2,7 +2,7 @@
 """The SPI target alone (gateware/host/spi_target.py), driven by a mode-0 host written here:
 SCK idles low, the host sets COPI while SCK is low and both sides sample on the rising edge.
 Checked against a model of the frame format (gateware/host/frames.py) written here, with the
-test-side codec's CRC (tests/link_codec.py), not the gateware's: a frame is exactly what is
+test-side codec's CRC (tests/support/link_codec.py), not the gateware's: a frame is exactly what is
 clocked in while ``cs_n`` is low, handed on with its first 64 bits and whether it is intact
 (exactly 80 bits, and the CRC over all of them holds). Answers are offered on ``replies`` for
 one clock each, as the decoder offers them: the target takes one only between frames

@@ -6,7 +6,7 @@ some."""
 
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from galvoscan.client import HostClient
+from galvoscan.link.client import HostClient
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import ScanSettings
 

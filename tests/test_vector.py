@@ -5,18 +5,17 @@
 written from Wan et al. 2018's DDA, and the laser pulses on every point counted on the DB25
 pins. (Raster mode: tests/test_raster.py.)"""
 
-import bisect
-
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient, WriteRefused
+from galvoscan.link.client import ClientError, HostClient, WriteRefused
 from galvoscan.gateware.host.regmap import STATUS_BITS, VectorOp
 from galvoscan.gateware.fields import pack
 from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
-from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
+from sim_board import SimBoard, SimSPITransport
+from vector_board import NO_DELAYS, queue, runs_on_the_wires, set_up_job, start_board
 from vector_model import PARK, dda, job_model, merge
 
 
@@ -30,80 +29,6 @@ def test_model_follows_001():
 
 
 # --- running a job on the simulated board -------------------------------------------------------
-
-def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
-    # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
-    board = SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
-                                baud=round(clk_freq / 8), record_laser=True,
-                                mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
-                                **VECTOR_ONLY,
-                                settings=ScanSettings(mode="vector", run=False, **settings))
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    return board, client
-
-
-def queue(client, job, *, factors=None):
-    """The job's segments, a checked frame each, back to back; ``factors``: each mark's
-    polygon_scaled factor (vec_op bits 1 up; RTC delay builds)."""
-    words = []
-    for index, (op, x_to, y_to) in enumerate(job):
-        factor = 0 if factors is None else factors[index]
-        words.append((pack(VecOpWord, op=VectorOp[op.upper()],
-                           corner_frames=0 if op == "jump" else factor), x_to, y_to))
-    if words:
-        client.queue_segments(words)
-
-
-def pulses_per_frame(board):
-    """(position, pulses) per frame read off the pins: frames from the tests' XY2 reader, each
-    in force from the end of its frame (the rising SYNC edge that starts the next one); pulses
-    are rising PRR edges while modulation is on, given to the frame in force before them."""
-    frames = [f for _, f in board.xy2_frames()]
-    sync = board.sync_pins
-    starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
-    pins = board.laser_pins
-    counts = [0] * len(frames)
-    for clock in range(1, len(pins)):
-        if pins[clock][2] and not pins[clock - 1][2] and pins[clock][1]:
-            frame = bisect.bisect_left(starts, clock) - 2
-            assert frame >= 0, "a pulse before any frame was sent"
-            counts[frame] += 1
-    return list(zip(frames, counts))
-
-
-def runs_on_the_wires(board):
-    return merge(pulses_per_frame(board))
-
-
-#: Vector mode as Wan et al.'s: the default build has no RTC delays (tests/test_vector_delays.py
-#: builds them, and checks that at 0 they change nothing).
-NO_DELAYS = {}
-
-
-def job_link(board):
-    """The real client over the UART at 8 clocks a bit; the segments go back to back, each
-    answered as it lands."""
-    link = SimUARTTransport(board)
-    return link, HostClient(link)
-
-
-def set_up_job(board, job, registers, *, always=(), factors=None):
-    """Over :func:`job_link`: ``registers`` (``(name, value)`` pairs; those at their reset
-    value, on this board fresh from power-up, are left alone unless named in ``always``), the
-    laser armed, the job queued meanwhile, and run once the MO lead (0.2 ms) has passed since
-    arming; returns the client."""
-    link, client = job_link(board)
-    regmap = board.top.regmap
-    for name, value in registers:
-        if value != regmap[name].reset or name in always:
-            client.write(name, value)
-    client.write("arm", 1)
-    armed = board.now
-    queue(client, job, factors=factors)
-    board.run_for(max(0, armed + 0.3e-3 - board.now))       # MO lead
-    client.write("run", 1)
-    return client
-
 
 def run_job(job, *, prr_100hz=600, pulses=1, pitch=60, seconds=None, clk_freq=4e6):
     board, _ = start_board(clk_freq)
@@ -304,9 +229,9 @@ def test_the_words_the_host_packs_are_the_registers_documented_bits():
 def test_vec_flush_empties_the_queue_and_stops_the_mode():
     """A job left half-queued (a host that died mid-job): vec_flush empties the queue and
     stops the sequencer where it is; the next job is taken and marks from its start."""
-    from galvoscan.client import HostClient, WriteRefused
     from galvoscan.gateware.fields import STATUS_BITS
-    from galvoscan.jobs.stream import JobStreamer
+    from galvoscan.link.client import HostClient, WriteRefused
+    from galvoscan.outputs.stream import JobStreamer
     from galvoscan.sim.board import SimTransport, SimulatedBoard
     board = SimulatedBoard(clk_freq=4e6, baud=500_000, modes=("vector",), links=("uart",),
                            settings=ScanSettings(mode="vector", run=False), correction=None,

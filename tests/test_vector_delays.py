@@ -3,16 +3,16 @@
 
 """Vector mode's RTC delays (issue 17): the points on the XY2-100 wires, frame for frame, and
 the laser's modulation edges on the DB25 pins, clock for clock, against a plain model of
-SCANLAB's delay definitions (tests/vector_delay_model.py); bad delay values refused."""
+SCANLAB's delay definitions (tests/support/vector_delay_model.py); bad delay values refused."""
 
 from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient, encode_write, WriteRefused
+from galvoscan.link.client import ClientError, HostClient, encode_write, WriteRefused
 from galvoscan.gateware.top import ScanSettings
 
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
-from test_vector import job_link, set_up_job
+from vector_board import job_link, set_up_job
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
 

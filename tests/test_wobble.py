@@ -2,7 +2,7 @@
 # (the parameter checks build tops that are never elaborated)
 
 """Wobble (issue 17): an ellipse laid over vector mode's marked points, checked on the XY2-100
-wires frame for frame against a plain floating-point model (tests/wobble_model.py). Each job
+wires frame for frame against a plain floating-point model (tests/support/wobble_model.py). Each job
 runs twice on the same build, with the shape off and on and the same register traffic: the
 first run gives the frames and the laser's pulses as the line alone puts them (checked against
 the vector model), the second must put the model's figure on every marked frame and change
@@ -13,7 +13,7 @@ import math
 from hypothesis import HealthCheck, Phase, example, given, settings, strategies as st
 import pytest
 
-from galvoscan.client import ClientError, HostClient
+from galvoscan.link.client import ClientError, HostClient
 from galvoscan.gateware.host.regmap import (BY_NAME, STATUS_BITS, WOBBLE_MAX_AMPLITUDE,
                                              WOBBLE_MAX_HZ)
 from galvoscan.gateware.sources.wobble import Wobble
@@ -21,7 +21,7 @@ from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
 from link_codec import command
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
-from test_vector import job_link, pulses_per_frame, set_up_job
+from vector_board import job_link, pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
 

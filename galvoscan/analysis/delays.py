@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from .figures import _pyplot
 from .galvo import FRAME_PERIOD, FULL_RANGE, GalvoModel
 
 
@@ -158,7 +159,6 @@ def delay_study(*, galvo=None, **job):
 def plot_delays(path, without, chosen):
     """Dose along the L-shaped job without and with the delays, and where the pulses fell at
     the line's start and at the corner."""
-    from .figures import _pyplot
     plt = _pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.4), dpi=110,
                              gridspec_kw={"width_ratios": [2.2, 1, 1]})

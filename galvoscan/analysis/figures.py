@@ -1,5 +1,8 @@
 """Figures of the scan analysis (matplotlib, written as PNG files)."""
 
+import matplotlib
+from matplotlib import pyplot
+from matplotlib.ticker import ScalarFormatter
 import numpy as np
 
 from .study import FILL_STAGES, fill_points
@@ -10,9 +13,7 @@ __all__ = ["plot_fill", "plot_dose_maps", "plot_sigma_sweep", "plot_spiral_vs_ra
 
 
 def _pyplot():
-    import matplotlib
     matplotlib.use("Agg")
-    from matplotlib import pyplot
     return pyplot
 
 
@@ -105,7 +106,6 @@ def plot_dose_maps(path, results, region, *, zoom_mm=3.0, title=None):
 
 def plot_sigma_sweep(path, results, *, chosen_sigma):
     """Uniformity against σ and against the mirror's peak acceleration."""
-    from matplotlib.ticker import ScalarFormatter
     plt = _pyplot()
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4), dpi=110)
     gauss = [r for r in results if r.table.sampling == "gaussian"]

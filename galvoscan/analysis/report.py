@@ -5,13 +5,17 @@ import math
 from pathlib import Path
 import sys
 
+from tqdm import tqdm
+
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
+from . import figures
 from .dose import Laser
 from .galvo import GalvoModel
 from .patterns import INTERPOLATIONS, ScanHead
 from .study import (PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
                     sigma_sweep, spiral_vs_raster)
+from .wobble import WOBBLE_AMPLITUDES_UM, WOBBLE_FREQUENCIES_HZ, wobble_study
 
 
 __all__ = ["ROWS", "format_table", "run_analyze"]
@@ -87,9 +91,6 @@ WOBBLE_ROWS = (
 
 def _run_wobble(args, head, laser, galvo):
     """``analyze --wobble``: the wobble study (:mod:`.wobble`), its table and figure."""
-    from tqdm import tqdm
-    from . import figures
-    from .wobble import WOBBLE_AMPLITUDES_UM, WOBBLE_FREQUENCIES_HZ, wobble_study
     bar = tqdm(total=len(WOBBLE_AMPLITUDES_UM) - 1 + len(WOBBLE_FREQUENCIES_HZ),
                desc="wobble", unit="run", file=sys.stderr, disable=args.quiet)
     amplitudes, frequencies = wobble_study(head, laser, galvo, speed_mm_s=args.wobble_speed,
@@ -121,8 +122,6 @@ def _run_wobble(args, head, laser, galvo):
 
 def run_analyze(args):
     """The ``analyze`` command (args from the CLI parser)."""
-    from tqdm import tqdm
-    from . import figures
     if args.wobble:
         try:
             head = ScanHead(args.lens_field)

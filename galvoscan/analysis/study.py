@@ -15,8 +15,8 @@ from ..gateware.points import FIELD_CENTRE
 from ..gateware.sources.spiral_table import DEFAULT_SIGMA, SpiralTable
 from .dose import Laser, Region
 from .galvo import FRAME_PERIOD, GalvoModel
-from .patterns import (INTERPOLATIONS, ScanHead, raster_frames, spiral_amplitude, spiral_dwell_for_speed,
-                       spiral_frames)
+from .patterns import (INTERPOLATIONS, ScanHead, raster_frames, spiral_amplitude,
+                       spiral_dwell_for_speed, spiral_frames)
 from .scan import analyse
 
 

@@ -12,6 +12,7 @@ they share.
 
 import argparse
 import sys
+from importlib.metadata import PackageNotFoundError, version
 
 from . import (analyze, bench, board, build, clean, correct, link, machine, mark, prove, sim,
                standalone, testgrid)
@@ -26,7 +27,6 @@ GROUPS = (machine, mark, testgrid, clean, standalone, board, link, sim, build, p
 
 
 def _version():
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("galvoscan")
     except PackageNotFoundError:                 # run from a source tree, not installed

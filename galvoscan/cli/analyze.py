@@ -1,6 +1,11 @@
 """``galvoscan analyze``: how a scan pattern doses a part, before burning one."""
 
-from .args import (INTERPOLATIONS, add_table_options, field_mm, number_in, output_dir, register_int)
+import json
+from pathlib import Path
+
+from ..analysis.galvo import GalvoModel
+from .args import (INTERPOLATIONS, add_table_options, field_mm, number_in, output_dir,
+                   register_int)
 
 
 __all__ = ["add_parsers"]
@@ -9,15 +14,15 @@ __all__ = ["add_parsers"]
 def _cmd_analyze(args):
     if args.delays:
         return _cmd_delays(args)
+    # Here: analysis.report takes 1.7 s to import; `galvoscan --help` need not wait.
     from ..analysis.report import run_analyze
     return run_analyze(args)
 
 
 def _cmd_delays(args):
     """The RTC delays on an L-shaped mark: dose at its ends and corner, without and with."""
-    import json
+    # Here: analysis.delays takes 2.9 s to import; `galvoscan --help` need not wait.
     from ..analysis.delays import delay_report, delay_study, plot_delays
-    from ..analysis.galvo import GalvoModel
     galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
     without, chosen = delay_study(galvo=galvo, field_mm=args.lens_field,
                                   speed_mm_s=args.mark_speed, prr_hz=args.prr * 1e3,
@@ -34,7 +39,6 @@ def _cmd_delays(args):
                   f"{row['end_peak']:.2f}; line starts {row['start_shift_um']:+.0f} µm, ends "
                   f"{row['end_shift_um']:+.0f} µm from its set points")
     if not args.no_plots:
-        from pathlib import Path
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         plot_delays(out / "delays.png", without, chosen)

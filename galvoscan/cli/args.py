@@ -296,7 +296,7 @@ def add_link_options(parser):
 
 def open_transport(*, port=None, spi=None, baud=None, timeout=0.5, sck=1e6):
     """A serial (``port``) or FTDI SPI (``spi``) transport, opened; one line if it cannot be."""
-    from ..client import ClientError, FTDISPITransport, SerialTransport
+    from ..link.client import ClientError, FTDISPITransport, SerialTransport
     from ..gateware.clocking import DEFAULT_BAUD
     try:
         if spi:
@@ -338,7 +338,7 @@ def simulated_board(args, **kwargs):
     """The :class:`~galvoscan.sim.board.SimulatedBoard` ``--backend`` asks for (a compile's
     progress and a fallback's reason on stderr); one line if the compiled one cannot be had."""
     import sys
-    from ..compiled import CompileError
+    from ..sim.compiled import CompileError
     from ..sim.board import SimulatedBoard
 
     def say(line):
@@ -355,9 +355,9 @@ def simulated_board(args, **kwargs):
 
 def hatch_set(text):
     """``SPACING[,ANGLE[,STEP[,OFFSET]]]``: mm, degrees, degrees a pass, mm: a
-    :class:`~galvoscan.jobs.fill.HatchSet`."""
-    from ..jobs.fill import HatchSet
-    from ..jobs.plan import PlanError
+    :class:`~galvoscan.geometry.fill.HatchSet`."""
+    from ..geometry.fill import HatchSet
+    from ..geometry.field import PlanError
     parts = text.replace(" ", "").split(",")
     try:
         if not 1 <= len(parts) <= 4:
@@ -373,9 +373,9 @@ def hatch_set(text):
 
 
 def contour_fill(text):
-    """``SPACING[,COUNT]``: mm, rings: a :class:`~galvoscan.jobs.fill.Contour`."""
-    from ..jobs.fill import Contour
-    from ..jobs.plan import PlanError
+    """``SPACING[,COUNT]``: mm, rings: a :class:`~galvoscan.geometry.fill.Contour`."""
+    from ..geometry.fill import Contour
+    from ..geometry.field import PlanError
     parts = text.replace(" ", "").split(",")
     try:
         if not 1 <= len(parts) <= 2:

@@ -6,6 +6,12 @@ import json
 import os
 from pathlib import Path
 
+from amaranth.back import verilog
+
+from ..correction.files import load_table, TableFileError
+from ..gateware.clocking import check_clocks
+from ..gateware.field.correction_table import CorrectionTable, TABLE_SIZES
+from ..toolchain import tool, ToolchainError
 from .args import (add_baud_option, add_table_options, fail, int_in, number_in, output_dir,
                    output_file, settings_from, table_from)
 
@@ -14,6 +20,7 @@ __all__ = ["add_parsers"]
 
 
 def _modes(text):
+    # Here: gateware.top takes 0.3 s to import; `galvoscan --help` need not wait.
     from ..gateware.top import MODES
     modes = tuple(part.strip() for part in text.split(","))
     if not all(mode in MODES for mode in modes) or len(set(modes)) != len(modes):
@@ -25,8 +32,7 @@ def _modes(text):
 def _correction(args):
     """The correction table for a build: None (no stage), a file's, or the identity
     (``"identity"``: the board's default)."""
-    from ..correction.files import TableFileError, load_table
-    from ..gateware.field.correction_table import TABLE_SIZES, CorrectionTable
+    # Here: gateware.top takes 0.3 s to import; `galvoscan --help` need not wait.
     from ..gateware.top import DEFAULT_CORRECTION_NODES
     nodes = args.correction_nodes or DEFAULT_CORRECTION_NODES
     if nodes not in TABLE_SIZES:
@@ -49,6 +55,7 @@ def _correction(args):
 def _apply_preset(args):
     """``--preset``'s options, where the command line gives none of its own (one line if it
     contradicts the preset)."""
+    # Here: build takes 0.7 s to import; `galvoscan --help` need not wait.
     from ..build import PRESETS
     if args.preset is None:
         return
@@ -69,6 +76,7 @@ def _apply_preset(args):
 
 
 def _cmd_build(args):
+    # Here: build takes 0.7 s to import; `galvoscan --help` need not wait.
     from ..build import BuildError, build_bitstream
     args.player = False
     _apply_preset(args)
@@ -115,10 +123,8 @@ def _cmd_build(args):
 
 
 def _cmd_export(args):
-    from amaranth.back import verilog
-    from ..gateware.clocking import check_clocks
+    # Here: gateware.top takes 0.3 s to import; `galvoscan --help` need not wait.
     from ..gateware.top import GalvoScanTop
-    from ..toolchain import ToolchainError, tool
 
     table = table_from(args)
     try:

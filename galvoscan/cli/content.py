@@ -1,13 +1,13 @@
 """The content ``mark`` and ``store`` make themselves, beside or instead of a drawing: text
-(``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.jobs.vector_job.MarkObject` of
+(``--text``), codes (``--code``) and photos (``--image``), each a :class:`~galvoscan.plan.objects.MarkObject` of
 the job."""
 
 from ..api import Code, Photo, Text, fields, mark_object
-from ..jobs.codes import CodeKind
-from ..jobs.drawing import DrawingError
-from ..jobs.photo import Dither
-from ..jobs.plan import PlanError
-from ..jobs.serial import load_counter, uses_serial
+from ..inputs.codes import CodeKind
+from ..geometry.drawing import DrawingError
+from ..inputs.photo import Dither
+from ..geometry.field import PlanError
+from ..inputs.serial import load_counter, uses_serial
 
 
 __all__ = ["check_content_options", "content_objects", "content_item",
@@ -26,7 +26,7 @@ def has_content(args):
 
 def check_content_options(args):
     """Refuse an option of one kind of content given without it (``--font`` without
-    ``--text``); one line (:class:`~galvoscan.jobs.plan.PlanError`)."""
+    ``--text``); one line (:class:`~galvoscan.geometry.field.PlanError`)."""
     for kind, options in _OPTIONS.items():
         given = [name for name in options if getattr(args, name, None) is not None]
         if getattr(args, kind, None) is None and given:
@@ -64,9 +64,9 @@ def content_item(kind, one):
 
 
 def content_objects(args, settings, profile, *, serial=None):
-    """The :class:`~galvoscan.jobs.vector_job.MarkObject` s of ``args.entries``' text, codes
+    """The :class:`~galvoscan.plan.objects.MarkObject` s of ``args.entries``' text, codes
     and photos (each entry the options of one object, over ``args``' own), ``serial`` the
-    part's number (raises :class:`~galvoscan.jobs.plan.PlanError`, one line): each made by
+    part's number (raises :class:`~galvoscan.geometry.field.PlanError`, one line): each made by
     the API (:func:`galvoscan.api.mark_object`)."""
     objects = []
     for kind in ("text", "image", "code"):

@@ -5,6 +5,15 @@ import json
 from pathlib import Path
 import sys
 
+from tqdm import tqdm
+import numpy as np
+
+from ..correction.files import load_table, save_table, TableFileError
+from ..correction.ftheta import fit_polynomial, PRINTED_COEFFICIENTS, TABLE_1, table_1_rows
+from ..correction.measure import MeasurementError, read_pairs, table_from_measurement
+from ..correction.model import ftheta_table, synthetic_head
+from ..correction.upload import upload_table
+from ..gateware.field.correction_table import TABLE_SIZES
 from .args import add_link_options, fail as _fail, int_in, number_in as positive, open_link, \
     image_file, output_dir, output_file
 
@@ -13,7 +22,6 @@ __all__ = ["add_parsers"]
 
 
 def _nodes(text):
-    from ..gateware.field.correction_table import TABLE_SIZES
     try:
         value = int(text)
     except ValueError:
@@ -35,7 +43,6 @@ def _grid(text):
 
 
 def _save(path, table, *, source, units_per_mm=None):
-    from ..correction.files import TableFileError, save_table
     try:
         for warning in save_table(path, table, source=source, units_per_mm=units_per_mm):
             print(f"galvoscan: warning: {warning}", file=sys.stderr)
@@ -49,7 +56,6 @@ def _save(path, table, *, source, units_per_mm=None):
 
 
 def _load(path, nodes=None):
-    from ..correction.files import TableFileError, load_table
     try:
         return load_table(path, nodes=nodes)
     except TableFileError as error:
@@ -59,7 +65,6 @@ def _load(path, nodes=None):
 # --- model / table1 ----------------------------------------------------------------------------
 
 def _cmd_model(args):
-    from ..correction.model import ftheta_table
     try:
         table = ftheta_table(args.nodes, field_mm=args.field, focal_mm=args.focal, k=args.k,
                              method="polynomial" if args.polynomial else "exact")
@@ -71,7 +76,6 @@ def _cmd_model(args):
 
 
 def _cmd_table1(args):
-    from ..correction.ftheta import PRINTED_COEFFICIENTS, TABLE_1, fit_polynomial, table_1_rows
     rows = table_1_rows()
     printed = table_1_rows(PRINTED_COEFFICIENTS)
     if args.json:
@@ -97,8 +101,6 @@ def _cmd_table1(args):
 # --- measure / convert / job ------------------------------------------------------------------
 
 def _cmd_measure(args):
-    import numpy as np
-    from ..correction.measure import MeasurementError, read_pairs, table_from_measurement
     try:
         cx, cy, mx, my = read_pairs(args.pairs)
     except MeasurementError as error:
@@ -120,7 +122,7 @@ def _cmd_convert(args):
 
 
 def _cmd_job(args):
-    from ..correction.measure import MeasurementError
+    # Here: correction.photo takes 1.1 s to import; `galvoscan --help` need not wait.
     from ..correction.photo import calibration_job, job_text
     try:
         segments = calibration_job(args.grid, span=args.span, line_width=args.line_width)
@@ -136,6 +138,7 @@ def _cmd_job(args):
 # --- photo ----------------------------------------------------------------------------------
 
 def _cmd_photo(args):
+    # Here: correction.photo takes 1.1 s to import; `galvoscan --help` need not wait.
     import matplotlib.image
     from ..correction.photo import PhotoError, table_from_photo
     try:
@@ -151,10 +154,11 @@ def _cmd_photo(args):
 
 
 def _cmd_synth_photo(args):
+    # Here: matplotlib takes 0.4 s to import; `galvoscan --help` need not wait.
     import matplotlib
     matplotlib.use("Agg")
+    # Here: matplotlib.pyplot takes 1.4 s to import; `galvoscan --help` need not wait.
     import matplotlib.pyplot as plt
-    from ..correction.model import synthetic_head
     from ..correction.photo import calibration_job, render_photo
     head = synthetic_head(args.max_error)
     image, _ = render_photo(calibration_job(args.grid), head.land, grid=args.grid,
@@ -171,13 +175,14 @@ def _cmd_show(args):
     print(f"{args.table}: {table.n} × {table.n} nodes, {table.node_spacing} units apart; dx "
           f"{table.dx.min()} … {table.dx.max()}, dy {table.dy.min()} … {table.dy.max()}")
     if args.png:
+        # Here: correction.figures takes 1.4 s to import; `galvoscan --help` need not wait.
         from ..correction.figures import plot_table
         plot_table(args.png, table, title=str(args.table))
         print(f"  png: {args.png}")
 
 
 def _cmd_study(args):
-    from tqdm import tqdm
+    # Here: correction.study takes 1.1 s to import; `galvoscan --help` need not wait.
     from ..correction.study import STUDY_STEPS, markdown_table, run_study
     with tqdm(total=STUDY_STEPS, desc="correction study", disable=args.quiet or None,
               file=sys.stderr) as bar:
@@ -196,14 +201,15 @@ def _cmd_study(args):
               f"circle centres within {photo['centre_error_max']:.0f} units (mean "
               f"{photo['centre_error_mean']:.1f}).")
     if not args.no_plots:
+        # Here: correction.figures takes 1.4 s to import; `galvoscan --help` need not wait.
         from ..correction.figures import plot_study
         for path in plot_study(study, args.out):
             print(f"  figure: {path}", file=sys.stderr)
 
 
 def _cmd_upload(args):
-    from ..client import ClientError, HostClient
-    from ..correction.upload import upload_table
+    # Here: link.client takes 0.1 s to import; `galvoscan --help` need not wait.
+    from ..link.client import ClientError, HostClient
     table = _load(args.table)
     with open_link(args) as link:
         board = HostClient(link)

@@ -10,10 +10,10 @@ wobble, tolerance) are :mod:`galvoscan.settings.laser`'s.
 
 from dataclasses import dataclass, field
 
-from ..jobs.codes import QR_LEVELS, CodeFill, CodeKind
-from ..jobs.fill import LineOrder
-from ..jobs.photo import Dither
-from ..jobs.text import ALIGNMENTS
+from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
+from ..geometry.fill import LineOrder
+from ..inputs.photo import Dither
+from ..inputs.text import ALIGNMENTS
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ)
 from .args import contour_fill, hatch_set, int_in, number_in, setting_keywords

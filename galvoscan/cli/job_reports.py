@@ -3,6 +3,12 @@ board) and what the simulated board's wires carried (``--sim --json``); ``standa
 the marks' frame."""
 
 from pathlib import Path
+from collections import Counter
+
+import numpy as np
+
+from ..geometry.field import from_galvo
+from .jobargs import job_settings_values
 
 
 __all__ = ["describe_job", "estimate_record", "mark_estimate_record", "sim_report", "FIELD_FRAME", "SVG_FRAME", "DXF_FRAME"]
@@ -75,7 +81,6 @@ def estimate_record(job, profile, power, prr, passes, preview):
 def mark_estimate_record(job, args, profile, *, parts, total_s):
     """``mark --estimate --json``: the plan (a job of layers: its totals and each layer's
     own), the parts and their time, the fill asked for."""
-    from .jobargs import job_settings_values
     speed, power, prr = job_settings_values(args, profile)
     record = estimate_record(job, profile, power, prr,
                               args.passes or profile.defaults.passes, args.preview)
@@ -116,7 +121,6 @@ def _wire_speeds(marked, wire_mm, pitch_mm, unit_mm, clk_freq):
     path, which is lower on short segments: a segment's last step, onto its end point, is
     shorter than a pitch and takes as long (Wan et al.'s DDA starts afresh at every vertex).
     """
-    import numpy as np
     line, path = [0.0, 0.0], [0.0, 0.0]
     for i in range(1, len(marked)):
         step = float(np.hypot(*(wire_mm[i] - wire_mm[i - 1])))
@@ -133,8 +137,6 @@ def _wire_speeds(marked, wire_mm, pitch_mm, unit_mm, clk_freq):
 def _layer_reports(board, job, marked, wire_mm, profile, layer_starts):
     """Each layer's speed and pulses per point as planned and as measured on the wires (its
     points: those whose first pulse came after the layer's first)."""
-    from collections import Counter
-    import numpy as np
     edges = [board.pulses[i] if i < len(board.pulses) else float("inf")
              for i in layer_starts] + [float("inf")]
     firsts = np.array([p[5] for p in marked], dtype=float)
@@ -158,8 +160,6 @@ def sim_report(board, job, placement, drawing, profile, report, *, layer_starts=
     """The ``--json`` record of a simulated job: the marked points off the wires (and, for a
     job of layers, each layer's speed and pulses per point on them; ``layer_starts``: the
     index of each layer's first pulse)."""
-    import numpy as np
-    from ..jobs.plan import from_galvo
     points = board.points()
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)

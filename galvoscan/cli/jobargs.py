@@ -8,9 +8,9 @@ import sys
 from tqdm import tqdm
 
 from ..api import load_lens_table
-from ..client import ClientError, HostClient, SerialTransport
-from ..jobs.stream import JobAborted, JobInterrupted
-from ..jobs.vector_job import frame_segments
+from ..link.client import ClientError, HostClient, SerialTransport
+from ..outputs.stream import JobAborted, JobInterrupted
+from ..plan.vector_job import frame_segments
 from ..sim.board import PTYServer
 from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
 from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board

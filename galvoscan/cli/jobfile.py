@@ -47,7 +47,7 @@ try:                    # Python 3.11's; tomli, the same parser, before (require
 except ImportError:     # pragma: no cover (CI runs 3.11)
     import tomli as tomllib
 
-from ..jobs.fill import Contour, HatchSet
+from ..geometry.fill import Contour, HatchSet
 from .args import fail
 from .job_options import OPTIONS, SECTIONS, defaults as option_defaults, option
 from .layers import layer_from_table
@@ -141,7 +141,7 @@ def _entry(section, table, folder, where, folder_name=""):
 
 def load_job_file(path):
     """``(job, entries, layers)``: the ``[job]`` settings and every other table, by
-    section, as ``{dest: value}``; the layers as :class:`~galvoscan.jobs.layers.Layer` s
+    section, as ``{dest: value}``; the layers as :class:`~galvoscan.plan.layers.Layer` s
     and their tables. One line (and exit) for anything wrong."""
     path = Path(path)
     try:

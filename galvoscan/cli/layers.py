@@ -9,10 +9,10 @@ import difflib
 
 from ..api import apply_wobble, job_wobble
 from ..gateware.host.regmap import BY_NAME
-from ..jobs.fill import LineOrder
-from ..jobs.layers import Layer
-from ..jobs.plan import PlanError
-from ..jobs.profile_keys import DELAY_KEYS
+from ..geometry.fill import LineOrder
+from ..plan.layers import Layer
+from ..geometry.field import PlanError
+from ..profile.keys import DELAY_KEYS
 from ..settings.laser import JOB_SETTINGS
 from .args import contour_fill, fail, hatch_set, register_int, setting_type
 
@@ -68,7 +68,7 @@ LAYER_KEYS = {
 
 
 def _layer(match, pairs, where):
-    """A :class:`~galvoscan.jobs.layers.Layer` from ``(key, value)`` pairs (values as text or
+    """A :class:`~galvoscan.plan.layers.Layer` from ``(key, value)`` pairs (values as text or
     TOML gives them); ValueError, one line naming ``where`` and the key."""
     fields, hatch, delays = {}, [], []
     for key, value in pairs:
@@ -137,7 +137,7 @@ def _number_or_text(text):
 
 
 class LayerAction(argparse.Action):
-    """``--layer MATCH KEY=VALUE …``: a :class:`~galvoscan.jobs.layers.Layer` appended to
+    """``--layer MATCH KEY=VALUE …``: a :class:`~galvoscan.plan.layers.Layer` appended to
     ``layers``, and its words as a job file's ``[[layer]]`` table (for ``--save``)."""
 
     def __call__(self, parser, namespace, values, option_string=None):

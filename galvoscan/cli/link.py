@@ -45,7 +45,7 @@ def _cmd_regs(args):
 
 def _assignments(items):
     """``[(name, value)]`` of NAME=VALUE items, every one checked against the map first."""
-    from ..client import ClientError, encode_write, parse_assignment
+    from ..link.client import ClientError, encode_write, parse_assignment
     try:
         assignments = [parse_assignment(item) for item in items]
         for name, value in assignments:
@@ -60,7 +60,7 @@ def _assignments(items):
 
 def _cmd_encode(args):
     from cobs import cobs
-    from ..client import ClientError, encode_read, encode_write
+    from ..link.client import ClientError, encode_read, encode_write
     try:
         if args.read:
             frames = [encode_read(name, tag=(args.seq + k) & 0xFF)
@@ -76,7 +76,7 @@ def _cmd_encode(args):
 
 
 def _cmd_send(args):
-    from ..client import ClientError, HostClient
+    from ..link.client import ClientError, HostClient
     # Every assignment is checked before the link is even opened: a typo in the last one must
     # not leave the first ones (arm=1, say) written.
     assignments = _assignments(args.items)
@@ -95,7 +95,7 @@ def _cmd_send(args):
 
 
 def _cmd_read(args):
-    from ..client import ClientError, HostClient
+    from ..link.client import ClientError, HostClient
     from ..gateware.host.regmap import BY_NAME
     unknown = [name for name in args.names if name not in BY_NAME]
     if unknown:
@@ -115,7 +115,7 @@ def _cmd_read(args):
 
 
 def _cmd_reset(args):
-    from ..client import ClientError, HostClient
+    from ..link.client import ClientError, HostClient
     from ..gateware.fields import Capabilities, Status
     with open_link(args) as link:
         board = HostClient(link)

@@ -14,13 +14,14 @@ from pathlib import Path
 import numpy as np
 
 from .. import api
-from ..job import JobError, parse_job
-from ..jobs.drawing import DrawingError
-from ..jobs.fill import LineOrder
-from ..jobs.plan import PlanError
-from ..jobs.speed import path_length_mm
-from ..jobs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
-from ..jobs.vector_job import hull_outline, link_segments_per_s, plan_job_file
+from ..inputs.job_file import JobError, parse_job
+from ..geometry.drawing import DrawingError
+from ..geometry.fill import LineOrder
+from ..geometry.field import PlanError
+from ..geometry.speed import path_length_mm
+from ..outputs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
+from ..plan.vector_job import hull_outline, plan_job_file
+from ..outputs.stream import link_segments_per_s
 from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, progress_bar,
@@ -47,7 +48,7 @@ def job_from_args(args):
 
 
 def _plan(args, profile, serial=None):
-    """The planned :class:`~galvoscan.jobs.vector_job.VectorJob` (of layers, when ``--layer``
+    """The planned :class:`~galvoscan.plan.vector_job.VectorJob` (of layers, when ``--layer``
     gives them) and the placement, or one line and exit: the arguments mapped onto the API
     (:mod:`galvoscan.api`), which plans."""
     entries = args.entries
@@ -123,7 +124,7 @@ def _draw_preview(args, job, drawing, profile):
     """The preview of one pass (each layer's in its colour), the title saying all passes'."""
     # Here, not at the top: the preview draws with matplotlib, whose import would slow every
     # command down by a third of a second; only --preview needs it.
-    from ..jobs.preview import preview
+    from ..plan.preview import preview
     source = args.file or getattr(args, "job_file", None)
     dots = sum(1 for p in job.paths_mm if not np.ptp(p, axis=0).any())
     passes = max(lj.settings.passes for lj in job.layers) if job.layers else \

@@ -5,6 +5,13 @@ import json
 import sys
 import time
 
+from tqdm import tqdm
+
+from ..correction.files import load_table, TableFileError
+from ..gateware.host.regmap import BY_NAME
+from ..gateware.settings import ScanSettings
+from ..gateware.sources.spiral import PARK_FRAMES
+from ..inputs.job_file import JobError, parse_job
 from .args import (INTERPOLATIONS, add_backend_option, add_table_options, fail, image_file,
                    int_in, number_in, output_file, prr_khz, read_text, register_int, settings_from,
                    table_from)
@@ -34,7 +41,7 @@ def _correction(args):
     """The correction table a simulation starts with: a file's, or the identity."""
     if not args.correction:
         return "identity"
-    from ..correction.files import TableFileError, load_table
+    # Here: gateware.top takes 0.3 s to import; `galvoscan --help` need not wait.
     from ..gateware.top import DEFAULT_CORRECTION_NODES
     try:
         return load_table(args.correction, nodes=DEFAULT_CORRECTION_NODES)
@@ -61,7 +68,6 @@ def _marking_speed(points, pitch):
 
 
 def _sim_vector(args):
-    from ..job import JobError, parse_job
 
     if args.points is not None:
         fail("--points is for the spiral; a vector job is as long as its file")
@@ -71,7 +77,8 @@ def _sim_vector(args):
         fail(error)
     correction = _correction(args)
     # The simulator only once every input is known good.
-    from ..sim import plot_job, replay_job
+    from ..sim.plots import plot_job
+    from ..sim.vector import replay_job
     start = time.monotonic()
     with _FrameBar() as bar:
         try:
@@ -140,9 +147,9 @@ def _netlist_settings(args):
     """``(settings, clocks per XY2 bit)`` of the build whose netlist ``--netlist`` names: its
     register resets (the default ones: ``galvoscan build`` takes none) and its spiral's
     interpolator, built or not; options that would change the design are refused."""
-    from ..compiled import CompileError
-    from ..compiled.netlist import build_record
-    from ..gateware.settings import ScanSettings
+    # Here: sim.compiled takes 2.8 s to import; `galvoscan --help` need not wait.
+    from ..sim.compiled import CompileError
+    from ..sim.compiled.netlist import build_record
     for option in ("dwell", "interp", "correction", "vcd"):
         if getattr(args, option) is not None:
             fail(f"--{option} is the build's with --netlist (the netlist is simulated as it "
@@ -170,7 +177,6 @@ class _FrameBar:
 
     def update(self, frames):
         if self._bar is None:
-            from tqdm import tqdm
             self.started = time.monotonic()
             self._bar = tqdm(total=self.total, unit="frame", desc="simulating", disable=None,
                              file=sys.stderr)
@@ -189,8 +195,9 @@ def _say(line):
 
 
 def _sim_spiral(args):
-    from ..gateware.sources.spiral import PARK_FRAMES
-    from ..sim import SIM_CLOCKS_PER_BIT, plot_path, replay_spiral, write_csv
+    # Here: sim takes 2.9 s to import; `galvoscan --help` need not wait.
+    from ..sim.plots import plot_path
+    from ..sim.spiral import SIM_CLOCKS_PER_BIT, replay_spiral, write_csv
 
     if args.job:
         fail("--job is for --mode vector")
@@ -253,7 +260,6 @@ VECTOR_DEFAULTS = {"prr": 60.0, "lens_field": 110.0}
 
 
 def _cmd_sim(args):
-    from ..gateware.host.regmap import BY_NAME
     vector_only = ("prr", "pulses_per_point", "pitch", "jump_delay", "lens_field", "points_csv")
     if args.mode == "vector":
         if args.netlist:
@@ -274,7 +280,8 @@ def _cmd_sim(args):
 
 
 def _compiled_or_one_line(command, args):
-    from ..compiled import CompileError
+    # Here: sim.compiled takes 2.8 s to import; `galvoscan --help` need not wait.
+    from ..sim.compiled import CompileError
     try:
         return command(args)
     except CompileError as error:
@@ -285,7 +292,6 @@ def _compiled_or_one_line(command, args):
 
 
 def add_parsers(commands):
-    from ..gateware.host.regmap import BY_NAME
 
     rom = commands.add_parser("rom", help="print the two spiral angle tables",
                               description="Print the X and Y spiral tables as the ROMs hold "

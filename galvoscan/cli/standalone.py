@@ -28,8 +28,8 @@ def _player_map():
 
 
 def _cmd_store(args):
-    from ..jobs.image import ImageError, job_image, read_image
-    from ..jobs.stream import job_segments
+    from ..outputs.image import ImageError, job_image, read_image
+    from ..outputs.stream import job_segments
     from .jobfile import use_job_file
     use_job_file(args)
     if not args.output and not args.estimate:
@@ -37,7 +37,7 @@ def _cmd_store(args):
     if args.wobble:
         fail("the stand-alone bitstream (build --preset marker) has no wobble stage: it does "
              "not fit beside the job player; store the job without --wobble")
-    from ..jobs.plan import PlanError
+    from ..geometry.field import PlanError
     from .content import part_serials
     if args.repeat != 1:
         fail("an image holds one part: --repeats N plays it N times a start (the same serial "
@@ -89,7 +89,7 @@ def _check_plays_jobs(bitstream):
 
 def _cmd_flash(args):
     from ..flashing import FlashingError, ModelPort, flash_regions, open_icebreaker, program
-    from ..jobs.image import ImageError, read_image
+    from ..outputs.image import ImageError, read_image
     from .jobargs import progress_bar
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
@@ -134,16 +134,16 @@ def _cmd_flash(args):
 
 def _cmd_standalone(args):
     from ..build import PRESETS
-    from ..client import HostClient
+    from ..link.client import HostClient
     from ..gateware.fields import PlayerResult, PlayerState, PlayerStatus
-    from ..jobs.image import ImageError, read_image
+    from ..outputs.image import ImageError, read_image
     from ..sim.board import SimTransport
     from .args import simulated_board
     if not args.sim:
         fail("a real stand-alone board runs on its own: press its start input (this command "
              "simulates one: give --sim)")
     from ..sim.spi_flash import FLASH_BYTES
-    from ..jobs.image import JOB_OFFSET, image_in_flash
+    from ..outputs.image import JOB_OFFSET, image_in_flash
     image = read_bytes(args.flash, "job image")
     if len(image) == FLASH_BYTES:
         # A whole flash, as `flash --to` writes it: the job image is at its offset.
@@ -198,7 +198,7 @@ def _cmd_standalone(args):
 def _report(board, profile, planned, presses, refused):
     """What ``mark --sim --json`` reports, off the wires, and the player's verdicts."""
     import numpy as np
-    from ..jobs.plan import from_galvo
+    from ..geometry.field import from_galvo
     points = board.points()
     marked = [p for p in points if p[2] > 0]
     xy = np.array([(p[0], p[1]) for p in marked], dtype=float).reshape(-1, 2)

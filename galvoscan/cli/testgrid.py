@@ -4,9 +4,9 @@ import argparse
 import json
 import sys
 
-from ..jobs.plan import PlanError
-from ..jobs.stream import JobStreamer
-from ..jobs.test_grid import axis_values, plan_test_grid
+from ..geometry.field import PlanError
+from ..outputs.stream import JobStreamer
+from ..plan.test_grid import axis_values, plan_test_grid
 from ..settings.laser import POWER, PRR, SPEED
 from .args import fail, image_file, int_in, number_in, setting_type
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
@@ -65,7 +65,7 @@ def _cmd_test_grid(args):
     if args.preview:
         # Here, not at the top: matplotlib's import would slow every command; only
         # --preview draws.
-        from ..jobs.preview import preview
+        from ..plan.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,
                 title=f"test grid: {len(cells)} squares")

@@ -5,7 +5,7 @@ __all__ = ["upload_table"]
 
 
 def upload_table(board, table, *, verify=False):
-    """Write every node of ``table`` through a :class:`~galvoscan.client.HostClient`.
+    """Write every node of ``table`` through a :class:`~galvoscan.link.client.HostClient`.
 
     Four frames a node: ``cor_node``, ``cor_dx``, ``cor_dy`` (two's complement), then the
     ``cor_write`` strobe, which stores both offsets at once between two points. ``verify``

@@ -4,10 +4,17 @@ unchanged (``galvoscan board --sim``).
 
 The host's bytes are clocked into ``uart_rx`` at the baud rate, 8N1, and ``uart_tx`` is read
 back bit by bit, as the board's FTDI chip does; a scan head on the XY2-100 wires and a laser on
-the DB25 pins record what the board does. The simulation runs about a thousand times slower
-than the board: a host talking to it needs a long answer timeout (``--timeout 60``), and
-anything timed in seconds on the host (a cleaning run's duration) is counted in the board's
-own time (its laser pulses) rather than by the host's clock.
+the DB25 pins record what the board does.
+
+The board runs on one of two backends behind one contract (:mod:`.contract`): the compiled
+model (:mod:`.compiled`; the command line's default, ``--backend auto``, wherever a C++
+compiler can build it) some 14 times slower than the board itself, or Amaranth's simulator
+(:mod:`.board_engine`, the reference) some 4,000 times slower (``docs/bench.json``, on two
+cores: 840,000 and 3,000 of the board's 12 MHz clocks a second). A host talking to it needs an
+answer timeout to match: :meth:`SimulatedBoard.answer_timeout_s` works it out from the speed
+measured (``galvoscan board --sim`` prints it). Anything timed in seconds on the host (a
+cleaning run's duration) is counted in the board's own time (its laser pulses) rather than by
+the host's clock.
 """
 
 import os
@@ -15,12 +22,19 @@ import select
 import threading
 import time
 from collections import deque
+import pty
+import tty
 
-from ..client import ClockedTransport, PacketTransport
 from ..gateware.clocking import DEFAULT_BAUD
+from ..gateware.player.image_format import JOB_OFFSET
 from ..gateware.top import GalvoScanTop
+from ..link.client import ClockedTransport, PacketTransport
 from ..settings.laser import TIMEOUT
-from .board_engine import LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS, PythonEngine
+from .board_engine import PythonEngine
+from .compiled import CompiledEngine, CompileError, compiled_model
+from .compiled.netlist import build_record, netlist_design
+from .contract import BACKENDS, LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
 
@@ -29,8 +43,6 @@ __all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport",
            "LASER_PINS", "PIN_FIELDS"]
 
 
-#: The simulated board's backends: ``auto`` is the compiled one where it can be built.
-BACKENDS = ("auto", "compiled", "python")
 
 
 class SimulatedBoard:
@@ -48,7 +60,7 @@ class SimulatedBoard:
         clock).
     backend : str
         ``"python"``: Amaranth's simulator (the reference); ``"compiled"``: the top compiled to
-        native code (:mod:`galvoscan.compiled`, built once per design and cached), some
+        native code (:mod:`galvoscan.sim.compiled`, built once per design and cached), some
         hundreds of times faster; ``"auto"``: the compiled one where it can be built, else the
         Python one, with a line to ``say`` saying why. Both give the same records.
     say : callable, optional
@@ -140,8 +152,6 @@ class SimulatedBoard:
 
     def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
                        **records):
-        from ..compiled import CompiledEngine, compiled_model
-        from ..compiled.netlist import build_record, netlist_design
         if backend == "python" or extra or records.get("record_pins") == "every clock":
             raise ValueError("a netlist runs on the compiled backend alone, as it was built")
         record = build_record(netlist) or {}
@@ -174,18 +184,15 @@ class SimulatedBoard:
         self.start_pressed = False
         self.flash = None
         if self.config is not None and self.config.player:
-            from .spi_flash import SPIFlashModel
             flash = self._flash_at_power_up
             if isinstance(flash, SPIFlashModel):
                 self.flash = flash
             else:
-                from ..gateware.player.image_format import JOB_OFFSET
                 self.flash = SPIFlashModel({JOB_OFFSET: flash} if flash else None)
 
     def _engine(self, backend, say, **records):
         if backend == "python" or records.get("record_pins") == "every clock":
             return PythonEngine(self, **records)
-        from ..compiled import CompileError, CompiledEngine
         try:
             return CompiledEngine(self, say=say, **records)
         except CompileError as error:
@@ -272,8 +279,6 @@ class PTYServer:
     """
 
     def __init__(self, board, *, step=100e-6):
-        import pty
-        import tty
         self.board = board
         self.step = step
         self._master, self._slave = pty.openpty()

@@ -1,8 +1,8 @@
 """The Python backend of the simulated board: the system top in Amaranth's simulator, its pins
 driven and recorded by Amaranth processes (the reference the compiled backend is checked
-against, :mod:`galvoscan.compiled`).
+against, :mod:`galvoscan.sim.compiled`).
 
-An engine moves a :class:`~.board.SimulatedBoard` on to a time of its own: it takes what the
+An engine (:class:`~.contract.Engine`) moves a :class:`~.board.SimulatedBoard` on to a time of its own: it takes what the
 host queued (``board.to_board``, ``board.spi_queue``) as it goes onto the pins, and appends to
 the board's records what the pins did. Every process here wakes at fixed instants (a UART
 bit, an SPI half period, the machine's period, 5 µs for an idle SPI host) or on a pin's
@@ -12,36 +12,11 @@ edge, so that the compiled board can wake at the same ones.
 from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
+from .contract import LASER_PINS, PIN_FIELDS, SPI_IDLE_S, pack_pins
 from .xy2_receiver import XY2Receiver
 
 
-__all__ = ["PythonEngine", "LASER_PINS", "MACHINE_PERIOD_S", "SPI_IDLE_S", "PIN_FIELDS",
-           "pack_pins"]
-
-
-# The laser pins recorded at every change, in this order.
-LASER_PINS = ("laser_enable", "laser_mo", "laser_am", "laser_prr", "laser_latch", "laser_guide")
-
-#: How often the machine's interlock and alarm pins are set from the board's attributes.
-MACHINE_PERIOD_S = 10e-6
-
-#: How often an idle SPI host looks for a transfer to send.
-SPI_IDLE_S = 5e-6
-
-#: The pins ``record_pins`` records, as ``(name, first bit, width)`` of the packed value
-#: (``laser_alarm`` 0 wide on a build without alarms).
-PIN_FIELDS = (("laser_mo", 0, 1), ("laser_am", 1, 1), ("laser_prr", 2, 1),
-              ("interlock_open", 3, 1), ("laser_latch", 4, 1), ("laser_power", 5, 8),
-              ("laser_enable", 13, 1), ("laser_alarm", 14, 4), ("laser_guide", 18, 1),
-              ("xy2_sync", 19, 1))
-
-
-def pack_pins(values):
-    """The values of :data:`PIN_FIELDS`' pins, in that order, as one packed number."""
-    packed = 0
-    for (_, first, _width), value in zip(PIN_FIELDS, values):
-        packed |= value << first
-    return packed
+__all__ = ["PythonEngine"]
 
 
 class _Clocked(Elaboratable):

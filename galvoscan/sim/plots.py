@@ -1,18 +1,19 @@
 """Plots of simulated runs: the spiral's path and a vector job's marked points."""
 
 
+# A Figure of its own, not pyplot's: no global backend or figure list to set or close.
+from matplotlib.figure import Figure
+
+
 __all__ = ["plot_path", "plot_job"]
 
 
 def plot_path(path, frames, *, title="Simulated XY2-100 output"):
     """Plot the path through the frames' positions over the whole field."""
-    import matplotlib
-    matplotlib.use("Agg")
-    from matplotlib import pyplot as plt
-
     xs = [f.x for f in frames]
     ys = [f.y for f in frames]
-    fig, ax = plt.subplots(figsize=(6, 6), dpi=120)
+    fig = Figure(figsize=(6, 6), dpi=120)
+    ax = fig.subplots()
     ax.plot(xs, ys, linewidth=0.25, color="tab:blue")
     ax.plot(xs, ys, ".", markersize=0.8, color="black")
     ax.set_xlim(0, 65535)
@@ -23,19 +24,15 @@ def plot_path(path, frames, *, title="Simulated XY2-100 output"):
     ax.set_title(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def plot_job(path, result, *, title):
     """Plot a vector job's path: jumps grey, marked points coloured by their pulses."""
-    import matplotlib
-    matplotlib.use("Agg")
-    from matplotlib import pyplot as plt
-
     points = result.points
     xs = [p[0] for p in points]
     ys = [p[1] for p in points]
-    fig, ax = plt.subplots(figsize=(6, 6), dpi=120)
+    fig = Figure(figsize=(6, 6), dpi=120)
+    ax = fig.subplots()
     ax.plot(xs, ys, linewidth=0.4, color="lightgrey")
     marked = [p for p in points if p[2]]
     if marked:
@@ -48,4 +45,3 @@ def plot_job(path, result, *, title):
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)

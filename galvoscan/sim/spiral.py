@@ -13,7 +13,9 @@ import csv
 from amaranth.sim import Simulator
 
 from ..gateware.top import GalvoScanTop
-from .xy2_receiver import XY2Receiver
+from .board import SimulatedBoard
+from .compiled import CompileError
+from .xy2_receiver import XY2Frame, XY2Receiver
 
 
 __all__ = ["SIM_CLOCKS_PER_BIT", "replay_spiral", "write_csv"]
@@ -49,7 +51,7 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
 
     Returns
     -------
-    list of :class:`~galvoscan.sim.XY2Frame`
+    list of :class:`~galvoscan.sim.xy2_receiver.XY2Frame`
     """
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
@@ -58,7 +60,6 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
         return _replay_on_board(frames=frames, clk_freq=None, progress=progress,
                                 backend="compiled", say=say, netlist=netlist)
     if backend != "python":
-        from ..compiled import CompileError
         if vcd:
             raise ValueError("a waveform (vcd) needs the Python backend")
         try:
@@ -102,8 +103,6 @@ def replay_spiral(*, frames, table=None, settings=None, bit_rate=2_000_000, vcd=
 
 def _replay_on_board(*, frames, clk_freq, progress, backend, say, **top_kwargs):
     """The first ``frames`` frames off the simulated board's wires (the compiled backend)."""
-    from .board import SimulatedBoard
-    from .xy2_receiver import XY2Frame
     if top_kwargs.get("netlist"):
         board = SimulatedBoard(backend=backend, say=say, **top_kwargs)
     else:

@@ -7,10 +7,10 @@ head holds when they fire. Simulated at the board's 12 MHz (6 clocks per XY2 bit
 timing is the board's.
 """
 
-from ..client import HostClient
 from ..gateware.host.regmap import BY_NAME
 from ..gateware.top import ScanSettings
-from ..jobs.stream import JobStreamer
+from ..link.client import HostClient
+from ..outputs.stream import JobStreamer
 from .board import SimSPITransport, SimulatedBoard
 from .xy2_receiver import frame_of_each_pulse
 

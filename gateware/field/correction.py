@@ -91,7 +91,7 @@ class FieldCorrection(wiring.Component):
         })
 
     # The two rules the formal spec checks, as methods, so that the tests can show that a stage
-    # breaking either fails the proof (tests/broken_correction.py).
+    # breaking either fails the proof (tests/support/broken_correction.py).
 
     def _may_take(self, busy, out_free):
         """A point is taken only between points, into a free output."""

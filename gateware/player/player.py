@@ -40,7 +40,7 @@ class JobPlayer(wiring.Component):
     register of :data:`~.image_format.PLAYER_OWNED`, and the CRC-32 of every byte. An image
     that fails writes nothing and arms nothing; it is counted in :attr:`refused` and named in
     :attr:`result`. One that passes is read again and played as a host plays a job
-    (:class:`~galvoscan.jobs.stream.JobStreamer`): vector mode is selected, stopped, and the
+    (:class:`~galvoscan.outputs.stream.JobStreamer`): vector mode is selected, stopped, and the
     image's settings written; its segments go into the queue as ``vec_x``, ``vec_y``,
     ``vec_op`` writes until it is full (or the job is all in); then ``arm`` is set, the MO
     lead waited out (``laser_ready``) and ``run`` set, and the rest of the segments follow as

@@ -1,0 +1,3 @@
+"""What leaves the host: a planned job run on a board over the link (:mod:`.stream`), or
+written as a flash image the board's job player runs alone (:mod:`.image`).
+"""

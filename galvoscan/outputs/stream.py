@@ -1,0 +1,510 @@
+"""Running a job on a board: parameters set, the laser armed, vector segments streamed into the
+512-segment queue as it empties, and the laser disarmed however the job ends.
+
+The queue's depth is the board's: read off ``fifo_free`` while the queue is empty (a real
+board's is 512; a simulated one may be built shorter).
+
+A segment is one checked frame (its end point and its operation together), and the board
+answers each with the free places left in its queue: the streamer sends at most a batch of
+segments, reads their answers, and sends the next batch into the room the last answer gave.
+Status is read between batches: a latched fault, an open interlock or an alarm stops the job
+at once. The watchdog is fed by the segments themselves; while the streamer waits on an armed
+board (the MO lead, a full queue, the last segments marking) it writes ``keepalive``.
+
+Before it arms, the streamer reads back every setting the job wrote and refuses to arm on any
+difference. Every ending says how far the job got: the board counts the segments its
+sequencer took (``vec_taken``), and a fault stops the sequencer where it is.
+
+Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
+first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
+caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
+(``errors``) is counted and reported, and :class:`StreamReport` says how many.
+"""
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+from ..gateware.fields import pack
+from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
+                                    VECTOR_QUEUE_DEPTH, VectorOp)
+from ..gateware.sources.vector import VecOpWord
+from ..geometry.corners import corner_frames
+from ..link.client import ClientError, encode_write, LinkLost
+
+
+__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
+           "DEFAULT_BATCH", "link_segments_per_s", "check_segment", "segment_words", "job_segments"]
+
+
+#: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
+QUEUE_DEPTH = VECTOR_QUEUE_DEPTH
+#: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
+DEFAULT_BATCH = 128
+#: Frames a segment takes on the link (vec_x, vec_y, vec_op), bytes a frame, bits a byte (8N1).
+_FRAMES_PER_SEGMENT, _BYTES_PER_FRAME, _BITS_PER_BYTE = 3, 4, 10
+
+
+def link_segments_per_s(baud, *, batch=None):
+    """Segments a second the serial link carries at ``baud``, with the streamer's read of
+    ``fifo_free`` (a request and its answer) after every ``batch`` segments (default: the
+    streamer's)."""
+    batch = batch or DEFAULT_BATCH
+    frames = _FRAMES_PER_SEGMENT + 2 / batch
+    return baud / _BITS_PER_BYTE / _BYTES_PER_FRAME / frames
+
+
+#: The board's counters a job reports, read before and after.
+COUNTERS = ("vec_underruns", "vec_stalls", "vec_rejected", "errors")
+_COUNTER_TOP = 0xFFFF
+
+
+class JobAborted(Exception):
+    """The board stopped the job (a fault, the interlock, an alarm, the link); the laser is
+    disarmed.
+
+    Attributes
+    ----------
+    taken, total : int or None
+        Segments the board's sequencer had taken when the job stopped, of the job's (None:
+        not known, the link being lost).
+    complete : bool
+        Every segment was marked to its end before the job stopped: the part is done.
+    """
+
+    def __init__(self, message, *, taken=None, total=None, complete=False):
+        super().__init__(message)
+        self.taken = taken
+        self.total = total
+        self.complete = complete
+
+
+class JobInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a job; the laser is disarmed. Says how far the job got, as
+    :class:`JobAborted` does (``taken``, ``total``, ``complete``)."""
+
+    def __init__(self, message, *, taken=None, total=None, complete=False):
+        super().__init__(message)
+        self.taken = taken
+        self.total = total
+        self.complete = complete
+
+
+@dataclass
+class StreamReport:
+    """What a job did on the board.
+
+    Attributes
+    ----------
+    segments : int
+        Segments the board took.
+    counters : dict
+        Increase of each of :data:`COUNTERS` during the job (underruns: the queue ran dry while
+        marking; stalls: frames a line waited for its next segment; rejected: segments refused
+        for a full queue; errors: frames the board refused).
+    pulses : int
+        Laser pulses emitted during the job (the board's counter, read in time to unwrap it).
+    seconds : float
+        Host time the job took.
+    resent : int
+        Frames the host sent again because the board refused them as damaged or out of step,
+        or their answers were lost: every one then landed (a job with a frame that did not
+        land stops; it does not end with a report).
+    """
+    segments: int = 0
+    counters: dict = field(default_factory=dict)
+    pulses: int = 0
+    seconds: float = 0.0
+    resent: int = 0
+
+    @classmethod
+    def total(cls, reports):
+        """The reports of jobs run one after another (a job's layers, a batch's parts) as one:
+        segments, pulses, time and each counter summed."""
+        reports = list(reports)
+        counters = {}
+        for report in reports:
+            for name, value in report.counters.items():
+                counters[name] = counters.get(name, 0) + value
+        return cls(segments=sum(r.segments for r in reports), counters=counters,
+                   pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports),
+                   resent=sum(r.resent for r in reports))
+
+    @property
+    def clean(self):
+        """No segment refused for a full queue, and no underrun. (Frames the link damaged are
+        counted in ``errors``, and were sent again: every write of a job that ends with a
+        report landed, acknowledged.)"""
+        return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
+
+
+def check_segment(op, x, y):
+    """Refuse a segment the board would: ``op`` a jump or a mark, ends within the field."""
+    if op not in ("jump", "mark"):
+        raise ValueError(f"a segment is a jump or a mark, not {op!r}")
+    for value in (x, y):
+        reg = BY_NAME["vec_x"]
+        if isinstance(value, bool) or not isinstance(value, int) or \
+                not reg.low <= value <= reg.high:
+            raise ValueError(f"segment end {value!r} is outside {reg.low} … {reg.high}")
+
+
+def segment_words(op, x, y, corner_frames=0):
+    """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
+    streamer writes and a job image holds."""
+    return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
+
+
+def job_segments(segments):
+    """A vector job's segments as the board is sent them: ending on a jump (to where the last
+    mark ends: no move), since the board counts a mark that finds the queue empty as an
+    underrun, and a job's end is none."""
+    segments = list(segments)
+    if segments and segments[-1][0] == "mark":
+        segments.append(("jump", *segments[-1][1:]))
+    return segments
+
+
+class JobStreamer:
+    """Runs jobs on a board through a :class:`~galvoscan.link.client.HostClient`.
+
+    Parameters
+    ----------
+    board : :class:`~galvoscan.link.client.HostClient`
+    batch : int
+        Most segments written between two reads of ``fifo_free`` (three frames each: the
+        frames in flight). A read waits for the board's answer, and over USB an answer
+        takes a round trip (1 ms with the FTDI driver's low-latency mode, 16 ms without), so
+        a batch must be long enough to carry the link past it: 128 segments are 15 ms at
+        1 Mbaud.
+    poll_s : float
+        Host seconds between status reads while waiting on the board.
+    progress : callable, optional
+        Called with the number of segments taken, as they are.
+    """
+
+    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None):
+        if not 1 <= batch <= QUEUE_DEPTH:
+            raise ValueError(f"batch must be from 1 to {QUEUE_DEPTH}, not {batch!r}")
+        self.board = board
+        # Every wait counts the link's clock: a simulated board's own time (its transport
+        # gives it), else the host's. A board without a clock of its own (a model) has the
+        # host's.
+        self._now = getattr(board, "now", time.monotonic)
+        self._sleep = getattr(board, "sleep", time.sleep)
+        self.batch = batch
+        self.poll_s = poll_s
+        self.progress = progress
+        self._pulses_seen = None
+        self._capabilities = None
+        self.pulses = 0
+        #: Segments the board's queue holds, read by :meth:`check_ready` (None before).
+        self.queue_depth = None
+
+    # --- the board's state ---------------------------------------------------------------------
+
+    def status(self):
+        """The board's status flags; a fault, an open interlock or an alarm raises
+        :class:`JobAborted`. Also keeps the pulse count."""
+        flags = Status.from_bits(self.board.read("status"))
+        self._count_pulses()
+        if flags.fault_interlock or flags.interlock_open:
+            raise JobAborted("the interlock opened: the laser is off (close it, then "
+                             "`galvoscan send fault_clear=1`)")
+        if flags.fault_alarm or flags.alarm:
+            raise JobAborted("the laser reported an alarm: the laser is off (see the laser's "
+                             "own display; then `galvoscan send fault_clear=1`)")
+        if flags.fault_watchdog:
+            raise JobAborted("the board's watchdog fired: no segment or keepalive came for "
+                             "longer than `watchdog` ms")
+        if flags.fault_link:
+            raise JobAborted("the board refused a frame while armed (damaged or lost on the "
+                             "line): it switched the laser off at once")
+        return flags
+
+    def _count_pulses(self):
+        now = self.board.read("pulses")
+        if self._pulses_seen is not None:
+            self.pulses += (now - self._pulses_seen) & _COUNTER_TOP
+        self._pulses_seen = now
+
+    def capabilities(self):
+        """What the board's bitstream holds (its ``caps`` register, read once): asked, not
+        tried, so that ``errors`` counts only the board's real refusals."""
+        if self._capabilities is None:
+            try:
+                self._capabilities = Capabilities.from_bits(self.board.read("caps"))
+            except ClientError as error:
+                raise JobAborted(f"the board does not say what its bitstream holds ({error}): "
+                                 f"a bitstream built before galvoscan had the caps register; "
+                                 f"build and flash it again") from None
+        return self._capabilities
+
+    def counters(self):
+        return {name: self.board.read(name) for name in COUNTERS}
+
+    def check_ready(self):
+        """Refuse to start on a board that is not idle and safe: one line, nothing written."""
+        flags = self.status()
+        if flags.armed:
+            raise JobAborted("the board is armed already: another job may be running "
+                             "(`galvoscan send arm=0` stops it)")
+        free = self.board.read("fifo_free")
+        # Not busy: the queue is empty and nothing is in the sequencer's hand, so every place
+        # is free and `free` is the queue's depth.
+        if flags.vector_busy:
+            raise JobAborted(f"the board's vector queue still holds segments of an earlier "
+                             f"job ({free} places free): reset the board first")
+        self.queue_depth = free
+
+    # --- stopping ------------------------------------------------------------------------------
+
+    def disarm(self):
+        """``arm = 0`` then ``run = 0`` and the guide laser off; best effort (the link may be
+        what failed)."""
+        for name in ("arm", "run", "guide"):
+            try:
+                self.board.write(name, 0)
+            except LinkLost:        # a lost link: the board's watchdog switches it off
+                return
+            except Exception:
+                pass
+
+    # --- running -------------------------------------------------------------------------------
+
+    def setup(self, registers):
+        """Write ``{name: value}`` (checked against the map before the first is sent); returns
+        them."""
+        for name, value in registers.items():
+            encode_write(name, value)
+        caps = self.capabilities()
+        if "mode" in registers:
+            mode = Mode(registers["mode"])
+            if not getattr(caps, mode.label):
+                raise JobAborted(f"the board has no {mode.label} mode: its bitstream was "
+                                 f"built without it (galvoscan build --modes)")
+        if registers.get("wob_shape") and not caps.wobble:
+            raise JobAborted("the board has no wobble stage: its bitstream was built "
+                             "without it (galvoscan build --wobble)")
+        self.board.write_many([(name, value) for name, value in registers.items()
+                               if not (name == "wob_shape" and not caps.wobble)])
+        # (wob_shape off, on a board that has no wobble to turn off, is not written.)
+        return registers
+
+    def verify(self, registers):
+        """Read back every setting of ``registers``: a difference refuses to arm."""
+        caps = self.capabilities()
+        for name, value in registers.items():
+            if BY_NAME[name].access != "rw" or (name == "wob_shape" and not caps.wobble):
+                continue
+            got = self.board.read(name)
+            if got != value:
+                raise JobAborted(f"the board holds {name} = {got} where the job wrote {value}: "
+                                 f"not arming")
+
+    def wait_ready(self, timeout_s):
+        """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""
+        deadline = self._now() + timeout_s
+        while not self.status().laser_ready:
+            if self._now() > deadline:
+                raise JobAborted(f"the laser did not become ready within {timeout_s:g} s")
+            self.keepalive()
+            self._sleep(self.poll_s)
+
+    def wait_idle(self, timeout_s):
+        """Wait until the vector queue is empty and the last point marked."""
+        deadline = self._now() + timeout_s
+        while self.status().vector_busy:
+            if self._now() > deadline:
+                raise JobAborted(f"the board was still marking after {timeout_s:g} s")
+            self.keepalive()
+            self._sleep(self.poll_s)
+
+    def keepalive(self):
+        """Feed the armed board's watchdog (status reads do not)."""
+        self.board.write("keepalive", 1)
+
+    def stream(self, segments, *, start, timeout_s, corners=None):
+        """Feed ``segments`` (``(op, x, y)``, galvo units) into the queue as it frees up.
+
+        ``start()`` is called once, when the first batch is in (or the job is all in): it
+        arms and starts the scan. ``corners``: each segment's corner hold in frames, sent in
+        ``vec_op`` bits 7:1 (:func:`~galvoscan.geometry.corners.corner_frames`; for
+        ``polygon_scaled``).
+        Returns the number of segments written."""
+        segments = list(segments)
+        for segment in segments:
+            check_segment(*segment)
+        corners = [0] * len(segments) if corners is None else list(corners)
+        # Every place is free (checked by check_ready), else as many as the board says.
+        free = self.queue_depth if self.queue_depth is not None else \
+            self.board.read("fifo_free")
+        sent = 0
+        started = False
+        deadline = self._now() + timeout_s
+        while sent < len(segments):
+            if free == 0:
+                self.status()
+                if started:
+                    self.keepalive()
+                free = self.board.read("fifo_free")
+                if free == 0:
+                    if self._now() > deadline:
+                        raise JobAborted(f"the queue did not move for {timeout_s:g} s")
+                    self._sleep(self.poll_s)
+                    continue
+                deadline = self._now() + timeout_s
+            count = min(free, self.batch, len(segments) - sent)
+            words = [segment_words(op, x, y, hold)
+                     for (op, x, y), hold in zip(segments[sent:sent + count],
+                                                 corners[sent:sent + count])]
+            # Each answered with the free places after it: the last one's is the room now.
+            free = self.board.queue_segments([(op_word, x, y) for x, y, op_word in words])
+            sent += count
+            self.sent = sent
+            if self.progress is not None:
+                self.progress(count)
+            if not started and (sent == len(segments) or free < self.batch):
+                start()
+                started = True
+        if not started:
+            start()
+        return sent
+
+    def _start(self, *, armed, ready_timeout_s):
+        """Arm (unless ``armed`` is false), wait out the MO lead, run."""
+        if armed:
+            self.board.write("arm", 1)
+            self.wait_ready(ready_timeout_s)
+        self.board.write("run", 1)
+
+    def _taken(self):
+        """``vec_taken`` now, or None (no vector mode, or no answer)."""
+        if not self.capabilities().vector:
+            return None
+        try:
+            return self.board.read("vec_taken")
+        except ClientError:
+            return None
+
+    def _job(self, body, total=None):
+        """What every job does around its ``body()`` (which returns the segments it sent):
+        refuse a board not ready, count, disarm however it ends (saying how far it got),
+        report the counters' rise. ``total``: the job's segments."""
+        started = time.monotonic()      # the report's seconds: the host's
+        self.check_ready()
+        before = self.counters()
+        self._count_pulses()
+        first = self.pulses
+        taken_before = self._taken() if total is not None else None
+        self.sent = 0
+        retries = getattr(self.board, "retries", 0)
+        try:
+            sent = body()
+        except BaseException as error:
+            self.disarm()
+            if total is None or not isinstance(error, (JobAborted, ClientError,
+                                                       KeyboardInterrupt)):
+                raise
+            ending = self._ending(error, taken_before, total)
+            if isinstance(error, KeyboardInterrupt):
+                raise JobInterrupted(str(ending), taken=ending.taken, total=total,
+                                     complete=ending.complete) from error
+            raise ending from error
+        self.disarm()
+        try:
+            after = self.counters()
+            self._count_pulses()
+        except ClientError as error:
+            if total is None:
+                raise
+            # Marked to its end (the queue ran empty), then the link failed.
+            raise JobAborted(f"every segment ({total}) was marked: the part is done, but the "
+                             f"link failed before its counters were read ({error})",
+                             taken=total, total=total, complete=True) from error
+        return StreamReport(
+            segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
+            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS},
+            resent=getattr(self.board, "retries", 0) - retries)
+
+    def _ending(self, error, taken_before, total):
+        """``error`` as a :class:`JobAborted` that says how far the job got."""
+        watchdog = getattr(self, "_watchdog_ms", None)
+        if isinstance(error, LinkLost):
+            bound = f"within {watchdog} ms of the last segment it took" if watchdog else \
+                "when its watchdog runs out"
+            return JobAborted(f"the link to the board is lost ({error}); the board had "
+                              f"acknowledged {self.sent} of {total} segments, and it stops the "
+                              f"laser {bound}", total=total)
+        said = "the laser is disarmed" if isinstance(error, KeyboardInterrupt) else str(error)
+        now = self._taken()
+        if now is None or taken_before is None:
+            return JobAborted(f"{said} (how far the job got is not known: the board does not "
+                              f"answer)", total=total)
+        taken = (now - taken_before) & _COUNTER_TOP
+        busy = None
+        try:
+            busy = Status.from_bits(self.board.read("status")).vector_busy
+        except Exception:
+            pass
+        complete = taken >= total and busy is False
+        where = (f"every segment ({total}) was marked: the part is done" if complete else
+                 f"stopped at segment {min(taken, total)} of {total}: the part is not done")
+        return JobAborted(f"{said}; {where}", taken=taken, total=total, complete=complete)
+
+    def _without_missing_delays(self, registers):
+        """``registers`` less the RTC delays if the board has none (the default bitstream:
+        ``galvoscan build --delays`` builds them), with one line saying so."""
+        delays = [name for name in registers if name in DELAY_REGISTERS]
+        if delays and not self.capabilities().delays:
+            print("galvoscan: note: the board has no laser or scanner delays (its bitstream "
+                  "was built without --delays): marking without them", file=sys.stderr)
+            return {name: value for name, value in registers.items()
+                    if name not in DELAY_REGISTERS}
+        return registers
+
+    def run_vector(self, segments, registers, *, ready_timeout_s=5.0, timeout_s=60.0,
+                   armed=True):
+        """A whole vector job: checks, parameters, arm, stream, wait, disarm, report.
+
+        ``registers`` are written after ``mode = vector`` and ``run = 0`` (pitch, pulses per
+        point, jump delay, power, PRR …). With ``armed`` false the job runs with the laser
+        off (framing with the guide laser)."""
+        segments = job_segments(segments)
+        registers = self._without_missing_delays(registers)
+
+        def body():
+            written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
+            self.verify(written)
+            self._watchdog_ms = self.board.read("watchdog")
+            corners = corner_frames(segments, written["polygon_delay"]) \
+                if written.get("polygon_scaled") else None
+            sent = self.stream(segments, timeout_s=timeout_s, corners=corners,
+                               start=lambda: self._start(
+                armed=armed, ready_timeout_s=ready_timeout_s))
+            self.wait_idle(timeout_s)
+            if registers.get("wob_shape"):
+                # A later job that does not ask for wobble must not inherit it.
+                self.board.write("wob_shape", 0)
+            return sent
+        return self._job(body, total=len(segments))
+
+    def run_area(self, registers, *, pulses, timeout_s, ready_timeout_s=5.0):
+        """A spiral or raster job: set up, arm, run until the laser has fired ``pulses``
+        pulses (the board's own clock: this works on a simulated board too), disarm."""
+        def body():
+            first = self.pulses
+            self.verify(self.setup(registers))
+            self._start(armed=True, ready_timeout_s=ready_timeout_s)
+            deadline = self._now() + timeout_s
+            while self.pulses - first < pulses:
+                self.status()
+                if self.progress is not None:
+                    self.progress(min(self.pulses - first, pulses))
+                if self._now() > deadline:
+                    raise JobAborted(f"the laser fired {self.pulses - first} of {pulses} "
+                                     f"pulses in {timeout_s:g} s")
+                self.keepalive()
+                self._sleep(self.poll_s)
+            return 0
+        return self._job(body)

@@ -1,0 +1,378 @@
+"""The machine profile: what a marking or cleaning job needs to know about the machine that the
+board's registers do not hold (the lens's field and correction table, the laser's power and
+pulse rates, how long the mirrors take to settle, the link, and the job settings to use when the
+command line gives none).
+
+It is a TOML file, ``galvoscan.toml`` by default, that ``galvoscan machine init`` writes with a
+comment on every key (:func:`galvoscan.profile.template.profile_text`)::
+
+    [field]     size_mm, correction
+    [link]      port, baud, spi, timeout_s
+    [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
+    [galvo]     jump_delay_us, settle_us_per_mm, max_speed_mm_s, laser_on_delay_us,
+                laser_off_delay_us, mark_delay_us, polygon_delay_us, polygon_scaled
+    [defaults]  speed_mm_s, power_percent, prr_khz, passes
+    [wobble]    across_um, along_um, freq_hz
+
+Every key is optional (its default is safe near a laser: 10 % power, one pass). A key or section
+that is not known is an error, with the nearest known name suggested: a typo must not pass
+silently into a job. Every problem with a file is a :class:`ProfileError`, one line that names the
+file and the key; nothing else escapes :func:`load_profile`.
+
+Ranges that the board fixes are taken from the register map (``laser_prr``, ``laser_power``,
+``jump_delay`` and the other delays), so a profile can never ask for what a register cannot
+hold.
+
+This module holds the profile itself: :class:`ProfileError`, the section dataclasses
+(:class:`FieldSection`, :class:`LinkSection`, :class:`LaserSection`, :class:`GalvoSection`,
+:class:`JobDefaults`), :class:`MachineProfile` and its derived numbers, :func:`default_profile`,
+:func:`parse_profile`, :func:`load_profile` and the public constants. The key table and the value
+checks are in :mod:`galvoscan.profile.keys` (below this module: it defines :class:`ProfileError`
+and the register ranges; its public names are re-exported here), and the commented template in
+:mod:`galvoscan.profile.template` (above it: the template reads the defaults from here).
+"""
+
+from dataclasses import dataclass, field as _field
+import math
+import os
+from pathlib import Path
+from typing import Optional, Tuple
+
+try:
+    import tomllib  # novermin: tomli below where it is missing
+except ModuleNotFoundError:                      # Python < 3.11
+    import tomli as tomllib
+
+from ..correction.files import load_table
+from ..gateware.clocking import DEFAULT_BAUD
+from ..gateware.points import FIELD_MAX
+from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
+                   SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
+                   _unknown_key, _unknown_section)
+
+
+__all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
+           "GalvoSection", "JobDefaults", "WobbleSection", "load_profile", "parse_profile", "default_profile",
+           "DEFAULT_PROFILE_NAME", "SECTIONS", "FULL_RANGE", "FRAME_US",
+           "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX"]
+
+
+#: The file ``galvoscan machine init`` writes and the job commands read when not told otherwise.
+DEFAULT_PROFILE_NAME = "galvoscan.toml"
+
+#: Galvo units across the field, on each axis (positions 0 … 65535).
+FULL_RANGE = FIELD_MAX + 1
+
+# --- the profile -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class FieldSection:
+    #: Side of the square field that galvo positions 0 … 65535 span (the lens's field), mm.
+    size_mm: float = 110.0
+    #: The correction table file (absolute), or None for the board's identity table.
+    correction: Optional[Path] = None
+
+
+@dataclass(frozen=True)
+class LinkSection:
+    #: Serial port of the board, or None (the command line must give it).
+    port: Optional[str] = None
+    #: Serial rate the bitstream was built with (a build's default unless told otherwise).
+    baud: int = DEFAULT_BAUD
+    #: pyftdi URL of an FTDI SPI adapter, or None.
+    spi: Optional[str] = None
+    #: Seconds to wait for an answer.
+    timeout_s: float = 0.5
+
+
+@dataclass(frozen=True)
+class LaserSection:
+    #: Average power at 100 % (``laser_power`` = 255), W.
+    max_power_w: float = 20.0
+    #: Lowest and highest pulse repetition rate the laser accepts, kHz.
+    prr_khz: Tuple[float, float] = PRR_RANGE_KHZ
+    #: Spot diameter at focus, mm.
+    spot_mm: float = 0.05
+    #: The machine has a guide (red pointer) laser on the board's guide output.
+    guide: bool = True
+
+
+@dataclass(frozen=True)
+class GalvoSection:
+    """The head's delays as SCANLAB's RTC defines them (docs/design/modes.md): the
+    defaults are what ``galvoscan analyze --delays`` finds for Wan et al.'s JD1403 galvo (a
+    10 mm head lagging its set point by some 80 µs) at 1 m/s: a line's ends and corners within
+    20 % of its mid-line dose."""
+    #: Laser-off wait after every jump, µs (rounded up to whole 10 µs frames).
+    jump_delay_us: float = 500.0
+    #: Extra wait per mm of jump, µs/mm (0: the same delay for every jump).
+    settle_us_per_mm: float = 0.0
+    #: Fastest marking speed a job may ask for, mm/s.
+    max_speed_mm_s: float = 10_000.0
+    #: The laser switches on this long after a mark's first point (negative: before), µs.
+    laser_on_delay_us: float = 100.0
+    #: The laser stays on this long after a mark's last point, µs.
+    laser_off_delay_us: float = 50.0
+    #: The mirrors hold a mark's end this long before a jump, µs.
+    mark_delay_us: float = 100.0
+    #: The mirrors hold a corner between two marks this long, laser on, µs (0: the corner is
+    #: rounded by the mirror's lag, but not over-dosed).
+    polygon_delay_us: float = 0.0
+    #: Scale each corner's polygon delay by (1 - cos φ) (RTC's variable polygon delay).
+    polygon_scaled: bool = True
+
+
+@dataclass(frozen=True)
+class JobDefaults:
+    #: Marking speed, mm/s.
+    speed_mm_s: float = 1000.0
+    #: Laser power, % of ``max_power_w``.
+    power_percent: float = 10.0
+    #: Pulse repetition rate, kHz.
+    prr_khz: float = 50.0
+    #: Times a job is repeated.
+    passes: int = 1
+
+
+@dataclass(frozen=True)
+class WobbleSection:
+    #: Wobble amplitude across marked lines (to each side), µm; 0 with along_um 0: no wobble.
+    across_um: float = 0.0
+    #: Wobble amplitude along marked lines, µm (equal to across_um: a circle).
+    along_um: float = 0.0
+    #: Turns of the wobble figure a second, Hz.
+    freq_hz: float = 1000.0
+
+
+@dataclass(frozen=True)
+class MachineProfile:
+    """A machine profile, checked. Two profiles are equal if their settings are (where they were
+    read from is not compared)."""
+
+    field: FieldSection = FieldSection()
+    link: LinkSection = LinkSection()
+    laser: LaserSection = LaserSection()
+    galvo: GalvoSection = GalvoSection()
+    defaults: JobDefaults = JobDefaults()
+    wobble: WobbleSection = WobbleSection()
+    #: The file it was read from, or None for the built-in defaults.
+    source: Optional[Path] = _field(default=None, compare=False)
+    _table: object = _field(default=None, compare=False, repr=False)
+
+    # --- derived numbers -----------------------------------------------------------------
+
+    @property
+    def units_per_mm(self):
+        """Galvo units per mm in the field (65536 / ``size_mm``)."""
+        return FULL_RANGE / self.field.size_mm
+
+    @property
+    def mm_per_unit(self):
+        return self.field.size_mm / FULL_RANGE
+
+    def jump_delay_register(self, jump_mm=0.0):
+        """``jump_delay`` (µs) for a jump of ``jump_mm``: ``jump_delay_us + settle_us_per_mm ×
+        jump_mm`` rounded *up* to a whole µs, at most what the register holds (65 535 µs); the
+        board rounds it up to whole 10 µs frames."""
+        if isinstance(jump_mm, bool) or not isinstance(jump_mm, (int, float)) or \
+                not math.isfinite(jump_mm) or jump_mm < 0:
+            raise ValueError(f"a jump length must be a number of mm from 0 up, not {jump_mm!r}")
+        us = self.galvo.jump_delay_us + self.galvo.settle_us_per_mm * jump_mm
+        # 1e-9: 500 µs is 500, not 501 because of a rounding error in the sum.
+        return max(_JUMP.low, min(_JUMP.high, math.ceil(us - 1e-9)))
+
+    def delay_registers(self):
+        """The laser, mark and polygon delay registers (µs to the nearest, half up) and
+        ``polygon_scaled``, as ``galvoscan mark`` writes them before a job."""
+        registers = {reg: math.floor(getattr(self.galvo, key) + 0.5)
+                     for key, reg in DELAY_KEYS.items()}
+        registers["polygon_scaled"] = int(self.galvo.polygon_scaled)
+        return registers
+
+    def power_register(self, percent):
+        """``laser_power`` for ``percent`` of full power (0 … 100 → 0 … 255, to the nearest
+        step, half up)."""
+        if isinstance(percent, bool) or not isinstance(percent, (int, float)) or \
+                not (0 <= percent <= 100):
+            raise ValueError(f"laser power must be a number from 0 to 100 %, not {percent!r}")
+        return min(POWER_REGISTER_MAX, math.floor(percent * POWER_REGISTER_MAX / 100 + 0.5))
+
+    def power_w(self, percent):
+        """The average power ``percent`` gives, in W (as the board will set it, register
+        rounding included)."""
+        return self.power_register(percent) / POWER_REGISTER_MAX * self.laser.max_power_w
+
+    def prr_register(self, khz):
+        """``laser_prr`` (100 Hz steps) for a pulse repetition rate of ``khz``; a rate outside
+        the laser's ``prr_khz`` is refused (ValueError, one line)."""
+        low, high = self.laser.prr_khz
+        if isinstance(khz, bool) or not isinstance(khz, (int, float)) or \
+                not (low <= khz <= high):
+            where = f" ({self.source})" if self.source else ""
+            raise ValueError(f"pulse repetition rate {_shown(khz)} kHz is outside this laser's "
+                             f"{_num(low)} … {_num(high)} kHz ([laser] prr_khz{where})")
+        steps = math.floor(khz * _PRR_STEPS_PER_KHZ + 0.5)
+        # Rounding must not leave the laser's range (nor the register's).
+        first = max(_PRR.low, math.ceil(low * _PRR_STEPS_PER_KHZ - 1e-9))
+        last = min(_PRR.high, math.floor(high * _PRR_STEPS_PER_KHZ + 1e-9))
+        if first <= last:
+            steps = max(first, min(last, steps))
+        return max(_PRR.low, min(_PRR.high, steps))
+
+    def correction_table(self):
+        """The :class:`~galvoscan.gateware.field.correction_table.CorrectionTable` that
+        ``[field] correction`` names (read when the profile was), or None: the board's
+        identity table."""
+        return self._table
+
+    def as_dict(self):
+        """The settings as plain data, keyed as in the file (``galvoscan machine show --json``),
+        with the derived numbers under ``"derived"``."""
+        table = self._table
+        return {
+            "source": None if self.source is None else str(self.source),
+            "field": {"size_mm": self.field.size_mm,
+                      "correction": None if self.field.correction is None
+                      else str(self.field.correction),
+                      "correction_nodes": None if table is None else table.n},
+            "link": {"port": self.link.port, "baud": self.link.baud, "spi": self.link.spi,
+                     "timeout_s": self.link.timeout_s},
+            "laser": {"max_power_w": self.laser.max_power_w,
+                      "prr_khz": list(self.laser.prr_khz), "spot_mm": self.laser.spot_mm,
+                      "guide": self.laser.guide},
+            "galvo": {"jump_delay_us": self.galvo.jump_delay_us,
+                      "settle_us_per_mm": self.galvo.settle_us_per_mm,
+                      "max_speed_mm_s": self.galvo.max_speed_mm_s,
+                      **{key: getattr(self.galvo, key) for key in DELAY_KEYS},
+                      "polygon_scaled": self.galvo.polygon_scaled},
+            "defaults": {"speed_mm_s": self.defaults.speed_mm_s,
+                         "power_percent": self.defaults.power_percent,
+                         "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},
+            "wobble": {"across_um": self.wobble.across_um, "along_um": self.wobble.along_um,
+                       "freq_hz": self.wobble.freq_hz},
+            "derived": {
+                "units_per_mm": self.units_per_mm,
+                "mm_per_unit": self.mm_per_unit,
+                "jump_delay_us_0mm": self.jump_delay_register(0),
+                "jump_delay_us_10mm": self.jump_delay_register(10),
+                "delay_registers": self.delay_registers(),
+                "default_power_register": self.power_register(self.defaults.power_percent),
+                "default_power_w": self.power_w(self.defaults.power_percent),
+                "default_prr_register": self.prr_register(self.defaults.prr_khz),
+            },
+        }
+
+
+def default_profile():
+    """The built-in profile: what ``galvoscan machine init`` writes."""
+    return MachineProfile()
+
+
+# --- reading ---------------------------------------------------------------------------------
+
+_SECTION_CLASSES = {"field": FieldSection, "link": LinkSection, "laser": LaserSection,
+                    "galvo": GalvoSection, "defaults": JobDefaults, "wobble": WobbleSection}
+assert all(tuple(k.name for k in keys) == tuple(_SECTION_CLASSES[name].__dataclass_fields__)
+           for name, keys in SECTIONS.items())
+
+
+def _resolve(text, folder):
+    path = Path(text).expanduser()
+    if not path.is_absolute():
+        path = folder / path
+    return Path(os.path.abspath(path))
+
+
+def _load_correction(path, where):
+    # A name with control characters in it is shown escaped: the message stays one line.
+    shown = str(path) if str(path).isprintable() else repr(str(path))
+    if not path.exists():
+        raise ProfileError(f"{where} correction: no file {shown} (a relative path is relative "
+                           f"to the profile's folder)")
+    if path.is_dir():
+        raise ProfileError(f"{where} correction: {shown} is a folder, not a table file")
+    try:
+        return load_table(path)
+    except (ValueError, OSError) as error:       # TableFileError is a ValueError
+        raise ProfileError(f"{where} correction: {_one_line(error)}") from None
+
+
+def _one_line(error):
+    return " ".join(str(error).split())
+
+
+def parse_profile(text, *, path=DEFAULT_PROFILE_NAME):
+    """The profile in TOML ``text``. ``path`` names it in messages, and a relative ``[field]
+    correction`` is relative to its folder."""
+    path = Path(path)
+    try:
+        document = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ProfileError(f"{path}: not valid TOML: {_one_line(error)}") from None
+    except RecursionError:
+        raise ProfileError(f"{path}: not valid TOML: arrays or tables nested too deeply") \
+            from None
+
+    sections = {}
+    for name, value in document.items():
+        if name not in SECTIONS:
+            raise _unknown_section(name, value, path)
+        if isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            raise ProfileError(f"{path}: [{name}] must be one section [{name}], not [[{name}]]")
+        if not isinstance(value, dict):
+            raise ProfileError(f"{path}: [{name}] must be a section (a line [{name}] and its "
+                               f"keys below it), not {name} = {_shown(value)}")
+        keys = {k.name: k for k in SECTIONS[name]}
+        checked = {}
+        for key, item in value.items():
+            if key not in keys:
+                raise _unknown_key(key, name, path)
+            checked[key] = _check(item, keys[key], f"{path}: [{name}]")
+        sections[name] = checked
+
+    link = sections.get("link", {})
+    if link.get("port") is not None and link.get("spi") is not None:
+        raise ProfileError(f"{path}: [link] port and spi are both set: the board is reached one "
+                           f"way, leave one of them out")
+    built = {name: cls(**sections.get(name, {})) for name, cls in _SECTION_CLASSES.items()}
+    laser, galvo, defaults = built["laser"], built["galvo"], built["defaults"]
+    low, high = laser.prr_khz
+    if not low <= defaults.prr_khz <= high:
+        raise ProfileError(f"{path}: [defaults] prr_khz must lie within the laser's "
+                           f"{_num(low)} … {_num(high)} kHz ([laser] prr_khz), not "
+                           f"{_num(defaults.prr_khz)}")
+    if defaults.speed_mm_s > galvo.max_speed_mm_s:
+        raise ProfileError(f"{path}: [defaults] speed_mm_s must be at most [galvo] "
+                           f"max_speed_mm_s ({_num(galvo.max_speed_mm_s)} mm/s), not "
+                           f"{_num(defaults.speed_mm_s)}")
+
+    table = None
+    correction = built["field"].correction
+    if correction is not None:
+        resolved = _resolve(correction, path.parent)
+        table = _load_correction(resolved, f"{path}: [field]")
+        built["field"] = FieldSection(size_mm=built["field"].size_mm, correction=resolved)
+    return MachineProfile(**built, source=path, _table=table)
+
+
+def load_profile(path):
+    """The profile in the TOML file ``path``; :class:`ProfileError` (one line) if it cannot be
+    read or is not a valid profile."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise ProfileError(f"{path}: is a folder, not a profile file") from None
+    except FileNotFoundError:
+        raise ProfileError(f"{path}: no such file (`galvoscan machine init` writes one)") \
+            from None
+    except OSError as error:
+        if path.is_dir():                     # Windows says "permission denied" for a folder
+            raise ProfileError(f"{path}: is a folder, not a profile file") from None
+        raise ProfileError(f"{path}: cannot read it: {error.strerror or error}") from None
+    try:
+        text = data.decode("utf-8-sig")      # a byte-order mark, as Windows editors write
+    except UnicodeDecodeError as error:
+        line = data[:error.start].count(b"\n") + 1
+        raise ProfileError(f"{path}, line {line}: not UTF-8 text (save it as UTF-8)") from None
+    return parse_profile(text, path=path)

@@ -1,0 +1,144 @@
+"""The commented machine profile template: :func:`profile_text`, the file ``galvoscan machine
+init`` writes (every key with its default, unit, range and purpose).
+
+The ranges and their units are read from the key table
+(:data:`galvoscan.profile.keys.SECTIONS`) and the defaults from
+:func:`galvoscan.profile.machine.default_profile`, so the template cannot disagree with what
+is checked (the keys that are a job's or a run's settings take theirs from
+:mod:`galvoscan.settings`).
+"""
+
+from .keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num
+from .machine import DEFAULT_PROFILE_NAME, default_profile
+
+
+def _key(section, name):
+    return next(k for k in SECTIONS[section] if k.name == name)
+
+
+def _span(section, name):
+    """A key's range and unit, as its key table has them: ``1 … 2_000 mm``."""
+    key = _key(section, name)
+    unit = f" {key.unit}" if key.unit else ""
+    return f"{_toml_num(key.low)} … {_toml_num(key.high)}{unit}"
+
+
+def profile_text():
+    """The commented profile ``galvoscan machine init`` writes: the defaults, every key
+    explained (unit, range, purpose)."""
+    d = default_profile()
+    s = _span
+    n = _toml_num
+    return f"""\
+# galvoscan machine profile
+#
+# What a marking or cleaning job needs to know about this machine that the board's
+# registers do not hold: the lens's field, the laser, how long the mirrors take to
+# settle, and the job settings to use when the command line gives none.
+# `galvoscan mark` and `galvoscan clean` read ./{DEFAULT_PROFILE_NAME} (or the file given
+# with --machine FILE); `galvoscan machine show` prints what this file resolves to.
+#
+# Every key may be left out: the value written here is its default. A key galvoscan
+# does not know is an error, not ignored, so that a typo cannot pass unnoticed.
+# Units are in the key names: _mm, _w (watts), _khz, _us (microseconds), _s (seconds).
+#
+# Edit first: [link] port, [field] size_mm and [laser] max_power_w.
+
+[field]
+# Side of the square marking field, in mm: the field of the f-theta lens, which the
+# whole galvo range (positions 0 … 65535 on each axis) spans. Take it from the lens's
+# data sheet (110 for the common F160 lens); a wrong value scales every job.
+# {s("field", "size_mm")}.
+size_mm = {n(d.field.size_mm)}
+# Distortion correction table for this lens: a galvoscan .json (`galvoscan correct`),
+# a SCANLAB .ctb or a JCZ (EzCad) .cor file. A relative path is relative to the folder
+# of this file. Left out, the board's identity table is used: no correction.
+# correction = "f160.cor"
+
+[link]
+# Serial port of the board: on Linux usually the second of its two /dev/ttyUSB ports,
+# on Windows a COM port. Left out, give --port on the command line. Set port or spi,
+# not both.
+# port = "/dev/ttyUSB1"
+# Serial rate in baud, as the bitstream was built. {s("link", "baud")}.
+baud = {n(d.link.baud)}
+# Instead of port: the pyftdi URL of an FTDI SPI adapter wired to the board.
+# spi = "ftdi://ftdi:2232h/1"
+# Seconds to wait for the board to answer before giving up. {s("link", "timeout_s")}.
+timeout_s = {n(d.link.timeout_s)}
+
+[laser]
+# Average power of the laser at 100 % (laser_power register {POWER_REGISTER_MAX}), in W: its
+# rating. Jobs set power in %; it is shown in W from this. {s("laser", "max_power_w")}.
+max_power_w = {n(d.laser.max_power_w)}
+# Pulse repetition rates the laser accepts, in kHz: [lowest, highest]. The board makes
+# {s("laser", "prr_khz")}; narrow it to your laser's data sheet (a job asking for a
+# rate outside it is refused).
+prr_khz = [{n(d.laser.prr_khz[0])}, {n(d.laser.prr_khz[1])}]
+# Spot diameter at focus, in mm (the lens data sheet, or measure the mark of single
+# pulses): what line spacings and previews are drawn from. {s("laser", "spot_mm")}.
+spot_mm = {n(d.laser.spot_mm)}
+# true if the machine has a guide (red pointer) laser wired to the board's guide output
+# (laser_guide), to frame a job before marking; false if not. The guide laser's pin on
+# the DB25 differs between lasers: see the wiring table (docs/hardware/wiring.md).
+guide = {"true" if d.laser.guide else "false"}
+
+[galvo]
+# Wait after every jump, laser off, for the mirrors to settle before marking resumes,
+# in µs. The board counts {FRAME_US} µs frames: rounded up to a whole frame.
+# {s("galvo", "jump_delay_us")}.
+jump_delay_us = {n(d.galvo.jump_delay_us)}
+# Extra wait per mm of jump, in µs/mm, added to jump_delay_us: long jumps settle longer
+# (a variable jump delay). 0 = the same wait after every jump.
+# {s("galvo", "settle_us_per_mm")}.
+settle_us_per_mm = {n(d.galvo.settle_us_per_mm)}
+# Fastest marking or cleaning speed a job may ask for, in mm/s: faster is refused. Take
+# it from the scan head's data sheet. {s("galvo", "max_speed_mm_s")}.
+max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}
+# The laser and scanner delays of SCANLAB's RTC (EzCad's start, end and corner TC): the
+# mirrors lag the set point by their tracking error (about 100-200 µs on a 10 mm head), so
+# without them a line starts and ends with a burnt dot and corners over-dose. Tune them with
+# a test mark (docs/design/modes.md, "Laser and scanner delays"). The laser delays are placed to the
+# board's clock; mark and polygon delays are rounded up to {FRAME_US} µs frames.
+# Laser on this long after a mark's first point; negative: that much before.
+# {s("galvo", "laser_on_delay_us")}.
+laser_on_delay_us = {n(d.galvo.laser_on_delay_us)}
+# Laser stays on this long after a mark's last point. {s("galvo", "laser_off_delay_us")}.
+laser_off_delay_us = {n(d.galvo.laser_off_delay_us)}
+# Mirrors hold a mark's end this long, laser off, before the next jump; keep it above
+# laser_off_delay_us (RTC's rule). {s("galvo", "mark_delay_us")}.
+mark_delay_us = {n(d.galvo.mark_delay_us)}
+# Mirrors hold each corner between two marks this long, laser on.
+# {s("galvo", "polygon_delay_us")}.
+polygon_delay_us = {n(d.galvo.polygon_delay_us)}
+# true: scale each corner's polygon delay by (1 - cos φ), φ the turn at the corner (RTC's
+# variable polygon delay: none straight on, the full delay at a right angle, twice it at a
+# reversal, at most 1270 µs); false: the full delay at every corner.
+polygon_scaled = {"true" if d.galvo.polygon_scaled else "false"}
+
+[defaults]
+# Job settings used when the command line does not give them.
+# Marking speed, in mm/s: at most [galvo] max_speed_mm_s. {s("defaults", "speed_mm_s")}.
+speed_mm_s = {n(d.defaults.speed_mm_s)}
+# Laser power, in % of max_power_w. Low on purpose: raise it per job, after a test
+# mark, rather than here. {s("defaults", "power_percent")}.
+power_percent = {n(d.defaults.power_percent)}
+# Pulse repetition rate, in kHz: within [laser] prr_khz.
+prr_khz = {n(d.defaults.prr_khz)}
+# Times each job is marked, one pass over the other. {s("defaults", "passes")}.
+passes = {n(d.defaults.passes)}
+
+[wobble]
+# A small ellipse laid over every marked line, to widen a weld or cleaning track (needs
+# a bitstream built with the wobble stage). `galvoscan mark --wobble` overrides these.
+# Amplitude across the line, to each side, in µm: the track grows by twice this.
+# 0 here and in along_um: no wobble. {s("wobble", "across_um")} (the board holds at
+# most 4095 galvo units: 6.9 mm on a 110 mm field).
+across_um = {n(d.wobble.across_um)}
+# Amplitude along the line, forwards and back, in µm; equal to across_um: a circle.
+# {s("wobble", "along_um")}.
+along_um = {n(d.wobble.along_um)}
+# Turns of the figure a second, in Hz: with the line speed v, the figure repeats every
+# v / freq_hz along the line. {s("wobble", "freq_hz")}.
+freq_hz = {n(d.wobble.freq_hz)}
+"""
