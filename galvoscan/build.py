@@ -96,6 +96,7 @@ class BuildReport:
     baud: int = DEFAULT_BAUD    # host serial port rate
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
     placer: str = "heap"        # nextpnr's placer that placed it: "static" or "heap"
+    seed: int = 1               # nextpnr's seed of that placement (the next ones if one missed)
     player: bool = False        # the job player (stand-alone marking; the UART link alone)
 
     @property
@@ -143,7 +144,8 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     ``player``), checked against the board before anything is built. ``correction`` is the
     correction table the RAM starts with (``None``: no correction stage), ``table`` and
     ``settings`` the spiral table and the scan settings; nextpnr runs with a fixed ``seed``
-    so builds are repeatable.
+    so builds are repeatable (and with the next ones where it misses the clock:
+    :mod:`galvoscan.placer`).
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
@@ -205,7 +207,8 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     luts, luts_available = _used(utilisation, "ICESTORM_LC")
     brams, brams_available = _used(utilisation, "ICESTORM_RAM")
     dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
-    placer = placer_file.read_text().strip() if placer_file.is_file() else "heap"
+    placer, seed = (placer_file.read_text().split() if placer_file.is_file()
+                    else ("heap", seed))
     result = BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
                        fmax_mhz=round(fmax_mhz, 2), luts=luts, luts_available=luts_available,
                        brams=brams, brams_available=brams_available, dsps=dsps,
@@ -213,7 +216,7 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
                        modes=config.modes,
                        correction_nodes=correction.n if correction else 0,
                        bit_rate_mhz=config.bit_rate / 1e6, baud=config.baud, placer=placer,
-                       player=config.player)
+                       seed=int(seed), player=config.player)
     # The build's record beside its netlist (its clock, baud and options): what a simulation
     # of the netlist needs to know of it.
     record = {**result.as_dict(), "interpolation": config.spiral_interpolation,

@@ -10,13 +10,18 @@ from galvoscan.placer import main, place_and_route
 
 # A stand-in for nextpnr: with --placer static it writes `ITERATIONS` of the static placer's
 # iteration lines to its --log (forever if negative) and exits with `STATIC_EXIT`; HeAP runs
-# write a line and exit 0. Every run's arguments go to runs.txt beside the log.
+# write a line and exit 0. Every run's arguments go to runs.txt beside the log. With --report,
+# it reports the Fmax `FMAX` gives for its --seed (30 MHz for any other) against 24 MHz.
 FAKE = """\
-import itertools, sys, time
+import itertools, json, sys, time
 argv = sys.argv[1:]
 log = argv[argv.index("--log") + 1]
 with open(log + ".runs.txt", "a") as runs:
     runs.write(" ".join(argv) + "\\n")
+if "--report" in argv:
+    achieved = {fmax}.get(int(argv[argv.index("--seed") + 1]), 30.0)
+    with open(argv[argv.index("--report") + 1], "w") as report:
+        json.dump({{"fmax": {{"clk": {{"achieved": achieved, "constraint": 24.0}}}}}}, report)
 with open(log, "w") as out:
     out.write("Info: Packing constants..\\n")
     if "--placer" in argv:
@@ -33,10 +38,11 @@ with open(log, "w") as out:
 """
 
 
-def fake_nextpnr(tmp_path, *, iterations, static_exit=0):
+def fake_nextpnr(tmp_path, *, iterations, static_exit=0, fmax=None):
     script = tmp_path / "fake_nextpnr"
     script.write_text(f"#!{sys.executable}\n" +
-                      FAKE.format(iterations=iterations, static_exit=static_exit))
+                      FAKE.format(iterations=iterations, static_exit=static_exit,
+                                  fmax=repr(fmax or {})))
     script.chmod(0o755)
     return str(script)
 
@@ -91,4 +97,19 @@ def test_main_writes_which_placer_placed_it(tmp_path, monkeypatch):
     monkeypatch.setattr("galvoscan.placer.tool", lambda name: nextpnr)
     monkeypatch.setattr("galvoscan.placer.STATIC_ITERATIONS_MAX", 100)
     assert main([*ARGS, "--log", str(log)]) == 0
-    assert (tmp_path / "top.tim.placer").read_text() == "heap\n"
+    assert (tmp_path / "top.tim.placer").read_text() == "heap 1\n"
+
+
+@pytest.mark.parametrize("fmax, seeds, placed", [
+    ({}, [1], "static 1"),                                  # met at once: one run
+    ({1: 23.1}, [1, 2], "static 2"),                        # missed, then met
+    ({1: 23.1, 2: 23.5, 3: 23.9}, [1, 2, 3], "static 3"),   # never met: three, the last kept
+])
+def test_a_placement_that_misses_its_clock_is_placed_again_with_the_next_seed(
+        tmp_path, monkeypatch, fmax, seeds, placed):
+    log, report = tmp_path / "top.tim", tmp_path / "top.report.json"
+    nextpnr = fake_nextpnr(tmp_path, iterations=10, fmax=fmax)
+    monkeypatch.setattr("galvoscan.placer.tool", lambda name: nextpnr)
+    assert main([*ARGS, "--report", str(report), "--log", str(log)]) == 0
+    assert [int(run[run.index("--seed") + 1]) for run in runs(log)] == seeds
+    assert (tmp_path / "top.tim.placer").read_text() == f"{placed}\n"

@@ -117,7 +117,8 @@ def _cmd_build(args):
     print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")
     print(f"  Fmax         {report.fmax_mhz:8.2f} MHz (needs {report.clock_mhz:g} MHz: "
           f"{'met' if report.meets_timing else 'NOT MET'}, {report.margin:.1f}x)")
-    print(f"  placer       {report.placer:>8}")
+    print(f"  placer       {report.placer:>8}, seed {report.seed}" +
+          (" (the first seeds missed the clock)" if report.seed > 1 else ""))
     print(f"  build time   {report.seconds:8.1f} s")
     return 0 if report.meets_timing else 1
 
