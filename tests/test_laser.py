@@ -137,7 +137,7 @@ def test_spiral_and_laser_from_host_commands():
     # A tenth of the paper's 5 ms MO lead (the top's default, below; the controller's 5 ms on
     # its pins: test_the_003_sequence_on_the_pins): the same sequence, a tenth of the clocks.
     from galvoscan.gateware.top import GalvoScanTop
-    assert GalvoScanTop(clk_freq=CLK).mo_lead == 5e-3
+    assert GalvoScanTop(clk_freq=CLK).config.mo_lead == 5e-3
     lead = 0.5e-3
     board = SimBoard(record_laser=True, mo_lead=lead, **SPIRAL_ONLY)
     client = HostClient(SimUARTTransport(board))

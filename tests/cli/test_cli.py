@@ -354,7 +354,7 @@ def test_sim_vector_waits_in_the_boards_time(backend, vcd, tmp_path, capsys, mon
     # At 4 MHz (a third of the clocks, the same frames), with a 1 ms MO lead: 5 s of the fast
     # host clock are 5 ms of real time, which no backend simulates 1 ms of the board in.
     import functools
-    import galvoscan.sim as module
+    import galvoscan.sim.vector as module
     monkeypatch.setattr(module, "replay_job", functools.partial(module.replay_job,
                                                                 clk_freq=4e6, mo_lead=1e-3))
     waves = tmp_path / "waves" / "line.vcd"

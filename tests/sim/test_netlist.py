@@ -8,12 +8,13 @@ import re
 
 import pytest
 
-from galvoscan.link.client import HostClient
-from galvoscan.sim.compiled import CompileError
-from galvoscan.sim.compiled.netlist import netlist_design
+from galvoscan.build import PRESETS
 from galvoscan.correction.files import load_table
 from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
+from galvoscan.link.client import HostClient
 from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
+from galvoscan.sim.compiled import CompileError
+from galvoscan.sim.compiled.netlist import netlist_design
 
 
 def session(board):
