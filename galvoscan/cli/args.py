@@ -322,7 +322,7 @@ def add_backend_option(parser, *, default="auto", what="the simulator"):
     from ..sim.board import BACKENDS
     parser.add_argument("--backend", choices=BACKENDS, default=default,
                         help=f"{what}: compiled (the design as native code, built once "
-                             f"per design and cached; some 300x faster), python (Amaranth's, "
+                             f"per design and cached; some 200 times faster: the benchmarks), python (Amaranth's, "
                              f"the reference) or auto, the compiled one where a C++ compiler "
                              f"can build it (default: {default or 'auto'})")
 
