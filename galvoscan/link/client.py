@@ -34,7 +34,7 @@ from ..gateware.host.regmap import BY_ADDRESS, BY_NAME, READ_FLAG
 
 
 __all__ = ["ClientError", "LinkLost", "WriteRefused", "HostClient", "SerialTransport",
-           "FTDISPITransport", "PacketTransport", "ClockedTransport", "encode_command",
+           "FTDISPITransport", "HostClock", "PacketTransport", "ClockedTransport", "encode_command",
            "encode_write", "encode_read", "decode_answer", "Answer", "parse_assignment",
            "REASONS"]
 
@@ -335,7 +335,20 @@ def _refusal_words(reg):
     return "its bitstream may not have that register or range"
 
 
-class PacketTransport:
+class HostClock:
+    """A link's clock: the host's. A simulated board's transports give the board's own time
+    instead, so that every wait on them counts what the board did."""
+
+    def now(self):
+        """The link's clock, in seconds."""
+        return time.monotonic()
+
+    def sleep(self, seconds):
+        """Let ``seconds`` pass on the link's clock."""
+        time.sleep(seconds)
+
+
+class PacketTransport(HostClock):
     """What a UART link does with frames: each COBS-encoded with a zero byte after it, sent
     back to back; each answer comes back as its six bytes. A subclass gives ``_write(bytes)``
     and ``_read(seconds)`` (the bytes that came, up to the time given)."""
@@ -355,24 +368,12 @@ class PacketTransport:
         want = count * ANSWER_BYTES
         buffer = b""
         self.heard = False
-        deadline = self._now() + self.timeout
-        while len(buffer) < want and self._now() <= deadline:
-            more = self._read(max(0.0, deadline - self._now()))
+        deadline = self.now() + self.timeout
+        while len(buffer) < want and self.now() <= deadline:
+            more = self._read(max(0.0, deadline - self.now()))
             self.heard = self.heard or bool(more)
             buffer += more
         return [buffer[i:i + ANSWER_BYTES] for i in range(0, len(buffer), ANSWER_BYTES)]
-
-    def _now(self):
-        return self.now()
-
-    def now(self):
-        """The link's clock, in seconds: the host's (a simulated board's transport gives the
-        board's own time, so that every wait on it counts what the board did)."""
-        return time.monotonic()
-
-    def sleep(self, seconds):
-        """Let ``seconds`` pass on the link's clock."""
-        time.sleep(seconds)
 
     def flush(self):
         """Start afresh: a zero byte ends whatever the board was gathering, and whatever comes
@@ -383,21 +384,13 @@ class PacketTransport:
             pass
 
 
-class ClockedTransport:
+class ClockedTransport(HostClock):
     """What an SPI link does with frames: each one clocked in whole; its answer comes out
     during the next, so a last read of ``link_seq`` (which changes nothing) clocks out the
     last answer. A subclass gives ``transfer(bytes) -> bytes``: the bytes clocked out while
     those were clocked in."""
 
     FETCH = encode_command(0xFF, READ_FLAG | BY_NAME["link_seq"].address)
-
-    def now(self):
-        """The link's clock, in seconds (see :meth:`PacketTransport.now`)."""
-        return time.monotonic()
-
-    def sleep(self, seconds):
-        """Let ``seconds`` pass on the link's clock."""
-        time.sleep(seconds)
 
     def transact(self, frames):
         returned = [self.transfer(frame) for frame in [*frames, self.FETCH]]

@@ -343,7 +343,21 @@ class PTYServer:
         self.stop()
 
 
-class SimTransport(PacketTransport):
+class BoardClock:
+    """A simulated board's transports keep its own time: a host's waits on it (the MO lead,
+    the queue, an answer) count what the board did, not the host's clock. Before the
+    transport's base in its bases."""
+
+    def now(self):
+        """The board's own time, in seconds."""
+        return self.board.now
+
+    def sleep(self, seconds):
+        """Run the board for ``seconds`` of its own time."""
+        self.board.run_for(seconds)
+
+
+class SimTransport(BoardClock, PacketTransport):
     """Frames straight into a :class:`SimulatedBoard`'s UART, in the board's own time (no
     pseudo-terminal, no host clock): what a host at the link's full speed, with no latency of
     its own, would get. ``timeout`` is in board seconds."""
@@ -352,12 +366,6 @@ class SimTransport(PacketTransport):
         self.board = board
         self.timeout = timeout          # board seconds
         self.quiet_s = 200 * board.bit_time
-
-    def now(self):
-        return self.board.now
-
-    def sleep(self, seconds):
-        self.board.run_for(seconds)
 
     def _write(self, data):
         board = self.board
@@ -380,7 +388,7 @@ class SimTransport(PacketTransport):
         return data
 
 
-class SimSPITransport(ClockedTransport):
+class SimSPITransport(BoardClock, ClockedTransport):
     """Frames into a :class:`SimulatedBoard`'s SPI target, in the board's own time, as a host
     at the link's top speed sends them (SCK = clock / 12, mode 0); each answer is clocked out
     during the next frame (as ``FTDISPITransport``)."""
@@ -388,13 +396,6 @@ class SimSPITransport(ClockedTransport):
     def __init__(self, board, *, clocks_per_sck=12):
         self.board = board
         self.half_period = clocks_per_sck / board.clk_freq / 2
-
-    def now(self):
-        """The board's own time: a host's waits on a simulated board count what it did."""
-        return self.board.now
-
-    def sleep(self, seconds):
-        self.board.run_for(seconds)
 
     def transfer(self, frame):
         board = self.board
