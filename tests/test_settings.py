@@ -12,10 +12,15 @@ import pytest
 from hypothesis import given, strategies as st
 
 from galvoscan.cli import parser
+from galvoscan.gateware.host.regmap import BY_NAME
 from galvoscan.cli.job_options import SECTIONS, job_file_table
-from galvoscan.profile.machine import ProfileError, parse_profile
-from galvoscan.settings import laser
-from galvoscan.settings.schema import Setting, SettingError, markdown_table
+from galvoscan.profile import keys as profile_keys
+from galvoscan.profile.machine import ProfileError, default_profile, parse_profile
+from galvoscan.settings import laser, machine
+from galvoscan.settings.schema import (ProfileKey, Setting, SettingError, markdown_table,
+                                       profile_table)
+
+DOCS = Path(__file__).parent.parent / "docs"
 
 
 def _option(argv_prefix, flag):
@@ -59,6 +64,105 @@ def test_a_setting_checks_itself():
         Setting("x_mm", "number", "mm", 2, 1, help="x", what="x")
     with pytest.raises(ValueError, match="default"):
         Setting("x_mm", "number", "mm", 0, 1, default=2, help="x", what="x")
+    with pytest.raises(ValueError, match="kind"):
+        Setting("x", "colour")
+    with pytest.raises(ValueError, match="no range"):
+        Setting("x", "bool", low=0, high=1)
+    with pytest.raises(ValueError, match="choices"):
+        Setting("x", "choice")
+    with pytest.raises(ValueError, match="parts"):
+        Setting("x", "numbers", metavar="A")
+    with pytest.raises(ValueError, match="default"):
+        Setting("x", "choice", choices=("a", "b"), default="c")
+    with pytest.raises(ValueError, match="default"):
+        ProfileKey("s", "x_mm", Setting("x_mm", "number", "mm", 0, 1, what="x"), default=2)
+    with pytest.raises(ValueError, match="default"):
+        ProfileKey("s", "x_mm", Setting("x_mm", "number", "mm", 0, 1, what="x"),
+                   default=(0, 2), kind="pair")
+    with pytest.raises(ValueError, match="a text of a number setting"):
+        ProfileKey("s", "x_mm", Setting("x_mm", "number", "mm", 0, 1, what="x"), kind="text")
+
+
+_YES_OR_NO = Setting("x", "bool")
+_WORDS = {"yes": True, "true": True, "1": True, "on": True,
+          "no": False, "false": False, "0": False, "off": False}
+
+
+@given(st.one_of(st.sampled_from(list(_WORDS)).map(lambda w: f" {w.upper()} "),
+                 st.text(max_size=6)))
+def test_yes_or_no_by_any_word(text):
+    """A yes-or-no setting takes its eight words in any case, and refuses any other."""
+    if text.strip().lower() in _WORDS:
+        assert _YES_OR_NO.parse(text) is _WORDS[text.strip().lower()]
+    else:
+        with pytest.raises(SettingError, match="^must be yes or no, not "):
+            _YES_OR_NO.parse(text)
+    assert _YES_OR_NO.check(True) is True
+    with pytest.raises(SettingError):
+        _YES_OR_NO.check(1)
+
+
+_PAIR = Setting("x_khz", "pair", "kHz", 20, 200, what="x")
+
+
+@given(st.floats(allow_nan=True, allow_infinity=True),
+       st.floats(allow_nan=True, allow_infinity=True))
+def test_a_pair_by_any_numbers(low, high):
+    """A pair takes two numbers, each in range, the first not above the second."""
+    inside = all(v == v and 20 <= v <= 200 for v in (low, high)) and low <= high
+    for text in (f"{low!r},{high!r}", f"[{low!r}, {high!r}]"):
+        if inside:
+            assert _PAIR.parse(text) == (low, high)
+        else:
+            with pytest.raises(SettingError, match="^x must be "):
+                _PAIR.parse(text)
+    if inside:
+        assert _PAIR.check((low, high)) == (low, high)
+
+
+_CHOICE = Setting("x", "choice", choices=("serpentine", "oneway"), make=str.upper)
+
+
+@given(st.one_of(st.sampled_from(_CHOICE.choices), st.text(max_size=10)))
+def test_a_choice_by_any_word(text):
+    """A choice takes its words as they are written (made into its value), and refuses any
+    other with the list of them."""
+    if text in _CHOICE.choices:
+        assert _CHOICE.parse(text) == text.upper()
+    else:
+        with pytest.raises(SettingError, match=r"^must be serpentine, oneway, not "):
+            _CHOICE.parse(text)
+
+
+def _span(spacing, count=None):
+    if spacing <= 0:
+        raise ValueError(f"spacing {spacing:g}: must be above 0")
+    return spacing, count
+
+
+_NUMBERS = Setting("x", "numbers", "mm, rings", what="--x", metavar="SPACING[,COUNT]",
+                   parts=("number", "integer"), make=_span)
+
+
+@given(st.text(alphabet="0123456789.,-e x", max_size=10))
+def test_numbers_by_any_text(text):
+    """Up to as many numbers as its parts, each of its part's kind, the first needed; a value
+    its maker refuses is said with the maker's reason."""
+    parts = text.replace(" ", "").split(",")
+    try:
+        if not 1 <= len(parts) <= 2:
+            raise ValueError
+        values = [float(parts[0]), *(int(p) for p in parts[1:])]
+    except ValueError:
+        with pytest.raises(SettingError) as refused:
+            _NUMBERS.parse(text)
+        assert str(refused.value) == f"--x must be SPACING[,COUNT] (mm, rings), not {text!r}"
+        return
+    if values[0] > 0:
+        assert _NUMBERS.parse(text) == tuple(values + [None] * (2 - len(values)))
+    else:
+        with pytest.raises(SettingError, match=r"^--x .*: spacing .*: must be above 0$"):
+            _NUMBERS.parse(text)
 
 
 @pytest.mark.parametrize("command", [("read",), ("send",), ("mark",), ("clean",),
@@ -94,23 +198,58 @@ def test_grid_axes_are_the_settings(flag, setting):
         action.type(f"{setting.low}:{setting.high * 1.01}:2")
 
 
-@pytest.mark.parametrize("section, key", list(laser.PROFILE_KEYS))
-def test_profile_keys_are_the_settings(section, key):
-    """A profile key refuses just outside its setting's range, and takes its ends."""
-    setting = laser.PROFILE_KEYS[section, key]
-    above = setting.high + (1 if setting.kind == "integer" else setting.high * 1e-3)
-    value = f"[{setting.low}, {setting.high}]" if key == "prr_khz" and section == "laser" \
-        else repr(setting.high)
-    if (section, key) == ("defaults", "speed_mm_s"):      # at most [galvo] max_speed_mm_s
+#: Every key of the profile, as ``(section, key)`` (for the tests' names).
+_PROFILE_KEYS = {(key.section, key.name): key for keys in machine.PROFILE.values()
+                 for key in keys}
+
+
+@pytest.mark.parametrize("section, name", [k for k, key in _PROFILE_KEYS.items()
+                                           if key.setting.ranged])
+def test_profile_keys_are_the_settings(section, name):
+    """A profile key takes its setting's ends, and refuses just outside them."""
+    key = _PROFILE_KEYS[section, name]
+    step = 1 if key.kind == "integer" else max(abs(key.high) * 1e-3, 1e-3)
+    value = f"[{key.low!r}, {key.high!r}]" if key.kind == "pair" else repr(key.high)
+    if (section, name) == ("defaults", "speed_mm_s"):      # at most [galvo] max_speed_mm_s
         value = f"{value}\n[galvo]\nmax_speed_mm_s = {value}"
-    parse_profile(f"[{section}]\n{key} = {value}\n")
-    with pytest.raises(ProfileError, match=f"{key} must be"):
-        parse_profile(f"[{section}]\n{key} = {above!r}\n")
+    parse_profile(f"[{section}]\n{name} = {value}\n")
+    for outside in (key.high + step, key.low - step):
+        with pytest.raises(ProfileError, match=f"{name} must be"):
+            parse_profile(f"[{section}]\n{name} = {outside!r}\n")
+
+
+def test_every_profile_key_is_a_declaration():
+    """The profile reads the declared keys and no others: each a setting declared in
+    galvoscan.settings (none written in galvoscan.profile), its defaults the profile's."""
+    assert profile_keys.SECTIONS is machine.PROFILE
+    declared = {id(value) for module in (laser, machine) for value in vars(module).values()
+                if isinstance(value, Setting)}
+    profile = default_profile()
+    for (section, name), key in _PROFILE_KEYS.items():
+        assert isinstance(key, ProfileKey) and key.section == section
+        assert id(key.setting) in declared, (section, name)
+        assert getattr(getattr(profile, section), name) == key.default, (section, name)
+        assert key.help and key.kind
+
+
+def test_the_profiles_delay_keys_are_the_registers():
+    """[galvo]'s delays are the registers a layer sets: their ranges the register map's."""
+    for key, register in profile_keys.DELAY_KEYS.items():
+        found = _PROFILE_KEYS["galvo", key]
+        assert (found.low, found.high) == (BY_NAME[register].low, BY_NAME[register].high)
+    assert profile_keys.JUMP_DELAY_RANGE_US == (BY_NAME["jump_delay"].low,
+                                                BY_NAME["jump_delay"].high)
+
+
+def test_profile_docs_table_is_the_declarations():
+    """The settings page's table of the profile's keys is generated from the declarations."""
+    page = (DOCS / "reference" / "settings.md").read_text(encoding="utf-8")
+    assert profile_table(machine.PROFILE) in page
 
 
 def test_docs_table_is_the_settings():
     """docs/reference/settings.md's table is generated from the settings (never edited by hand)."""
-    docs = (Path(__file__).parent.parent / "docs" / "reference" / "settings.md").read_text(encoding="utf-8")
+    docs = (DOCS / "reference" / "settings.md").read_text(encoding="utf-8")
     assert markdown_table(laser.ALL) in docs
 
 

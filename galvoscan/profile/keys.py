@@ -7,8 +7,9 @@ This module holds what :mod:`galvoscan.profile.machine` reads a file with, below
   register cannot hold: :data:`FRAME_US`, :data:`PRR_RANGE_KHZ`, :data:`JUMP_DELAY_RANGE_US`,
   :data:`DELAY_KEYS`, :data:`POWER_REGISTER_MAX`;
 * :class:`ProfileError`, the one error a profile that cannot be used raises;
-* the key table: :data:`SECTIONS`, every section and its keys (:class:`_Key`: kind, range,
-  unit), in the template's order;
+* the key table: :data:`SECTIONS`, every section and its keys in the template's order, each a
+  :class:`~galvoscan.settings.schema.ProfileKey` (kind, range, unit, default) declared in
+  :mod:`galvoscan.settings.machine`, none here;
 * the value checks (``_check``) and the messages for a key or section that is not known, with
   the nearest known name suggested (``_unknown_key``, ``_unknown_section``), and the number
   formatting they and the template share (``_num``, ``_toml_num``, ``_shown``).
@@ -16,33 +17,33 @@ This module holds what :mod:`galvoscan.profile.machine` reads a file with, below
 :mod:`galvoscan.profile.machine` re-exports the public names; import them from there.
 """
 
-from dataclasses import dataclass
 import difflib
 import math
 import re
 
 from ..gateware.host.regmap import BY_NAME, FRAME_US
 from ..settings import laser as settings
+from ..settings.machine import JUMP_DELAY, LASER_DELAYS, PROFILE
+
+
+__all__ = ["FRAME_US", "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX", "DELAY_KEYS",
+           "ProfileError", "SECTIONS", "default"]
 
 
 # --- what the registers fix ------------------------------------------------------------------
 
 _PRR = BY_NAME["laser_prr"]
 _POWER = BY_NAME["laser_power"]
-_JUMP = BY_NAME["jump_delay"]
+_JUMP = BY_NAME[JUMP_DELAY.name]
 
 #: Steps of ``laser_prr`` per kHz (its unit is 100 Hz): the setting's.
 _PRR_STEPS_PER_KHZ = settings.PRR_STEPS_PER_KHZ
 assert _JUMP.unit == "µs", "jump_delay's unit changed: update the profile"
-#: ``[galvo]`` keys that go to a delay register as they are, in µs: key → register.
-DELAY_KEYS = {"laser_on_delay_us": "laser_on_delay", "laser_off_delay_us": "laser_off_delay",
-              "mark_delay_us": "mark_delay", "polygon_delay_us": "polygon_delay"}
-assert all(BY_NAME[r].unit.startswith("µs") for r in DELAY_KEYS.values())
 
 #: The pulse repetition rates the board can make, in kHz (``laser_prr``'s range).
 PRR_RANGE_KHZ = settings.PRR.range
 #: The jump delays the board can wait, in µs (``jump_delay``'s range).
-JUMP_DELAY_RANGE_US = (_JUMP.low, _JUMP.high)
+JUMP_DELAY_RANGE_US = JUMP_DELAY.range
 #: ``laser_power`` at 100 %.
 POWER_REGISTER_MAX = _POWER.high
 
@@ -51,53 +52,20 @@ class ProfileError(ValueError):
     """A machine profile that cannot be used: one line naming the file and the key."""
 
 
-def _whole(bound):
-    """A bound as the template and the messages write it: 12000000, not 12000000.0."""
-    return int(bound) if float(bound).is_integer() else bound
-
-
 # --- the keys --------------------------------------------------------------------------------
 
-@dataclass(frozen=True)
-class _Key:
-    name: str
-    kind: str            # "number", "integer", "text", "path", "bool", "prr_pair"
-    low: float = None
-    high: float = None
-    unit: str = ""
+#: Every section and its keys, in the template's order (:data:`galvoscan.settings.machine.
+#: PROFILE`): the ranges checked, the units and the defaults.
+SECTIONS = PROFILE
 
-    @classmethod
-    def of(cls, section, name, kind="number"):
-        """The key ``[section] name``, whose range and unit are its setting's
-        (:data:`galvoscan.settings.laser.PROFILE_KEYS`)."""
-        setting = settings.PROFILE_KEYS[section, name]
-        return cls(name, kind if setting.kind == "number" else "integer",
-                   _whole(setting.low), _whole(setting.high), setting.unit)
+#: ``[galvo]`` keys that go to a delay register as they are, in µs: key → register.
+DELAY_KEYS = {key.name: key.setting.name for key in SECTIONS["galvo"]
+              if key.setting in LASER_DELAYS}
 
 
-#: Every section and its keys, in the template's order. The ranges here are the ones checked;
-#: the keys that are a job's or a run's settings take theirs from :mod:`galvoscan.settings`.
-SECTIONS = {
-    "field": (_Key("size_mm", "number", 1, 2000, "mm"),
-              _Key("correction", "path")),
-    "link": (_Key("port", "text"),
-             _Key.of("link", "baud", "integer"),
-             _Key("spi", "text"),
-             _Key.of("link", "timeout_s")),
-    "laser": (_Key("max_power_w", "number", 0.1, 10_000, "W"),
-              _Key.of("laser", "prr_khz", "prr_pair"),
-              _Key("spot_mm", "number", 0.001, 10, "mm"),
-              _Key("guide", "bool")),
-    "galvo": (_Key("jump_delay_us", "number", *JUMP_DELAY_RANGE_US, "µs"),
-              _Key("settle_us_per_mm", "number", 0, 10_000, "µs/mm"),
-              _Key("max_speed_mm_s", "number", 1, 100_000, "mm/s"),
-              *(_Key(key, "number", BY_NAME[reg].low, BY_NAME[reg].high, "µs")
-                for key, reg in DELAY_KEYS.items()),
-              _Key("polygon_scaled", "bool")),
-    "defaults": tuple(_Key.of("defaults", name) for name in
-                      ("speed_mm_s", "power_percent", "prr_khz", "passes")),
-    "wobble": tuple(_Key.of("wobble", name) for name in ("across_um", "along_um", "freq_hz")),
-}
+def default(section, name):
+    """The value of ``[section] name`` when a profile leaves it out."""
+    return next(key.default for key in SECTIONS[section] if key.name == name)
 
 
 def _num(value):
@@ -184,7 +152,7 @@ def _check(value, key, where):
         if not isinstance(value, bool):
             bad("true or false")
         return value
-    if key.kind == "prr_pair":
+    if key.kind == "pair":
         if not (isinstance(value, list) and len(value) == 2 and
                 all(_is_number(v) and _in_range(v, key) for v in value)):
             bad(f"two numbers [lowest, highest], each {_range(key)}")

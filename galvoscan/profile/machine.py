@@ -19,9 +19,12 @@ that is not known is an error, with the nearest known name suggested: a typo mus
 silently into a job. Every problem with a file is a :class:`ProfileError`, one line that names the
 file and the key; nothing else escapes :func:`load_profile`.
 
-Ranges that the board fixes are taken from the register map (``laser_prr``, ``laser_power``,
-``jump_delay`` and the other delays), so a profile can never ask for what a register cannot
-hold.
+Every key's kind, unit, range, default and help is declared once, in
+:mod:`galvoscan.settings.machine` (the keys that are a job's or a run's settings hold
+:mod:`galvoscan.settings.laser`'s): the checks, the section dataclasses' defaults below, the
+template and the docs' table of the keys are read from there. Ranges that the board fixes are
+taken from the register map (``laser_prr``, ``laser_power``, ``jump_delay`` and the other
+delays), so a profile can never ask for what a register cannot hold.
 
 This module holds the profile itself: :class:`ProfileError`, the section dataclasses
 (:class:`FieldSection`, :class:`LinkSection`, :class:`LaserSection`, :class:`GalvoSection`,
@@ -44,11 +47,10 @@ except ModuleNotFoundError:                      # Python < 3.11
     import tomli as tomllib
 
 from ..correction.files import load_table
-from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.points import FIELD_MAX
 from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
                    SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
-                   _unknown_key, _unknown_section)
+                   _unknown_key, _unknown_section, default as _default)
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
@@ -68,33 +70,33 @@ FULL_RANGE = FIELD_MAX + 1
 @dataclass(frozen=True)
 class FieldSection:
     #: Side of the square field that galvo positions 0 … 65535 span (the lens's field), mm.
-    size_mm: float = 110.0
+    size_mm: float = _default("field", "size_mm")
     #: The correction table file (absolute), or None for the board's identity table.
-    correction: Optional[Path] = None
+    correction: Optional[Path] = _default("field", "correction")
 
 
 @dataclass(frozen=True)
 class LinkSection:
     #: Serial port of the board, or None (the command line must give it).
-    port: Optional[str] = None
+    port: Optional[str] = _default("link", "port")
     #: Serial rate the bitstream was built with (a build's default unless told otherwise).
-    baud: int = DEFAULT_BAUD
+    baud: int = _default("link", "baud")
     #: pyftdi URL of an FTDI SPI adapter, or None.
-    spi: Optional[str] = None
+    spi: Optional[str] = _default("link", "spi")
     #: Seconds to wait for an answer.
-    timeout_s: float = 0.5
+    timeout_s: float = _default("link", "timeout_s")
 
 
 @dataclass(frozen=True)
 class LaserSection:
     #: Average power at 100 % (``laser_power`` = 255), W.
-    max_power_w: float = 20.0
+    max_power_w: float = _default("laser", "max_power_w")
     #: Lowest and highest pulse repetition rate the laser accepts, kHz.
-    prr_khz: Tuple[float, float] = PRR_RANGE_KHZ
+    prr_khz: Tuple[float, float] = _default("laser", "prr_khz")
     #: Spot diameter at focus, mm.
-    spot_mm: float = 0.05
+    spot_mm: float = _default("laser", "spot_mm")
     #: The machine has a guide (red pointer) laser on the board's guide output.
-    guide: bool = True
+    guide: bool = _default("laser", "guide")
 
 
 @dataclass(frozen=True)
@@ -104,44 +106,44 @@ class GalvoSection:
     10 mm head lagging its set point by some 80 µs) at 1 m/s: a line's ends and corners within
     20 % of its mid-line dose."""
     #: Laser-off wait after every jump, µs (rounded up to whole 10 µs frames).
-    jump_delay_us: float = 500.0
+    jump_delay_us: float = _default("galvo", "jump_delay_us")
     #: Extra wait per mm of jump, µs/mm (0: the same delay for every jump).
-    settle_us_per_mm: float = 0.0
+    settle_us_per_mm: float = _default("galvo", "settle_us_per_mm")
     #: Fastest marking speed a job may ask for, mm/s.
-    max_speed_mm_s: float = 10_000.0
+    max_speed_mm_s: float = _default("galvo", "max_speed_mm_s")
     #: The laser switches on this long after a mark's first point (negative: before), µs.
-    laser_on_delay_us: float = 100.0
+    laser_on_delay_us: float = _default("galvo", "laser_on_delay_us")
     #: The laser stays on this long after a mark's last point, µs.
-    laser_off_delay_us: float = 50.0
+    laser_off_delay_us: float = _default("galvo", "laser_off_delay_us")
     #: The mirrors hold a mark's end this long before a jump, µs.
-    mark_delay_us: float = 100.0
+    mark_delay_us: float = _default("galvo", "mark_delay_us")
     #: The mirrors hold a corner between two marks this long, laser on, µs (0: the corner is
     #: rounded by the mirror's lag, but not over-dosed).
-    polygon_delay_us: float = 0.0
+    polygon_delay_us: float = _default("galvo", "polygon_delay_us")
     #: Scale each corner's polygon delay by (1 - cos φ) (RTC's variable polygon delay).
-    polygon_scaled: bool = True
+    polygon_scaled: bool = _default("galvo", "polygon_scaled")
 
 
 @dataclass(frozen=True)
 class JobDefaults:
     #: Marking speed, mm/s.
-    speed_mm_s: float = 1000.0
+    speed_mm_s: float = _default("defaults", "speed_mm_s")
     #: Laser power, % of ``max_power_w``.
-    power_percent: float = 10.0
+    power_percent: float = _default("defaults", "power_percent")
     #: Pulse repetition rate, kHz.
-    prr_khz: float = 50.0
+    prr_khz: float = _default("defaults", "prr_khz")
     #: Times a job is repeated.
-    passes: int = 1
+    passes: int = _default("defaults", "passes")
 
 
 @dataclass(frozen=True)
 class WobbleSection:
     #: Wobble amplitude across marked lines (to each side), µm; 0 with along_um 0: no wobble.
-    across_um: float = 0.0
+    across_um: float = _default("wobble", "across_um")
     #: Wobble amplitude along marked lines, µm (equal to across_um: a circle).
-    along_um: float = 0.0
+    along_um: float = _default("wobble", "along_um")
     #: Turns of the wobble figure a second, Hz.
-    freq_hz: float = 1000.0
+    freq_hz: float = _default("wobble", "freq_hz")
 
 
 @dataclass(frozen=True)

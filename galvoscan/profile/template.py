@@ -2,10 +2,9 @@
 init`` writes (every key with its default, unit, range and purpose).
 
 The ranges and their units are read from the key table
-(:data:`galvoscan.profile.keys.SECTIONS`) and the defaults from
-:func:`galvoscan.profile.machine.default_profile`, so the template cannot disagree with what
-is checked (the keys that are a job's or a run's settings take theirs from
-:mod:`galvoscan.settings`).
+(:data:`galvoscan.profile.keys.SECTIONS`, the declarations of :mod:`galvoscan.settings.machine`)
+and the defaults from :func:`galvoscan.profile.machine.default_profile` (the declarations'
+too), so the template cannot disagree with what is checked.
 """
 
 from .keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num

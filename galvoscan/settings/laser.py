@@ -1,12 +1,13 @@
 """The settings a job is marked at and a run talks to its board with, each declared once:
-marking speed, laser power, pulse repetition rate, passes, wobble, chord tolerance and the
-link's answer timeout.
+marking speed, laser power, pulse repetition rate, passes, pulses per point, wobble, chord
+tolerance and the link's answer timeout and rate.
 
 ``mark``, ``clean``, ``store`` and ``test-grid`` build their options from these, a job file's
 ``[job]`` and a layer's keys read with them, and the machine profile's ``[defaults]``,
-``[wobble]`` and ``[link] timeout_s`` check their values against the same ranges
-(:data:`PROFILE_KEYS`). Ranges a register fixes (the PRR, the wobble's frequency) are read
-from the register map, so that no setting can ask for what the board cannot hold.
+``[wobble]``, ``[laser] prr_khz`` and ``[link] baud`` and ``timeout_s`` hold them
+(:mod:`.machine`). Ranges a register fixes (the PRR, pulses per point, the wobble's
+frequency) are read from the register map, so that no setting can ask for what the board
+cannot hold.
 """
 
 from ..gateware.clocking import DEFAULT_BAUD
@@ -15,9 +16,9 @@ from ..gateware.limits import WOBBLE_MAX_HZ
 from .schema import Setting, number_text
 
 
-__all__ = ["SPEED", "POWER", "PRR", "PASSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
-           "TOLERANCE", "TIMEOUT", "BAUD", "PRESS_TIMEOUT", "ALL", "JOB_SETTINGS", "PROFILE_KEYS",
-           "PRR_STEPS_PER_KHZ"]
+__all__ = ["SPEED", "POWER", "PRR", "PASSES", "PULSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
+           "TOLERANCE", "TIMEOUT", "LINK_TIMEOUT_S", "BAUD", "PRESS_TIMEOUT", "ALL",
+           "JOB_SETTINGS", "PRR_STEPS_PER_KHZ"]
 
 
 _PRR_REGISTER = BY_NAME["laser_prr"]
@@ -42,6 +43,11 @@ PRR = Setting("prr_khz", "number", "kHz", _PRR_REGISTER.low / PRR_STEPS_PER_KHZ,
 PASSES = Setting("passes", "integer", "", 1, 1000, what="passes", flag="--passes",
                  key="passes", metavar="N", help="times the job is marked",
                  default_said=_DEFAULTS)
+_PULSES_REGISTER = BY_NAME["pulses_per_point"]
+#: A layer's ``pulses``: the pitch follows the speed, not the other way round.
+PULSES = Setting("pulses_per_point", "integer", "", _PULSES_REGISTER.low,
+                 _PULSES_REGISTER.high, what="pulses per point", key="pulses",
+                 help="laser pulses a point (the pitch then follows the speed)")
 WOBBLE = Setting("wobble_um", "number", "µm", 0, 10_000, what="wobble", flag="--wobble",
                  key="wobble", metavar="UM", default_said=_WOBBLE,
                  help="wobble amplitude across the line (to each side); a circle unless "
@@ -57,12 +63,14 @@ WOBBLE_HZ = Setting("wobble_hz", "number", "Hz", BY_NAME["wob_freq"].low, WOBBLE
 TOLERANCE = Setting("tolerance_mm", "number", "mm", 0.0005, 1, default=0.01,
                     what="tolerance", flag="--tolerance", key="tolerance", metavar="MM",
                     help="curves as chords at most this far off")
+#: The link's answer timeout when neither the command line nor a profile gives one, s.
+LINK_TIMEOUT_S = 0.5
 #: Up to 600 s: the answer timeout ``board --sim`` advises for its slowest backend
 #: (:meth:`galvoscan.sim.board.SimulatedBoard.answer_timeout_s` is held to this range).
 TIMEOUT = Setting("timeout_s", "number", "s", 0.01, 600, what="timeout", flag="--timeout",
                   metavar="S", help="seconds to wait for the board's answer",
-                  default_said="0.5 (read, send, …); a job's: the profile's [link], with "
-                               "--sim the simulator's measured speed")
+                  default_said=f"{number_text(LINK_TIMEOUT_S)} (read, send, …); a job's: the "
+                               f"profile's [link], with --sim the simulator's measured speed")
 
 #: The host link's serial rate: a number as a person writes it (``1e6``), whole. ``build``'s
 #: ``--baud`` (the bitstream's), the link options' and the profile's ``[link] baud``.
@@ -83,11 +91,3 @@ JOB_SETTINGS = {s.key: s for s in (SPEED, POWER, PRR, PASSES, WOBBLE, WOBBLE_ALO
 #: The settings docs/reference/settings.md lists, in its order (``standalone``'s press timeout is that
 #: command's own).
 ALL = (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ, TIMEOUT, BAUD)
-
-#: The machine profile's keys that are these settings: ``(section, key)`` → setting.
-PROFILE_KEYS = {("defaults", "speed_mm_s"): SPEED, ("defaults", "power_percent"): POWER,
-                ("defaults", "prr_khz"): PRR, ("defaults", "passes"): PASSES,
-                ("laser", "prr_khz"): PRR, ("link", "timeout_s"): TIMEOUT,
-                ("link", "baud"): BAUD,
-                ("wobble", "across_um"): WOBBLE, ("wobble", "along_um"): WOBBLE_ALONG,
-                ("wobble", "freq_hz"): WOBBLE_HZ}
