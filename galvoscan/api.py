@@ -15,7 +15,9 @@ A sketch (``docs/examples/first_job.py`` runs one whole)::
     report = api.run(plan, board)
     print(report.segments, report.pulses, report.marks_mm[:3])
 
-Every value is checked where it is given, with the command line's one-line refusal
+A job's layers may be built from tables as a job file's ``[[layer]]`` gives them
+(:func:`layer_from_table`, by the key table :data:`LAYER_KEYS` that ``--layer`` and job files
+read too). Every value is checked where it is given, with the command line's one-line refusal
 (:class:`~galvoscan.settings.schema.SettingError`, :class:`~galvoscan.geometry.field.PlanError`,
 :class:`~galvoscan.geometry.drawing.DrawingError`; all are :class:`ValueError`), and the whole
 job is planned and checked before any byte goes to a board.
@@ -33,6 +35,7 @@ from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
 from .inputs.drawings import load_drawing
 from .geometry.fill import HatchSet, LineOrder
+from .plan.layer_keys import LAYER_KEYS, layer_from_table
 from .plan.layers import Layer, merged, plan_layers
 from .inputs.photo import Dither, PhotoSpec
 from .plan.objects import photo_object
@@ -46,7 +49,8 @@ from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE
 from .sim.board import SimTransport, SimulatedBoard
 
 
-__all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "HatchSet", "LineOrder", "Job",
+__all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
+           "HatchSet", "LineOrder", "Job",
            "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
            "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
            "load_profile",

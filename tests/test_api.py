@@ -66,6 +66,39 @@ def test_text_and_code_planned_without_the_command_line():
         api.plan(api.Job(texts=[api.Text("{nope}")]))
 
 
+def test_a_layer_from_a_table_without_the_command_line():
+    """A ``[[layer]]`` table, as a program gives it, is read by the API with the job file's
+    key table (the command line not imported) and refused with its lines; the layer plans."""
+    code = ("import sys\n"
+            "from galvoscan import api\n"
+            "layer = api.layer_from_table({'match': '#F00', 'speed': 500, 'outline': False,\n"
+            "                              'hatch': ['0.1,0', '0.1,90'], 'laser_on_delay': -10})\n"
+            "print(repr(layer))\n"
+            "print(sorted(m for m in sys.modules if m.startswith('galvoscan.cli')))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    layer, cli = done.stdout.splitlines()
+    assert cli == "[]"
+    assert layer == repr(api.Layer("#ff0000", speed_mm_s=500.0, outline=False,
+                                   hatch=(api.HatchSet(0.1), api.HatchSet(0.1, 90.0)),
+                                   delays_us=(("laser_on_delay", -10),)))
+    with pytest.raises(ValueError, match=r"^layer 2 \('red'\): pulses: pulses per point must "
+                                         r"be from 1 to 255, not 0$"):
+        api.layer_from_table({"match": "red", "pulses": 0}, "layer 2")
+    with pytest.raises(ValueError, match=r"^\[\[layer\]\] \('red'\): 'sped' is not a layer "
+                                         r"setting \(did you mean 'speed'\?\)"):
+        api.layer_from_table({"match": "red", "sped": 500})
+    with pytest.raises(ValueError, match=r"hatch_lines: must be serpentine, oneway, joined, "
+                                         r"not 'zigzag'$"):
+        api.layer_from_table({"match": "red", "hatch_lines": "zigzag"})
+    text = api.Text("I", font="hershey", height_mm=2, layer="Slow")
+    plan = api.plan(api.Job(texts=[text], layers=[api.layer_from_table(
+        {"match": "Slow", "speed": 503.5, "pulses": 2})]))
+    (only,) = plan.vector_job.layers
+    assert only.settings.speed_mm_s == 503.5 and only.job.pitch.pulses_per_point == 2
+
+
 def test_wobble_from_the_job_else_the_profile():
     """A job's wobble is its own (a circle when only across is given), else the profile's;
     one that would reach past the field is refused in one line."""

@@ -1,10 +1,11 @@
 """The settings schema (``galvoscan/settings``): each setting's range read and refused the
 same way wherever it is used (the command line of every command, a job file, a layer, the
-machine profile), and ``--timeout`` one range that accepts what ``board --sim`` advises."""
+machine profile), ``--timeout`` one range that accepts what ``board --sim`` advises, every
+machine-profile key a declaration, the schema's kinds read by any text, and the docs' tables
+of the settings, the profile's keys and a layer's keys generated from the declarations."""
 
 import argparse
-import subprocess
-import sys
+import re
 from pathlib import Path
 
 import grimp
@@ -12,8 +13,9 @@ import pytest
 from hypothesis import given, strategies as st
 
 from galvoscan.cli import parser
-from galvoscan.gateware.host.regmap import BY_NAME
 from galvoscan.cli.job_options import SECTIONS, job_file_table
+from galvoscan.gateware.host.regmap import BY_NAME
+from galvoscan.plan import layer_keys
 from galvoscan.profile import keys as profile_keys
 from galvoscan.profile.machine import ProfileError, default_profile, parse_profile
 from galvoscan.settings import laser, machine
@@ -253,6 +255,18 @@ def test_docs_table_is_the_settings():
     assert markdown_table(laser.ALL) in docs
 
 
+def test_layer_docs_table_is_the_declarations():
+    """The settings page's table of a layer's keys is generated from the key table, and the
+    marking page's list of them names each key and no other."""
+    page = (DOCS / "reference" / "settings.md").read_text(encoding="utf-8")
+    assert layer_keys.markdown_table() in page
+    marking = (DOCS / "user" / "marking.md").read_text(encoding="utf-8")
+    listed = re.search(r"The keys: (.+?); what a layer leaves out", marking, re.S)
+    assert listed, "the marking page's list of a layer's keys"
+    words = re.sub(r"\([^)]*\)", "", listed[1])          # what is said of a key, in brackets
+    assert re.findall(r"`(\w+)`", words) == list(layer_keys.LAYER_KEYS)
+
+
 def test_job_file_table_is_the_options():
     """The job-file page's table of a job file's keys is generated from the job options; each
     key it lists is one a job file takes."""
@@ -267,6 +281,7 @@ def test_job_file_table_is_the_options():
 @pytest.mark.parametrize("importer, imported", [
     ("galvoscan.settings", "galvoscan.cli"),          # the schema sits below the CLI
     ("galvoscan.api", "galvoscan.cli"),               # the API needs no command line
+    ("galvoscan.plan.layer_keys", "galvoscan.cli"),   # nor a layer's key table
     ("galvoscan.cli.jobfile", "galvoscan.cli.mark"),  # job files read the option table
     ("galvoscan.cli.job_options", "galvoscan.cli.mark"),
 ])

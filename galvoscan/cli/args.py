@@ -18,8 +18,7 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
-           "check_backend_needs_sim", "simulated_board", "hatch_set", "contour_fill",
-           "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s",
+           "check_backend_needs_sim", "simulated_board", "prr_khz", "setting_type", "setting_keywords", "add_setting", "speed_mm_s",
            "power_percent", "passes"]
 
 
@@ -76,12 +75,18 @@ def setting_type(setting):
 
 
 def setting_keywords(setting, *, default=None, default_text=None):
-    """``add_argument``'s keywords for ``setting``: its type, placeholder, default and help
-    (the unit, the range and the default said). ``default``: the command's own, in place of
-    the setting's; ``default_text``: where a default left as None comes from."""
+    """``add_argument``'s keywords for ``setting``: its type (a choice: its words), placeholder,
+    default and help (the unit, the range and the default said); a repeated setting's values
+    gathered in a list. ``default``: the command's own, in place of the setting's;
+    ``default_text``: where a default left as None comes from."""
     default = setting.default if default is None else default
-    return dict(type=setting_type(setting), default=default, metavar=setting.metavar,
-                help=setting.described(default, default_text).replace("%", "%%"))
+    help = setting.described(default, default_text).replace("%", "%%")
+    if setting.kind == "choice":
+        return dict(choices=list(setting.choices), default=default, help=help)
+    keywords = dict(type=setting_type(setting), metavar=setting.metavar, help=help)
+    if setting.repeated:
+        return dict(keywords, action="append")
+    return dict(keywords, default=default)
 
 
 def add_setting(group, setting, **how):
@@ -351,41 +356,3 @@ def simulated_board(args, **kwargs):
             fail(f"the netlist cannot be simulated: {error}")
         fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
              f"Amaranth's)")
-
-
-def hatch_set(text):
-    """``SPACING[,ANGLE[,STEP[,OFFSET]]]``: mm, degrees, degrees a pass, mm: a
-    :class:`~galvoscan.geometry.fill.HatchSet`."""
-    from ..geometry.fill import HatchSet
-    from ..geometry.field import PlanError
-    parts = text.replace(" ", "").split(",")
-    try:
-        if not 1 <= len(parts) <= 4:
-            raise ValueError
-        values = [float(part) for part in parts]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--hatch must be SPACING[,ANGLE[,STEP[,OFFSET]]] (mm, "
-                                         f"degrees, degrees a pass, mm), not {text!r}")
-    try:
-        return HatchSet(*values)
-    except PlanError as error:
-        raise argparse.ArgumentTypeError(f"--hatch {text}: {error}")
-
-
-def contour_fill(text):
-    """``SPACING[,COUNT]``: mm, rings: a :class:`~galvoscan.geometry.fill.Contour`."""
-    from ..geometry.fill import Contour
-    from ..geometry.field import PlanError
-    parts = text.replace(" ", "").split(",")
-    try:
-        if not 1 <= len(parts) <= 2:
-            raise ValueError
-        spacing = float(parts[0])
-        count = int(parts[1]) if len(parts) == 2 else None
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--contour must be SPACING[,COUNT] (mm, rings), not "
-                                         f"{text!r}")
-    try:
-        return Contour(spacing, count)
-    except PlanError as error:
-        raise argparse.ArgumentTypeError(f"--contour {text}: {error}")

@@ -5,20 +5,21 @@ help), and the job file's table and key it is saved under (:data:`SECTIONS`, der
 ``mark`` adds its arguments from this table (:func:`add_job_file_options`) and job files
 (:mod:`.jobfile`) read each key with its option's own type, so a key's range, its words and
 its one-line refusal are the option's. The job's shared settings (speed, power, PRR, passes,
-wobble, tolerance) are :mod:`galvoscan.settings.laser`'s.
+wobble, tolerance) are :mod:`galvoscan.settings.laser`'s, its fill (hatch, hatch lines,
+contour, outline) :mod:`galvoscan.plan.layer_keys`', which a layer's keys are read by too.
 """
 
 from dataclasses import dataclass, field
 
 from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
-from ..geometry.fill import LineOrder
 from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
+from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ)
-from .args import contour_fill, hatch_set, int_in, number_in, setting_keywords
+from .args import int_in, number_in, setting_keywords
 from .jobargs import pair_mm
-from .layers import LAYER_KEYS, LayerAction
+from .layers import LayerAction
 
 
 __all__ = ["Option", "OPTIONS", "SECTIONS", "GROUPS", "add_job_file_options", "defaults",
@@ -184,25 +185,12 @@ OPTIONS = (
         help="settings of their own for the paths of one colour (an SVG stroke, else fill: "
              "\"#ff0000\"; quote it) or one layer (an Inkscape layer's label, a DXF layer's "
              "name); repeat it for more layers, run in that order, what none matches last; "
-             "keys: " + ", ".join(f"{key} ({unit})" for key, (_, _, unit) in
+             "keys: " + ", ".join(f"{key} ({one.said})" for key, one in
                                   LAYER_KEYS.items()).replace("%", "%%"))),
-    Option("--hatch", "drawing", dict(
-        type=hatch_set, action="append", metavar="SPACING[,ANGLE[,STEP[,OFFSET]]]",
-        help="fill closed shapes with lines SPACING mm apart at ANGLE degrees (holes by the "
-             "even-odd rule), turned STEP degrees more each pass, moved OFFSET mm across; "
-             "repeat it for more sets (0.05,0 and 0.05,90: a cross-hatch)"), section="job"),
-    Option("--hatch-lines", "drawing", dict(
-        choices=[order.value for order in LineOrder], default=LineOrder.SERPENTINE.value,
-        help="the hatch's lines each the other way from the last (serpentine, the default), "
-             "all the same way (oneway), or serpentine and joined inside the shape where they "
-             "can be (joined: fewer jumps)"), section="job"),
-    Option("--contour", "drawing", dict(
-        type=contour_fill, metavar="SPACING[,COUNT]",
-        help="fill closed shapes with rings inward from their edges, SPACING mm apart (COUNT "
-             "of them at most; default: until filled)"), section="job"),
+    *(_setting(setting, "drawing", "job") for setting in (HATCH, HATCH_LINES, CONTOUR)),
     Option("--no-outline", "drawing", dict(
         action="store_true", help="mark the hatch only, not the outlines"),
-        section="job", key="outline", inverted=True),
+        section="job", key=OUTLINE.key, inverted=True),
     _setting(TOLERANCE, "drawing", "job"),
     # wobble
     *(_setting(setting, "wobble", "job") for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),

@@ -48,9 +48,9 @@ except ImportError:     # pragma: no cover (CI runs 3.11)
     import tomli as tomllib
 
 from ..geometry.fill import Contour, HatchSet
+from ..plan.layer_keys import layer_from_table
 from .args import fail
 from .job_options import OPTIONS, SECTIONS, defaults as option_defaults, option
-from .layers import layer_from_table
 
 
 __all__ = ["is_job_file", "use_job_file", "save_job_file", "content_entries", "SECTIONS"]

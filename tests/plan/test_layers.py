@@ -1,16 +1,28 @@
-"""Layers (galvoscan/plan/layers.py, cli/layers.py, `mark --layer`): paths picked by SVG colour,
-Inkscape layer and DXF layer; the layer options' one-line refusals; and, on the simulated
-board, each layer's speed and pulses per point measured on the XY2-100 and DB25 wires."""
+"""Layers (galvoscan/plan/layers.py, plan/layer_keys.py, cli/layers.py, `mark --layer`): paths
+picked by SVG colour, Inkscape layer and DXF layer; the key table, read alike by `--layer`, a
+job file's `[[layer]]` and `mark`'s own fill options; the layer options' one-line refusals;
+and, on the simulated board, each layer's speed and pulses per point measured on the XY2-100
+and DB25 wires."""
 
+import argparse
 import json
+import re
+from pathlib import Path
 
+from hypothesis import given, strategies as st
 import numpy as np
 import pytest
 
-from galvoscan.cli import main
+from galvoscan.cli import main, parser
+from galvoscan.cli.jobfile import _entry
+from galvoscan.cli.job_options import SECTIONS
+from galvoscan.cli.layers import layer_from_words
 from galvoscan.inputs.drawings import load_drawing
+from galvoscan.plan.layer_keys import (CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE,
+                                       LayerKey, layer_from_table)
 from galvoscan.plan.layers import Layer, split_by_layer
 from galvoscan.geometry.drawing import PathStyle
+from galvoscan.settings.schema import Setting, SettingError
 
 from sim_board import VECTOR_BOARD, quick_sim_board
 
@@ -96,6 +108,87 @@ def test_dxf_colours_and_colour_names(tmp_path):
     assert len(parts[0].paths) == 2                     # stroke="#FF0000" and "#ff0000"
 
 
+def test_every_layer_key_is_a_declaration():
+    """Each key a layer takes is a declared setting, and each setting a Layer holds has its
+    key."""
+    for key, one in LAYER_KEYS.items():
+        assert isinstance(one, LayerKey) and isinstance(one.setting, Setting)
+        assert one.setting.key == key and one.said
+    assert {one.field for one in LAYER_KEYS.values()} == set(Layer.__dataclass_fields__) - \
+        {"match"}
+
+
+def _mark_option(flag):
+    mark = next(a for a in parser()._actions if isinstance(a, argparse._SubParsersAction))
+    return next(a for a in mark.choices["mark"]._actions if flag in a.option_strings)
+
+
+def test_marks_fill_options_are_the_declarations():
+    """``--hatch``, ``--hatch-lines``, ``--contour`` and ``--no-outline`` are the layer keys'
+    settings: their placeholders, words and default, and the job file's keys for them."""
+    hatch, lines, contour = (_mark_option(s.flag) for s in (HATCH, HATCH_LINES, CONTOUR))
+    assert (hatch.metavar, hatch.help) == (HATCH.metavar, HATCH.help)
+    assert (contour.metavar, contour.help) == (CONTOUR.metavar, CONTOUR.help)
+    assert lines.choices == list(HATCH_LINES.choices) and lines.default == HATCH_LINES.default
+    assert SECTIONS["job"][OUTLINE.key].flag == "--no-outline"
+    assert SECTIONS["job"][OUTLINE.key].inverted
+    for setting in (HATCH, HATCH_LINES, CONTOUR):
+        assert SECTIONS["job"][setting.key].flag == setting.flag
+
+
+def _read(read, text):
+    """What ``read(text)`` gives, or its refusal's line."""
+    try:
+        return read(text)
+    except (ValueError, argparse.ArgumentTypeError) as error:
+        return str(error)
+
+
+@pytest.mark.parametrize("setting", [HATCH, CONTOUR], ids=lambda s: s.key)
+@given(text=st.text(alphabet="0123456789.,-e x", max_size=12))
+def test_a_fill_is_read_alike_everywhere(setting, text):
+    """``mark --hatch``, a job file's ``[job] hatch``, ``--layer … hatch=`` and a
+    ``[[layer]]`` table's ``hatch`` read a text by the one declaration: the same value, or
+    the same refusal (each reader naming where); and so for ``contour``."""
+    try:
+        value, refusal = setting.parse(text), None
+    except SettingError as error:
+        value, refusal = None, str(error)
+    option = _read(_mark_option(setting.flag).type, text)
+    job = _read(lambda t: _entry("job", {setting.key: t}, Path("."), "[job]")[setting.key],
+                text)
+    table = _read(lambda t: getattr(layer_from_table({"match": "red", setting.key: t},
+                                                     "L"), setting.name), text)
+    words = _read(lambda t: getattr(layer_from_words(["red", f"{setting.key}={t}"]),
+                                    setting.name), text)
+    if refusal is None:
+        made = [value] if setting.repeated else value
+        assert (option, job) == (value, made)
+        assert table == ((value,) if setting.repeated else value)
+        if text == text.strip():          # (--layer's words are stripped first)
+            assert words == table
+    else:
+        assert option == refusal and job == f"[job].{setting.key}: {refusal}"
+        assert table == f"L ('red'): {setting.key}: {refusal}"
+
+
+@pytest.mark.parametrize("words, said", [
+    (["hatch_lines=joined", "outline=off"], dict(hatch_lines=HATCH_LINES.make("joined"),
+                                                   outline=False)),
+    (["hatch=none", "contour=0.1,3"], dict(hatch=(), contour=CONTOUR.parse("0.1,3"))),
+    (["pulses=0x10", "jump_delay=2000", "laser_on_delay=-19"],
+     dict(pulses_per_point=16, delays_us=(("jump_delay", 2000), ("laser_on_delay", -19)))),
+])
+def test_layer_words_and_tables_alike(words, said):
+    """The same keys as ``--layer`` words and as a ``[[layer]]`` table: the same layer."""
+    from_words = layer_from_words(["Engrave", *words])
+    table = {"match": "Engrave"}
+    for word in words:
+        key, _, value = word.partition("=")
+        table[key] = {"off": False}.get(value, value)
+    assert from_words == layer_from_table(table) == Layer("Engrave", **said)
+
+
 @pytest.mark.parametrize("layer, words", [
     (["#ff0000", "sped=300"], "'sped' is not a layer setting \\(did you mean 'speed'\\?\\)"),
     (["#ff0000", "speed=0"], "--layer #ff0000: speed: speed must be from 0.1"),
@@ -116,7 +209,6 @@ def test_bad_layers_are_one_line(tmp_path, capsys, layer, words):
         main(["mark", str(svg), "--layer", *layer, "--estimate"])
     said = capsys.readouterr().err + str(stopped.value.code)
     assert len([line for line in said.splitlines() if "error" in line]) == 1
-    import re
     assert re.search(words, said), said
 
 
