@@ -10,7 +10,7 @@ import math
 import os
 from pathlib import Path
 
-from ..settings.laser import BAUD, PASSES, POWER, PRR, SPEED, TIMEOUT
+from ..settings.laser import BAUD, LINK_TIMEOUT_S, PASSES, POWER, PRR, SPEED, TIMEOUT
 from ..settings.schema import SettingError, number_text as _number
 
 
@@ -293,13 +293,13 @@ def add_link_options(parser):
                                                     "(e.g. ftdi://ftdi:2232h/1)")
     link.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
                       help="serial rate of the bitstream (default: %(default)s)")
-    add_setting(link, TIMEOUT, default=0.5)
+    add_setting(link, TIMEOUT, default=LINK_TIMEOUT_S)
     link.add_argument("--sck", type=number_in("SPI clock", 1e3, 30e6), default=1e6,
                       metavar="HZ", help="SPI clock, at most the board clock / 12 "
                                          "(default: 1e6)")
 
 
-def open_transport(*, port=None, spi=None, baud=None, timeout=0.5, sck=1e6):
+def open_transport(*, port=None, spi=None, baud=None, timeout=LINK_TIMEOUT_S, sck=1e6):
     """A serial (``port``) or FTDI SPI (``spi``) transport, opened; one line if it cannot be."""
     from ..link.client import ClientError, FTDISPITransport, SerialTransport
     from ..gateware.clocking import DEFAULT_BAUD
