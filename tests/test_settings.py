@@ -161,7 +161,9 @@ def test_numbers_by_any_text(text):
         assert str(refused.value) == f"--x must be SPACING[,COUNT] (mm, rings), not {text!r}"
         return
     if values[0] > 0:
-        assert _NUMBERS.parse(text) == tuple(values + [None] * (2 - len(values)))
+        made = _NUMBERS.parse(text)
+        assert made == tuple(values + [None] * (2 - len(values)))
+        assert _NUMBERS.check(text) == made           # a program's text, read alike
     else:
         with pytest.raises(SettingError, match=r"^--x .*: spacing .*: must be above 0$"):
             _NUMBERS.parse(text)

@@ -96,6 +96,8 @@ PROFILE = {
                                          help="the pulse repetition rates the laser accepts "
                                               "(the board's range, narrowed to the laser's)")),
                    ("spot_mm", SPOT, {}), ("guide", GUIDE, {})),
+    # The delays' defaults are what `galvoscan analyze --delays` finds for Wan et al.'s JD1403
+    # galvo at 1 m/s (galvoscan.profile.machine.GalvoSection).
     "galvo": _keys("galvo", ("jump_delay_us", JUMP_DELAY, dict(default=500.0, kind="number")),
                    ("settle_us_per_mm", SETTLE, {}), ("max_speed_mm_s", MAX_SPEED, {}),
                    ("laser_on_delay_us", LASER_ON_DELAY, dict(default=100.0, kind="number")),

@@ -208,10 +208,8 @@ class Setting:
                     all(_is_number(v) for v in value)):
                 raise self._refusal(f"two numbers, not {value!r}")
             return self._pair(",".join(repr(float(v)) for v in value))
-        if self.kind == "choice" and self.make is not None and isinstance(value, self.make):
-            return value
-        if self.kind == "numbers" and isinstance(value, self.make):
-            return value
+        if isinstance(self.make, type) and isinstance(value, self.make):
+            return value                        # made already (a HatchSet, a LineOrder)
         if not isinstance(value, str):
             raise self._refusal(f"text, not {value!r}")
         return self.parse(value)
