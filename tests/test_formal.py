@@ -175,7 +175,7 @@ def test_broken_player_fails_the_proof(fault, tmp_path):
         image=_player_fault_image(fault), name=f"broken_{fault}")
     if fault == "arms_on_start":
         # (The write comes on the clock after the start.)
-        proof = replace(proof, bmc_skip=0, bmc_depth=4)
+        proof = replace(proof, bmc_skip=3, bmc_depth=4)
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert failed_properties(bmc) == {

@@ -234,6 +234,11 @@ class JobStreamer:
         if self._capabilities is None:
             try:
                 self._capabilities = Capabilities.from_bits(self.board.read("caps"))
+            except LinkLost:
+                # A silent or damaged link, not an old bitstream: raised as it is, so that a
+                # job says how far it got (a read of caps lost to a line held for 30 ms was
+                # said to be a bitstream to build again).
+                raise
             except ClientError as error:
                 raise JobAborted(f"the board does not say what its bitstream holds ({error}): "
                                  f"a bitstream built before galvoscan had the caps register; "

@@ -391,6 +391,9 @@ def test_the_first_trials_cases(link):
 @pytest.mark.slow
 @fault_settings
 @given(faults)
+# (The answer to the caps read held 30 ms: its three tries failed, and the job stopped saying
+# the bitstream was too old for a caps register, not that the link was damaged.)
+@example(Fault("delay", "from board", 8, 0, seconds=0.03))
 def test_a_fault_on_the_uart(fault):
     check_fault("uart", fault)
 
