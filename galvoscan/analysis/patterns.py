@@ -1,7 +1,7 @@
 """Commanded frame sequences of the scan patterns, in galvo units (one position per 10 µs frame).
 
 * :func:`spiral_frames` is the Python model of the gateware's spiral sequencer and scale stage
-  (docs/design/architecture.md). The full-pattern replay test (``tests/test_spiral.py``) checks it
+  (docs/design/architecture.md). The full-pattern replay test (``tests/gateware/sources/test_spiral.py``) checks it
   frame for frame against the XY2-100 wires of the simulated system top, so the analysis speaks
   of what the gateware emits.
 * :func:`raster_frames` is the line-by-line fill the paper compares the spiral with: lines at a

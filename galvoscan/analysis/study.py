@@ -123,7 +123,7 @@ def run_raster(setup, *, field_mm=DEFAULT_FIELD_MM, bidirectional=True, turn_gat
                      region=setup.region(field_mm), periodic=False,
                      target_dose_j_cm2=setup.target_dose_j_cm2)
     # The gateware's raster mode draws exactly these frames from these register values
-    # (tests/test_vector.py checks the wires against raster_frames).
+    # (tests/gateware/sources/test_vector.py checks the wires against raster_frames).
     registers = {"mode": 1, "ras_x": corner[0], "ras_y": corner[1], "ras_w": size[0],
                  "ras_h": size[1], "ras_spacing": spacing, "ras_step": step, "ras_flags": 0,
                  "ras_turn_gate": 0}

@@ -1,5 +1,5 @@
 """The stand-alone board of the job player's tests: a small vector build with the player, a
-short job and its registers (tests/test_player.py, and both backends in
+short job and its registers (tests/gateware/player/test_player.py, and both backends in
 tests/sim/test_compiled.py)."""
 
 from galvoscan.gateware.top import ScanSettings

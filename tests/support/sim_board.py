@@ -337,7 +337,7 @@ VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False)
 #: the 5 ms MO lead): 8 MHz, the slowest clock that carries the link's 1 Mbaud (8 clocks a
 #: bit) and XY2-100 (4 clocks a bit), so a third fewer clocks to simulate for the same frames,
 #: and a 0.5 ms MO lead, for jobs whose tests check what is marked, not the lead
-#: (tests/test_laser.py checks the lead).
+#: (tests/gateware/laser/test_laser.py checks the lead).
 QUICK_SIM_BOARD = {"clk_freq": 8e6, "mo_lead": 0.5e-3}
 
 
@@ -366,7 +366,7 @@ def quick_replay_job():
     """Within it, ``galvoscan sim --mode vector`` (``galvoscan.sim.vector.replay_job``) simulates at
     4 MHz, 2 clocks per XY2 bit (the same frames and pulses as at the board's 12 MHz, a third
     of the clocks), with a 0.2 ms MO lead where the board's is 5 ms (the lead, which the host
-    only waits out, is checked on the pins by tests/test_laser.py)."""
+    only waits out, is checked on the pins by tests/gateware/laser/test_laser.py)."""
     import functools
     import galvoscan.sim.vector as module
     with pytest.MonkeyPatch.context() as patch:

@@ -58,7 +58,7 @@ def runs_on_the_wires(board):
     return merge(pulses_per_frame(board))
 
 
-#: Vector mode as Wan et al.'s: the default build has no RTC delays (tests/test_vector_delays.py
+#: Vector mode as Wan et al.'s: the default build has no RTC delays (tests/gateware/sources/test_vector_delays.py
 #: builds them, and checks that at 0 they change nothing).
 NO_DELAYS = {}
 

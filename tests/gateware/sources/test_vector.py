@@ -3,7 +3,7 @@
 
 """Vector mode (issue 6): the points decoded from the XY2-100 wires against plain Python models
 written from Wan et al. 2018's DDA, and the laser pulses on every point counted on the DB25
-pins. (Raster mode: tests/test_raster.py.)"""
+pins. (Raster mode: tests/gateware/sources/test_raster.py.)"""
 
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 import pytest

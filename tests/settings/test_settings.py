@@ -22,7 +22,7 @@ from galvoscan.settings import laser, machine
 from galvoscan.settings.schema import (ProfileKey, Setting, SettingError, markdown_table,
                                        profile_table)
 
-DOCS = Path(__file__).parent.parent / "docs"
+DOCS = Path(__file__).parents[2] / "docs"
 
 
 def _option(argv_prefix, flag):
@@ -272,7 +272,7 @@ def test_layer_docs_table_is_the_declarations():
 def test_job_file_table_is_the_options():
     """The job-file page's table of a job file's keys is generated from the job options; each
     key it lists is one a job file takes."""
-    page = (Path(__file__).parent.parent / "docs" / "user" / "job-files.md").read_text(
+    page = (Path(__file__).parents[2] / "docs" / "user" / "job-files.md").read_text(
         encoding="utf-8")
     assert job_file_table() in page
     for section, keys in SECTIONS.items():

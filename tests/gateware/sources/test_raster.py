@@ -238,7 +238,7 @@ def test_random_rectangles_against_the_model(x, y, width, height, spacing, step,
     assert run_sequencer(params, 150) == raster_model(**params, frames=150)
 
 
-# --- on the whole board (moved from tests/test_vector.py) --------------------------------------
+# --- on the whole board (moved from tests/gateware/sources/test_vector.py) --------------------------------------
 
 RASTER_CASES = [
     # corner, size, spacing, step, flags (bit 0 along y, bit 1 one way), turn gate
