@@ -32,7 +32,6 @@ def collect_garbage():
 #: gives each worker its share of the long ones and the two finish together. Only an order:
 #: a name missing here runs after these, as collected.
 LONGEST_FIRST = {
-    "tests/cli/test_cli.py::test_build_xy2_200_on_the_pll": 142,
     "tests/link/test_link_faults.py::test_a_fault_on_the_reference_simulator": 115,
     "tests/cli/test_cli.py::test_build_icebreaker": 98,
     "tests/sim/test_netlist.py::test_the_default_builds_netlist_behaves_as_its_design": 74,

@@ -254,19 +254,6 @@ def test_build_rejects_clocks_it_cannot_use(capsys):
 
 
 @pytest.mark.toolchain
-def test_build_xy2_200_on_the_pll(tmp_path, capsys):
-    """XY2-200 (4 Mbit/s) needs a clock that is an even multiple: 24 MHz from the PLL. The
-    whole default system (every mode, correction) meets it."""
-    code, out, _ = run(capsys, "build", "--clock", "24e6", "--bit-rate", "4e6", "--build-dir",
-                       str(tmp_path), "--json")
-    report = json.loads(out)
-    print(report)
-    assert code == 0 and report["meets_timing"] and report["fmax_mhz"] >= 24
-    assert report["clock_mhz"] == 24 and report["bit_rate_mhz"] == 4
-    assert report["modes"] == ["spiral", "raster", "vector"] and report["correction_nodes"] == 17
-
-
-@pytest.mark.toolchain
 def test_build_icestick(tmp_path, capsys):
     """The HX1K build: spiral, UART, serial multipliers, no laser; it places and meets 12 MHz."""
     code, out, _ = run(capsys, "build", "--board", "icestick", "--build-dir", str(tmp_path),
@@ -292,13 +279,17 @@ def test_build_icestick_refuses_what_does_not_fit(argv, message):
 @pytest.mark.toolchain
 def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, capsys):
     """The smallest options together (one mode, a bigger spiral table, no correction stage),
-    asked for 120 MHz: far beyond any of the design's paths (about 27 MHz for the spiral
-    alone), so nextpnr finishes with an Fmax below the clock: one line, no traceback, no .bin
-    to flash and no .asc. The line's figures are the build's: it would meet the board's 12 MHz, and its
-    RAMs are the options' (one build for both checks: each costs half a minute)."""
+    asked for 120 MHz from the PLL at XY2-200's 4 Mbit/s: far beyond any of the design's paths
+    (about 27 MHz for the spiral alone), so nextpnr finishes with an Fmax below the clock: one
+    line, no traceback, no .bin to flash and no .asc. The line's figures are the build's: it
+    would meet the board's 12 MHz, and its RAMs are the options' (one build for all three
+    checks: each costs half a minute). Whether the whole default system meets XY2-200's
+    24 MHz is a figure of the placement, not a behaviour: ``galvoscan bench`` builds it (its
+    ``icebreaker_xy2_200`` row), as it builds the three seeds; two placements of it took three
+    minutes of the suite."""
     with pytest.raises(SystemExit) as exit:
         main(["build", "--modes", "spiral", "--table-points", "512", "--no-correction",
-              "--clock", "120e6", "--build-dir", str(tmp_path)])
+              "--clock", "120e6", "--bit-rate", "4e6", "--build-dir", str(tmp_path)])
     message = str(exit.value.code)
     assert message.startswith("galvoscan: error: timing not met: ") and "\n" not in message
     found = re.search(r"not met: ([\d.]+) MHz < 120 MHz \(icebreaker, (\d+) of 5280 cells, "
@@ -313,6 +304,7 @@ def test_build_that_misses_timing_is_one_line_and_writes_no_bitstream(tmp_path, 
     assert not list(tmp_path.glob("*.bin")) and not list(tmp_path.glob("*.asc"))
     record = json.loads((tmp_path / "galvoscan_icebreaker.build.json").read_text())
     assert not record["meets_timing"] and record["clock_mhz"] == 120
+    assert record["bit_rate_mhz"] == 4
 
 
 def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
