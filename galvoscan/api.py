@@ -35,7 +35,7 @@ from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
 from .inputs.drawings import load_drawing
 from .geometry.fill import HatchSet, LineOrder
-from .plan.layer_keys import LAYER_KEYS, layer_from_table
+from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers
 from .inputs.photo import Dither, PhotoSpec
 from .plan.objects import photo_object
@@ -290,6 +290,9 @@ def plan(job, profile=None, *, serial=None):
     profile = profile or default_profile()
     if not (job.drawings or job.texts or job.codes or job.photos):
         raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
+    for number, layer in enumerate(job.layers, 1):
+        # A program's Layer, held to the declarations a job file's [[layer]] is read by.
+        check_layer(layer, f"layer {number} ({getattr(layer, 'match', layer)!r})")
     settings = job_settings(job, profile)
     planned = plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
                            profile)

@@ -66,6 +66,35 @@ def test_text_and_code_planned_without_the_command_line():
         api.plan(api.Job(texts=[api.Text("{nope}")]))
 
 
+@pytest.mark.parametrize("layer, message", [
+    (api.Layer("red", delays_us=(("laser_on_delay", 5000),)),
+     r"^layer 1 \('red'\): laser_on_delay: laser on delay must be from -19 to 1023, not "
+     r"5000$"),
+    (api.Layer("red", delays_us=(("bogus", 3),)),
+     r"^layer 1 \('red'\): 'bogus' is not a delay a layer may set \(the delays: "),
+    (api.Layer("red", outline="no"), r"^layer 1 .*: outline: .*yes or no, not 'no'$"),
+    (api.Layer("red", speed_mm_s="fast"), r"^layer 1 .*: speed: speed must be a number"),
+    (api.Layer("red", hatch="0.05,45"), r"^layer 1 .*: hatch must be a tuple of its sets"),
+    (api.Layer("red", pulses_per_point=0), r"^layer 1 .*: pulses: .*from 1 to 255, not 0$"),
+])
+def test_a_programs_layer_is_held_to_the_layer_keys(layer, message, tmp_path):
+    """A :class:`~galvoscan.api.Layer` a program makes is checked as a ``[[layer]]`` table
+    is, before anything is planned: a delay out of its register's range, a register that is
+    no delay, a text where a yes or no belongs (``outline="no"`` marked the outlines) are
+    one line, not registers sent to a board or a TypeError."""
+    drawing = tmp_path / "red.svg"
+    drawing.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                       'viewBox="0 0 10 10"><rect width="10" height="10" fill="none" '
+                       'stroke="red"/></svg>')
+    job = api.Job(drawings=[api.Drawing(str(drawing))], layers=[layer])
+    with pytest.raises(ValueError, match=message):
+        api.plan(job)
+    good = api.Layer("red", delays_us=(("laser_on_delay", 50),), outline=False,
+                     hatch=api.layer_from_table({"match": "red", "hatch": "0.1,45"}).hatch)
+    plan = api.plan(api.Job(drawings=[api.Drawing(str(drawing))], layers=[good]))
+    assert ("laser_on_delay", 50) in plan.vector_job.layers[0].settings.delays_us
+
+
 def test_a_layer_from_a_table_without_the_command_line():
     """A ``[[layer]]`` table, as a program gives it, is read by the API with the job file's
     key table (the command line not imported) and refused with its lines; the layer plans."""

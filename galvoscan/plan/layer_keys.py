@@ -30,7 +30,7 @@ from .layers import Layer
 
 
 __all__ = ["HATCH", "HATCH_LINES", "CONTOUR", "OUTLINE", "LayerKey", "LAYER_KEYS",
-           "layer_from_pairs", "layer_from_table", "markdown_table"]
+           "layer_from_pairs", "layer_from_table", "check_layer", "markdown_table"]
 
 
 HATCH = Setting("hatch", "numbers", "mm, degrees, degrees a pass, mm", what="--hatch",
@@ -151,6 +151,49 @@ def layer_from_table(table, where="[[layer]]"):
             isinstance(value, list) else [value]
         pairs += [(key, v) for v in values]
     return layer_from_pairs(table["match"], pairs, f"{where} ({table['match']!r})")
+
+
+_DELAY_SETTINGS = {setting.name: setting for setting in DELAYS}
+
+
+def check_layer(layer, where):
+    """``layer`` as a program made it (:class:`~.layers.Layer`'s fields, not a table's text)
+    held to the same declarations as a table's: each value set is one its setting can take
+    (a number in range, a HatchSet, a LineOrder, a bool), and each delay one of the delay
+    registers, in its range; ValueError, one line naming ``where`` and the key. Without it a
+    program's ``delays_us=(("laser_on_delay", 5000),)`` reached the plan's registers, and
+    ``outline="no"`` (a true string) marked the outlines."""
+    if not isinstance(layer, Layer):
+        raise ValueError(f"{where}: a layer must be a Layer, not {type(layer).__name__}")
+    for one in LAYER_KEYS.values():
+        if one.field == "delays_us":
+            continue
+        value = getattr(layer, one.field)
+        if value is None:
+            continue
+        values = value if one.setting.repeated else (value,)
+        if one.setting.repeated and not isinstance(value, (tuple, list)):
+            raise ValueError(f"{where}: {one.key} must be a tuple of its sets, not {value!r}")
+        for item in values:
+            try:
+                one.setting.check(item)
+            except SettingError as error:
+                raise ValueError(f"{where}: {one.key}: {error}") from None
+    if not isinstance(layer.delays_us, (tuple, list)):
+        raise ValueError(f"{where}: delays_us must be (register, µs) pairs, not "
+                         f"{layer.delays_us!r}")
+    for pair in layer.delays_us:
+        if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
+            raise ValueError(f"{where}: delays_us must be (register, µs) pairs, not {pair!r}")
+        name, value = pair
+        setting = _DELAY_SETTINGS.get(name)
+        if setting is None:
+            raise ValueError(f"{where}: {name!r} is not a delay a layer may set (the delays: "
+                             f"{', '.join(_DELAY_SETTINGS)})")
+        try:
+            setting.check(value)
+        except SettingError as error:
+            raise ValueError(f"{where}: {name}: {error}") from None
 
 
 def markdown_table():
