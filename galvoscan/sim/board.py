@@ -202,9 +202,15 @@ class SimulatedBoard:
                 f"simulator, some 200 times slower")
             return PythonEngine(self, **records)
 
-    def reset(self):
+    def reset(self, *, flash=...):
         """Back to power-up (the same design, every record empty, the machine's inputs as
-        at power-up), far quicker than building the board again."""
+        at power-up), far quicker than building the board again; with ``flash`` (as the
+        constructor takes it) in the configuration flash from now on, if given."""
+        if flash is not ...:
+            if flash is not None and not self.config.player:
+                raise ValueError("a flash is read by the job player: build it with "
+                                 "player=True")
+            self._flash_at_power_up = flash
         self._power_up_records()
         self.engine.reset()
         self.run_for(1 / self.clk_freq)

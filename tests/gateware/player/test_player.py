@@ -17,8 +17,18 @@ from galvoscan.sim.board import SimTransport, SimulatedBoard
 from player_board import JOB, PLAYER_BOARD, REGISTERS
 
 
-def board_with(image, **kwargs):
-    return SimulatedBoard(flash=image, **{**PLAYER_BOARD, **kwargs})
+_BOARD = []
+
+
+def board_with(image):
+    """The player's board from power-up with ``image`` in its flash: on the compiled backend
+    (held to Amaranth's, record for record, by tests/sim/test_compiled.py's player test),
+    built once and reset for each test (building it again converts the design anew)."""
+    if not _BOARD:
+        _BOARD.append(SimulatedBoard(flash=image, backend="compiled", **PLAYER_BOARD))
+    else:
+        _BOARD[0].reset(flash=image)
+    return _BOARD[0]
 
 
 def player_status(client):
@@ -52,18 +62,20 @@ def test_plays_the_image_as_the_streamer_streams_it():
     the flash: the same points in the same order on the wires, and the same pulses and dwell
     at each, but for the job's first two points. Vector points are paced by the laser's
     pulses, whose phase when ``run`` is set differs: the player sets it as soon as the MO lead
-    is over, the host some polls later."""
-    streamed = SimulatedBoard(**{**PLAYER_BOARD, "player": False})
+    is over, the host some polls later. (The host streams to the same build, its flash
+    erased and its player idle, as `mark` streams to the default bitstream.)"""
+    streamed = board_with(None)
     JobStreamer(HostClient(SimTransport(streamed)), poll_s=0).run_vector(
         JOB, REGISTERS, timeout_s=1e9)
     streamed.run_for(0.3e-3)
+    streamed_points = marked_points(streamed)
 
-    played = board_with(job_image(JOB, REGISTERS))
+    played = board_with(job_image(JOB, REGISTERS))      # (the same board, reset)
     client = HostClient(SimTransport(played))
     status = press_and_wait(played, client)
     played.run_for(0.3e-3)
     assert status.result == PlayerResult.DONE and status.refused == 0
-    played_points, streamed_points = marked_points(played), marked_points(streamed)
+    played_points = marked_points(played)
     assert [p[:2] for p in played_points] == [p[:2] for p in streamed_points]
     assert played_points[2:] == streamed_points[2:]
     assert sum(p[2] for p in played_points) > 10
@@ -78,12 +90,13 @@ def test_repeats_play_the_segments_again():
     back to its start (its pulses differ by the first points' phase, as above)."""
     once = board_with(job_image(JOB, REGISTERS))
     press_and_wait(once, HostClient(SimTransport(once)))
-    thrice = board_with(job_image(JOB, REGISTERS, repeats=3))
+    positions = [point[:2] for point in once.points()[1:]]
+    pulses_once = len(once.pulses)
+    thrice = board_with(job_image(JOB, REGISTERS, repeats=3))     # (the same board, reset)
     status = press_and_wait(thrice, HostClient(SimTransport(thrice)))
     assert status.result == PlayerResult.DONE
-    positions = [point[:2] for point in once.points()[1:]]
     assert [point[:2] for point in thrice.points()[1:]] == 3 * positions
-    assert abs(len(thrice.pulses) - 3 * len(once.pulses)) <= 2 * 3 and once.pulses
+    assert abs(len(thrice.pulses) - 3 * pulses_once) <= 2 * 3 and pulses_once
 
 
 def _with_crc(image):
@@ -201,4 +214,4 @@ def test_a_short_glitch_on_the_start_input_starts_nothing():
     board.press_start(0.5e-3)          # half the debounce
     board.run_for(2e-3)
     assert player_status(client).result == PlayerResult.NONE
-    assert not board.flash.commands
+    assert board.engine.flash_counts() == (0, 0)       # (commands, ignored): never read
