@@ -5,24 +5,25 @@ import math
 import time
 
 import pytest
-from amaranth.hdl import Elaboratable, Module, Mux, Signal
+from amaranth.hdl import Elaboratable, Module, Signal
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import connect
-from amaranth.sim import Simulator
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 from amaranth.lib.wiring import In, Out
 
 from galvoscan.analysis.patterns import spiral_frames as analysis_spiral_frames
 from galvoscan.gateware.field.scale import ScaleOffset
 from galvoscan.gateware.phy.xy2_100 import XY2Transmitter
-from galvoscan.gateware.points import FIELD_CENTRE, FieldPoint, OffsetPoint
-from galvoscan.gateware.sources.spiral_interp import DIVIDE_CLOCKS
+from galvoscan.gateware.points import OffsetPoint
 from galvoscan.gateware.sources.spiral import PARK_FRAMES, SpiralSequencer
 from galvoscan.gateware.sources.spiral_table import SpiralTable
+from galvoscan.gateware.clocking import DEFAULT_BAUD
+from galvoscan.gateware.limits import FRAME_US
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
 from spiral_model import PARK, spiral_frames
 from wires import frames_from_samples, record_falling_edges
+from sim_board import QUICK_SIM_BOARD, SimBoard
 
 
 def test_sequencer_signature():
@@ -90,22 +91,12 @@ class SpiralPath(Elaboratable):
     top starts with (``settings.register_resets()``) held on their inputs. What the top adds
     around it (host link, register file, status, the source select, which in spiral mode
     passes the spiral's stream and ``run`` through unchanged) does nothing until a host
-    writes.
+    writes. The PHY is the real :class:`XY2Transmitter` at ``clk_freq``: the XY2-100 wires."""
 
-    With ``frame_clocks`` None, the real :class:`XY2Transmitter` at ``clk_freq``: the XY2-100
-    wires. With ``frame_clocks`` a number, no PHY: a frame strobe every ``frame_clocks``
-    clocks (the first on the first clock, as the PHY's) into the sequencer and as the scale
-    stage's ``ready``, and :attr:`latched` the position the PHY would send in that frame, taken
-    by the PHY's own rule (the point offered at the strobe, else the last one again)."""
-
-    def __init__(self, table, settings, *, clk_freq=4e6, frame_clocks=None):
-        self.table, self.settings = table, settings
-        self.clk_freq, self.frame_clocks = clk_freq, frame_clocks
+    def __init__(self, table, settings, *, clk_freq=4e6):
+        self.table, self.settings, self.clk_freq = table, settings, clk_freq
         self.xy2_clk, self.xy2_sync, self.xy2_x, self.xy2_y = (Signal(name=name) for name in (
             "xy2_clk", "xy2_sync", "xy2_x", "xy2_y"))
-        self.latched = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
-        #: High on the clock after each strobe: when :attr:`latched` is that frame's position.
-        self.frame_shown = Signal()
 
     def elaborate(self, platform):
         m = Module()
@@ -118,47 +109,12 @@ class SpiralPath(Elaboratable):
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(resets[name])
         connect(m, spiral.points, scale.offsets)
-        if self.frame_clocks is None:
-            m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq)
-            connect(m, scale.positions, phy.position)
-            m.d.comb += spiral.frame_strobe.eq(phy.frame_strobe)
-            for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
-                m.d.comb += getattr(self, name).eq(getattr(phy, name))
-        else:
-            tick = Signal(range(self.frame_clocks), init=self.frame_clocks - 1)
-            strobe = tick == self.frame_clocks - 1
-            m.d.sync += tick.eq(Mux(strobe, 0, tick + 1))
-            m.d.comb += [spiral.frame_strobe.eq(strobe), scale.positions.ready.eq(strobe)]
-            with m.If(strobe & scale.positions.valid):
-                m.d.sync += self.latched.eq(scale.positions.payload)
-            m.d.sync += self.frame_shown.eq(strobe)
+        m.submodules.phy = phy = XY2Transmitter(clk_freq=self.clk_freq)
+        connect(m, scale.positions, phy.position)
+        m.d.comb += spiral.frame_strobe.eq(phy.frame_strobe)
+        for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
+            m.d.comb += getattr(self, name).eq(getattr(phy, name))
         return m
-
-
-#: Clocks a frame in :func:`replay_frames`: the fewest that give the model's frames (a point's
-#: way to the next is divided in DIVIDE_CLOCKS clocks after the ROMs are read, and the next
-#: point is due at the next strobe; at 20 the interpolated frames come out wrong, at 21 they
-#: are right). The PHY's frames are at least 40 clocks (2 a bit), so no real build is faster.
-FRAME_CLOCKS = DIVIDE_CLOCKS + 5
-
-
-def replay_frames(table, settings, points, *, frame_clocks=FRAME_CLOCKS):
-    """The positions the PHY takes for its frames from power-up, enough for ``points`` spiral
-    points, with a frame every ``frame_clocks`` clocks (:class:`SpiralPath`)."""
-    path = SpiralPath(table, settings, frame_clocks=frame_clocks)
-    sim = Simulator(path)
-    sim.add_clock(1e-6)
-    frames, total = [], PARK_FRAMES + points * settings.dwell
-
-    async def phy_latch(ctx):
-        async for _, x, y in ctx.posedge(path.frame_shown).sample(path.latched.x, path.latched.y):
-            frames.append((x, y))
-            if len(frames) == total:
-                return
-
-    sim.add_testbench(phy_latch)
-    sim.run()
-    return frames
 
 
 def replay(table, settings, points, *, clocks_per_bit=2, path_only=False, **top_kwargs):
@@ -184,29 +140,23 @@ def expected(table, settings, points):
 @pytest.mark.slow
 def test_full_pattern_replays_point_for_point():
     """All lcm(128, 126) = 8064 points of the precessing spiral, 3 frames (30 µs) each, linear
-    interpolation between them (the reset), as the PHY takes them for its frames, equal the
-    model frame for frame. (Points held without interpolation: test_held_points and others.)
-
-    Replayed on the spiral's own path through the system top (:class:`SpiralPath`: sequencer,
-    scale stage, the PHY's latch rule and frame strobe), wired as the spiral-only top wires it,
-    at a frame every :data:`FRAME_CLOCKS` (21) clocks instead of the PHY's 40 at least. The
-    frames are the same: the sequencer and the scale stage see nothing of a frame but its
-    strobe, and each finishes its work on a point well within 21 clocks (20 is too few: then the
-    frames differ from the model, see FRAME_CLOCKS); the rest of the top sits idle in spiral
-    mode until a host writes. The PHY's encoding of those positions on the wires, and the same
-    frames from the default build's wires, are checked by the wire-level replays here
-    (test_dwell, test_held_points and the others, 60 to 400 points each, at 2 and 6 clocks a
-    bit), and the first 60 points of this pattern (182 frames) are replayed both ways below."""
+    interpolation between them (the reset), on the XY2-100 wires of the default build from
+    power-up, decoded by the tests' reader, equal the model frame for frame: 24,194 frames,
+    a quarter of a second of the board. (Points held without interpolation: test_held_points
+    and others.) On the compiled board, which tests/sim/test_compiled.py holds to Amaranth's
+    simulator record for record; the first 60 points are replayed on Amaranth's here too."""
     table, settings = SpiralTable(), ScanSettings()
     assert settings.spiral_interp == 1
     points = math.lcm(128, 126)
     assert points == 8064
+    total = PARK_FRAMES + points * settings.dwell
+    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
     start = time.monotonic()
-    frames = replay_frames(table, settings, points)
+    board.run_for((total + 1) * FRAME_US * 1e-6)
+    frames = [frame for _, frame in board.xy2_frames()][:total]
     print(f"full replay: {len(frames)} frames in {time.monotonic() - start:.1f} s")
-    # The strobed path gives the wires' frames: its first ones are those of the XY2-100 wires
-    # of the spiral-only top.
-    assert frames[:3 * 60 + PARK_FRAMES] == replay(table, settings, 60, path_only=True)
+    assert len(frames) == total
+    assert frames[:3 * 60 + PARK_FRAMES] == replay(table, settings, 60)
     assert frames == expected(table, settings, points)
     # The scan analysis' numpy model of the same pattern (galvoscan.analysis) is what the
     # gateware emits, so its dose figures speak of the real output.
