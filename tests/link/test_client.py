@@ -20,6 +20,12 @@ def writable(board):
     return [r for r in board.top.regmap if r.access == "rw"]
 
 
+def quick_board():
+    """The default build on the compiled board (as test_compiled's quick board is built,
+    which it holds to Amaranth's simulator record for record)."""
+    return SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
+
+
 def make_link(kind, board):
     return SimUARTTransport(board) if kind == "uart" else SimSPITransport(board)
 
@@ -32,9 +38,8 @@ def contains_run(frames, run):
 
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_every_register_resets_and_reads_back(kind):
-    # Three frames for each of some sixty registers: on the compiled board (the same records
-    # as Amaranth's: tests/sim/test_compiled.py), as test_compiled's quick board is built.
-    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
+    # Three frames for each of some sixty registers.
+    board = quick_board()
     client = HostClient(make_link(kind, board))
     for reg in writable(board):
         assert client.read(reg.name) == reg.reset, reg.name
@@ -122,7 +127,7 @@ def test_encoding_is_the_documented_frame():
     assert encode_read("errors", tag=3) == command(3, BY_NAME["errors"].address, read=True)
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_board_refuses_and_counts_each_bad_frame_with_its_reason(kind):
-    board = SimBoard()
+    board = quick_board()
     link = make_link(kind, board)
     client = HostClient(link)
     dwell = BY_NAME["dwell"].address
@@ -155,7 +160,7 @@ def test_board_refuses_and_counts_each_bad_frame_with_its_reason(kind):
 def test_writes_are_taken_in_sequence_only(kind):
     """A write lost on the line makes the next refused (the board never takes one out of
     order); the client finds out from link_seq and sends again only what was not taken."""
-    board = SimBoard()
+    board = quick_board()
     link = make_link(kind, board)
     client = HostClient(link)
     seq = client.sequence()
@@ -174,7 +179,7 @@ def test_writes_are_taken_in_sequence_only(kind):
 
 
 def test_a_refused_write_stops_the_client_with_its_reason():
-    board = SimBoard()
+    board = quick_board()
     client = HostClient(SimUARTTransport(board))
     with pytest.raises(WriteRefused, match="x_last = 200") as refused:
         client.write_many([("dwell", 4), ("x_last", 200), ("dwell", 6)])
@@ -197,7 +202,7 @@ def test_segments_are_queued_whole_and_answered_with_the_room_left(kind):
 
 
 def test_uart_finds_the_next_frame_after_a_lost_byte_an_extra_byte_and_a_bad_stop_bit():
-    board = SimBoard()
+    board = quick_board()
     link = SimUARTTransport(board)
     client = HostClient(link)
     seq = client.sequence()
@@ -219,7 +224,7 @@ def cobs_frame(frame):
 
 
 def test_spi_frames_of_the_wrong_length_are_discarded_whole():
-    board = SimBoard()
+    board = quick_board()
     link = SimSPITransport(board)
     client = HostClient(link)
     write = command(client.sequence(), BY_NAME["dwell"].address, 13)
@@ -279,7 +284,7 @@ def test_a_long_write_whose_answers_are_lost_is_not_taken_twice():
     """More segments than the 256 sequence numbers in one call, every answer of the first
     batch lost on the line: the board took them all, and the host, reading link_seq, sends
     none of them again (a batch of 300 would have read 44 taken and sent 256 again)."""
-    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
+    board = quick_board()
 
     class LosingFirstAnswers(SimUARTTransport):
         lost = False
