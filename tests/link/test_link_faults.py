@@ -11,6 +11,7 @@ job (before arming, while armed, mid-segment). For every case:
 * the board runs the next job after a reset.
 """
 
+import bisect
 import math
 import random
 from dataclasses import dataclass
@@ -233,14 +234,13 @@ class FaultySPI(SimSPITransport):
 
 # --- the checks ------------------------------------------------------------------------------
 
-def power_at(board, cycle):
-    """The laser_power pins' value in force at ``cycle`` (from the recorded pin changes)."""
-    value = 0
-    for clock, packed in board.board.pin_changes:
-        if clock > cycle:
-            break
-        value = (packed >> 5) & 0xFF
-    return value
+def powers_at(board, cycles):
+    """The laser_power pins' value in force at each of ``cycles`` (from the recorded pin
+    changes: the last one on or before it; 0 before the first)."""
+    changes = board.board.pin_changes
+    clocks = [clock for clock, _ in changes]
+    found = (bisect.bisect_right(clocks, cycle) for cycle in cycles)
+    return [(changes[i - 1][1] >> 5) & 0xFF if i else 0 for i in found]
 
 
 def check_wires(board, *, since_cycle=0):
@@ -256,8 +256,8 @@ def check_wires(board, *, since_cycle=0):
     pulses = [c for c in board.board.pulses if c >= since_cycle]
     for a, b in zip(pulses, pulses[1:]):
         assert b - a >= period - 1, f"pulses {b - a} clocks apart: the PRR is not {PRR * 100} Hz"
-    for cycle in pulses:
-        assert power_at(board, cycle) == POWER, f"a pulse at power {power_at(board, cycle)}"
+    for cycle, power in zip(pulses, powers_at(board, pulses)):
+        assert power == POWER, f"a pulse at power {power} (clock {cycle})"
 
 
 def laser_off_now(board):

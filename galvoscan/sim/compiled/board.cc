@@ -752,6 +752,22 @@ int64_t gs_board_counter(void *handle, int which) {
     return -1;
 }
 
+// What a run leaves for Python in one call (a host that polls in steps of a UART bit makes
+// hundreds of thousands of runs, and a call each for the counters and every record cost more
+// than the clocks they ran): out[0] UART items started, out[1] framing errors, out[2] SPI
+// transfers started, out[3] a bit for each record (Record) that holds values.
+void gs_board_status(void *handle, int64_t *out) {
+    Board *board = static_cast<Board *>(handle);
+    out[0] = board->items_started;
+    out[1] = board->framing_errors;
+    out[2] = board->transfers_started;
+    int64_t pending = 0;
+    for (int which = 0; which < RECORDS; which++)
+        if (!board->records[which].empty())
+            pending |= int64_t(1) << which;
+    out[3] = pending;
+}
+
 // Record `which` (Record): copy up to `capacity` values into `out`, drop them from the
 // board, return how many.
 int64_t gs_board_take(void *handle, int which, int64_t *out, int64_t capacity) {

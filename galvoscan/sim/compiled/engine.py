@@ -62,6 +62,9 @@ class CompiledEngine:
                                         int(board.flash.powered_down)) != 0:
                 raise ValueError("the compiled model has no flash: it was built without "
                                  "the job player")
+        self._machine_sent = None   # the machine's inputs as last handed to the model
+        self._status = (ctypes.c_int64 * 4)()
+        self._counted = (0, 0)      # UART items and SPI transfers started, as last counted
         self._given = 0          # items of board.to_board already handed to the model
         self._spi_given = 0      # transfers of board.spi_queue likewise
         self._spi_results = []   # the result lists of the transfers handed over, in order
@@ -80,25 +83,33 @@ class CompiledEngine:
             fresh = list(self._items(list(board.to_board)[self._given:]))
             lib.gs_board_send(handle, (ctypes.c_int64 * len(fresh))(*fresh), len(fresh))
             self._given = len(board.to_board)
-        for bits, results, half_period, phase in list(board.spi_queue)[self._spi_given:]:
-            bits = bytes(bits)
-            lib.gs_board_spi(handle, bits, len(bits), _fs(half_period), _fs(phase))
-            self._spi_results.append(results)
-        self._spi_given = len(board.spi_queue)
-        lib.gs_board_machine(handle, int(bool(board.interlock_closed)),
-                             int(bool(board.alarms_clear)))
-        lib.gs_board_start(handle, int(bool(board.start_pressed)))
-        started = lib.gs_board_counter(handle, 0)
-        transfers = lib.gs_board_counter(handle, 4)
+        if self._spi_given < len(board.spi_queue):
+            for bits, results, half_period, phase in list(board.spi_queue)[self._spi_given:]:
+                bits = bytes(bits)
+                lib.gs_board_spi(handle, bits, len(bits), _fs(half_period), _fs(phase))
+                self._spi_results.append(results)
+            self._spi_given = len(board.spi_queue)
+        # (The inputs only when they change: a host polling in steps of a UART bit runs the
+        # board hundreds of thousands of times, and each call here costs more than a clock.)
+        machine = (bool(board.interlock_closed), bool(board.alarms_clear),
+                   bool(board.start_pressed))
+        if machine != self._machine_sent:
+            lib.gs_board_machine(handle, int(machine[0]), int(machine[1]))
+            lib.gs_board_start(handle, int(machine[2]))
+            self._machine_sent = machine
+        status, (started, transfers) = self._status, self._counted
         outcome = lib.gs_board_run_until(handle, int(seconds * 1e15))
-        for _ in range(lib.gs_board_counter(handle, 0) - started):
+        lib.gs_board_status(handle, status)
+        for _ in range(status[0] - started):
             board.to_board.popleft()
             self._given -= 1
-        for _ in range(lib.gs_board_counter(handle, 4) - transfers):
+        for _ in range(status[2] - transfers):
             board.spi_queue.popleft()
             self._spi_given -= 1
-        board.framing_errors = lib.gs_board_counter(handle, 1)
-        self._take_records()
+        self._counted = (status[0], status[2])
+        board.framing_errors = status[1]
+        if status[3]:
+            self._take_records(status[3])
         if outcome != 0:
             raise XY2ProtocolError(lib.gs_board_message(handle).decode())
 
@@ -111,29 +122,39 @@ class CompiledEngine:
             if n < len(buffer):
                 return values
 
-    def _take_records(self):
+    def _take_records(self, pending):
+        """The records whose bits are set in ``pending``, appended to the board's."""
         board = self.board
-        values = self._take(FRAMES)
-        board.frames.extend(zip(values[0::3], values[1::3], values[2::3]))
-        board.sync_rises.extend(self._take(SYNC_RISES))
-        board.pulses.extend(self._take(PULSES))
-        values = self._take(LASER_CHANGES)
-        for cycle, pins in zip(values[0::2], values[1::2]):
-            board.laser_changes.append(
-                (cycle, tuple((pins >> i) & 1 for i in range(len(LASER_PINS)))))
-        values = self._take(BYTES_IN)
-        board.bytes_in.extend(zip(values[0::2], values[1::2]))
-        board.from_board.extend(self._take(BYTES_OUT))
-        values = self._take(XY2_SAMPLES)
-        board.xy2_samples.extend((cycle, bits & 1, (bits >> 1) & 1, (bits >> 2) & 1)
-                                 for cycle, bits in zip(values[0::2], values[1::2]))
-        values = self._take(PIN_CHANGES)
-        board.pin_changes.extend(zip(values[0::2], values[1::2]))
-        for value in self._take(SPI_RESULTS):
-            if value == SPI_DONE:
-                self._spi_results.pop(0).append("done")
-            else:
-                self._spi_results[0].append(value)
+        if pending & 1 << FRAMES:
+            values = self._take(FRAMES)
+            board.frames.extend(zip(values[0::3], values[1::3], values[2::3]))
+        if pending & 1 << SYNC_RISES:
+            board.sync_rises.extend(self._take(SYNC_RISES))
+        if pending & 1 << PULSES:
+            board.pulses.extend(self._take(PULSES))
+        if pending & 1 << LASER_CHANGES:
+            values = self._take(LASER_CHANGES)
+            for cycle, pins in zip(values[0::2], values[1::2]):
+                board.laser_changes.append(
+                    (cycle, tuple((pins >> i) & 1 for i in range(len(LASER_PINS)))))
+        if pending & 1 << BYTES_IN:
+            values = self._take(BYTES_IN)
+            board.bytes_in.extend(zip(values[0::2], values[1::2]))
+        if pending & 1 << BYTES_OUT:
+            board.from_board.extend(self._take(BYTES_OUT))
+        if pending & 1 << XY2_SAMPLES:
+            values = self._take(XY2_SAMPLES)
+            board.xy2_samples.extend((cycle, bits & 1, (bits >> 1) & 1, (bits >> 2) & 1)
+                                     for cycle, bits in zip(values[0::2], values[1::2]))
+        if pending & 1 << PIN_CHANGES:
+            values = self._take(PIN_CHANGES)
+            board.pin_changes.extend(zip(values[0::2], values[1::2]))
+        if pending & 1 << SPI_RESULTS:
+            for value in self._take(SPI_RESULTS):
+                if value == SPI_DONE:
+                    self._spi_results.pop(0).append("done")
+                else:
+                    self._spi_results[0].append(value)
 
     def flash_counts(self):
         """``(carried out, ignored)``: the flash's instructions so far."""

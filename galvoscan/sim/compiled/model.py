@@ -183,6 +183,7 @@ class CompiledModel:
             "gs_board_run_until": (ctypes.c_int, [p, i64]),
             "gs_board_message": (ctypes.c_char_p, [p]),
             "gs_board_counter": (i64, [p, ctypes.c_int]),
+            "gs_board_status": (None, [p, ctypes.POINTER(i64)]),
             "gs_board_take": (i64, [p, ctypes.c_int, ctypes.POINTER(i64), i64]),
         }
         for name, (restype, argtypes) in signatures.items():
