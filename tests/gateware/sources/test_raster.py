@@ -14,9 +14,10 @@ import pytest
 from galvoscan.analysis.patterns import raster_frames
 from galvoscan.link.client import HostClient
 from galvoscan.gateware.sources.raster import RasterSequencer
-from galvoscan.gateware.top import ScanSettings
+from galvoscan.gateware.clocking import DEFAULT_BAUD
+from galvoscan.gateware.fields import Mode
 
-from sim_board import SimBoard, SimSPITransport
+from sim_board import QUICK_SIM_BOARD, SimBoard, SimSPITransport
 from vector_board import pulses_per_frame
 
 
@@ -250,16 +251,20 @@ RASTER_CASES = [
 
 @pytest.mark.parametrize("corner, size, spacing, step, flags, gate", RASTER_CASES)
 def test_raster_matches_the_analysis_model(corner, size, spacing, step, flags, gate):
-    """The raster the analysis compares with the spiral is the one the gateware draws."""
-    board = SimBoard(record_laser=True, mo_lead=0.2e-3,
-                     settings=ScanSettings(mode="raster", run=False))
+    """The raster the analysis compares with the spiral is the one the gateware draws: on the
+    default build (on the compiled board, which tests/sim/test_compiled.py holds to Amaranth's
+    simulator, raster included), switched from the spiral it starts in to raster mode over
+    SPI, as a host does."""
+    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, record_laser=True,
+                     **QUICK_SIM_BOARD)
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    for name, value in (("ras_x", corner[0]), ("ras_y", corner[1]), ("ras_w", size[0]),
+    for name, value in (("run", 0), ("mode", Mode.RASTER.value),
+                        ("ras_x", corner[0]), ("ras_y", corner[1]), ("ras_w", size[0]),
                         ("ras_h", size[1]), ("ras_spacing", spacing), ("ras_step", step),
                         ("ras_flags", flags), ("ras_turn_gate", gate),
                         ("laser_prr", 1000), ("arm", 1)):
         client.write(name, value)
-    board.run_for(0.3e-3)
+    board.run_for(QUICK_SIM_BOARD["mo_lead"] + 0.1e-3)       # (the laser ready)
     sent = len(board.xy2_frames())
     client.write("run", 1)
     model = raster_frames(corner=corner, size=size, spacing=spacing, step=step,
