@@ -14,6 +14,7 @@ from galvoscan.gateware.fields import pack
 from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
+from player_board import PLAYER_BOARD
 from sim_board import SimBoard, SimSPITransport
 from vector_board import NO_DELAYS, queue, runs_on_the_wires, set_up_job, start_board
 from vector_model import PARK, dda, job_model, merge
@@ -233,9 +234,9 @@ def test_vec_flush_empties_the_queue_and_stops_the_mode():
     from galvoscan.link.client import HostClient, WriteRefused
     from galvoscan.outputs.stream import JobStreamer
     from galvoscan.sim.board import SimTransport, SimulatedBoard
-    board = SimulatedBoard(clk_freq=4e6, baud=500_000, modes=("vector",), links=("uart",),
-                           settings=ScanSettings(mode="vector", run=False), correction=None,
-                           mo_lead=0.2e-3, vector_queue_depth=8)
+    # The job player's small vector build (8 places, a 0.2 ms lead), its player idle, on the
+    # compiled board that tests/sim/test_compiled.py holds to Amaranth's simulator.
+    board = SimulatedBoard(backend="compiled", **PLAYER_BOARD)
     client = HostClient(SimTransport(board))
     client.queue_segments([(1, x, 30000) for x in (30000, 31000, 32000)])
     client.write("run", 1)
