@@ -14,6 +14,7 @@ from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 
 from link_codec import cobs_encode, command
+from sim_board import quick_replay_job
 from spiral_model import spiral_frames
 
 
@@ -80,8 +81,10 @@ def test_prove_unknown_name(capsys):
 @pytest.mark.parametrize("interp", [None, "off", "linear"])
 def test_sim_writes_frames_and_plot(tmp_path, capsys, interp):
     csv_path, png_path = tmp_path / "frames.csv", tmp_path / "path.png"
+    # (A millisecond of the board: on Amaranth's simulator, quicker than compiling each of
+    # the two builds for the compiled one, which tests/sim/test_compiled.py holds to it.)
     code, out, _ = run(capsys, "sim", "--points", "40", "--dwell", "2", "--csv", str(csv_path),
-                       "--png", str(png_path), "--json",
+                       "--png", str(png_path), "--json", "--backend", "python",
                        *(["--interp", interp] if interp else []))
     assert code == 0
     summary = json.loads(out)
@@ -319,7 +322,7 @@ def test_table_points_512_simulates_and_reports_its_ranges(tmp_path, capsys):
 
     csv_path = tmp_path / "spiral512.csv"
     code, out, _ = run(capsys, "sim", "--points", "20", "--table-points", "512", "--json",
-                       "--csv", str(csv_path))
+                       "--csv", str(csv_path), "--backend", "python")
     summary = json.loads(out)
     assert code == 0 and summary["x_range"] == [0, 511] and summary["y_range"] == [1, 510]
     rows = list(csv.DictReader(csv_path.read_text().splitlines()))
@@ -345,13 +348,11 @@ def test_sim_vector_waits_in_the_boards_time(backend, vcd, tmp_path, capsys, mon
     monkeypatch.setattr(time, "monotonic", lambda: started + 1000 * (real() - started))
     # At 4 MHz (a third of the clocks, the same frames), with a 1 ms MO lead: 5 s of the fast
     # host clock are 5 ms of real time, which no backend simulates 1 ms of the board in.
-    import functools
-    import galvoscan.sim.vector as module
-    monkeypatch.setattr(module, "replay_job", functools.partial(module.replay_job,
-                                                                clk_freq=4e6, mo_lead=1e-3))
     waves = tmp_path / "waves" / "line.vcd"
-    code, out, err = run(capsys, "sim", "--mode", "vector", "--job", str(job),
-                         "--backend", backend, *(["--vcd", str(waves)] if vcd else []), "--json")
+    with quick_replay_job():
+        code, out, err = run(capsys, "sim", "--mode", "vector", "--job", str(job),
+                             "--backend", backend, *(["--vcd", str(waves)] if vcd else []),
+                             "--json")
     assert code == 0, err
     result = json.loads(out)
     # The line is 240 units at the pitch of 60: a jump, then marks every pitch along it.

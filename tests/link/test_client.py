@@ -65,7 +65,7 @@ def test_every_register_resets_and_reads_back(kind):
 @pytest.mark.parametrize("kind", ["uart", "spi"])
 def test_host_starts_stops_and_reshapes_the_spiral(kind):
     table = SpiralTable()
-    board = SimBoard(table=table, backend="compiled")
+    board = quick_board()                           # (its spiral table is this one)
     client = HostClient(make_link(kind, board))
 
     # Stop: the mirrors hold still.
