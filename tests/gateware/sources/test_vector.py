@@ -15,7 +15,7 @@ from galvoscan.gateware.sources.vector import DelayedVectorCommand, VecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 
 from player_board import PLAYER_BOARD
-from sim_board import SimBoard, SimSPITransport
+from sim_board import SimBoard, SimSPITransport, SimUARTTransport
 from vector_board import NO_DELAYS, queue, runs_on_the_wires, set_up_job, start_board
 from vector_model import PARK, dda, job_model, merge
 
@@ -110,11 +110,16 @@ def test_the_builds_queue_reads_512_free_when_empty():
 
 # The queue filled here is built 16 deep, not the build's 512 (the same FIFO; fifo_free counts
 # down from its depth): full after 17 writes, not 513.
-SHORT_QUEUE = 16
+SHORT_QUEUE = 8
 
 
 def test_full_queue_refuses_and_counts():
-    board, client = start_board(vector_queue_depth=SHORT_QUEUE)
+    # The job player's small vector build, whose queue holds SHORT_QUEUE (its model is
+    # compiled for the player's tests already), over its UART.
+    assert PLAYER_BOARD["vector_queue_depth"] == SHORT_QUEUE
+    board = SimBoard.powered_up(backend="compiled", record_laser=True, **{
+        name: value for name, value in PLAYER_BOARD.items() if name != "machine_period_s"})
+    client = HostClient(SimUARTTransport(board))
     assert client.read("fifo_free") == SHORT_QUEUE
     # The queue, and one in the sequencer's hand: the last answer says no room is left.
     assert client.queue_segments([(0, 32768, 32768)] * (SHORT_QUEUE + 1)) == 0
