@@ -135,9 +135,7 @@ class SimulatedBoard:
             self.top = GalvoScanTop(config, **top_kwargs)
         self.config = self.top.config
         self.clk_freq = self.config.clk_freq
-        self._flash_at_power_up = flash
-        if flash is not None and not self.config.player:
-            raise ValueError("a flash is read by the job player: build it with player=True")
+        self._set_flash(flash)
         self.baud = self.config.baud
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = (interlock_closed, alarms_clear)
@@ -165,6 +163,12 @@ class SimulatedBoard:
         self.engine = CompiledEngine(self, model=model, **records)
         self.backend = self.engine.name
         self.run_for(1 / self.clk_freq)
+
+    def _set_flash(self, flash):
+        """The configuration flash's contents at every power-up from now on."""
+        if flash is not None and not self.config.player:
+            raise ValueError("a flash is read by the job player: build it with player=True")
+        self._flash_at_power_up = flash
 
     def _power_up_records(self):
         self.now = 0.0
@@ -207,10 +211,7 @@ class SimulatedBoard:
         at power-up), far quicker than building the board again; with ``flash`` (as the
         constructor takes it) in the configuration flash from now on, if given."""
         if flash is not ...:
-            if flash is not None and not self.config.player:
-                raise ValueError("a flash is read by the job player: build it with "
-                                 "player=True")
-            self._flash_at_power_up = flash
+            self._set_flash(flash)
         self._power_up_records()
         self.engine.reset()
         self.run_for(1 / self.clk_freq)

@@ -3,14 +3,13 @@
 import pytest
 
 from galvoscan.link.client import ClientError, HostClient, WriteRefused, encode_read, encode_write
-from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.host.regmap import BY_NAME, STATUS_BITS
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.gateware.top import ScanSettings
 
 from link_codec import REASON, command, parse_answer
-from sim_board import QUICK_SIM_BOARD, SimBoard, SimSPITransport, SimUARTTransport
+from sim_board import SimBoard, SimSPITransport, SimUARTTransport, quick_board
 from spiral_model import spiral_frames
 
 
@@ -18,12 +17,6 @@ def writable(board):
     """The board's writable registers that read back what was written, with the ranges of
     its build (vec_op, a queue, is written a segment at a time: test_segments_...)."""
     return [r for r in board.top.regmap if r.access == "rw"]
-
-
-def quick_board():
-    """The default build on the compiled board (as test_compiled's quick board is built,
-    which it holds to Amaranth's simulator record for record)."""
-    return SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
 
 
 def make_link(kind, board):

@@ -10,6 +10,7 @@ import math
 
 import pytest
 
+from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.top import ScanSettings
 from galvoscan.sim.board import PIN_FIELDS, SimulatedBoard
 
@@ -339,6 +340,14 @@ VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False)
 #: and a 0.5 ms MO lead, for jobs whose tests check what is marked, not the lead
 #: (tests/gateware/laser/test_laser.py checks the lead).
 QUICK_SIM_BOARD = {"clk_freq": 8e6, "mo_lead": 0.5e-3}
+
+
+def quick_board(**kwargs):
+    """The default build at :data:`QUICK_SIM_BOARD` and the link's 1 Mbaud on the compiled
+    board, the model tests/sim/test_compiled.py holds to Amaranth's simulator record for
+    record (``kwargs``: what is recorded, e.g. ``record_laser=True``; nothing that changes
+    the build, so that every test shares one compiled model)."""
+    return SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD, **kwargs)
 
 
 @contextlib.contextmanager

@@ -8,11 +8,10 @@ from amaranth.sim import Simulator
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
 from galvoscan.link.client import HostClient
-from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.host.regmap import STATUS_BITS
 from galvoscan.gateware.laser.controller import LaserController
 
-from sim_board import QUICK_SIM_BOARD, SimBoard, SimUARTTransport
+from sim_board import QUICK_SIM_BOARD, SimBoard, SimUARTTransport, quick_board
 
 
 CLK = 4e6
@@ -143,8 +142,7 @@ def test_spiral_and_laser_from_host_commands():
     assert GalvoScanTop(clk_freq=CLK).config.mo_lead == 5e-3
     lead = QUICK_SIM_BOARD["mo_lead"]
     assert lead == 0.5e-3
-    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, record_laser=True,
-                     **QUICK_SIM_BOARD)
+    board = quick_board(record_laser=True)
     clk = board.clk_freq
     client = HostClient(SimUARTTransport(board))
     client.write("laser_power", 128)

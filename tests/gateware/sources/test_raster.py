@@ -14,10 +14,9 @@ import pytest
 from galvoscan.analysis.patterns import raster_frames
 from galvoscan.link.client import HostClient
 from galvoscan.gateware.sources.raster import RasterSequencer
-from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.fields import Mode
 
-from sim_board import QUICK_SIM_BOARD, SimBoard, SimSPITransport
+from sim_board import QUICK_SIM_BOARD, SimSPITransport, quick_board
 from vector_board import pulses_per_frame
 
 
@@ -255,8 +254,7 @@ def test_raster_matches_the_analysis_model(corner, size, spacing, step, flags, g
     default build (on the compiled board, which tests/sim/test_compiled.py holds to Amaranth's
     simulator, raster included), switched from the spiral it starts in to raster mode over
     SPI, as a host does."""
-    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, record_laser=True,
-                     **QUICK_SIM_BOARD)
+    board = quick_board(record_laser=True)
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     for name, value in (("run", 0), ("mode", Mode.RASTER.value),
                         ("ras_x", corner[0]), ("ras_y", corner[1]), ("ras_w", size[0]),

@@ -17,13 +17,12 @@ from galvoscan.gateware.phy.xy2_100 import XY2Transmitter
 from galvoscan.gateware.points import OffsetPoint
 from galvoscan.gateware.sources.spiral import PARK_FRAMES, SpiralSequencer
 from galvoscan.gateware.sources.spiral_table import SpiralTable
-from galvoscan.gateware.clocking import DEFAULT_BAUD
 from galvoscan.gateware.limits import FRAME_US
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
 from spiral_model import PARK, spiral_frames
 from wires import frames_from_samples, record_falling_edges
-from sim_board import QUICK_SIM_BOARD, SimBoard
+from sim_board import quick_board
 
 
 def test_sequencer_signature():
@@ -150,7 +149,7 @@ def test_full_pattern_replays_point_for_point():
     points = math.lcm(128, 126)
     assert points == 8064
     total = PARK_FRAMES + points * settings.dwell
-    board = SimBoard(backend="compiled", baud=DEFAULT_BAUD, **QUICK_SIM_BOARD)
+    board = quick_board()
     start = time.monotonic()
     board.run_for((total + 1) * FRAME_US * 1e-6)
     frames = [frame for _, frame in board.xy2_frames()][:total]
