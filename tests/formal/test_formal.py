@@ -16,7 +16,7 @@ from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
-from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS
+from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS, SPI_TARGET_SOLVERS
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
@@ -82,7 +82,8 @@ def test_broken_command_path_fails_the_proof(fault, tmp_path):
 def test_broken_spi_target_fails_the_proof(fault, tmp_path):
     make, properties = BROKEN_SPI_TARGETS[fault]
     # One paced frame, any one bit flipped: a bad frame event shows as cs_n rises.
-    bmc = spi_frame_proof(make_spi=make, helpers=False, name=f"broken_{fault}").check(tmp_path)
+    bmc = spi_frame_proof(make_spi=make, helpers=False, name=f"broken_{fault}").check(
+        tmp_path, solver=SPI_TARGET_SOLVERS.get(fault))
     assert bmc.status == "FAIL"
     assert expected_properties(properties) & failed_properties(bmc), (fault, bmc.failed)
 

@@ -162,3 +162,7 @@ BROKEN_SPI_TARGETS = {
          "an SPI frame event carries the frame's first 64 bits",
          "an SPI frame with 80 bits and a CRC that holds is intact")),
 }
+
+#: The solver each SPI target's bounded check is searched with, where it is not the proofs'
+#: own: the frame whose CRC does not hold takes Yices 164 s to find and z3 18 s.
+SPI_TARGET_SOLVERS = {"target_ignores_crc": "z3"}
