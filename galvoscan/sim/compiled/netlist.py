@@ -50,10 +50,22 @@ NETLIST_SCRIPT = ("read_json top.json; techmap -autoproc -map sb_io_sim.v; "
                   "write_cxxrtl -g0 -header top.cc")
 
 
-def cell_models(cell_types):
+#: The LUT as what it is, its INIT indexed by its inputs (I3 the most significant), in place
+#: of the model's tree of four multiplexers: one cell a LUT rather than four, which halves
+#: the netlist's C++ (10.5 → 5.4 MB on the default build) and its compile. Yosys' model
+#: selects the same bit (tests/sim/test_netlist.py checks the two equivalent).
+LUT4_MODEL = """\
+module SB_LUT4 (output O, input I0, input I1, input I2, input I3);
+	parameter [15:0] LUT_INIT = 0;
+	assign O = LUT_INIT[{I3, I2, I1, I0}];
+"""
+
+
+def cell_models(cell_types, *, lut_as_index=True):
     """Yosys' iCE40 simulation models (``share/ice40/cells_sim.v``) of ``cell_types`` and of
     the cells they hold, with the file's defines: reading the whole file takes Yosys some
-    50 s, nearly all of it the UltraPlus SPRAM's 16 k-word memory, which no build uses."""
+    50 s, nearly all of it the UltraPlus SPRAM's 16 k-word memory, which no build uses.
+    ``lut_as_index``: SB_LUT4 as :data:`LUT4_MODEL`."""
     text = (Path(yowasp_init).parent / "share" / "ice40" / "cells_sim.v").read_text()
     # Each chunk ends with a module's endmodule and holds, before it, its attributes (and,
     # in the first, the file's `timescale and `define lines).
@@ -63,6 +75,8 @@ def cell_models(cell_types):
         found = re.search(r"(?m)^module\s+(\w+)", chunk)
         if found:
             models[found.group(1)] = (chunk[:found.start()], chunk[found.start():])
+    if lut_as_index:
+        models["SB_LUT4"] = (models["SB_LUT4"][0], LUT4_MODEL)
     wanted = {kind for kind in cell_types if kind in models}
     while True:         # and the models a wanted one instantiates
         more = {name for kind in wanted for name in models
@@ -151,7 +165,8 @@ def netlist_design(build_dir):
                          "cells_sim.v": cell_models(cell_types)},
                   script=NETLIST_SCRIPT, ports=dict(NETLIST_PORTS),
                   alarm_bits=alarm_bits, settle_falling=True,
-                  # A netlist's C++ is some 10 MB: g++ -O1 took 8 min 45 s over it, -Og 40 s
-                  # (and simulates 1.6 times faster than -O0's, which took 35 s).
+                  # A netlist's C++ is some 5 MB (10 MB with Yosys' LUT model, over which
+                  # g++ -O1 took 8 min 45 s, -Og 40 s and -O0 35 s, -Og's simulating 1.6
+                  # times faster); -Og compiles the default build's in 48 s on 2 cores.
                   optimise=False,
                   description=f"the netlist {netlist.name}")
