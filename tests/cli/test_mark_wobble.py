@@ -18,7 +18,7 @@ from galvoscan.profile.template import profile_text
 from galvoscan.outputs.stream import JobAborted, JobStreamer
 from galvoscan.plan.wobble import WobbleSettings, wobble_registers
 
-from sim_board import quick_sim_board
+from sim_board import VECTOR_BOARD, quick_sim_board
 from fake_board import FakeBoard, job
 
 
@@ -167,7 +167,9 @@ def test_a_wobbled_line_marked_on_the_simulated_board(line, tmp_path):
     machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 100\n")
     out = io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()), \
-            quick_sim_board():
+            quick_sim_board(**VECTOR_BOARD, vector_delays=True):
+        # (The vector build with the delays and the wobble stage: the model of
+        # tests/sim/test_compiled.py's job with delays and wobble on both backends.)
         assert main(["mark", str(line), "--speed", "1000", "--prr", "50", "--machine",
                      str(machine), "--wobble", "60", "--wobble-along", "20", "--wobble-hz",
                      "5000", "--sim", "--json"]) == 0
