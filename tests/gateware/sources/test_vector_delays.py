@@ -25,9 +25,11 @@ PRR_100HZ = 200
 
 def jobs_board():
     """The jobs' build, fresh from power-up: vector mode alone with the RTC delays (the same
-    registers, half the design of the default build's to simulate)."""
+    registers, half the design of the default build's to simulate), and the wobble stage,
+    off (wob_shape 0) as at power-up: the wobble tests' build (test_wobble.py), whose compiled
+    model the two share."""
     return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
-                               mo_lead=0.2e-3,
+                               mo_lead=0.2e-3, wobble=True,
                                vector_delays=True, **VECTOR_BOARD)
 
 

@@ -31,9 +31,11 @@ CLK = 4e6
 
 def jobs_board():
     """The jobs' build, fresh from power-up: vector mode alone with the wobble stage (the same
-    registers, half the design of the default build's to simulate)."""
+    registers, half the design of the default build's to simulate), and the RTC delays, so
+    that the delays' tests (test_vector_delays.py) share its compiled model: :func:`run`
+    writes their delays 0, with which the laser follows the points as without them."""
     return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
-                               mo_lead=0.2e-3, wobble=True,
+                               mo_lead=0.2e-3, wobble=True, vector_delays=True,
                                **VECTOR_BOARD)
 
 
@@ -51,6 +53,7 @@ def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60, sec
         # A jump held 40 µs: longer than the next segment's set-up (140 clocks, 35 µs at
         # 4 MHz), so the mark after it never stalls.
         ("pulses_per_point", pulses), ("pitch", pitch), ("jump_delay", 40),
+        ("laser_on_delay", 0), ("laser_off_delay", 0), ("mark_delay", 0),
         ("laser_power", 200)], always=("wob_shape",))
     started = board.now
     expected = job_model(job, pitch, pulses)
