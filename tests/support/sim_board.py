@@ -371,15 +371,16 @@ def quick_sim_board(**top_kwargs):
 
 
 @contextlib.contextmanager
-def quick_replay_job():
+def quick_replay_job(mo_lead=1e-3):
     """Within it, ``galvoscan sim --mode vector`` (``galvoscan.sim.vector.replay_job``) simulates at
     4 MHz, 2 clocks per XY2 bit (the same frames and pulses as at the board's 12 MHz, a third
-    of the clocks), with a 1 ms MO lead where the board's is 5 ms (the lead, which the host
-    only waits out, is checked on the pins by tests/gateware/laser/test_laser.py; 1 ms is what
-    the test of the host waiting in the board's time needs, and one build serves both)."""
+    of the clocks), with a 1 ms MO lead (``mo_lead``, in seconds) where the board's is 5 ms
+    (the lead, which the host only waits out, is checked on the pins by
+    tests/gateware/laser/test_laser.py; 1 ms is what the test of the host waiting in the
+    board's time needs on the compiled board, and one compiled build serves both)."""
     import functools
     import galvoscan.sim.vector as module
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(module, "replay_job", functools.partial(module.replay_job, clk_freq=4e6,
-                                                              mo_lead=1e-3))
+                                                              mo_lead=mo_lead))
         yield
