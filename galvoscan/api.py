@@ -11,7 +11,7 @@ A sketch (``docs/examples/first_job.py`` runs one whole)::
                   speed_mm_s=1000, power_percent=30)
     plan = api.plan(job, serial=7)           # the default profile; or api.load_profile(path)
     print(plan.estimate_s)                   # seconds, the board's own time
-    board = api.SimulatedBoard(backend="compiled")
+    board = api.SimulatedBoard(config=api.PRESETS["default"], backend="compiled")
     report = api.run(plan, board)
     print(report.segments, report.pulses, report.marks_mm[:3])
 
@@ -47,6 +47,9 @@ from .plan.objects import JobSettings, MarkObject
 from .plan.wobble import WobbleSettings, wobble_registers
 from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
 from .sim.board import SimTransport, SimulatedBoard
+# The bitstreams `galvoscan build --preset` builds, by name: a SimulatedBoard of one
+# (config=PRESETS["default"]) is the board that bitstream makes.
+from .build import PRESETS
 
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
@@ -54,7 +57,8 @@ __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAY
            "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
            "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
            "load_profile",
-           "default_profile", "SimulatedBoard", "HostClient", "SerialTransport", "FTDISPITransport",
+           "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
+           "FTDISPITransport",
            "PlanError"]
 
 

@@ -1,8 +1,8 @@
 """A first job through galvoscan's Python API (:mod:`galvoscan.api`), without the command line:
 a 10 mm square drawn as an SVG here, placed with its centre at (5, -3) mm in the field, planned
-for the default machine profile, estimated, and marked on the simulated board (its compiled
-backend where a C++ compiler can build it, else Amaranth's); the report is what the board's
-XY2-100 wires and laser did.
+for the default machine profile, estimated, and marked on the default bitstream's simulated
+board (its compiled backend where a C++ compiler can build it, else Amaranth's); the report is
+what the board's XY2-100 wires and laser did.
 
 Run it: ``python docs/examples/first_job.py``.
 """
@@ -32,7 +32,8 @@ def main():
         plan = api.plan(job)                            # the default machine profile
     print(f"planned: {len(plan.segments)} segments, {plan.mark_mm:.2f} mm marked, "
           f"estimated {plan.estimate_s:.3f} s")
-    board = api.SimulatedBoard(backend="auto")
+    # The default bitstream's board, as `galvoscan board --sim` simulates it.
+    board = api.SimulatedBoard(config=api.PRESETS["default"], backend="auto")
     try:
         report = api.run(plan, board)
     finally:
