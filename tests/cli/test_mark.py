@@ -328,7 +328,8 @@ def watch(built):
         time.sleep(0.02)
     print("galvoscan-test: emitting", flush=True)
 
-with quick_sim_board(vector_queue_depth=16, **VECTOR_BOARD) as board_class:
+# (A queue of four: the link fault tests' build, whose compiled model they share.)
+with quick_sim_board(vector_queue_depth=4, **VECTOR_BOARD) as board_class:
     threading.Thread(target=watch, args=(board_class.built,), daemon=True).start()
     sys.argv[0] = "galvoscan"
     runpy.run_module("galvoscan.cli", run_name="__main__", alter_sys=True)
