@@ -15,11 +15,14 @@ from vector_model import merge
 
 
 def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
+    """Vector mode alone, with the wobble stage and the RTC delays: the build the vector,
+    wobble and delay tests share (one compiled model); jobs without them write
+    :data:`NO_DELAYS` and leave the wobble off, as at power-up."""
     # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
     board = SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
                                 baud=round(clk_freq / 8), record_laser=True,
                                 mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
-                                **VECTOR_ONLY,
+                                wobble=True, vector_delays=True, **VECTOR_ONLY,
                                 settings=ScanSettings(mode="vector", run=False, **settings))
     client = HostClient(SimSPITransport(board, clocks_per_sck=12))
     return board, client
@@ -58,9 +61,9 @@ def runs_on_the_wires(board):
     return merge(pulses_per_frame(board))
 
 
-#: Vector mode as Wan et al.'s: the default build has no RTC delays (tests/gateware/sources/test_vector_delays.py
-#: builds them, and checks that at 0 they change nothing).
-NO_DELAYS = {}
+#: Vector mode as Wan et al.'s, on the jobs' build (:func:`start_board`): its RTC delays at 0,
+#: with which they change nothing (tests/gateware/sources/test_vector_delays.py checks that).
+NO_DELAYS = {"laser_on_delay": 0, "laser_off_delay": 0, "mark_delay": 0}
 
 
 def job_link(board):
