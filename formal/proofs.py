@@ -131,10 +131,10 @@ def spi_frame_proof(*, make_spi=None, helpers=True, name="spi_frames"):
 
     Only the last clock is searched. What the covers and the faults reach holds from then on:
     a frame event waits until it is taken, and the spec's consumer may never take it, while
-    cs_n, once high, stays high. Each clock searched is a query over the whole unrolled frame
-    solved afresh, and the clocks where nothing is reachable yet are the dear ones: with z3, searching
-    clocks 158 … 167 took 2 min 45 s for the broken target that ignores the length, a minute
-    for clock 158 alone, against some 15 s for the last clock only."""
+    cs_n, once high, stays high. Each clock searched is a query over the whole unrolled frame,
+    and the clocks where nothing is reachable yet are the dear ones: with z3, searching clocks
+    158 … 167 took 2 min 45 s for the broken target that ignores the length, a minute for
+    clock 158 alone, against some 15 s for the last clock only."""
     kwargs = {"helpers": helpers}
     if make_spi is not None:
         kwargs["make_spi"] = make_spi

@@ -70,12 +70,15 @@ class ProofResult:
 #: test asks for z3, which the test extra installs.)
 SOLVER = "yices"
 
-#: smtbmc's options for a search after a long skipped prefix (``unrolled``), by solver: the
-#: state as plain bit-vectors, unrolled, so that the solver takes the whole frame as one
-#: bit-vector problem. z3 takes each query best with a new solver (``--noincr``), which it
-#: bit-blasts whole; Yices best incrementally (with ``--noincr`` the SPI target's bounded
-#: check took 590 s rather than 27).
-_UNROLLED = {"yices": (" --stbv --unroll", ""), "z3": (" --stbv --unroll", " -- --noincr")}
+#: smtbmc's options for a search after a long skipped prefix (``unrolled``): the state as
+#: plain bit-vectors, unrolled, so that the solver takes the whole frame as one bit-vector
+#: problem.
+_UNROLLED = " --stbv --unroll"
+
+#: What each solver takes besides for such a search: z3 each query best with a new solver
+#: (``--noincr``), which it bit-blasts whole; Yices best incrementally (with ``--noincr`` the
+#: SPI target's bounded check took 590 s rather than 27).
+_UNROLLED_SOLVER_OPTIONS = {"yices": "", "z3": " -- --noincr"}
 
 
 def run_sby(harness, name, workdir, *, depth, cover_depth, cover_skip=0,
@@ -111,8 +114,9 @@ def run_sby(harness, name, workdir, *, depth, cover_depth, cover_skip=0,
         _SBY_TEMPLATE.format(name=name, depth=depth, cover_depth=cover_depth,
                              cover_skip=cover_skip,
                              solver=solver,
-                             search_options=_UNROLLED[solver][0] if unrolled else "",
-                             search_solver_options=_UNROLLED[solver][1] if unrolled else ""))
+                             search_options=_UNROLLED if unrolled else "",
+                             search_solver_options=_UNROLLED_SOLVER_OPTIONS[solver]
+                             if unrolled else ""))
 
     results = []
     for task in tasks:

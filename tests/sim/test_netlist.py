@@ -5,6 +5,7 @@ power-on reset holds the design a fixed number of clocks, and the XY2-100 and la
 leave through the I/O cells' output flip-flops, one clock later; nothing else may differ."""
 
 import re
+import subprocess
 
 import pytest
 
@@ -14,7 +15,8 @@ from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
 from galvoscan.link.client import HostClient
 from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
 from galvoscan.sim.compiled import CompileError
-from galvoscan.sim.compiled.netlist import cell_models, netlist_design
+from galvoscan.sim.compiled.netlist import LUT4_MODEL, cell_models, netlist_design
+from galvoscan.toolchain import tool
 
 
 def session(board):
@@ -113,7 +115,6 @@ def test_what_is_no_netlist_is_one_line(tmp_path):
 def test_only_the_cells_a_netlist_uses_are_read():
     """Yosys' cell models of the netlist's cells, with what they instantiate and the file's
     defines; none of the others (the UltraPlus SPRAM's alone costs Yosys some 50 s)."""
-
     text = cell_models({"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K", "$buf"})
     modules = set(re.findall(r"(?m)^module\s+(\w+)", text))
     assert {"SB_LUT4", "SB_DFFESR", "SB_RAM40_4K"} <= modules
@@ -131,10 +132,6 @@ def test_the_lut_model_selects_the_bit_yosys_model_does(tmp_path):
     multiplexers), proved equal by Yosys' SAT solver for each of the 16 one-hot INITs: each
     model picks one bit of INIT for any inputs, so agreeing on those picks the same bit, for
     every INIT. A model with two inputs swapped fails it."""
-    import subprocess
-    from galvoscan.sim.compiled.netlist import LUT4_MODEL
-    from galvoscan.toolchain import tool
-
     yosys_model = cell_models({"SB_LUT4"}, lut_as_index=False)
 
     def proved(ours):

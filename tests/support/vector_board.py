@@ -14,18 +14,24 @@ from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
 from vector_model import merge
 
 
-def start_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
-    """Vector mode alone, with the wobble stage and the RTC delays: the build the vector,
-    wobble and delay tests share (one compiled model); jobs without them write
-    :data:`NO_DELAYS` and leave the wobble off, as at power-up."""
+def jobs_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
+    """The jobs' build, fresh from power-up: vector mode alone (half the design of the default
+    build's to simulate), with the wobble stage and the RTC delays, so that the vector, wobble
+    and delay tests share one compiled model; jobs without them write :data:`NO_DELAYS` and
+    leave the wobble off, as at power-up."""
     # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
-    board = SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
-                                baud=round(clk_freq / 8), record_laser=True,
-                                mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
-                                wobble=True, vector_delays=True, **VECTOR_ONLY,
-                                settings=ScanSettings(mode="vector", run=False, **settings))
-    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
-    return board, client
+    return SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
+                               baud=round(clk_freq / 8), record_laser=True,
+                               mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
+                               wobble=True, vector_delays=True, **VECTOR_ONLY,
+                               settings=ScanSettings(mode="vector", run=False, **settings))
+
+
+def start_board(clk_freq=4e6, **kwargs):
+    """:func:`jobs_board` (``kwargs`` as it takes them) and the real client over its SPI
+    pins."""
+    board = jobs_board(clk_freq, **kwargs)
+    return board, HostClient(SimSPITransport(board, clocks_per_sck=12))
 
 
 def queue(client, job, *, factors=None):

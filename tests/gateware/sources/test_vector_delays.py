@@ -11,8 +11,8 @@ import pytest
 from galvoscan.link.client import ClientError, HostClient, encode_write, WriteRefused
 from galvoscan.gateware.top import ScanSettings
 
-from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
-from vector_board import job_link, set_up_job
+from sim_board import SimBoard, SimSPITransport
+from vector_board import job_link, jobs_board, set_up_job
 from vector_model import PARK
 from vector_delay_model import frames_model, modulation_edges
 
@@ -23,19 +23,9 @@ CLOCKS_PER_US = 4
 PRR_100HZ = 200
 
 
-def jobs_board():
-    """The jobs' build, fresh from power-up: vector mode alone with the RTC delays (the same
-    registers, half the design of the default build's to simulate), and the wobble stage,
-    off (wob_shape 0) as at power-up: the wobble tests' build (test_wobble.py), whose compiled
-    model the two share."""
-    return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
-                               mo_lead=0.2e-3, wobble=True,
-                               vector_delays=True, **VECTOR_BOARD)
-
-
 def run(job, *, on=0, off=0, mark=0, polygon=0, jump=300, scaled=0, factors=None, pulses=1,
         pitch=60, extra_s=0.6e-3):
-    board = jobs_board()
+    board = jobs_board(CLK)
     client = set_up_job(board, job, [
         ("laser_prr", PRR_100HZ), ("pulses_per_point", pulses), ("pitch", pitch),
         ("jump_delay", jump), ("laser_on_delay", on), ("laser_off_delay", off),
@@ -200,7 +190,7 @@ def test_the_board_refuses_out_of_range_delays_and_counts_them():
     from galvoscan.gateware.host.regmap import BY_NAME
     from link_codec import command
     # The jobs' build, over the jobs' link.
-    board = jobs_board()
+    board = jobs_board(CLK)
     client = job_link(board)[1]
     client.write("laser_on_delay", -19)
     assert client.read("laser_on_delay") == -19

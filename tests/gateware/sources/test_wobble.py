@@ -20,8 +20,8 @@ from galvoscan.gateware.sources.wobble import Wobble
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
 
 from link_codec import command
-from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport
-from vector_board import job_link, pulses_per_frame, set_up_job
+from sim_board import SimBoard, SimSPITransport
+from vector_board import NO_DELAYS, job_link, jobs_board, pulses_per_frame, set_up_job
 from vector_model import PARK, job_model, merge
 from wobble_model import marked_points, wobbled_frames
 
@@ -29,22 +29,12 @@ from wobble_model import marked_points, wobbled_frames
 CLK = 4e6
 
 
-def jobs_board():
-    """The jobs' build, fresh from power-up: vector mode alone with the wobble stage (the same
-    registers, half the design of the default build's to simulate), and the RTC delays, so
-    that the delays' tests (test_vector_delays.py) share its compiled model: :func:`run`
-    writes their delays 0, with which the laser follows the points as without them."""
-    return SimBoard.powered_up(backend="compiled", clk_freq=CLK, record_laser=True,
-                               mo_lead=0.2e-3, wobble=True, vector_delays=True,
-                               **VECTOR_BOARD)
-
-
 def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60, seconds=None):
     """The job run with the wobble's registers as given; for ``seconds`` from the run
     command, or (None) until the vector model's points and pulses are all on the wires, then
     0.3 ms (30 frames) more in which nothing else may happen. Returns the board, the client and
     the seconds run."""
-    board = jobs_board()
+    board = jobs_board(CLK)
     # Both runs of a job write the same registers, wob_shape included, so that their traffic,
     # and so their timing, is the same.
     client = set_up_job(board, job, [
@@ -53,7 +43,7 @@ def run(job, *, shape, along, across, hz, prr_100hz=600, pulses=1, pitch=60, sec
         # A jump held 40 µs: longer than the next segment's set-up (140 clocks, 35 µs at
         # 4 MHz), so the mark after it never stalls.
         ("pulses_per_point", pulses), ("pitch", pitch), ("jump_delay", 40),
-        ("laser_on_delay", 0), ("laser_off_delay", 0), ("mark_delay", 0),
+        *NO_DELAYS.items(),
         ("laser_power", 200)], always=("wob_shape",))
     started = board.now
     expected = job_model(job, pitch, pulses)
@@ -166,7 +156,7 @@ def test_random_jobs_amplitudes_and_frequencies_match_the_model(job, along, acro
 def wobble_board():
     # The jobs' build over the UART at 8 clocks a bit: a read is 8 characters, 640 clocks,
     # where SPI at its 12 clocks an SCK takes two 420-clock frames.
-    board = jobs_board()
+    board = jobs_board(CLK)
     return board, job_link(board)[1]
 
 
