@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from galvoscan.cli import main
 from galvoscan.link.client import HostClient, encode_read, encode_write
-from galvoscan.sim.compiled import CompileError, Compiler, compiled_model
+from galvoscan.sim.compiled import CompileError, Compiler, compiled_model, find_compiler
 from galvoscan.sim.compiled import model as model_module
 from galvoscan.gateware.host.regmap import Mode
 from galvoscan.gateware.top import GalvoScanTop, ScanSettings
@@ -382,6 +382,38 @@ def test_the_minutes_of_zigs_first_run_are_told_only_before_it(monkeypatch, tmp_
     assert _zig_cache_is_empty()                    # there, empty
     (tmp_path / "zig" / "o").mkdir()
     assert not _zig_cache_is_empty()
+
+
+def fake_compiler(folder, name, says):
+    path = folder / name
+    path.write_text(f"#!/bin/sh\necho '{says}'\n")
+    path.chmod(0o755)
+
+
+def test_the_compiler_is_cxx_then_the_newest_clang_then_gpp(monkeypatch, tmp_path):
+    """Clang before g++ (it compiles CXXRTL's C++ in half the time, the models as fast), a
+    versioned clang++-N where there is no plain clang++, and $CXX before them all; a
+    netlist's light optimisation is -O1 for Clang (zig's included) and -Og for g++."""
+    for name, says in [("g++", "g++ (Debian 12.2.0) 12.2.0"),
+                       ("clang++-9", "clang version 9.0.1"),
+                       ("clang++-14", "Debian clang version 14.0.6"),
+                       ("clang++-14.bak", "not a compiler"),
+                       ("my-cxx", "my compiler 1.0")]:
+        fake_compiler(tmp_path, name, says)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    monkeypatch.delenv("CXX", raising=False)
+    clang = find_compiler("system")
+    assert clang.identity == "Debian clang version 14.0.6"
+    assert clang.light_optimisation == "-O1"
+    (tmp_path / "clang++-14").unlink()
+    (tmp_path / "clang++-9").unlink()
+    gpp = find_compiler("system")
+    assert gpp.identity == "g++ (Debian 12.2.0) 12.2.0" and gpp.light_optimisation == "-Og"
+    fake_compiler(tmp_path, "clang++", "clang version 18.1.0")
+    assert find_compiler("system").identity == "clang version 18.1.0"
+    monkeypatch.setenv("CXX", "my-cxx")
+    assert find_compiler("system").identity == "my compiler 1.0"
+    assert Compiler(("zig",), "zig 0.13.0", zig=True).light_optimisation == "-O1"
 
 
 def test_the_job_player_from_the_flash_is_the_same_on_both_backends():

@@ -2,13 +2,19 @@
 ``zig c++`` from the ``ziglang`` wheel (a galvoscan dependency), so that a machine with nothing
 but Python still gets it.
 
-A system compiler is a program of the system's, found on PATH (``$CXX`` first, then ``g++``,
-``c++``, ``clang++``); ``ziglang`` is found beside the running interpreter, as a module of its
-environment, never on PATH.
+A system compiler is a program of the system's, found on PATH: ``$CXX`` first, then Clang
+(``clang++``, else the newest versioned ``clang++-N``), then ``g++`` and ``c++``. Clang first,
+because it is the faster here on CXXRTL's one large function, and what is compiled is mostly
+that: on the tests' 8 MHz top (0.3 MB of C++) clang++ 14 took 3.6 to 5.5 s at -O2 where g++ 12
+took 9.5, the models simulating as fast (0.77 and 0.84 s for the same 24,000 frames); on the
+default build's netlist (5 MB) Clang -O1 compiled in 42 to 48 s and then ran 1.2 ms of the board
+in 0.3 s, where g++ -Og took 43 s and ran it in 18 s. ``ziglang`` is found beside the running
+interpreter, as a module of its environment, never on PATH.
 """
 
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -35,6 +41,18 @@ class Compiler:
     zig: bool = False
 
     @property
+    def clang(self):
+        """Clang's front end (``zig c++`` is Clang too)."""
+        return self.zig or "clang" in self.identity.lower()
+
+    @property
+    def light_optimisation(self):
+        """The flag for a design too large to optimise fully (a netlist's C++): Clang's -O1
+        compiles a netlist in under a minute and simulates it some 60 times faster than
+        g++'s -Og, while g++'s -O1 takes minutes over it (8 min 45 s, measured)."""
+        return "-O1" if self.clang else "-Og"
+
+    @property
     def name(self):
         return "zig c++" if self.zig else os.path.basename(self.command[0])
 
@@ -51,11 +69,26 @@ def _identity(command):
     return lines[0] if lines else None
 
 
+def _versioned_clangs():
+    """``clang++-N`` on PATH (Debian's and Ubuntu's names), the newest first."""
+    found = {}
+    for folder in os.environ.get("PATH", "").split(os.pathsep):
+        try:
+            with os.scandir(folder or ".") as entries:
+                for entry in entries:
+                    match = re.fullmatch(r"clang\+\+-(\d+)", entry.name)
+                    if match and os.access(entry.path, os.X_OK):
+                        found.setdefault(int(match[1]), entry.name)
+        except OSError:
+            continue
+    return [found[version] for version in sorted(found, reverse=True)]
+
+
 def _system_compilers():
     names = []
     if os.environ.get("CXX"):
         names.append(os.environ["CXX"])
-    names += ["g++", "c++", "clang++"]
+    names += ["clang++", *_versioned_clangs(), "g++", "c++"]
     for name in names:
         path = shutil.which(name)
         if path:
@@ -83,7 +116,8 @@ def find_compiler(prefer=None):
     Parameters
     ----------
     prefer : str, optional
-        ``"system"`` or ``"zig"``: that kind only. Default: the system's, else zig.
+        ``"system"`` or ``"zig"``: that kind only. Default: the system's (``$CXX``, Clang,
+        g++, c++, in that order), else zig.
 
     Raises
     ------

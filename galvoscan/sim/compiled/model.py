@@ -101,8 +101,9 @@ class Design:
         Evaluate the design at the clock's falling edge too, and at each edge until it settles
         (a netlist, whose clock reaches its flip-flops through its input cell).
     optimise : bool
-        Compile with -O2 (False: -Og, for a netlist whose C++ an optimising compile takes
-        minutes over).
+        Compile with -O2 (False: the compiler's
+        :attr:`~.compiler.Compiler.light_optimisation`, for a netlist whose C++ a full
+        optimisation takes minutes over).
     description : str
         What it is, for the line that says it is being compiled.
     """
@@ -126,11 +127,14 @@ class Design:
 
     def key_parts(self):
         return [*(f"{name}\0{text}" for name, text in sorted(self.files.items())),
-                self.script, self.ports_header(), " ".join(self.cxx_flags())]
+                self.script, self.ports_header()]
 
-    def cxx_flags(self):
-        return CXX_FLAGS if self.optimise else tuple("-Og" if flag == "-O2" else flag
-                                                     for flag in CXX_FLAGS)
+    def cxx_flags(self, compiler):
+        """The flags ``compiler`` builds this design with."""
+        if self.optimise:
+            return CXX_FLAGS
+        return tuple(compiler.light_optimisation if flag == "-O2" else flag
+                     for flag in CXX_FLAGS)
 
 
 def top_design(top):
@@ -202,7 +206,7 @@ class CompiledModel:
 def _key(design, board, yosys_version, compiler):
     digest = hashlib.sha256()
     for part in (*design.key_parts(), board, yosys_version, compiler.identity,
-                 " ".join(CXX_FLAGS), sys.platform):
+                 " ".join(design.cxx_flags(compiler)), sys.platform):
         digest.update(part.encode())
         digest.update(b"\0")
     return digest.hexdigest()[:32]
@@ -259,7 +263,7 @@ def _build(workdir, design, board, key, compiler):
     runtime = _cxxrtl_runtime()
     (workdir / "key.cc").write_text(
         f'extern "C" const char *gs_model_key() {{ return "{key}"; }}\n')
-    command = [*compiler.command, *design.cxx_flags(), f"-I{runtime}", "-I.",
+    command = [*compiler.command, *design.cxx_flags(compiler), f"-I{runtime}", "-I.",
                '-DTOP_HEADER="top.h"', "board.cc", "top.cc", "key.cc", "-o", "model.so"]
     _run(command, cwd=workdir, what=f"the C++ compiler ({compiler.name})")
     return workdir / "model.so"
