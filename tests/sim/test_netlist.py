@@ -43,8 +43,9 @@ def offsets(a, b):
 def test_the_default_builds_netlist_behaves_as_its_design(icebreaker_build):
     """The gates simulate slowly (compiled lightly optimised: a full optimisation of the
     netlist's C++ takes minutes; g++'s -Og model runs some 800 clocks a second), so a
-    millisecond of spiral and a short host session: every block of the default build is in them (the spiral's ROMs, the DSP scale
-    stage, the correction table's RAM, the PHY, the UART and register file, the laser)."""
+    millisecond of spiral and a short host session: every block of the default build is in
+    them (the spiral's ROMs, the DSP scale stage, the correction table's RAM, the PHY, the
+    UART and register file, the laser)."""
     folder, code, _, table_file = icebreaker_build
     assert code == 0
     netlist = SimulatedBoard(netlist=folder, backend="compiled")

@@ -165,10 +165,7 @@ def netlist_design(build_dir):
                          "cells_sim.v": cell_models(cell_types)},
                   script=NETLIST_SCRIPT, ports=dict(NETLIST_PORTS),
                   alarm_bits=alarm_bits, settle_falling=True,
-                  # A netlist's C++ is some 5 MB (10 MB with Yosys' LUT model, over which
-                  # g++ -O1 took 8 min 45 s, -Og 40 s and -O0 35 s): lightly optimised, the
-                  # default build's compiles in under a minute (Clang -O1 42-48 s, running
-                  # 1.2 ms of the board in 0.3 s; g++ -Og 43 s, running it in 18 s; Clang
-                  # -O0 15 s, running it in 34 s).
+                  # A netlist's C++ is some 5 MB: the compiler's light optimisation (its
+                  # measured times in compiler.py), not -O2.
                   optimise=False,
                   description=f"the netlist {netlist.name}")
