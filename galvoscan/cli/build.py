@@ -87,32 +87,41 @@ def _cmd_build(args):
     else:
         settings = settings_from(args, table)
     correction = _correction(args)
+    if args.board == "ulx3s":
+        # Every feature is built: the options that add one to an iCE40 build add nothing.
+        features = {}
+        args.wobble = args.interpolation = args.delays = args.player = True
+    else:
+        if args.device:
+            fail(f"--device is the ULX3S's (its ECP5), not the {args.board}'s")
+        features = dict(wobble=args.wobble, interpolation=args.interpolation,
+                        delays=args.delays, player=args.player)
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
                                  clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
-                                 wobble=args.wobble, interpolation=args.interpolation,
-                                 delays=args.delays, player=args.player)
+                                 device=args.device, **features)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
         print(json.dumps(report.as_dict(), indent=2))
         return 0
     nodes = report.correction_nodes
-    print(f"{report.board}: {report.bitstream}")
+    print(f"{report.board}{f' ({report.device})' if report.device else ''}: {report.bitstream}")
     print(f"  XY2 rate     {report.bit_rate_mhz:g} Mbit/s "
           f"({report.bit_rate_mhz * 1e6 / 20:,.0f} frames/s) on a {report.clock_mhz:g} MHz "
           f"system clock")
     print(f"  host link    UART {report.baud:,} baud" +
-          (" only (no SPI link: PMOD1B holds the start input and the PLC's busy and ready "
-           "lines)" if report.player else ", SPI"))
+          (", SPI" if "spi" in report.links else
+           " only (the SPI link's pins are the start input and the PLC's busy and ready "
+           "lines)" if report.player else " only"))
     print(f"  modes        {', '.join(report.modes)}; correction "
           f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
     built = [what for what, on in (("RTC delays", args.delays), ("wobble", args.wobble),
                                    ("spiral interpolation", args.interpolation),
                                    ("job player", args.player)) if on]
     print(f"  with         {', '.join(built) if built else 'no build options'}")
-    print(f"  logic cells  {report.luts:5d} / {report.luts_available}")
+    print(f"  {report.logic_name:<12} {report.luts:5d} / {report.luts_available}")
     print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
     print(f"  DSPs         {report.dsps:5d} / {report.dsps_available}")
     print(f"  Fmax         {report.fmax_mhz:8.2f} MHz (needs {report.clock_mhz:g} MHz: "
@@ -152,8 +161,12 @@ def add_parsers(commands):
         description="Synthesise, place and route the full system with the YoWASP toolchain; "
                     "report logic cells, block RAMs, DSPs and nextpnr's Fmax. Exits non-zero, "
                     "in one line, when timing is not met.")
-    build.add_argument("--board", choices=["icebreaker", "icestick"], default="icebreaker",
-                       help="target board (default: %(default)s)")
+    build.add_argument("--board", choices=["icebreaker", "icestick", "ulx3s"],
+                       default="icebreaker",
+                       help="target board (default: %(default)s); ulx3s builds every feature "
+                            "in one bitstream")
+    build.add_argument("--device", choices=["12F", "25F", "45F", "85F"], default=None,
+                       help="the ULX3S's ECP5 (default: 25F)")
     build.add_argument("--build-dir", type=output_dir, default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
     build.add_argument("--preset", choices=["marker", "cleaner"], default=None,

@@ -1,0 +1,281 @@
+"""ULX3S (Lattice ECP5 LFE5U-25F, or the 12F/45F/85F): every feature in one bitstream.
+
+The iCEBreaker's UP5K holds the system only with features left out; the ECP5 on the ULX3S holds
+all of it with room to spare (``galvoscan build --board ulx3s``): the spiral with its
+interpolator, raster, vector mode with the RTC delays and the wobble stage, the correction
+stage with a 33 × 33 table, the job player, and both host links, the SPI target and the UART
+on the board's FT231X (the player's machine lines have pins of their own here).
+
+The clock: 24 MHz, the PLL's CLKOS from the 25 MHz crystal (25 MHz is no whole, even multiple
+of XY2-100's 2 MHz bit rate). 24 MHz is the slowest clock that gives XY2-100 a whole, even
+number of clocks a bit (12), the UART 3 Mbaud exactly (8 clocks a bit), and the RTC delays
+their whole µs; it is the iCEBreaker marker's clock, so every core counts the same there and
+here; and the ECP5 meets it more than twice over, which leaves the room for more features.
+
+Pins, on the GPIO header J1 (``GPn`` / ``GNn``: the pair's two pins, 3.3 V LVCMOS, **not 5 V
+tolerant**). The table is :data:`ULX3S_PINS`; the README's wiring table is checked against it.
+
+XY2-100 goes through an RS-422 driver (AM26LV31, SN75C1168) run from 3.3 V or 5 V, whose inputs
+take 3.3 V logic. The laser's DB25 lines want 5 V TTL: drive them through a 74HCT245 or
+74AHCT125 run from 5 V, output enable from ``laser_enable`` pulled down to its off level, each
+laser line pulled down behind it. Inputs from the laser or a PLC (24 V) come through
+optocouplers or a divider to 3.3 V: never straight to the header.
+
+Before and while the ECP5 configures, its user pins float (weakly pulled up): the pull-down on
+``laser_enable`` keeps the buffers off then, as on the iCEBreaker. From configuration on, every
+laser line and the bus leave through the I/O cells' output flip-flops, which start low.
+
+LED 0 lights once frames are going out; LED 1 is the player's (lit while busy, blinking after
+it refused an image). The FIRE 1 button starts the job player, as the start input does.
+"""
+
+from amaranth.build import Attrs, Pins, Resource, Subsignal
+from amaranth.hdl import Cat, ClockDomain, Elaboratable, Instance, Module, Signal
+from amaranth.lib import io
+from amaranth_boards.ulx3s import (ULX3S_12F_Platform, ULX3S_25F_Platform, ULX3S_45F_Platform,
+                                   ULX3S_85F_Platform)
+
+from ..gateware.build_config import BuildConfig, LINKS, MODES
+from ..gateware.clocking import DEFAULT_BAUD, XY2_100_BIT_RATE, check_clocks
+from ..gateware.field.correction_table import CorrectionTable
+from ..gateware.top import GalvoScanTop
+from .pll import ECP5PLL, ecp5_pll_settings
+
+
+__all__ = ["ULX3SScanner", "ulx3s_platform", "ULX3S_DEVICES", "ULX3S_CLOCK_HZ",
+           "ULX3S_CRYSTAL_HZ", "ULX3S_CORRECTION_NODES", "ULX3S_PINS"]
+
+
+#: The board's oscillator.
+ULX3S_CRYSTAL_HZ = 25_000_000
+#: The system clock, from the PLL (why 24 MHz: the module's docstring).
+ULX3S_CLOCK_HZ = 24_000_000
+#: The correction table's nodes per axis (the iCEBreaker's 17 leave 4 times the error between
+#: nodes; block RAM is no constraint here).
+ULX3S_CORRECTION_NODES = 33
+
+#: The ECP5 a ULX3S carries → its amaranth-boards platform.
+ULX3S_DEVICES = {"12F": ULX3S_12F_Platform, "25F": ULX3S_25F_Platform,
+                 "45F": ULX3S_45F_Platform, "85F": ULX3S_85F_Platform}
+
+#: Every signal on the GPIO header: name → (header pin, direction, where it goes). Pins marked
+#: "spare" are kept for what is still to come (the Z axis, the head's status, marking on the
+#: fly's encoders, the part sensor): wire them now and a later bitstream uses them.
+ULX3S_PINS = {
+    "xy2_clk": ("GP0", "o", "RS-422 driver → head CLOCK±"),
+    "xy2_sync": ("GN0", "o", "RS-422 driver → head SYNC±"),
+    "xy2_x": ("GP1", "o", "RS-422 driver → head CHAN1± (X)"),
+    "xy2_y": ("GN1", "o", "RS-422 driver → head CHAN2± (Y)"),
+    "xy2_z": ("GP2", "spare", "RS-422 driver → head CHAN3± (Z)"),
+    "xy2_status": ("GN2", "spare", "RS-422 receiver ← head STATUS±"),
+    "laser_power[0]": ("GP3", "o", "5 V buffer → DB25 1"),
+    "laser_power[1]": ("GN3", "o", "5 V buffer → DB25 2"),
+    "laser_power[2]": ("GP4", "o", "5 V buffer → DB25 3"),
+    "laser_power[3]": ("GN4", "o", "5 V buffer → DB25 4"),
+    "laser_power[4]": ("GP5", "o", "5 V buffer → DB25 5"),
+    "laser_power[5]": ("GN5", "o", "5 V buffer → DB25 6"),
+    "laser_power[6]": ("GP6", "o", "5 V buffer → DB25 7"),
+    "laser_power[7]": ("GN6", "o", "5 V buffer → DB25 8"),
+    "laser_latch": ("GP7", "o", "5 V buffer → DB25 9"),
+    "laser_mo": ("GN7", "o", "5 V buffer → DB25 18"),
+    "laser_am": ("GP8", "o", "5 V buffer → DB25 19"),
+    "laser_prr": ("GN8", "o", "5 V buffer → DB25 20"),
+    "laser_enable": ("GP9", "o", "the 5 V buffers' output enable (pulled down: off)"),
+    "laser_guide": ("GN9", "o", "own 5 V buffer → DB25 22 on IPG (pulled down)"),
+    "interlock_open": ("GP10", "i", "interlock loop to GND (pulled up: a broken loop reads open)"),
+    "laser_alarm[0]": ("GN10", "i", "optocoupler ← laser alarm (pulled up: 1 = alarm)"),
+    "laser_alarm[1]": ("GP11", "i", "optocoupler ← laser alarm (pulled up: 1 = alarm)"),
+    "spi_cs_n": ("GP14", "i", "host SPI chip select (pulled up)"),
+    "spi_copi": ("GN14", "i", "host SPI data in"),
+    "spi_cipo": ("GP15", "o", "host SPI data out"),
+    "spi_sck": ("GN15", "i", "host SPI clock"),
+    "start_n": ("GP16", "i", "optocoupler ← foot switch or PLC start, to GND (pulled up)"),
+    "busy": ("GN16", "o", "optocoupler → PLC: a job is checked or played"),
+    "ready": ("GP17", "o", "optocoupler → PLC: armed and past the MO lead"),
+    "part_sensor": ("GN17", "spare", "optocoupler ← part sensor"),
+    "encoder0_a": ("GP18", "spare", "RS-422 receiver ← encoder 0 A"),
+    "encoder0_b": ("GN18", "spare", "RS-422 receiver ← encoder 0 B"),
+    "encoder1_a": ("GP19", "spare", "RS-422 receiver ← encoder 1 A"),
+    "encoder1_b": ("GN19", "spare", "RS-422 receiver ← encoder 1 B"),
+}
+
+
+def _pin(name):
+    """The header pin's name in the amaranth-boards connector: ``GP3`` → ``3+``."""
+    header = ULX3S_PINS[name][0]
+    return f"{header[2:]}{'+' if header[1] == 'P' else '-'}"
+
+
+def _pins(*names, direction):
+    return Pins(" ".join(_pin(name) for name in names), dir=direction, conn=("gpio", 0))
+
+
+def _subsignals(names, **attrs):
+    return [Subsignal(name.split("_", 1)[1], _pins(name, direction=ULX3S_PINS[name][1]),
+                      Attrs(**attrs)) for name in names]
+
+
+def ulx3s_platform(device="25F"):
+    """The ULX3S platform for ``device`` with the galvoscan resources on the GPIO header.
+
+    A build needs only Yosys, nextpnr-ecp5 and ecppack (from PyPI): amaranth-boards' ULX3S
+    also asks for openFPGALoader, which only programs, so that is left out of the tools a build
+    checks for (``galvoscan flash`` programs the board)."""
+    if device not in ULX3S_DEVICES:
+        raise ValueError(f"unknown ULX3S device {device!r}; known: {', '.join(ULX3S_DEVICES)}")
+    base = ULX3S_DEVICES[device]
+
+    class Platform(base):
+        @property
+        def required_tools(self):
+            return [name for name in base.required_tools.fget(self)
+                    if name != "openFPGALoader"]
+
+    Platform.__name__ = Platform.__qualname__ = f"GalvoScan{base.__name__}"
+    platform = Platform()
+    lvcmos = {"IO_TYPE": "LVCMOS33"}
+    power = [f"laser_power[{bit}]" for bit in range(8)]
+    alarms = [name for name in ULX3S_PINS if name.startswith("laser_alarm")]
+    platform.add_resources([
+        Resource("xy2", 0, *_subsignals(["xy2_clk", "xy2_sync", "xy2_x", "xy2_y"]),
+                 Attrs(**lvcmos, DRIVE="8")),
+        Resource("laser", 0,
+                 Subsignal("power", _pins(*power, direction="o")),
+                 *_subsignals(["laser_latch", "laser_mo", "laser_am", "laser_prr",
+                               "laser_enable", "laser_guide"]),
+                 Attrs(**lvcmos, DRIVE="8")),
+        Resource("host_spi", 0,
+                 *_subsignals(["spi_cs_n"], PULLMODE="UP"),
+                 *_subsignals(["spi_copi", "spi_cipo", "spi_sck"]),
+                 Attrs(**lvcmos)),
+        # Pulled up: a broken loop, an unconnected alarm or start input is open, alarm, no press.
+        Resource("interlock", 0, _pins("interlock_open", direction="i"),
+                 Attrs(**lvcmos, PULLMODE="UP")),
+        Resource("laser_alarm", 0, _pins(*alarms, direction="i"),
+                 Attrs(**lvcmos, PULLMODE="UP")),
+        Resource("machine", 0,
+                 Subsignal("start_n", _pins("start_n", direction="i"), Attrs(PULLMODE="UP")),
+                 Subsignal("busy", _pins("busy", direction="o")),
+                 Subsignal("ready", _pins("ready", direction="o")),
+                 Attrs(**lvcmos)),
+    ])
+    return platform
+
+
+class ULX3SScanner(Elaboratable):
+    """The system top on the ULX3S: every feature, on the PLL's 24 MHz.
+
+    Parameters
+    ----------
+    config : :class:`~galvoscan.gateware.build_config.BuildConfig`
+        The build (:meth:`config`).
+    table, settings
+        As for :class:`~galvoscan.gateware.top.GalvoScanTop`.
+    correction : :class:`~galvoscan.gateware.field.correction_table.CorrectionTable` or str
+        The table the correction RAM starts with (``"identity"``: the identity of
+        :data:`ULX3S_CORRECTION_NODES` nodes).
+    """
+
+    def __init__(self, config, *, table=None, settings=None, correction="identity"):
+        self.config = config
+        self.table = table
+        self.settings = settings
+        if isinstance(correction, str) and correction == "identity":
+            correction = CorrectionTable.identity(ULX3S_CORRECTION_NODES)
+        self.correction = correction
+        self.pll = ecp5_pll_settings(ULX3S_CRYSTAL_HZ, config.clk_freq)
+
+    @staticmethod
+    def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
+               baud=None, wobble=True, interpolation=True, delays=True, player=True):
+        """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
+        with no options, every feature (all three modes, correction, the interpolator, the
+        RTC delays, wobble, the job player, both links). ``clock`` in Hz (None: 24 MHz) must
+        be one the PLL makes exactly from 25 MHz; ``baud`` None: 1 Mbaud, as on every board (the
+        FT231X and 24 MHz carry 3 Mbaud too: 8 clocks a bit). A ``ValueError``
+        for what cannot be built, before anything is built."""
+        clock = ULX3S_CLOCK_HZ if clock is None else clock
+        ecp5_pll_settings(ULX3S_CRYSTAL_HZ, clock)          # (raises for one it cannot make)
+        baud = DEFAULT_BAUD if baud is None else baud
+        check_clocks(clock, bit_rate, baud)
+        modes = MODES if modes is None else tuple(modes)
+        return BuildConfig(
+            modes=modes, clk_freq=clock, bit_rate=bit_rate, baud=baud,
+            correction=correction is not None, laser_alarms=2,
+            wobble=wobble and "vector" in modes,
+            spiral_interpolation=interpolation, vector_delays=delays,
+            player=player and "vector" in modes, links=LINKS)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.domains.sync = sync = ClockDomain()
+        crystal = platform.request(platform.default_clk, dir="-")
+        m.submodules.crystal_pad = crystal_pad = io.Buffer("i", crystal)
+        m.submodules.pll = ECP5PLL(crystal_pad.i, self.pll, sync)
+        m.submodules.scanner = scanner = GalvoScanTop(
+            self.config, table=self.table, settings=self.settings, correction=self.correction)
+
+        # The bus and the laser leave through the I/O cells' own flip-flops (which start low):
+        # the lines change together, whatever the placement, and no logic glitch reaches them.
+        xy2 = platform.request("xy2", 0, dir="-")
+        for name in ("clk", "sync", "x", "y"):
+            m.submodules[f"xy2_{name}_pad"] = pad = io.FFBuffer("o", getattr(xy2, name))
+            m.d.comb += pad.o.eq(getattr(scanner, f"xy2_{name}"))
+        laser = platform.request("laser", 0, dir="-")
+        for name in ("power", "latch", "mo", "am", "prr", "enable", "guide"):
+            m.submodules[f"laser_{name}_pad"] = pad = io.FFBuffer("o", getattr(laser, name))
+            m.d.comb += pad.o.eq(getattr(scanner, f"laser_{name}"))
+
+        # The links and the inputs: the cores synchronise their inputs, so plain buffers.
+        uart = platform.request("uart", 0, dir="-")
+        spi = platform.request("host_spi", 0, dir="-")
+        inputs = {"uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n,
+                  "spi_copi": spi.copi,
+                  "interlock_open": platform.request("interlock", 0, dir="-"),
+                  "laser_alarm": platform.request("laser_alarm", 0, dir="-")}
+        outputs = {"uart_tx": uart.tx, "spi_cipo": spi.cipo}
+        for name, port in inputs.items():
+            m.submodules[f"{name}_pad"] = pad = io.Buffer("i", port)
+            m.d.comb += getattr(scanner, name).eq(pad.i)
+        for name, port in outputs.items():
+            m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
+            m.d.comb += pad.o.eq(getattr(scanner, name))
+
+        running = Signal()
+        with m.If(scanner.xy2_sync):
+            m.d.sync += running.eq(1)
+        m.submodules.led_pad = led = io.Buffer("o", platform.request("led", 0, dir="-"))
+        m.d.comb += led.o.eq(running)
+        if self.config.player:
+            self._player_pins(m, platform, scanner)
+        return m
+
+    def _player_pins(self, m, platform, scanner):
+        """The configuration flash, the start inputs, the PLC's lines and LED 1."""
+        flash = platform.request("spi_flash", 0, dir="-")
+        # The flash's clock pin is the configuration clock, reached after configuration only
+        # through USRMCLK (its tristate held low: driven).
+        m.submodules.flash_clk = Instance("USRMCLK", i_USRMCLKI=scanner.flash_clk,
+                                          i_USRMCLKTS=0)
+        for name, port in (("cs_n", flash.cs), ("copi", flash.copi), ("wp", flash.wp),
+                           ("hold", flash.hold)):
+            m.submodules[f"flash_{name}_pad"] = pad = io.Buffer("o", port)
+            if name in ("wp", "hold"):
+                m.d.comb += pad.o.eq(0)         # (active-low pins: 0 = high, inactive)
+            elif name == "cs_n":
+                m.d.comb += pad.o.eq(~scanner.flash_cs_n)     # (the resource is active low)
+            else:
+                m.d.comb += pad.o.eq(scanner.flash_copi)
+        m.submodules.flash_cipo_pad = cipo = io.Buffer("i", flash.cipo)
+        m.d.comb += scanner.flash_cipo.eq(cipo.i)
+        machine = platform.request("machine", 0, dir="-")
+        m.submodules.start_pad = start = io.Buffer("i", machine.start_n)
+        m.submodules.fire_pad = fire = io.Buffer("i", platform.request("button_fire", 0,
+                                                                       dir="-"))
+        # (FIRE 1 reads 1 while pressed; start_n is active low.)
+        m.d.comb += scanner.start_n.eq(Cat(start.i, ~fire.i))
+        for name in ("busy", "ready"):
+            m.submodules[f"{name}_pad"] = pad = io.FFBuffer("o", getattr(machine, name))
+            m.d.comb += pad.o.eq(getattr(scanner, name))
+        m.submodules.player_led_pad = led = io.Buffer("o", platform.request("led", 1, dir="-"))
+        m.d.comb += led.o.eq(scanner.player_led)
