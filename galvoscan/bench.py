@@ -182,6 +182,11 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
         result["link"] = link_figures(frames=24 if replay else 4)
         result["link"]["stream"] = stream_figures(segments=600, backend=backend) if replay \
             else stream_figures(segments=100, clk_freq=8e6, backend=backend, mo_lead=0.5e-3)
+        # The ULX3S bitstream (24 MHz, 3 Mbaud) on the compiled board: the link's rate at the
+        # fastest baud the FTDI chips make.
+        from .build import board_config
+        result["link"]["stream_ulx3s"] = stream_figures(
+            segments=2000 if replay else 200, config=board_config("ulx3s"), backend="compiled")
         step("simulator backends")
         # The quick bench: the tests' 8 MHz board, whose compiled model they share.
         result["backends"] = backend_figures(python_s=5e-3, compiled_s=0.5) if replay else \
@@ -229,6 +234,12 @@ def table(result):
         rows.append((f"vector segments/s streamed end to end, UART {stream['baud']:,} baud "
                      f"(batches and fifo_free reads), {stream.get('backend', 'python')} "
                      f"backend",
+                     f"{stream['segments_per_s']:,.0f} ({stream['errors']} errors)"))
+    if "stream_ulx3s" in link:
+        stream = link["stream_ulx3s"]
+        rows.append((f"vector segments/s streamed end to end, ULX3S bitstream "
+                     f"({stream['clock_mhz']:g} MHz, UART {stream['baud']:,} baud), "
+                     f"{stream['backend']} backend",
                      f"{stream['segments_per_s']:,.0f} ({stream['errors']} errors)"))
     if "backends" in result:
         backends = result["backends"]

@@ -149,7 +149,8 @@ def link_figures(*, clk_freq=12e6, baud=115_200, frames=24):
 
 # --- simulator -----------------------------------------------------------------------------------
 
-def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", **top_kwargs):
+def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", config=None,
+                   **top_kwargs):
     """Vector segments a second streamed end to end: ``JobStreamer`` (batches of segment
     frames, each answered with the queue's free places) through the UART pins of the simulated board at the default baud, one-point
     marks that the board takes faster than the link brings them (so each one finds the queue
@@ -157,13 +158,18 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", 
 
     The rate is the link's: any clock that carries the baud gives it to within the few clocks
     a ``fifo_free`` answer takes (``clk_freq``: 12 MHz, the board's; the quick bench's 8 MHz,
-    the slowest that carries 1 Mbaud, is two thirds of the clocks to simulate)."""
+    the slowest that carries 1 Mbaud, is two thirds of the clocks to simulate). ``config``: a
+    bitstream's :class:`~galvoscan.gateware.build_config.BuildConfig` (its clock and baud), in
+    place of ``clk_freq`` and ``baud``."""
     from .link.client import HostClient
     from .gateware.clocking import DEFAULT_BAUD
     from .outputs.stream import JobStreamer
     from .sim.board import SimTransport, SimulatedBoard
-    board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD, backend=backend,
-                           **top_kwargs)
+    if config is None:
+        board = SimulatedBoard(clk_freq=clk_freq, baud=baud or DEFAULT_BAUD, backend=backend,
+                               **top_kwargs)
+    else:
+        board = SimulatedBoard(config=config, backend=backend, **top_kwargs)
     client = HostClient(SimTransport(board))
     streamer = JobStreamer(client, poll_s=0)
     streamer.setup({"run": 1, "mode": 2, "pitch": 1000, "pulses_per_point": 1,
@@ -173,7 +179,7 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", 
     streamer.stream(job, start=lambda: None, timeout_s=1e9)
     seconds = board.now - start
     return {"segments_per_s": segments / seconds, "baud": board.baud,
-            "segments": segments, "clock_mhz": clk_freq / 1e6,
+            "segments": segments, "clock_mhz": board.clk_freq / 1e6,
             "underruns": client.read("vec_underruns"), "errors": client.read("errors"),
             "backend": board.backend}
 

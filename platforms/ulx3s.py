@@ -4,7 +4,7 @@ The iCEBreaker's UP5K holds the system only with features left out; the ECP5 on 
 all of it with room to spare (``galvoscan build --board ulx3s``): the spiral with its
 interpolator, raster, vector mode with the RTC delays and the wobble stage, the correction
 stage with a 33 × 33 table, the job player, and both host links, the SPI target and the UART
-on the board's FT231X (the player's machine lines have pins of their own here).
+on the board's FT231X at 3 Mbaud (the player's machine lines have pins of their own here).
 
 The clock: 24 MHz, the PLL's CLKOS from the 25 MHz crystal (25 MHz is no whole, even multiple
 of XY2-100's 2 MHz bit rate). 24 MHz is the slowest clock that gives XY2-100 a whole, even
@@ -36,20 +36,23 @@ from amaranth_boards.ulx3s import (ULX3S_12F_Platform, ULX3S_25F_Platform, ULX3S
                                    ULX3S_85F_Platform)
 
 from ..gateware.build_config import BuildConfig, LINKS, MODES
-from ..gateware.clocking import DEFAULT_BAUD, XY2_100_BIT_RATE, check_clocks
+from ..gateware.clocking import XY2_100_BIT_RATE, check_clocks, default_baud
 from ..gateware.field.correction_table import CorrectionTable
 from ..gateware.top import GalvoScanTop
 from .pll import ECP5PLL, ecp5_pll_settings
 
 
 __all__ = ["ULX3SScanner", "ulx3s_platform", "ULX3S_DEVICES", "ULX3S_CLOCK_HZ",
-           "ULX3S_CRYSTAL_HZ", "ULX3S_CORRECTION_NODES", "ULX3S_PINS"]
+           "ULX3S_CRYSTAL_HZ", "ULX3S_BAUD", "ULX3S_CORRECTION_NODES", "ULX3S_PINS"]
 
 
 #: The board's oscillator.
 ULX3S_CRYSTAL_HZ = 25_000_000
 #: The system clock, from the PLL (why 24 MHz: the module's docstring).
 ULX3S_CLOCK_HZ = 24_000_000
+#: The host serial port's rate: 3 Mbaud, the FT231X's fastest, 8 system clocks a bit; it
+#: carries some 25,000 vector segments a second (1 Mbaud: 8,300).
+ULX3S_BAUD = 3_000_000
 #: The correction table's nodes per axis (the iCEBreaker's 17 leave 4 times the error between
 #: nodes; block RAM is no constraint here).
 ULX3S_CORRECTION_NODES = 33
@@ -191,12 +194,13 @@ class ULX3SScanner(Elaboratable):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
         RTC delays, wobble, the job player, both links). ``clock`` in Hz (None: 24 MHz) must
-        be one the PLL makes exactly from 25 MHz; ``baud`` None: 1 Mbaud, as on every board (the
-        FT231X and 24 MHz carry 3 Mbaud too: 8 clocks a bit). A ``ValueError``
+        be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
+        where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
         clock = ULX3S_CLOCK_HZ if clock is None else clock
         ecp5_pll_settings(ULX3S_CRYSTAL_HZ, clock)          # (raises for one it cannot make)
-        baud = DEFAULT_BAUD if baud is None else baud
+        if baud is None:
+            baud = ULX3S_BAUD if clock >= 8 * ULX3S_BAUD else default_baud(clock)
         check_clocks(clock, bit_rate, baud)
         modes = MODES if modes is None else tuple(modes)
         return BuildConfig(

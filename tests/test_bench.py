@@ -36,6 +36,11 @@ def test_bench_quick(capsys):
     stream = link["stream"]
     assert stream["baud"] == 1_000_000 and stream["errors"] == 0
     assert stream["backend"] == backend
+    # The ULX3S bitstream's link: 3 Mbaud, the same 12 bytes a segment, at least the 20,000
+    # segments a second a photo's dots need, under the line's 25,000.
+    ulx3s = link["stream_ulx3s"]
+    assert ulx3s["baud"] == 3_000_000 and ulx3s["clock_mhz"] == 24 and ulx3s["errors"] == 0
+    assert 20_000 <= ulx3s["segments_per_s"] < 3_000_000 / 10 / 12
     # Both backends, measured in the same run.
     backends = result["backends"]
     assert backends["compiled_clocks_per_s"] > backends["python_clocks_per_s"] > 0

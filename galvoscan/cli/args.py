@@ -274,13 +274,16 @@ def baud(text):
     return int(value)
 
 
-def add_baud_option(parser, *, clock_option="--clock"):
+def add_baud_option(parser, *, clock_option="--clock", board_default=None):
     """``--baud`` of a build: the rate the bitstream's serial port runs at (``clock_option``:
-    the command's option for the system clock)."""
+    the command's option for the system clock; ``board_default``: a sentence on boards whose
+    default differs, and then the option's default is None, the board's)."""
     from ..gateware.clocking import DEFAULT_BAUD, FTDI_BAUDS
-    parser.add_argument("--baud", type=baud, default=DEFAULT_BAUD, metavar="BAUD",
-                        help=f"host serial port rate (default: {_number(DEFAULT_BAUD)}; the "
-                             f"FT2232H makes {', '.join(map(_number, FTDI_BAUDS))} exactly; "
+    parser.add_argument("--baud", type=baud, default=None if board_default else DEFAULT_BAUD,
+                        metavar="BAUD",
+                        help=f"host serial port rate (default: {_number(DEFAULT_BAUD)}"
+                             f"{f'; {board_default}' if board_default else ''}; the "
+                             f"FTDI chips make {', '.join(map(_number, FTDI_BAUDS))} exactly; "
                              f"3e6 needs {clock_option} 24e6 or more)")
 
 

@@ -99,8 +99,9 @@ def _cmd_build(args):
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
-                                 clock=args.clock, bit_rate=args.bit_rate, baud=args.baud,
-                                 device=args.device, **features)
+                                 clock=args.clock, bit_rate=args.bit_rate, device=args.device,
+                                 **({} if args.baud is None else {"baud": args.baud}),
+                                 **features)
     except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
         fail(error)
     if args.json:
@@ -201,7 +202,7 @@ def add_parsers(commands):
     build.add_argument("--bit-rate", type=number_in("bit rate", 0.1e6, 20e6), default=2e6,
                        metavar="HZ", help="XY2 bit rate: 2e6 = XY2-100 (default), 4e6 = "
                                           "XY2-200; the clock must be an even multiple")
-    add_baud_option(build)
+    add_baud_option(build, board_default="the ULX3S's 3e6")
     build.add_argument("--correction-nodes", type=int_in(5, 65, "nodes"), default=None,
                        metavar="N", help="table nodes per axis in the RAM: 5, 9, 17, 33 or "
                                          "65 (default 17)")

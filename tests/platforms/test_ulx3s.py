@@ -70,9 +70,11 @@ def test_the_configuration_holds_every_feature():
     assert config.clk_freq == ULX3S_CLOCK_HZ == 24e6
     assert config.modes == MODES and config.links == ("spi", "uart")
     assert all(config.capabilities().values()), config.capabilities()
-    assert config.clocking.clocks_per_bit == 12 and config.clocking.uart_divisor == 24
-    # 3 Mbaud: 8 clocks a bit, exactly.
-    assert ULX3SScanner.config(baud=3_000_000).clocking.uart_divisor == 8
+    # XY2-100: 12 clocks a bit; 3 Mbaud: 8 clocks a bit, exactly.
+    assert config.clocking.clocks_per_bit == 12
+    assert config.baud == 3_000_000 and config.clocking.uart_divisor == 8
+    # On a clock too slow for 3 Mbaud (the tests' 8 MHz), the fastest rate it carries.
+    assert ULX3SScanner.config(clock=8e6).baud == 1_000_000
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -114,6 +116,7 @@ def test_build_ulx3s(ulx3s_build):
     assert report["luts_available"] == 24288
     assert 0 < report["luts"] <= 0.5 * report["luts_available"]
     assert report["clock_mhz"] == 24 and report["fmax_mhz"] >= 2 * 24
+    assert report["baud"] == 3_000_000
     assert report["dsps"] > 0 and report["brams"] > 0
     # Each signal on the ball that ULX3S_PINS puts it on (amaranth-boards' map of the
     # header), and every signal of the table there.
