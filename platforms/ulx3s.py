@@ -21,9 +21,11 @@ take 3.3 V logic. The laser's DB25 lines want 5 V TTL: drive them through a 74HC
 laser line pulled down behind it. Inputs from the laser or a PLC (24 V) come through
 optocouplers or a divider to 3.3 V: never straight to the header.
 
-Before and while the ECP5 configures, its user pins float (weakly pulled up): the pull-down on
-``laser_enable`` keeps the buffers off then, as on the iCEBreaker. From configuration on, every
-laser line and the bus leave through the I/O cells' output flip-flops, which start low.
+Before and while the ECP5 configures, nothing drives its user pins: they are tri-stated, held
+at most by the I/O's weak default pull, which must not be counted on either way. The external
+pull-down on ``laser_enable`` keeps the buffers off then, as on the iCEBreaker, and a pull-down
+behind each buffer holds its laser line low. From configuration on, every laser line and the
+bus leave through the I/O cells' output flip-flops, which start low.
 
 LED 0 lights once frames are going out; LED 1 is the player's (lit while busy, blinking after
 it refused an image). The FIRE 1 button starts the job player, as the start input does.
@@ -43,7 +45,8 @@ from .pll import ECP5PLL, ecp5_pll_settings
 
 
 __all__ = ["ULX3SScanner", "ulx3s_platform", "ULX3S_DEVICES", "ULX3S_CLOCK_HZ",
-           "ULX3S_CRYSTAL_HZ", "ULX3S_BAUD", "ULX3S_CORRECTION_NODES", "ULX3S_PINS"]
+           "ULX3S_CRYSTAL_HZ", "ULX3S_BAUD", "ULX3S_CORRECTION_NODES", "ULX3S_PINS",
+           "wiring_table"]
 
 
 #: The board's oscillator.
@@ -283,3 +286,15 @@ class ULX3SScanner(Elaboratable):
             m.d.comb += pad.o.eq(getattr(scanner, name))
         m.submodules.player_led_pad = led = io.Buffer("o", platform.request("led", 1, dir="-"))
         m.d.comb += led.o.eq(scanner.player_led)
+
+
+def wiring_table():
+    """:data:`ULX3S_PINS` as the Markdown table the README and the wiring page show: header
+    pin, the ECP5's ball (amaranth-boards' map of the header), signal, where it goes."""
+    connector = ulx3s_platform().connectors["gpio", 0]
+    lines = ["| J1 pin | ECP5 ball | signal | wire to |", "|---|---|---|---|"]
+    for name, (header, direction, to) in ULX3S_PINS.items():
+        ball = connector.mapping[_pin(name)]
+        signal = f"`{name}`" if direction != "spare" else f"({name}: spare)"
+        lines.append(f"| {header} | {ball} | {signal} | {to} |")
+    return "\n".join(lines)

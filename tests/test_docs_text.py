@@ -24,6 +24,7 @@ except ModuleNotFoundError:                      # Python < 3.11
     import tomli as tomllib
 from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
                                            LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
+from galvoscan.platforms.ulx3s import wiring_table
 
 
 ROOT = Path(__file__).parent.parent
@@ -142,6 +143,33 @@ def test_benchmark_table_is_what_bench_recorded():
     result = json.loads((ROOT / "docs" / "bench.json").read_text())
     assert docs_block(result) in page("reference/benchmarks.md")
     assert sum(text.count("| what | figure |") for _, text in every_page()) == 1
+
+
+def test_ulx3s_wiring_is_the_platforms():
+    """The ULX3S's pin table, in the README and on the wiring page, is the platform's
+    (tests/platforms/test_ulx3s.py holds the platform to the pins its build places)."""
+    table = wiring_table()
+    assert table in README
+    assert table in page("hardware/wiring.md")
+
+
+def test_boards_table_is_what_bench_recorded():
+    """The README's boards: each one's logic, Fmax and clock as `galvoscan bench` measured
+    its default bitstream, and the ULX3S link's rate."""
+    result = json.loads((DOCS / "bench.json").read_text())
+    rows = {row[0]: row for row in re.findall(
+        r"^\| (iCEBreaker|iCEstick|ULX3S) \|.*\| (\d+) / (\d+) ([\w ]+?) \| ([\d.]+) MHz "
+        r"\(([\d.]+) MHz\) \|$", README, re.M)}
+    assert set(rows) == {"iCEBreaker", "iCEstick", "ULX3S"}
+    for name, label in (("iCEBreaker", "icebreaker"), ("iCEstick", "icestick"),
+                        ("ULX3S", "ulx3s")):
+        board = result["boards"][label]
+        _, used, available, logic, fmax, clock = rows[name]
+        assert (int(used), int(available)) == (board["luts"], board["luts_available"])
+        assert logic == board.get("logic", "logic cells")
+        assert (float(fmax), float(clock)) == (round(board["fmax_mhz"], 1), board["clock_mhz"])
+    segments = result["link"]["stream_ulx3s"]["segments_per_s"]
+    assert f"UART at 3 Mbaud: {round(segments, -2):,.0f} segments/s" in README
 
 
 def test_every_port_of_the_top_is_listed():
