@@ -11,36 +11,57 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
-    from ..build import PRESETS
+    from ..build import BOARDS, PRESETS, board_config
+    from ..gateware.field.correction_table import CorrectionTable
     from ..sim.board import PTYServer
     if args.preset not in PRESETS:
         fail(f"--preset must be one of {', '.join(PRESETS)}, not {args.preset!r}")
+    if args.board == "ulx3s" and args.preset != "default":
+        fail("--preset names an iCEBreaker bitstream; the ULX3S has one, with every feature")
     if args.netlist:
         if args.backend == "python":
             fail("--netlist runs on the compiled backend (Amaranth simulates designs, not "
                  "netlists)")
         board = simulated_board(args, netlist=args.netlist)
     else:
-        # A bitstream's configuration, at the serial rate asked for (a build takes --baud too).
-        board = simulated_board(args, config=replace(PRESETS[args.preset], baud=args.baud))
+        # A bitstream's configuration and the table it starts with, at the serial rate asked
+        # for (a build takes --baud too).
+        if args.board == "ulx3s":
+            config = board_config("ulx3s")
+            contents = {"correction": CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes)}
+        else:
+            config, contents = PRESETS[args.preset], {}
+        if args.baud is not None:
+            config = replace(config, baud=args.baud)
+        board = simulated_board(args, config=config, **contents)
     speed = board.speed()
     timeout = board.answer_timeout_s()
-    server = PTYServer(board)
+    server = PTYServer(board, real_time=not args.free_run)
     what = f"the netlist in {args.netlist}, gate by gate" if args.netlist else \
         f"{board.backend} backend"
     print(f"simulated board ({board.clk_freq / 1e6:g} MHz, {board.baud:,} baud, {what}) on "
           f"{server.port}", flush=True)
     if board.config is not None:
-        print(f"  the {args.preset} bitstream (build --preset {args.preset}): "
-              f"{board.config.summary()}", flush=True)
-    print(f"  it runs at {_fraction(speed)} of real time: give clients --timeout "
-          f"{timeout:.0f} or more; Ctrl-C stops it", flush=True)
+        what = ("the ULX3S bitstream (build --board ulx3s)" if args.board == "ulx3s" else
+                f"the {args.preset} bitstream (build --preset {args.preset})")
+        print(f"  {what}: {board.config.summary()}", flush=True)
+    if speed >= 1 and not args.free_run:
+        print("  it runs faster than real time and waits for the host's clock: a client "
+              "sees a real board's timing (answers, the watchdog, clean --duration); "
+              "Ctrl-C stops it", flush=True)
+    else:
+        print(f"  it runs at {_fraction(speed)} of real time: give clients --timeout "
+              f"{timeout:.0f} or more (it says how far it falls behind); Ctrl-C stops it",
+              flush=True)
     print(f"  e.g. galvoscan read status --port {server.port} --baud {board.baud} "
           f"--timeout {timeout:.0f}", flush=True)
     started = time.monotonic()
     board_started = board.now
     try:
-        server.serve_forever()
+        server.serve_forever(report=lambda lag: print(
+            f"  {lag:,.1f} s behind the host's clock "
+            f"({_fraction((board.now - board_started) / max(time.monotonic() - started, 1e-9))}"
+            f" of real time)", flush=True))
     except KeyboardInterrupt:
         pass
     finally:
@@ -71,8 +92,12 @@ def add_parsers(commands):
                     "--port. It runs until Ctrl-C.")
     board.add_argument("--sim", action="store_true", required=True,
                        help="simulate the board (the only kind this command serves)")
-    board.add_argument("--baud", type=baud, default=DEFAULT_BAUD,
-                       help="the simulated bitstream's serial rate (default: %(default)s)")
+    board.add_argument("--board", choices=["icebreaker", "ulx3s"], default="icebreaker",
+                       help="whose bitstream: the iCEBreaker's (default) or the ULX3S's, "
+                            "with every feature")
+    board.add_argument("--baud", type=baud, default=None,
+                       help=f"the simulated bitstream's serial rate (default: the board's: "
+                            f"{DEFAULT_BAUD:g}, the ULX3S's 3e6)")
     # (Checked when it runs: the presets are build configurations, which the parser does not
     # load.)
     board.add_argument("--preset", default="default",
@@ -83,4 +108,7 @@ def add_parsers(commands):
                        help="serve the synthesized netlist of the build in BUILD_DIR (what "
                             "galvoscan build left there), gate by gate: the bitstream's own "
                             "logic, at the build's clock and baud")
+    board.add_argument("--free-run", action="store_true",
+                       help="run as fast as the simulator can, ahead of the host's clock "
+                            "(by default a board faster than real time waits for it)")
     board.set_defaults(run=_cmd_board)

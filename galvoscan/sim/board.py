@@ -283,11 +283,18 @@ class PTYServer:
 
     ``port`` is the terminal's path, for pyserial. The board runs in steps of ``step`` seconds
     of its own time while the link is idle, and for as long as the bytes need while it is not.
+
+    ``real_time``: the board never runs ahead of the host's clock: a board faster than real
+    time waits after each step until the wall has caught up, so a host sees a real board's
+    timing (its watchdog, a cleaning run's duration, the answers' latency). A board slower
+    than real time cannot keep up: :attr:`lag_s` says how far behind it is.
     """
 
-    def __init__(self, board, *, step=100e-6):
+    def __init__(self, board, *, step=100e-6, real_time=False):
         self.board = board
         self.step = step
+        self.real_time = real_time
+        self._wall_start = self._board_start = None
         self._master, self._slave = pty.openpty()
         tty.setraw(self._slave)
         self.port = os.ttyname(self._slave)
@@ -300,23 +307,46 @@ class PTYServer:
         self._thread.start()
         return self
 
-    def serve_forever(self):
+    def serve_forever(self, report=None, every_s=10.0):
         """Serve until Ctrl-C (or :meth:`stop` from another thread).
 
         The simulation runs in the server's own thread, and this one only waits: a Ctrl-C then
         lands here, never inside a step of the simulator (whose coroutines it would leave
-        half-run), and the server stops between two steps."""
+        half-run), and the server stops between two steps. ``report(lag_s)`` is called
+        every ``every_s`` seconds while the board is behind the host's clock."""
         self.start()
+        last = time.monotonic()
         try:
             while self._thread.is_alive():
                 time.sleep(0.1)
+                if report is not None and time.monotonic() - last >= every_s:
+                    last = time.monotonic()
+                    if self.lag_s > 0:
+                        report(self.lag_s)
         finally:
             self.stop()
 
+    @property
+    def lag_s(self):
+        """Seconds the board's time is behind the host's since the server started (0 while
+        it keeps up)."""
+        if self._wall_start is None:
+            return 0.0
+        return max(0.0, (time.monotonic() - self._wall_start) -
+                   (self.board.now - self._board_start))
+
     def _serve(self):
         board = self.board
+        self._wall_start, self._board_start = time.monotonic(), board.now
         try:
             while not self._stop.is_set():
+                if self.real_time:
+                    ahead = (board.now - self._board_start) - \
+                        (time.monotonic() - self._wall_start)
+                    if ahead > 0:
+                        # (Woken early by stop(); a byte from the host waits for the
+                        # instant the board's time reaches the wall's.)
+                        self._stop.wait(ahead)
                 ready, _, _ = select.select([self._master], [], [], 0)
                 if ready:
                     try:

@@ -55,3 +55,48 @@ def test_board_needs_sim():
     result = subprocess.run([sys.executable, "-m", "galvoscan.cli", "board"],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 2 and "--sim" in result.stderr
+
+
+def _served_for(board, seconds, **kwargs):
+    """Serve ``board`` for ``seconds`` of the host's clock: ``(server, wall seconds, board
+    seconds, lag)``, the last three read together at the end."""
+    import time
+    from galvoscan.sim.board import PTYServer
+    server = PTYServer(board, **kwargs)
+    started, board_started = time.monotonic(), board.now
+    with server:
+        time.sleep(seconds)
+        ran = board.now - board_started
+        wall = time.monotonic() - started
+        lag = server.lag_s
+    return server, wall, ran, lag
+
+
+def test_a_board_faster_than_real_time_keeps_the_hosts_clock():
+    """The spiral alone at 4 MHz runs faster than real time on the compiled board: served in
+    real time, its time never runs ahead of the host's (by more than the step it is on)."""
+    from galvoscan.sim.board import SimulatedBoard
+    board = SimulatedBoard(clk_freq=4e6, baud=115_200, modes=("spiral",), correction=None,
+                           links=("uart",), backend="compiled")
+    server, wall, ran, lag = _served_for(board, 1.0, real_time=True)
+    # (It runs a step, then waits for the wall: a step ahead at most.)
+    assert ran <= wall + server.step
+    # (It keeps up when the machine is not too busy; a step's worth behind at most then.)
+    assert lag < 0.5
+
+
+def test_a_board_slower_than_real_time_says_how_far_behind_it_is():
+    import threading
+    from galvoscan.sim.board import PTYServer, SimulatedBoard
+    board = SimulatedBoard(clk_freq=4e6, baud=115_200, modes=("spiral",), correction=None,
+                           links=("uart",), backend="python")
+    server = PTYServer(board, real_time=True)
+    reports = []
+    timer = threading.Timer(1.0, server.stop)
+    timer.start()
+    server.serve_forever(report=reports.append, every_s=0.3)
+    timer.join()
+    # Amaranth's simulator runs this board at some 1/100 of real time: nearly all of the
+    # second is lag, reported as it grows.
+    assert reports and reports == sorted(reports) and 0.5 < reports[-1] < 1.0
+    assert board.now < 0.1
