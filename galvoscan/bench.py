@@ -26,7 +26,8 @@ import platform as host_platform
 import tempfile
 import time
 
-from .bench_sim import backend_figures, link_figures, phy_rate, replay_figures, stream_figures
+from .bench_sim import (backend_figures, link_figures, phy_rate, real_time_figures,
+                        replay_figures, stream_figures)
 
 
 __all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures", "stream_figures", "table",
@@ -184,9 +185,13 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
             else stream_figures(segments=100, clk_freq=8e6, backend=backend, mo_lead=0.5e-3)
         # The ULX3S bitstream (24 MHz, 3 Mbaud) on the compiled board: the link's rate at the
         # fastest baud the FTDI chips make.
-        from .build import board_config
+        from .build import BOARDS, board_config
+        from .gateware.field.correction_table import CorrectionTable
         result["link"]["stream_ulx3s"] = stream_figures(
-            segments=2000 if replay else 200, config=board_config("ulx3s"), backend="compiled")
+            segments=2000 if replay else 200, config=board_config("ulx3s"), backend="compiled",
+            correction=CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes))
+        step("real time")
+        result["real_time"] = real_time_figures(seconds=0.25 if replay else 0.01)
         step("simulator backends")
         # The quick bench: the tests' 8 MHz board, whose compiled model they share.
         result["backends"] = backend_figures(python_s=5e-3, compiled_s=0.5) if replay else \
@@ -253,6 +258,11 @@ def table(result):
         if "compiled_replay_s" in backends:
             rows.append(("full 8064-point spiral off the wires, compiled backend",
                          f"{backends['compiled_replay_s']:.1f} s"))
+    for name, figures in result.get("real_time", {}).items():
+        rows.append((f"simulated board, {name} bitstream ({figures['clock_mhz']:g} MHz), "
+                     f"compiled backend, idle",
+                     f"{figures['clocks_per_s']:,.0f} system clocks/s: "
+                     f"{figures['real_time_fraction']:.2f} of real time"))
     if "simulator" in result:
         sim = result["simulator"]
         # (Records from before the option was: the replay ran on Amaranth's.)

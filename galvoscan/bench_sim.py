@@ -184,6 +184,31 @@ def stream_figures(*, segments=600, baud=None, clk_freq=12e6, backend="python", 
             "backend": board.backend}
 
 
+def real_time_figures(seconds=0.25):
+    """How fast the simulated board runs each board's default bitstream, against real time:
+    the compiled board, idle (the spiral running, no host, nothing recorded: what ``board
+    --sim`` does between a host's frames), for ``seconds`` of its own time. ``{board:
+    {"clock_mhz", "clocks_per_s", "real_time_fraction"}}``."""
+    from .build import BOARDS, PRESETS, board_config
+    from .gateware.field.correction_table import CorrectionTable
+    from .sim.board import SimulatedBoard
+    figures = {}
+    for name, config, contents in (
+            ("icebreaker", PRESETS["default"], {}),
+            ("ulx3s", board_config("ulx3s"),
+             {"correction": CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes)})):
+        board = SimulatedBoard(config=config, backend="compiled", **contents)
+        board.run_for(50e-6)            # (the first steps start the board's processes)
+        started = time.perf_counter()
+        board.run_for(seconds)
+        wall = time.perf_counter() - started
+        board.close()
+        figures[name] = {"clock_mhz": config.clk_freq / 1e6,
+                         "clocks_per_s": seconds * config.clk_freq / wall,
+                         "real_time_fraction": seconds / wall}
+    return figures
+
+
 def replay_figures(points=8064, backend="python"):
     """Simulator speed and time of the full spiral replay (``galvoscan sim --points 8064``),
     on ``backend`` (its own path on Amaranth's, the simulated board on the compiled one)."""

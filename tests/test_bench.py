@@ -41,6 +41,10 @@ def test_bench_quick(capsys):
     ulx3s = link["stream_ulx3s"]
     assert ulx3s["baud"] == 3_000_000 and ulx3s["clock_mhz"] == 24 and ulx3s["errors"] == 0
     assert 20_000 <= ulx3s["segments_per_s"] < 3_000_000 / 10 / 12
+    # Both boards' default bitstreams on the compiled board, against real time.
+    assert set(result["real_time"]) == {"icebreaker", "ulx3s"}
+    assert [f["clock_mhz"] for f in result["real_time"].values()] == [12, 24]
+    assert all(f["clocks_per_s"] > 0 for f in result["real_time"].values())
     # Both backends, measured in the same run.
     backends = result["backends"]
     assert backends["compiled_clocks_per_s"] > backends["python_clocks_per_s"] > 0
