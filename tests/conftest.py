@@ -80,3 +80,19 @@ def icebreaker_build(tmp_path_factory):
         code = main(["build", "--board", "icebreaker", "--build-dir", str(folder),
                      "--correction", str(table), "--json"])
     return folder, code, json.loads(out.getvalue()), table
+
+
+@pytest.fixture(scope="session")
+def ulx3s_build(tmp_path_factory):
+    """``galvoscan build --board ulx3s`` (every feature), built once for the tests that look
+    at it (each in the xdist group ``ulx3s_build``, so that one worker builds it):
+    ``(folder, exit code, report)``."""
+    import contextlib
+    import io
+    import json
+    from galvoscan.cli import main
+    folder = tmp_path_factory.mktemp("ulx3s")
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(["build", "--board", "ulx3s", "--build-dir", str(folder), "--json"])
+    return folder, code, json.loads(out.getvalue())

@@ -89,19 +89,6 @@ def test_build_refuses_in_one_line(argv, message):
     assert "\n" not in str(refusal.value.code)
 
 
-@pytest.fixture(scope="module")
-def ulx3s_build(tmp_path_factory):
-    """``galvoscan build --board ulx3s``: ``(folder, exit code, report)``."""
-    import contextlib
-    import io
-    import json
-    folder = tmp_path_factory.mktemp("ulx3s")
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main(["build", "--board", "ulx3s", "--build-dir", str(folder), "--json"])
-    return folder, code, json.loads(out.getvalue())
-
-
 @pytest.mark.toolchain
 @pytest.mark.xdist_group("ulx3s_build")
 def test_build_ulx3s(ulx3s_build):
