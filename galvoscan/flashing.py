@@ -8,6 +8,9 @@ holds it, so its pins leave the flash alone; after the write and its read-back, 
 high and the FPGA configures from the new bitstream. Everything is checked before the first
 byte goes to the board: the bitstream's preamble and size (it must end below the job image),
 the image as the player will check it.
+
+The ULX3S's flash is written by the same :func:`program` through its ECP5's JTAG
+(:mod:`galvoscan.flashing_ecp5`), whose port stands where pyftdi's SPI port stands here.
 """
 
 import time
@@ -16,7 +19,7 @@ from .gateware.player.image_format import FLASH_BYTES, JOB_OFFSET
 
 
 __all__ = ["FlashingError", "check_bitstream", "flash_regions", "program", "ModelPort",
-           "open_icebreaker", "DEFAULT_URL"]
+           "open_icebreaker", "use_wheel_libusb", "DEFAULT_URL"]
 
 
 #: The iCEBreaker's FTDI, channel A (pyftdi's URL).
@@ -44,11 +47,12 @@ def check_bitstream(data, *, name="the bitstream"):
                             f"at {JOB_OFFSET:#x}")
 
 
-def flash_regions(bitstream=None, job=None):
-    """``[(address, bytes)]`` to write: the bitstream at 0, the job image at its offset."""
+def flash_regions(bitstream=None, job=None, *, check=check_bitstream):
+    """``[(address, bytes)]`` to write: the bitstream at 0, the job image at its offset;
+    ``check(bitstream)`` refuses a bitstream not for the board (the iCE40's by default)."""
     regions = []
     if bitstream is not None:
-        check_bitstream(bitstream)
+        check(bitstream)
         regions.append((0, bytes(bitstream)))
     if job is not None:
         if JOB_OFFSET + len(job) > FLASH_BYTES:
@@ -60,12 +64,29 @@ def flash_regions(bitstream=None, job=None):
     return regions
 
 
-def _flash_device(port):
-    """The pyspiflash device on ``port``, woken from power-down, its JEDEC id checked."""
-    from spiflash.serialflash import SerialFlashManager, W25xFlashDevice
+def _flash_device(port, *, any_flash=False):
+    """The pyspiflash device on ``port``, woken from power-down, its JEDEC id checked: the
+    iCEBreaker's W25Q, or with ``any_flash`` any part pyspiflash has a driver for."""
+    from spiflash.serialflash import (SerialFlashError, SerialFlashManager,
+                                      W25xFlashDevice)
     port.exchange(b"\xab")              # release from deep power-down (the FPGA's may be)
     time.sleep(10e-6)                   # tRES1, 3 µs
     jedec = bytes(SerialFlashManager.read_jedec_id(port))
+    if any_flash:
+        # JEP106 gives every manufacturer's code odd parity: FF and 00 (nothing driven) and
+        # any other even byte are no flash answering.
+        if bin(jedec[0]).count("1") % 2 == 0:
+            raise FlashingError(f"no flash answers (JEDEC id {jedec.hex(' ')}): is the board "
+                                f"connected, and nothing else holding its FTDI?")
+        try:
+            # pyspiflash's own pick among its drivers (a private call, but the one its
+            # get_flash_device makes): the ULX3S's part differs between board revisions.
+            return SerialFlashManager._get_flash(port, jedec)
+        except SerialFlashError:
+            raise FlashingError(f"the flash answers JEDEC id {jedec.hex(' ')}, a part "
+                                f"pyspiflash has no driver for: write it with another "
+                                f"programmer (galvoscan flash --to FILE writes the image)"
+                                ) from None
     if not W25xFlashDevice.match(jedec) or jedec[2] not in W25xFlashDevice.SIZES:
         raise FlashingError(f"the flash answers JEDEC id {jedec.hex(' ')}, not a Winbond "
                             f"W25Q (EF 40 18 on the iCEBreaker): is the board connected, "
@@ -73,14 +94,15 @@ def _flash_device(port):
     return W25xFlashDevice(port, jedec)
 
 
-def program(port, regions, *, progress=None):
+def program(port, regions, *, progress=None, any_flash=False):
     """Erase, write and read back each of ``regions`` on the flash behind ``port`` (a pyftdi
-    :class:`~pyftdi.spi.SpiPort`, or :class:`ModelPort`); ``progress(bytes)`` as it goes.
-    Returns the flash's description. A flash or a link that fails is a
-    :class:`FlashingError`."""
+    :class:`~pyftdi.spi.SpiPort`, :class:`ModelPort`, or the ULX3S's
+    :class:`~galvoscan.flashing_ecp5.BackgroundSPI`); ``progress(bytes)`` as it goes;
+    ``any_flash``: take any part pyspiflash knows, not only a W25Q. Returns the flash's
+    description. A flash or a link that fails is a :class:`FlashingError`."""
     from spiflash.serialflash import SerialFlashError
     try:
-        return _program(port, regions, progress)
+        return _program(port, regions, progress, any_flash)
     except SerialFlashError as error:
         raise FlashingError(f"the flash did not do as told ({error}): is the board's FTDI "
                             f"cable sound, and the flash not write-protected?") from None
@@ -89,8 +111,13 @@ def program(port, regions, *, progress=None):
                             f"flash may be half written: run galvoscan flash again") from None
 
 
-def _program(port, regions, progress):
-    device = _flash_device(port)
+def _program(port, regions, progress, any_flash):
+    device = _flash_device(port, any_flash=any_flash)
+    for address, data in regions:
+        # (A smaller part than the 16 MiB the image format assumes: before any erase.)
+        if address + len(data) > len(device):
+            raise FlashingError(f"{len(data):,} bytes at {address:#x} do not fit the flash "
+                                f"({device}, {len(device):,} bytes)")
     sector = device.get_erase_size()
     for address, data in regions:
         start = address - address % sector
@@ -135,29 +162,45 @@ class ModelPort:
         return self.model.transfer(out + b"\0" * readlen)[len(out):]
 
 
-def open_icebreaker(url=DEFAULT_URL):
-    """``(port, release)``: the flash's SPI port on the board's FTDI with the FPGA held in
-    reset; ``release()`` lets it configure and closes the FTDI. One-line errors."""
+def use_wheel_libusb():
+    """Have pyusb (under pyftdi) load libusb from the libusb-package wheel, not the system's;
+    returns the function that gives pyusb its own lookup back. One-line errors."""
     try:
         import libusb_package
         import usb.backend.libusb1
-        from pyftdi.ftdi import FtdiError
-        from pyftdi.spi import SpiController
-        from pyftdi.usbtools import UsbToolsError
     except ImportError as error:
-        raise FlashingError(f"flashing needs {error.name} (pip install galvoscan installs "
-                            f"it)") from None
-    # pyusb finds libusb through the wheel's copy, not the system's.
+        raise FlashingError(_missing(error)) from None
     backend = usb.backend.libusb1.get_backend(find_library=libusb_package.find_library)
     if backend is None:
         raise FlashingError("libusb (from the libusb-package wheel) does not load here")
     original = usb.backend.libusb1.get_backend
     usb.backend.libusb1.get_backend = lambda *args, **kwargs: backend
+
+    def restore():
+        usb.backend.libusb1.get_backend = original
+    return restore
+
+
+def _missing(error):
+    return f"flashing needs {error.name} (pip install galvoscan installs it)"
+
+
+def open_icebreaker(url=DEFAULT_URL):
+    """``(port, release)``: the flash's SPI port on the board's FTDI with the FPGA held in
+    reset; ``release()`` lets it configure and closes the FTDI. One-line errors."""
+    restore = use_wheel_libusb()
+    try:
+        from pyftdi.ftdi import FtdiError
+        from pyftdi.spi import SpiController
+        from pyftdi.usbtools import UsbToolsError
+    except ImportError as error:
+        restore()
+        raise FlashingError(_missing(error)) from None
     controller = SpiController(cs_count=FLASH_CS + 1)
     try:
         controller.configure(url, frequency=SPI_HZ)
     except (FtdiError, UsbToolsError, ValueError, OSError) as error:
-        usb.backend.libusb1.get_backend = original
+        restore()
         raise FlashingError(f"no iCEBreaker at {url} ({error}): is it plugged in, and may "
                             f"this user open it (a udev rule for 0403:6010)?") from None
     gpio = controller.get_gpio()
@@ -168,5 +211,5 @@ def open_icebreaker(url=DEFAULT_URL):
     def release():
         gpio.write(CRESET_PIN)          # CRESET_B high: the FPGA configures
         controller.terminate()
-        usb.backend.libusb1.get_backend = original
+        restore()
     return controller.get_port(FLASH_CS, freq=SPI_HZ), release

@@ -1,0 +1,237 @@
+"""The ULX3S's flash writer (galvoscan/flashing_ecp5.py): through pyftdi's bit-bang calls, a
+model of the FT231X, of the ECP5's TAP and its background SPI, and of the flash behind it
+(tests/support/ecp5_jtag.py, written from IEEE 1149.1, Lattice's tables and FTDI's
+documents, not from the driver), with pyspiflash and galvoscan.flashing.program writing as they
+write the iCEBreaker's; and drivers broken on purpose, which the same test fails."""
+
+import random
+from types import SimpleNamespace
+
+import pyftdi.ftdi
+import pytest
+import spiflash.serialflash as serialflash
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+import galvoscan.flashing as flashing
+import galvoscan.flashing_ecp5 as flashing_ecp5
+import galvoscan.sim.spi_flash as spi_flash
+from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
+from galvoscan.flashing_ecp5 import DEFAULT_URL, check_bitstream, open_ulx3s
+from galvoscan.gateware.player.image_format import JOB_OFFSET
+from galvoscan.outputs.image import job_image
+from galvoscan.sim.spi_flash import SPIFlashModel
+
+from ecp5_jtag import ECP5, Clock, FakeFtdi, ecp5_bitstream
+
+
+LFE5U_25F = 0x41111043
+LFE5U_85F = 0x41113043
+#: What the board's flash holds before: a bitstream the ECP5 runs (it reads the flash).
+OLD = ecp5_bitstream(LFE5U_25F, b"old design" * 50)
+
+
+def bitstream(size, seed=1, idcode=LFE5U_25F):
+    rng = random.Random(seed)
+    return ecp5_bitstream(idcode, bytes(rng.getrandbits(8) for _ in range(size)))
+
+
+def a_job():
+    segments = [("jump", 100, 200), ("mark", 3000, 200), ("mark", 3000, 2500)]
+    return job_image(segments, {"pitch": 40, "laser_power": 128})
+
+
+def ulx3s(monkeypatch, *, idcode=LFE5U_25F, contents=OLD, tdo=None, state="Test-Logic-Reset"):
+    """A ULX3S on the USB: its flash holding ``contents``, its ECP5 configured from them, the
+    FT231X that pyftdi's ``Ftdi()`` opens; one clock for all of them and for the sleeps."""
+    clock = Clock()
+    for module in (serialflash, flashing, flashing_ecp5):
+        monkeypatch.setattr(module, "time", clock)
+    flash = SPIFlashModel(contents)     # (in deep power-down, as a design may leave it)
+    ecp5 = ECP5(flash, idcode=idcode, clock=clock, state=state,
+                configured=contents is not None)
+    ftdi = FakeFtdi(ecp5, clock, tdo=tdo)
+    monkeypatch.setattr(pyftdi.ftdi, "Ftdi", lambda: ftdi)
+    return SimpleNamespace(clock=clock, flash=flash, ecp5=ecp5, ftdi=ftdi)
+
+
+def write(bitstream=None, job=None):
+    """What ``galvoscan flash --board ulx3s`` does: (the flash's description, configured)."""
+    regions = flash_regions(bitstream, job, check=check_bitstream)
+    port, release = open_ulx3s(bitstream=bitstream)
+    try:
+        what = program(port, regions, any_flash=True)
+    finally:
+        configured = release()
+    return what, configured
+
+
+def untouched(board):
+    """Nothing done to the board: no configuration instruction, no flash command, the
+    design still running, the FTDI closed."""
+    return (board.ecp5.carried_out == [] and board.flash.commands == []
+            and board.ecp5.configured and board.ftdi.closed)
+
+
+def test_writes_the_bitstream_and_a_job_through_the_ecp5(monkeypatch):
+    board = ulx3s(monkeypatch)
+    new, job = bitstream(6000), a_job()
+    what, configured = write(new, job)
+    memory = bytes(board.flash.memory)
+    assert memory[:len(new)] == new and memory[len(new):len(new) + 64] == b"\xff" * 64
+    assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
+    assert what == "Winbond W25Q128 16 MiB" and configured
+    # The design cleared before the flash's first command, the key given, the ECP5
+    # configured again from the new flash after its last; nothing refused on the way.
+    assert [(name, commands > 0) for name, commands in board.ecp5.carried_out] == [
+        ("ISC_ENABLE", False), ("ISC_ERASE", False), ("ISC_DISABLE", False),
+        ("LSC_PROG_SPI", False), ("LSC_REFRESH", True)]
+    assert board.ecp5.carried_out[-1][1] == len(board.flash.commands)
+    assert board.ecp5.ignored == [] and board.flash.ignored == []
+    assert board.ecp5.configured and not board.ecp5.spi_open
+    assert board.ecp5.state == "Test-Logic-Reset"
+    assert board.ftdi.url == DEFAULT_URL == "ftdi://ftdi:ft-x/1" and board.ftdi.closed
+
+
+@pytest.mark.parametrize("state", ["Shift-DR", "Pause-IR", "Exit2-DR", "Update-IR"])
+def test_a_tap_left_anywhere_by_another_tool(monkeypatch, state):
+    board = ulx3s(monkeypatch, state=state)
+    new = bitstream(300)
+    assert write(new) == ("Winbond W25Q128 16 MiB", True)
+    assert bytes(board.flash.memory[:len(new)]) == new
+
+
+def test_a_job_alone_onto_a_blank_flash_says_the_ecp5_did_not_configure(monkeypatch):
+    board = ulx3s(monkeypatch, contents=None)
+    job = a_job()
+    assert write(job=job) == ("Winbond W25Q128 16 MiB", False)
+    assert bytes(board.flash.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+
+
+@pytest.mark.parametrize("idcode, expected, message", [
+    (LFE5U_85F, LFE5U_25F, r"the board's FPGA is an LFE5U-85F \(IDCODE 0x41113043\), the "
+                           r"bitstream is for an LFE5U-25F \(0x41111043\): build it with "
+                           r"galvoscan build --board ulx3s --device 85F"),
+    (0x0A012093, None, r"the board's JTAG answers IDCODE 0x0a012093, no ECP5 \(a ULX3S's "
+                       r"LFE5U: 12F 0x21111043, 25F 0x41111043"),
+])
+def test_a_wrong_fpga_is_refused_before_anything_changes(monkeypatch, idcode, expected,
+                                                         message):
+    board = ulx3s(monkeypatch, idcode=idcode)
+    with pytest.raises(FlashingError, match=message) as error:
+        write(bitstream(100, idcode=expected) if expected else None, a_job())
+    assert "\n" not in str(error.value)
+    assert untouched(board) and bytes(board.flash.memory[:len(OLD)]) == OLD
+
+
+@pytest.mark.parametrize("level, reads", [(1, "ones"), (0, "zeros")])
+def test_a_stuck_tdo_is_one_line(monkeypatch, level, reads):
+    """No board behind the FTDI, or a broken JTAG line: TDO never moves."""
+    board = ulx3s(monkeypatch, tdo=level)
+    with pytest.raises(FlashingError, match=f"no JTAG answers on the ULX3S's FTDI "
+                                            f"\\(TDO reads all {reads}\\)") as error:
+        write(bitstream(100))
+    assert "\n" not in str(error.value) and untouched(board)
+
+
+def test_no_ulx3s_at_the_url_is_one_line(monkeypatch):
+    class Absent:
+        def open_bitbang_from_url(self, url, **options):
+            raise pyftdi.ftdi.FtdiError("UsbError: [Errno 2] Entity not found")
+    monkeypatch.setattr(pyftdi.ftdi, "Ftdi", Absent)
+    with pytest.raises(FlashingError, match=r"^no ULX3S at ftdi://ftdi:ft-x/2 \(UsbError: "
+                                            r".*a udev rule for 0403:6015"):
+        open_ulx3s("ftdi://ftdi:ft-x/2")
+
+
+@settings(max_examples=12, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.one_of(
+    st.binary(max_size=400),
+    st.builds(ecp5_bitstream, st.sampled_from([LFE5U_25F, LFE5U_85F, 0x12345679]),
+              st.binary(max_size=1500))))
+def test_a_random_bitstream_is_refused_or_written_exactly(monkeypatch, data):
+    board = ulx3s(monkeypatch)
+    try:
+        what, configured = write(data, a_job())
+    except FlashingError as error:
+        # Refused in one line before the board changed (not an ECP5's, or another ECP5's).
+        assert "\n" not in str(error)
+        assert board.ecp5.carried_out == [] and board.flash.commands == []
+        assert bytes(board.flash.memory[:len(OLD)]) == OLD
+        return
+    assert bytes(board.flash.memory[:len(data)]) == data and configured
+
+
+#: Drivers broken on purpose: each of the model's rules that a driver could get wrong.
+BROKEN = {
+    # The flash's bytes sent LSB first, as JTAG shifts them.
+    "bits not reversed": lambda monkeypatch: monkeypatch.setattr(
+        flashing_ecp5, "_REVERSED", bytes(range(256))),
+    # The running design keeps the flash.
+    "configuration not cleared": lambda monkeypatch: monkeypatch.setattr(
+        flashing_ecp5, "_clear_configuration", lambda jtag: None),
+    # LSC_PROG_SPI without its key.
+    "no background SPI key": lambda monkeypatch: monkeypatch.setattr(
+        flashing_ecp5, "SPI_KEY", 0),
+    # The busy flag never read (BYPASS's register, which always reads 0): the next
+    # instruction comes while the ECP5 still erases.
+    "busy not waited for": lambda monkeypatch: monkeypatch.setattr(
+        flashing_ecp5, "LSC_CHECK_BUSY", flashing_ecp5.BYPASS),
+}
+
+
+@pytest.mark.parametrize("fault", BROKEN)
+def test_a_broken_driver_fails(monkeypatch, fault):
+    """The first test's write, with the driver broken: it must not pass for a write."""
+    board = ulx3s(monkeypatch)
+    new = bitstream(600)
+    BROKEN[fault](monkeypatch)
+    with pytest.raises(FlashingError) as error:
+        write(new, a_job())
+    assert "\n" not in str(error.value)
+    assert bytes(board.flash.memory[:len(OLD)]) == OLD and board.ftdi.closed
+
+
+@pytest.mark.parametrize("data, message", [
+    (b"\xff\x00GS\x00\xff\x7e\xaa\x99\x7e" + bytes(300), "it is an iCE40's: flash it with "
+                                                         "--board icebreaker"),
+    (b"hello" * 100, "is not an ECP5 bitstream .* give the .bit galvoscan build"),
+    (b"\xff\x00x\x00\xff\xff\xff\xbd\xb3\xff\xff\x22\x00\x00\x00", "has no VERIFY_ID"),
+    (ecp5_bitstream(0x12345679), "is for IDCODE 0x12345679, which is no ECP5"),
+    (ecp5_bitstream(LFE5U_25F, bytes(JOB_OFFSET)), "would overlap the job image at 0x100000 "
+                                                   r"\(.*ecppack --compress\)"),
+])
+def test_check_bitstream_refuses(data, message):
+    with pytest.raises(FlashingError, match=message):
+        check_bitstream(data)
+
+
+def test_check_bitstream_takes_ecppacks_layouts():
+    assert check_bitstream(ecp5_bitstream(LFE5U_85F)) == LFE5U_85F
+    # No comment (a raw .bin), and ecppack's --spimode command before the CRC reset.
+    assert check_bitstream(b"\xff\xff\xbd\xb3\xff\xff" + b"\x79\x00\x00\x00"
+                           + b"\x3b\x00\x00\x00\xe2\x00\x00\x00\x21\x11\x10\x43") == 0x21111043
+
+
+@pytest.mark.parametrize("jedec, any_flash, outcome", [
+    (b"\xc2\x20\x18", True, "Macronix MX25E06128 16 MiB"),   # (pyspiflash's name)
+    (b"\xc2\x20\x18", False, FlashingError("JEDEC id c2 20 18, not a Winbond W25Q")),
+    (b"\x9d\x60\x18", True, FlashingError("JEDEC id 9d 60 18, a part pyspiflash has no "
+                                          "driver for")),        # ISSI IS25LP128
+    (b"\xff\xff\xff", True, FlashingError(r"no flash answers \(JEDEC id ff ff ff\)")),
+])
+def test_the_ulx3s_takes_any_flash_pyspiflash_knows(monkeypatch, jedec, any_flash, outcome):
+    """The ULX3S's part differs between board revisions; the iCEBreaker's is a W25Q."""
+    clock = Clock()
+    monkeypatch.setattr(serialflash, "time", clock)
+    monkeypatch.setattr(flashing, "time", clock)
+    monkeypatch.setattr(spi_flash, "JEDEC_ID", jedec)
+    model = SPIFlashModel(powered_down=False)
+    regions = flash_regions(job=a_job())
+    if isinstance(outcome, Exception):
+        with pytest.raises(FlashingError, match=str(outcome)):
+            program(ModelPort(model, clock=clock.monotonic), regions, any_flash=any_flash)
+        assert model.commands[2:] == []         # (after the wake-up and the JEDEC id)
+    else:
+        assert program(ModelPort(model, clock=clock.monotonic), regions,
+                       any_flash=any_flash) == outcome
