@@ -1,10 +1,11 @@
 """``galvoscan store``, ``flash`` and ``standalone``: a job that runs with no PC attached.
 
 ``store`` plans a drawing exactly as ``mark`` does (the same options and refusals) and writes
-it as a job image; ``flash`` puts a bitstream and an image into the iCEBreaker's flash through
-its FTDI (pyftdi and pyspiflash, from PyPI), reads them back and compares; ``standalone
---sim`` presses the foot switch of a simulated stand-alone board whose flash holds the image,
-and reports what ``mark --sim --json`` reports, with the player's verdict.
+it as a job image; ``flash`` puts a bitstream and an image into the board's flash (the
+iCEBreaker's through its FTDI, the ULX3S's through its ECP5's JTAG; pyftdi and pyspiflash, from
+PyPI), reads them back and compares; ``standalone --sim`` presses the foot switch of a
+simulated stand-alone board whose flash holds the image, and reports what ``mark --sim
+--json`` reports, with the player's verdict.
 """
 
 import json
@@ -88,13 +89,20 @@ def _check_plays_jobs(bitstream):
 
 
 def _cmd_flash(args):
-    from ..flashing import FlashingError, ModelPort, flash_regions, open_icebreaker, program
+    from .. import flashing
+    from ..flashing import FlashingError, ModelPort, flash_regions, program
     from ..outputs.image import ImageError, read_image
     from .jobargs import progress_bar
+    ulx3s = args.board == "ulx3s"
+    if ulx3s:
+        from .. import flashing_ecp5 as writer
+    else:
+        writer = flashing
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
     try:
-        regions = flash_regions(bitstream, job)     # (a file that is no bitstream: first)
+        # (A file that is no bitstream for the board: first.)
+        regions = flash_regions(bitstream, job, check=writer.check_bitstream)
         if job is not None:
             # The player's own checks, and the marker's register file's, before any byte
             # goes out.
@@ -106,20 +114,26 @@ def _cmd_flash(args):
              f"{error}".lstrip(": "))
     total = sum(len(data) for _, data in regions)
     bar = progress_bar(total, "B")
+    configured = None
     try:
         if args.to:
             from ..sim.spi_flash import SPIFlashModel
             path = Path(args.to)
             model = SPIFlashModel(path.read_bytes() if path.is_file() else None,
                                   powered_down=False)
-            what = program(ModelPort(model), regions, progress=bar.update)
+            what = program(ModelPort(model), regions, progress=bar.update, any_flash=ulx3s)
             path.write_bytes(bytes(model.memory))
         else:
-            port, release = open_icebreaker(args.url)
+            url = args.url or writer.DEFAULT_URL
+            if ulx3s:
+                # (The ECP5 is checked against the bitstream before its configuration goes.)
+                port, release = writer.open_ulx3s(url, bitstream=bitstream)
+            else:
+                port, release = writer.open_icebreaker(url)
             try:
-                what = program(port, regions, progress=bar.update)
+                what = program(port, regions, progress=bar.update, any_flash=ulx3s)
             finally:
-                release()
+                configured = release()
     except FlashingError as error:
         fail(error)
     finally:
@@ -129,6 +143,12 @@ def _cmd_flash(args):
         print(f"wrote the {name} at {address:#08x}: {len(data):,} bytes, read back and "
               f"compared")
     print(f"{what}{f' (the file {args.to})' if args.to else ''}")
+    if configured is False:             # (the ULX3S's ECP5 says whether it took the flash)
+        if bitstream is not None:
+            fail("the ECP5 did not configure from the bitstream written (DONE stays low)")
+        print("galvoscan: note: the ECP5 did not configure from the flash (DONE stays low): "
+              "is there a bitstream at 0? (galvoscan flash BITSTREAM writes one)",
+              file=sys.stderr)
     return 0
 
 
@@ -243,17 +263,22 @@ def add_parsers(commands):
     store.set_defaults(run=_cmd_store)
 
     flash = commands.add_parser(
-        "flash", help="write a bitstream and a job image into the iCEBreaker's flash",
-        description="Write a bitstream (at 0) and a job image (at 1 MiB) into the "
-                    "iCEBreaker's configuration flash through its FTDI, read them back and "
-                    "compare; the FPGA then configures from it. Needs no system tools: "
-                    "pyftdi and pyspiflash drive the FTDI, libusb comes from PyPI.")
+        "flash", help="write a bitstream and a job image into the board's flash",
+        description="Write a bitstream (at 0) and a job image (at 1 MiB) into the board's "
+                    "configuration flash, read them back and compare; the FPGA then "
+                    "configures from it. The iCEBreaker's flash is written through its FTDI, "
+                    "the ULX3S's through its ECP5's JTAG on the FT231X. Needs no system "
+                    "tools: pyftdi and pyspiflash drive the FTDI, libusb comes from PyPI.")
     flash.add_argument("bitstream", nargs="?", metavar="BITSTREAM",
-                       help="the .bin galvoscan build wrote (default: none, the job only)")
+                       help="the bitstream galvoscan build wrote: the iCEBreaker's .bin, the "
+                            "ULX3S's .bit (default: none, the job only)")
     flash.add_argument("--job", metavar="IMAGE", help="a job image (galvoscan store)")
+    flash.add_argument("--board", choices=["icebreaker", "ulx3s"], default="icebreaker",
+                       help="the board (default icebreaker)")
     where = flash.add_mutually_exclusive_group()
-    where.add_argument("--url", default="ftdi://ftdi:2232h/1",
-                       help="pyftdi URL of the board's FTDI (default: ftdi://ftdi:2232h/1)")
+    where.add_argument("--url",
+                       help="pyftdi URL of the board's FTDI (default: ftdi://ftdi:2232h/1, on "
+                            "the ULX3S ftdi://ftdi:ft-x/1)")
     where.add_argument("--to", type=output_file, metavar="FILE",
                        help="write a 16 MiB flash image file instead of a board (for another "
                             "programmer; a file that is one already is updated as a board's "

@@ -1,8 +1,10 @@
 """`galvoscan store`, `flash` and `standalone` (galvoscan/cli/standalone.py), and the flash
-writer under `flash` (galvoscan/flashing.py) driving pyspiflash into the W25Q128JV model."""
+writer under `flash` (galvoscan/flashing.py) driving pyspiflash into the W25Q128JV model; the
+ULX3S's writer itself is tests/test_flashing_ecp5.py's."""
 
 import json
 
+import pyftdi.ftdi
 import pytest
 
 from galvoscan.cli import main
@@ -11,12 +13,16 @@ from galvoscan.gateware.player.image_format import JOB_OFFSET
 from galvoscan.outputs.image import read_image
 from galvoscan.sim.spi_flash import FLASH_BYTES, SPIFlashModel
 
+from ecp5_jtag import ECP5, FakeFtdi, ecp5_bitstream
+
 
 SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10">
 <rect x="1" y="1" width="6" height="3" fill="none" stroke="black"/>
 <line x1="1" y1="8" x2="7" y2="8" stroke="black"/></svg>"""
 
 BITSTREAM = b"\xff\x00GS\x00\xff" + b"\x7e\xaa\x99\x7e" + bytes(range(256)) * 300
+#: The ULX3S's (an LFE5U-25F's, as ecppack lays it out).
+ECP5_BITSTREAM = ecp5_bitstream(0x41111043, bytes(range(256)) * 20)
 
 
 @pytest.fixture
@@ -46,9 +52,10 @@ class FakeClock:
 def fast_flash(monkeypatch):
     import spiflash.serialflash as serialflash
     import galvoscan.flashing as flashing
+    import galvoscan.flashing_ecp5 as flashing_ecp5
     clock = FakeClock()
-    monkeypatch.setattr(serialflash, "time", clock)
-    monkeypatch.setattr(flashing, "time", clock)
+    for module in (serialflash, flashing, flashing_ecp5):
+        monkeypatch.setattr(module, "time", clock)
     return clock
 
 
@@ -92,6 +99,55 @@ def test_flash_writes_both_and_reads_them_back(drawing, tmp_path, fast_flash, ca
     job = image_path.read_bytes()
     assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
     assert memory[len(BITSTREAM):len(BITSTREAM) + 64] == b"\xff" * 64
+
+
+def test_flash_ulx3s_to_a_file_and_to_the_board(drawing, tmp_path, fast_flash, monkeypatch,
+                                               capsys):
+    """--board ulx3s: the ECP5's .bit to a flash image file, and to a (modelled) board through
+    its ECP5's JTAG on the FT231X at the ULX3S's default URL."""
+    image_path, bit_path, flash_path = (tmp_path / name for name in
+                                        ("part.img", "top.bit", "flash.bin"))
+    assert main(["store", str(drawing), "-o", str(image_path)]) == 0
+    bit_path.write_bytes(ECP5_BITSTREAM)
+    job = image_path.read_bytes()
+    args = ["flash", "--board", "ulx3s", str(bit_path), "--job", str(image_path)]
+    assert main(args + ["--to", str(flash_path)]) == 0
+    memory = flash_path.read_bytes()
+    assert memory[:len(ECP5_BITSTREAM)] == ECP5_BITSTREAM
+    assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
+
+    flash = SPIFlashModel(BITSTREAM)            # (the wrong board's, so the FPGA starts idle)
+    ecp5 = ECP5(flash, idcode=0x41111043, clock=fast_flash, configured=False)
+    ftdi = FakeFtdi(ecp5, fast_flash)
+    monkeypatch.setattr(pyftdi.ftdi, "Ftdi", lambda: ftdi)
+    capsys.readouterr()
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "bitstream at 0x000000" in out and "Winbond W25Q128" in out
+    assert bytes(flash.memory[:len(ECP5_BITSTREAM)]) == ECP5_BITSTREAM
+    assert bytes(flash.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+    assert ftdi.url == "ftdi://ftdi:ft-x/1" and ftdi.closed and ecp5.configured
+
+    # A job alone onto a board with no bitstream: written, and the ECP5's silence noted.
+    ecp5 = ECP5(SPIFlashModel(), idcode=0x41111043, clock=fast_flash, configured=False)
+    blank = FakeFtdi(ecp5, fast_flash)
+    monkeypatch.setattr(pyftdi.ftdi, "Ftdi", lambda: blank)
+    assert main(["flash", "--board", "ulx3s", "--job", str(image_path)]) == 0
+    assert "note: the ECP5 did not configure from the flash" in capsys.readouterr().err
+    assert bytes(ecp5.flash.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+
+
+@pytest.mark.parametrize("board, data, message", [
+    ("ulx3s", BITSTREAM, "top.bit: the bitstream is not an ECP5 bitstream .* it is an "
+                         "iCE40's: flash it with --board icebreaker"),
+    ("icebreaker", ECP5_BITSTREAM, "top.bit: the bitstream is not an iCE40 bitstream"),
+])
+def test_flash_refuses_the_other_boards_bitstream(tmp_path, board, data, message):
+    bit_path, flash_path = tmp_path / "top.bit", tmp_path / "flash.bin"
+    bit_path.write_bytes(data)
+    with pytest.raises(SystemExit, match=message):
+        main(["flash", "--board", board, str(bit_path), "--to", str(flash_path)])
+    assert not flash_path.exists()
 
 
 @pytest.mark.parametrize("case, message", [
