@@ -10,7 +10,9 @@ byte goes to the board: the bitstream's preamble and size (it must end below the
 the image as the player will check it.
 
 The ULX3S's flash is written by the same :func:`program` through its ECP5's JTAG
-(:mod:`galvoscan.flashing_ecp5`), whose port stands where pyftdi's SPI port stands here.
+(:mod:`galvoscan.flashing_ecp5`), whose port stands where pyftdi's SPI port stands here; its
+part differs between board revisions, and :mod:`galvoscan.flash_chips` picks the driver by
+the JEDEC id it answers (pyspiflash's, or galvoscan's own for the ISSI IS25LP).
 """
 
 import time
@@ -65,10 +67,12 @@ def flash_regions(bitstream=None, job=None, *, check=check_bitstream):
 
 
 def _flash_device(port, *, any_flash=False):
-    """The pyspiflash device on ``port``, woken from power-down, its JEDEC id checked: the
-    iCEBreaker's W25Q, or with ``any_flash`` any part pyspiflash has a driver for."""
-    from spiflash.serialflash import (SerialFlashError, SerialFlashManager,
-                                      W25xFlashDevice)
+    """The flash's driver on ``port``, woken from power-down, its JEDEC id checked: the
+    iCEBreaker's W25Q, or with ``any_flash`` any part :mod:`galvoscan.flash_chips` has a
+    driver for (pyspiflash's, and the ISSI IS25LP several ULX3S revisions carry)."""
+    # (Loaded when a flash is written, as pyftdi is: pyspiflash imports it.)
+    from spiflash.serialflash import SerialFlashManager, W25xFlashDevice
+    from .flash_chips import flash_device
     port.exchange(b"\xab")              # release from deep power-down (the FPGA's may be)
     time.sleep(10e-6)                   # tRES1, 3 µs
     jedec = bytes(SerialFlashManager.read_jedec_id(port))
@@ -78,15 +82,13 @@ def _flash_device(port, *, any_flash=False):
         if bin(jedec[0]).count("1") % 2 == 0:
             raise FlashingError(f"no flash answers (JEDEC id {jedec.hex(' ')}): is the board "
                                 f"connected, and nothing else holding its FTDI?")
-        try:
-            # pyspiflash's own pick among its drivers (a private call, but the one its
-            # get_flash_device makes): the ULX3S's part differs between board revisions.
-            return SerialFlashManager._get_flash(port, jedec)
-        except SerialFlashError:
+        # (The ULX3S's part differs between board revisions.)
+        device = flash_device(port, jedec)
+        if device is None:
             raise FlashingError(f"the flash answers JEDEC id {jedec.hex(' ')}, a part "
-                                f"pyspiflash has no driver for: write it with another "
-                                f"programmer (galvoscan flash --to FILE writes the image)"
-                                ) from None
+                                f"galvoscan has no driver for: write it with another "
+                                f"programmer (galvoscan flash --to FILE writes the image)")
+        return device
     if not W25xFlashDevice.match(jedec) or jedec[2] not in W25xFlashDevice.SIZES:
         raise FlashingError(f"the flash answers JEDEC id {jedec.hex(' ')}, not a Winbond "
                             f"W25Q (EF 40 18 on the iCEBreaker): is the board connected, "
@@ -98,7 +100,8 @@ def program(port, regions, *, progress=None, any_flash=False):
     """Erase, write and read back each of ``regions`` on the flash behind ``port`` (a pyftdi
     :class:`~pyftdi.spi.SpiPort`, :class:`ModelPort`, or the ULX3S's
     :class:`~galvoscan.flashing_ecp5.BackgroundSPI`); ``progress(bytes)`` as it goes;
-    ``any_flash``: take any part pyspiflash knows, not only a W25Q. Returns the flash's
+    ``any_flash``: take any part :mod:`galvoscan.flash_chips` knows, not only a W25Q, its
+    block protection cleared first where it has one set (the IS25LP's). Returns the flash's
     description. A flash or a link that fails is a :class:`FlashingError`."""
     from spiflash.serialflash import SerialFlashError
     try:
@@ -112,12 +115,19 @@ def program(port, regions, *, progress=None, any_flash=False):
 
 
 def _program(port, regions, progress, any_flash):
+    from spiflash.serialflash import SerialFlashRequestError
+    from .flash_chips import clear_protection
     device = _flash_device(port, any_flash=any_flash)
     for address, data in regions:
         # (A smaller part than the 16 MiB the image format assumes: before any erase.)
         if address + len(data) > len(device):
             raise FlashingError(f"{len(data):,} bytes at {address:#x} do not fit the flash "
                                 f"({device}, {len(device):,} bytes)")
+    try:
+        clear_protection(device)
+    except SerialFlashRequestError as error:
+        raise FlashingError(f"the flash ({device}) cannot be written: {error}; nothing was "
+                            f"erased") from None
     sector = device.get_erase_size()
     for address, data in regions:
         start = address - address % sector

@@ -2,9 +2,12 @@
 model of the FT231X, of the ECP5's TAP and its background SPI, and of the flash behind it
 (tests/support/ecp5_jtag.py, written from IEEE 1149.1, Lattice's tables and FTDI's
 documents, not from the driver), with pyspiflash and galvoscan.flashing.program writing as they
-write the iCEBreaker's; and drivers broken on purpose, which the same test fails."""
+write the iCEBreaker's; and drivers broken on purpose, which the same test fails. The flash is
+the iCEBreaker's W25Q128JV, or the ISSI IS25LP128 other ULX3S revisions carry
+(tests/support/issi_flash.py), which galvoscan/flash_chips.py drives."""
 
 import random
+from functools import partial
 from types import SimpleNamespace
 
 import pyftdi.ftdi
@@ -12,9 +15,10 @@ import pytest
 import spiflash.serialflash as serialflash
 from hypothesis import HealthCheck, given, settings, strategies as st
 
+import galvoscan.flash_chips as flash_chips
 import galvoscan.flashing as flashing
 import galvoscan.flashing_ecp5 as flashing_ecp5
-import galvoscan.sim.spi_flash as spi_flash
+from galvoscan.flash_chips import DRIVERS, IS25LPFlashDevice
 from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
 from galvoscan.flashing_ecp5 import DEFAULT_URL, check_bitstream, open_ulx3s
 from galvoscan.gateware.player.image_format import JOB_OFFSET
@@ -22,6 +26,7 @@ from galvoscan.outputs.image import job_image
 from galvoscan.sim.spi_flash import SPIFlashModel
 
 from ecp5_jtag import ECP5, Clock, FakeFtdi, ecp5_bitstream
+from issi_flash import SR_BP, SR_QE, SR_SRWD, IS25LPModel
 
 
 LFE5U_25F = 0x41111043
@@ -40,13 +45,15 @@ def a_job():
     return job_image(segments, {"pitch": 40, "laser_power": 128})
 
 
-def ulx3s(monkeypatch, *, idcode=LFE5U_25F, contents=OLD, tdo=None, state="Test-Logic-Reset"):
-    """A ULX3S on the USB: its flash holding ``contents``, its ECP5 configured from them, the
-    FT231X that pyftdi's ``Ftdi()`` opens; one clock for all of them and for the sleeps."""
+def ulx3s(monkeypatch, *, idcode=LFE5U_25F, contents=OLD, tdo=None, state="Test-Logic-Reset",
+          part=SPIFlashModel):
+    """A ULX3S on the USB: its flash (a ``part``) holding ``contents``, its ECP5 configured
+    from them, the FT231X that pyftdi's ``Ftdi()`` opens; one clock for all of them and for
+    the sleeps."""
     clock = Clock()
     for module in (serialflash, flashing, flashing_ecp5):
         monkeypatch.setattr(module, "time", clock)
-    flash = SPIFlashModel(contents)     # (in deep power-down, as a design may leave it)
+    flash = part(contents)              # (in deep power-down, as a design may leave it)
     ecp5 = ECP5(flash, idcode=idcode, clock=clock, state=state,
                 configured=contents is not None)
     ftdi = FakeFtdi(ecp5, clock, tdo=tdo)
@@ -213,25 +220,146 @@ def test_check_bitstream_takes_ecppacks_layouts():
                            + b"\x3b\x00\x00\x00\xe2\x00\x00\x00\x21\x11\x10\x43") == 0x21111043
 
 
+# --- the parts, by JEDEC id ---------------------------------------------------------------------
+
+def test_writes_an_issi_flash_through_the_ecp5(monkeypatch):
+    """The IS25LP128 of other ULX3S revisions, unprotected as it leaves the factory: erased,
+    written and read back as the W25Q is, its status register left alone."""
+    board = ulx3s(monkeypatch, part=IS25LPModel)
+    new, job = bitstream(6000), a_job()
+    assert write(new, job) == ("ISSI IS25LP128 16 MiB", True)
+    memory = bytes(board.flash.memory)
+    assert memory[:len(new)] == new and memory[len(new):len(new) + 64] == b"\xff" * 64
+    assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
+    commands = board.flash.commands
+    assert {0x06, 0x20, 0x02, 0x0B} <= set(commands) and 0x01 not in commands
+    assert board.flash.ignored == [] and board.flash.refused == []
+    assert board.ecp5.ignored == [] and board.ftdi.closed
+
+
+def test_an_issi_flash_with_blocks_protected_is_unprotected_first(monkeypatch):
+    """BP0-BP3 set (and QE, the board's quad-mode choice): one Write Status Register clears
+    the BP bits before the first erase and keeps QE."""
+    board = ulx3s(monkeypatch, part=partial(IS25LPModel, status=SR_BP | SR_QE))
+    new, job = bitstream(3000), a_job()
+    assert write(new, job) == ("ISSI IS25LP128 16 MiB", True)
+    assert bytes(board.flash.memory[:len(new)]) == new
+    assert bytes(board.flash.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+    assert board.flash.nonvolatile == SR_QE and board.flash.refused == []
+    commands = board.flash.commands
+    assert commands.count(0x01) == 1 and commands.index(0x01) < commands.index(0x20)
+    assert board.flash.ignored == []
+
+
+def test_an_issi_flash_left_protected_fails(monkeypatch):
+    """The driver broken on purpose: the protection not cleared, every erase and program is
+    inhibited and the read-back says so, in one line."""
+    board = ulx3s(monkeypatch, part=partial(IS25LPModel, status=SR_BP))
+    monkeypatch.setattr(flash_chips, "clear_protection", lambda device: None)
+    with pytest.raises(FlashingError, match=r"reads back .* the write failed") as error:
+        write(bitstream(600), a_job())
+    assert "\n" not in str(error.value)
+    assert board.flash.refused and bytes(board.flash.memory[:len(OLD)]) == OLD
+    assert board.ftdi.closed
+
+
+def test_an_issi_flash_whose_status_register_is_locked_is_not_erased(monkeypatch):
+    """SRWD set with /WP held low: the BP bits cannot be cleared; said in one line before
+    any erase, and the ECP5 configured again from the old flash."""
+    board = ulx3s(monkeypatch, part=partial(IS25LPModel, status=SR_BP | SR_SRWD, wp_n=0))
+    with pytest.raises(FlashingError, match=r"^the flash \(ISSI IS25LP128 16 MiB\) cannot be "
+                                            r"written: its block protection stays on \(status "
+                                            r"register 0xbc: SRWD is set and /WP held low, "
+                                            r"which locks it\); nothing was erased$"):
+        write(bitstream(600), a_job())
+    assert not {0x02, 0x20, 0x52, 0xD8, 0xC7, 0x60} & set(board.flash.commands)
+    assert board.flash.nonvolatile == SR_BP | SR_SRWD and not board.flash.write_enabled
+    assert bytes(board.flash.memory[:len(OLD)]) == OLD
+    assert board.ecp5.configured and board.ftdi.closed
+
+
+def part(jedec, model=SPIFlashModel):
+    """``model`` answering ``jedec``: the commands pyspiflash's '25' drivers give are the
+    W25Q's (and the IS25LP's) for all of these."""
+    return type("Part", (model,), {"jedec_id": jedec})
+
+
+NO_DRIVER = "a part galvoscan has no driver for: write it with another programmer"
+
+
 @pytest.mark.parametrize("jedec, any_flash, outcome", [
     (b"\xc2\x20\x18", True, "Macronix MX25E06128 16 MiB"),   # (pyspiflash's name)
+    (b"\xef\x40\x18", True, "Winbond W25Q128 16 MiB"),
+    (b"\x9d\x60\x18", True, "ISSI IS25LP128 16 MiB"),
+    (b"\x9d\x60\x17", True, "ISSI IS25LP064 8 MiB"),
+    (b"\x9d\x60\x16", True, "ISSI IS25LP032 4 MiB"),
     (b"\xc2\x20\x18", False, FlashingError("JEDEC id c2 20 18, not a Winbond W25Q")),
-    (b"\x9d\x60\x18", True, FlashingError("JEDEC id 9d 60 18, a part pyspiflash has no "
-                                          "driver for")),        # ISSI IS25LP128
+    (b"\x9d\x60\x18", False, FlashingError("JEDEC id 9d 60 18, not a Winbond W25Q")),
+    # ISSI's 1.8 V IS25WP128, which no ULX3S carries, and an SST25, whose pyspiflash
+    # driver cannot write.
+    (b"\x9d\x70\x18", True, FlashingError(f"^the flash answers JEDEC id 9d 70 18, {NO_DRIVER}")),
+    (b"\xbf\x25\x41", True, FlashingError(f"JEDEC id bf 25 41, {NO_DRIVER}")),
     (b"\xff\xff\xff", True, FlashingError(r"no flash answers \(JEDEC id ff ff ff\)")),
 ])
-def test_the_ulx3s_takes_any_flash_pyspiflash_knows(monkeypatch, jedec, any_flash, outcome):
-    """The ULX3S's part differs between board revisions; the iCEBreaker's is a W25Q."""
+def test_the_ulx3s_takes_any_flash_galvoscan_knows(monkeypatch, jedec, any_flash, outcome):
+    """The ULX3S's part differs between board revisions; the iCEBreaker's is a W25Q. Through
+    ModelPort, as ``flash --to FILE`` writes; an unknown part is named by its id in one line
+    before any erase."""
     clock = Clock()
     monkeypatch.setattr(serialflash, "time", clock)
     monkeypatch.setattr(flashing, "time", clock)
-    monkeypatch.setattr(spi_flash, "JEDEC_ID", jedec)
-    model = SPIFlashModel(powered_down=False)
-    regions = flash_regions(job=a_job())
+    model = part(jedec, IS25LPModel if jedec[0] == 0x9D else SPIFlashModel)(powered_down=False)
+    job = a_job()
+    regions = flash_regions(job=job)
     if isinstance(outcome, Exception):
-        with pytest.raises(FlashingError, match=str(outcome)):
+        with pytest.raises(FlashingError, match=str(outcome)) as error:
             program(ModelPort(model, clock=clock.monotonic), regions, any_flash=any_flash)
+        assert "\n" not in str(error.value)
         assert model.commands[2:] == []         # (after the wake-up and the JEDEC id)
     else:
         assert program(ModelPort(model, clock=clock.monotonic), regions,
                        any_flash=any_flash) == outcome
+        assert bytes(model.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+
+
+def test_an_issi_flash_through_modelport_by_blocks_and_sectors(monkeypatch):
+    """A bitstream over 64 KB blocks and a job (``flash --to FILE``'s path) onto a protected
+    IS25LP128: the BP bits cleared, 64 KB and 4 KB erases, each region read back."""
+    clock = Clock()
+    monkeypatch.setattr(serialflash, "time", clock)
+    monkeypatch.setattr(flashing, "time", clock)
+    model = IS25LPModel(b"\0" * (JOB_OFFSET + 8192), status=SR_BP | SR_QE)
+    new, job = bitstream(200_000), a_job()
+    written = []
+    what = program(ModelPort(model, clock=clock.monotonic),
+                   flash_regions(new, job, check=check_bitstream), progress=written.append,
+                   any_flash=True)
+    assert what == "ISSI IS25LP128 16 MiB" and sum(written) == len(new) + len(job)
+    memory = bytes(model.memory)
+    assert memory[:len(new)] == new
+    # (The rest of the bitstream's last sector erased; what lies beyond it untouched.)
+    end = -(-len(new) // 4096) * 4096
+    assert memory[len(new):end] == b"\xff" * (end - len(new)) and memory[end:end + 8] == bytes(8)
+    assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
+    assert {0xD8, 0x20} <= set(model.commands)
+    assert model.nonvolatile == SR_QE and model.refused == [] and model.ignored == []
+
+
+def test_a_region_beyond_a_smaller_issi_part_is_refused_before_any_erase(monkeypatch):
+    clock = Clock()
+    monkeypatch.setattr(serialflash, "time", clock)
+    model = part(b"\x9d\x60\x16", IS25LPModel)(powered_down=False, status=SR_BP)
+    with pytest.raises(FlashingError, match=r"^3,200,000 bytes at 0x100000 do not fit the "
+                                            r"flash \(ISSI IS25LP032 4 MiB, 4,194,304 bytes\)$"):
+        program(ModelPort(model, clock=clock.monotonic), flash_regions(job=bytes(3_200_000)),
+                any_flash=True)
+    assert model.commands[2:] == [] and model.nonvolatile == SR_BP
+
+
+def test_the_drivers_are_pyspiflashs_in_its_order_and_the_issis():
+    """galvoscan's table in place of pyspiflash's private pick: every public driver it has
+    (but the SST25's, whose write() cannot work), in the order its _get_flash tries them."""
+    public = [driver for name, driver in vars(serialflash).items()
+              if name.endswith("FlashDevice") and not name.startswith("_")]
+    assert list(DRIVERS) == [driver for driver in public
+                             if driver is not serialflash.Sst25FlashDevice] + [IS25LPFlashDevice]

@@ -39,7 +39,8 @@ T_RES1 = 3e-6
 
 
 class SPIFlashModel:
-    """The flash: its memory, its state, and the commands it takes.
+    """The flash: its memory, its state, and the commands it takes. (A subclass for another
+    part sets :attr:`jedec_id` and adds to :meth:`_status` and the commands.)
 
     Parameters
     ----------
@@ -64,6 +65,9 @@ class SPIFlashModel:
     commands : list of int
         Every instruction it carried out, in order.
     """
+
+    #: What Read JEDEC ID (0x9F) answers.
+    jedec_id = JEDEC_ID
 
     def __init__(self, contents=None, *, powered_down=True, sck_hz=1e6):
         self.memory = bytearray(b"\xff") * FLASH_BYTES
@@ -121,12 +125,16 @@ class SPIFlashModel:
                 address = int.from_bytes(bytes(received[1:4]), "big")
                 out = self.memory[(address + n - first) % FLASH_BYTES]
         elif command == 0x9F:
-            out = JEDEC_ID[n - 1] if n <= len(JEDEC_ID) else 0xFF
+            out = self.jedec_id[n - 1] if n <= len(self.jedec_id) else 0xFF
         elif command == 0x05:
-            out = int(self.busy) | int(self.write_enabled) << 1
+            out = self._status()
         elif command == 0xAB and n >= 4:
             out = 0x17                  # the device id, after three dummy bytes
         self._next_out = out
+
+    def _status(self):
+        """The status register as Read Status Register (0x05) gives it: BUSY, WEL."""
+        return int(self.busy) | int(self.write_enabled) << 1
 
     def _accepting(self, command):
         """Whether the flash carries out ``command``, given at its first byte (the

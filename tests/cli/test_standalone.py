@@ -1,12 +1,14 @@
 """`galvoscan store`, `flash` and `standalone` (galvoscan/cli/standalone.py), and the flash
-writer under `flash` (galvoscan/flashing.py) driving pyspiflash into the W25Q128JV model; the
-ULX3S's writer itself is tests/test_flashing_ecp5.py's."""
+writer under `flash` (galvoscan/flashing.py) driving pyspiflash into the W25Q128JV model (and
+into the ISSI IS25LP128 some ULX3S revisions carry); the ULX3S's writer itself is
+tests/test_flashing_ecp5.py's."""
 
 import json
 
 import pyftdi.ftdi
 import pytest
 
+import galvoscan.sim.spi_flash as spi_flash
 from galvoscan.cli import main
 from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
 from galvoscan.gateware.player.image_format import JOB_OFFSET
@@ -14,6 +16,7 @@ from galvoscan.outputs.image import read_image
 from galvoscan.sim.spi_flash import FLASH_BYTES, SPIFlashModel
 
 from ecp5_jtag import ECP5, FakeFtdi, ecp5_bitstream
+from issi_flash import SR_BP, SR_QE, IS25LPModel
 
 
 SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" viewBox="0 0 10 10">
@@ -135,6 +138,40 @@ def test_flash_ulx3s_to_a_file_and_to_the_board(drawing, tmp_path, fast_flash, m
     assert main(["flash", "--board", "ulx3s", "--job", str(image_path)]) == 0
     assert "note: the ECP5 did not configure from the flash" in capsys.readouterr().err
     assert bytes(ecp5.flash.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
+
+
+def test_flash_ulx3s_onto_an_issi_flash(tmp_path, fast_flash, monkeypatch, capsys):
+    """--board ulx3s onto the IS25LP128: to a file written through a model of it (as `--to`
+    writes, through ModelPort), and to a board whose part has its blocks protected; a part
+    galvoscan has no driver for is one line naming its JEDEC id, and no file."""
+    bit_path, flash_path = tmp_path / "top.bit", tmp_path / "flash.bin"
+    bit_path.write_bytes(ECP5_BITSTREAM)
+    args = ["flash", "--board", "ulx3s", str(bit_path)]
+    monkeypatch.setattr(spi_flash, "SPIFlashModel", IS25LPModel)
+    capsys.readouterr()
+    assert main(args + ["--to", str(flash_path)]) == 0
+    assert f"ISSI IS25LP128 16 MiB (the file {flash_path})" in capsys.readouterr().out
+    assert flash_path.read_bytes()[:len(ECP5_BITSTREAM)] == ECP5_BITSTREAM
+
+    flash = IS25LPModel(status=SR_BP | SR_QE)
+    ecp5 = ECP5(flash, idcode=0x41111043, clock=fast_flash, configured=False)
+    ftdi = FakeFtdi(ecp5, fast_flash)
+    monkeypatch.setattr(pyftdi.ftdi, "Ftdi", lambda: ftdi)
+    assert main(args) == 0
+    assert "ISSI IS25LP128 16 MiB\n" in capsys.readouterr().out
+    assert bytes(flash.memory[:len(ECP5_BITSTREAM)]) == ECP5_BITSTREAM
+    assert flash.nonvolatile == SR_QE and flash.refused == []
+    assert ecp5.configured and ftdi.closed
+
+    # (ISSI's 1.8 V IS25WP128, which no ULX3S carries.)
+    monkeypatch.setattr(spi_flash, "SPIFlashModel",
+                        type("IS25WP128", (IS25LPModel,), {"jedec_id": b"\x9d\x70\x18"}))
+    other = tmp_path / "other.bin"
+    with pytest.raises(SystemExit, match=r"^galvoscan: error: the flash answers JEDEC id "
+                                         r"9d 70 18, a part galvoscan has no driver for: "
+                                         r"write it with another programmer") as error:
+        main(args + ["--to", str(other)])
+    assert "\n" not in str(error.value) and not other.exists()
 
 
 @pytest.mark.parametrize("board, data, message", [
