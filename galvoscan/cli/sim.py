@@ -336,8 +336,9 @@ def add_parsers(commands):
     add_backend_option(sim)
     sim.add_argument("--netlist", metavar="BUILD_DIR",
                      help="simulate the synthesized netlist of the build in BUILD_DIR (what "
-                          "galvoscan build left there), gate by gate with the iCE40 cell "
-                          "models: the bitstream's own logic (the spiral; compiled backend)")
+                          "galvoscan build left there, iCEBreaker or ULX3S), gate by gate "
+                          "with the FPGA's cell models: the bitstream's own logic (the "
+                          "spiral; compiled backend)")
     vector = sim.add_argument_group("vector mode")
     vector.add_argument("--job", metavar="FILE", help="the job: 'jump X Y' / 'mark X Y' lines")
     prr = BY_NAME["laser_prr"]       # in 100 Hz steps
