@@ -31,7 +31,7 @@ from .bench_sim import (backend_figures, link_figures, phy_rate, real_time_figur
 
 
 __all__ = ["BUILDS", "run_bench", "phy_rate", "link_figures", "stream_figures", "table",
-           "docs_block", "write_docs", "DOCS_START", "DOCS_END"]
+           "readme_table", "docs_block", "write_docs", "DOCS_START", "DOCS_END"]
 
 #: The lines around the benchmarks page's table (docs/reference/benchmarks.md), which
 #: :func:`write_docs` rewrites.
@@ -315,6 +315,27 @@ def table(result):
     rows.append(("whole bench", f"{result['bench_s'] / 60:.1f} min"))
     lines = ["| what | figure |", "|---|---|"]
     lines += [f"| {what} | {figure} |" for what, figure in rows]
+    return "\n".join(lines)
+
+
+def readme_table(result):
+    """The README's table of speeds, from a full run: the two boards' default bitstreams side
+    by side (what the bus, the link and the simulated board do)."""
+    link, real_time = result["link"], result["real_time"]
+    rows = [
+        ("XY2-100 frames a second, read back off the wires",
+         *[f"{result['xy2_100']['frames_per_s']:,.0f}"] * 2),
+        ("vector segments a second, host to queue (UART)",
+         f"{link['stream']['segments_per_s']:,.0f} at {link['stream']['baud'] / 1e6:g} Mbaud",
+         f"{link['stream_ulx3s']['segments_per_s']:,.0f} at "
+         f"{link['stream_ulx3s']['baud'] / 1e6:g} Mbaud"),
+        ("the simulated board, idle, against real time",
+         *(f"{real_time[name]['real_time_fraction']:.2f} "
+           f"({real_time[name]['clocks_per_s'] / 1e6:.1f} M clocks/s of "
+           f"{real_time[name]['clock_mhz']:g} M)" for name in ("icebreaker", "ulx3s"))),
+    ]
+    lines = ["| what | iCEBreaker | ULX3S |", "|---|---|---|"]
+    lines += [f"| {what} | {a} | {b} |" for what, a, b in rows]
     return "\n".join(lines)
 
 

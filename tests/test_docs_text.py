@@ -11,7 +11,7 @@ import pytest
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
 from galvoscan.analysis.study import Setup, run_spiral
-from galvoscan.bench import DOCS_END, DOCS_START, docs_block, write_docs
+from galvoscan.bench import DOCS_END, DOCS_START, docs_block, readme_table, write_docs
 from galvoscan.cli import main
 from galvoscan.cli.link import register_table
 from galvoscan.correction.study import markdown_table, photo_sentence_values, run_study
@@ -170,6 +170,11 @@ def test_boards_table_is_what_bench_recorded():
         assert (float(fmax), float(clock)) == (round(board["fmax_mhz"], 1), board["clock_mhz"])
     segments = result["link"]["stream_ulx3s"]["segments_per_s"]
     assert f"UART at 3 Mbaud: {round(segments, -2):,.0f} segments/s" in README
+
+
+def test_readme_speeds_are_what_bench_recorded():
+    result = json.loads((DOCS / "bench.json").read_text())
+    assert readme_table(result) in README
 
 
 def test_every_port_of_the_top_is_listed():
