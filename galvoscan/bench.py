@@ -185,11 +185,10 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
             else stream_figures(segments=100, clk_freq=8e6, backend=backend, mo_lead=0.5e-3)
         # The ULX3S bitstream (24 MHz, 3 Mbaud) on the compiled board: the link's rate at the
         # fastest baud the FTDI chips make.
-        from .build import BOARDS, board_config
-        from .gateware.field.correction_table import CorrectionTable
+        from .build import board_config, starting_table
         result["link"]["stream_ulx3s"] = stream_figures(
             segments=2000 if replay else 200, config=board_config("ulx3s"), backend="compiled",
-            correction=CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes))
+            correction=starting_table("ulx3s"))
         step("real time")
         result["real_time"] = real_time_figures(seconds=0.25 if replay else 0.01)
         step("simulator backends")

@@ -189,14 +189,12 @@ def real_time_figures(seconds=0.25):
     the compiled board, idle (the spiral running, no host, nothing recorded: what ``board
     --sim`` does between a host's frames), for ``seconds`` of its own time. ``{board:
     {"clock_mhz", "clocks_per_s", "real_time_fraction"}}``."""
-    from .build import BOARDS, PRESETS, board_config
-    from .gateware.field.correction_table import CorrectionTable
+    from .build import PRESETS, board_config, starting_table
     from .sim.board import SimulatedBoard
     figures = {}
     for name, config, contents in (
             ("icebreaker", PRESETS["default"], {}),
-            ("ulx3s", board_config("ulx3s"),
-             {"correction": CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes)})):
+            ("ulx3s", board_config("ulx3s"), {"correction": starting_table("ulx3s")})):
         board = SimulatedBoard(config=config, backend="compiled", **contents)
         board.run_for(50e-6)            # (the first steps start the board's processes)
         started = time.perf_counter()

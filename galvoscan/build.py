@@ -21,7 +21,7 @@ from .toolchain import tool_env
 
 
 __all__ = ["BOARDS", "PRESETS", "BuildReport", "build_bitstream", "board_config",
-           "preset_register_map", "preset_settings"]
+           "starting_table", "preset_register_map", "preset_settings"]
 
 
 @dataclass(frozen=True)
@@ -57,6 +57,12 @@ BOARDS = {
                    ("TRELLIS_COMB", "DP16KD", "MULT18X18D"),
                    correction_nodes=ULX3S_CORRECTION_NODES),
 }
+
+
+def starting_table(board):
+    """The correction table ``board``'s bitstream starts with where given none: the identity
+    of :attr:`Board.correction_nodes` nodes (what a simulated board of it starts with too)."""
+    return CorrectionTable.identity(BOARDS[board].correction_nodes)
 
 
 def board_config(board="icebreaker", **options):
@@ -199,7 +205,7 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     if not config.correction:
         correction = None               # the build has no correction stage at all
     elif isinstance(correction, str) and correction == "identity":
-        correction = CorrectionTable.identity(target.correction_nodes)
+        correction = starting_table(board)
     top_contents = {"correction": correction} if target.correction else {}
     clock = config.clk_freq
     platform = target.platform(device) if device else target.platform()

@@ -73,13 +73,14 @@ through the I/O cells' output flip-flops, one system clock after the core's own 
 """
 
 from amaranth.build import Attrs, Pins, Resource, Subsignal
-from amaranth.hdl import Cat, ClockDomain, Elaboratable, Module, Signal
-from amaranth.lib import io
+from amaranth.hdl import ClockDomain, Elaboratable, Module
 from amaranth_boards.icebreaker import ICEBreakerPlatform
 
 from ..gateware.clocking import DEFAULT_BAUD, check_clocks
 from ..gateware.build_config import LINKS, MODES, BuildConfig
 from ..gateware.top import GalvoScanTop
+from .pads import (player_pins, plain_inputs, plain_outputs, registered_outputs,
+                   running_led)
 from .pll import ICE40PLL, pll_settings
 
 
@@ -233,76 +234,30 @@ class ICEBreakerScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             self.config, table=self.table, settings=self.settings, correction=self.correction)
 
-        # All four lines leave through the I/O cells' own flip-flops, so they change within
-        # the pads' skew of each other, whatever the placement.
+        # The bus and the laser through the I/O cells' output flip-flops (platforms/pads.py).
         xy2 = platform.request("xy2", 0, dir="-")
-        for name in XY2_PMOD_PINS:
-            m.submodules[f"xy2_{name}_pad"] = pad = io.FFBuffer("o", getattr(xy2, name))
-            m.d.comb += pad.o.eq(getattr(scanner, f"xy2_{name}"))
+        laser = platform.request("laser", 0, dir="-")
+        registered_outputs(m, scanner, {
+            **{f"xy2_{name}": getattr(xy2, name) for name in XY2_PMOD_PINS},
+            **{f"laser_{name}": getattr(laser, name) for name in LASER_PMOD_PINS}})
 
-        # Host link. The cores synchronise their inputs, so plain buffers here.
+        # The host link, and the machine's inputs.
         uart = platform.request("uart", 0, dir="-")
-        inputs = {"uart_rx": uart.rx}
+        inputs = {"uart_rx": uart.rx,
+                  "interlock_open": platform.request("interlock", 0, dir="-"),
+                  "laser_alarm": platform.request("laser_alarm", 0, dir="-")}
         outputs = {"uart_tx": uart.tx}
         if self.config.player:
-            self._player_pins(m, platform, scanner)
+            # The SPI link's pins are the player's machine lines.
+            player_pins(m, scanner, flash=platform.request("spi_flash_1x", 0, dir="-"),
+                        machine=platform.request("machine", 0, dir="-"),
+                        button=platform.request("button", 0, dir="-"),
+                        led=platform.request("led_g", 0, dir="-"))
         else:
             spi = platform.request("host_spi", 0, dir="-")
             inputs.update({"spi_sck": spi.sck, "spi_cs_n": spi.cs_n, "spi_copi": spi.copi})
             outputs["spi_cipo"] = spi.cipo
-        for name, port in inputs.items():
-            m.submodules[f"{name}_pad"] = pad = io.Buffer("i", port)
-            m.d.comb += getattr(scanner, name).eq(pad.i)
-        for name, port in outputs.items():
-            m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
-            m.d.comb += pad.o.eq(getattr(scanner, name))
-
-        # Laser. Every line through the I/O cell's output flip-flop, like the bus: no logic
-        # glitch reaches the laser, and the lines (with laser_enable) change together. The
-        # flip-flops come out of configuration low. The core synchronises the inputs.
-        laser = platform.request("laser", 0, dir="-")
-        for name in LASER_PMOD_PINS:
-            m.submodules[f"laser_{name}_pad"] = pad = io.FFBuffer("o", getattr(laser, name))
-            m.d.comb += pad.o.eq(getattr(scanner, f"laser_{name}"))
-        m.submodules.interlock_pad = interlock = io.Buffer(
-            "i", platform.request("interlock", 0, dir="-"))
-        m.d.comb += scanner.interlock_open.eq(interlock.i)
-        m.submodules.alarm_pad = alarm = io.Buffer(
-            "i", platform.request("laser_alarm", 0, dir="-"))
-        m.d.comb += scanner.laser_alarm.eq(alarm.i)
-
-        running = Signal()
-        with m.If(scanner.xy2_sync):
-            m.d.sync += running.eq(1)
-        m.submodules.led_pad = led = io.Buffer("o", platform.request("led_r", 0, dir="-"))
-        m.d.comb += led.o.eq(running)
+        plain_inputs(m, scanner, inputs)
+        plain_outputs(m, scanner, outputs)
+        running_led(m, scanner, platform.request("led_r", 0, dir="-"))
         return m
-
-    def _player_pins(self, m, platform, scanner):
-        """The flash, the start inputs, the PLC's lines and the green LED."""
-        # The flash's lines straight from the reader's flip-flops (an output flip-flop would
-        # put SCK a clock behind the moment the reader samples CIPO); WP and HOLD held high.
-        flash = platform.request("spi_flash_1x", 0, dir="-")
-        for name, port in (("cs_n", flash.cs), ("clk", flash.clk), ("copi", flash.copi),
-                           ("wp", flash.wp), ("hold", flash.hold)):
-            m.submodules[f"flash_{name}_pad"] = pad = io.Buffer("o", port)
-            if name in ("wp", "hold"):
-                m.d.comb += pad.o.eq(0)         # (active-low pins: 0 = high, inactive)
-            elif name == "cs_n":
-                m.d.comb += pad.o.eq(~scanner.flash_cs_n)     # (the resource is active low)
-            else:
-                m.d.comb += pad.o.eq(getattr(scanner, f"flash_{name}"))
-        m.submodules.flash_cipo_pad = cipo = io.Buffer("i", flash.cipo)
-        m.d.comb += scanner.flash_cipo.eq(cipo.i)
-        machine = platform.request("machine", 0, dir="-")
-        m.submodules.start_pad = start = io.Buffer("i", machine.start_n)
-        m.submodules.button_pad = button = io.Buffer("i", platform.request("button", 0,
-                                                                           dir="-"))
-        # (The button resource is active low: its buffer reads 1 while pressed.)
-        m.d.comb += scanner.start_n.eq(Cat(start.i, ~button.i))
-        for name in ("busy", "ready"):
-            m.submodules[f"{name}_pad"] = pad = io.FFBuffer("o", getattr(machine, name))
-            m.d.comb += pad.o.eq(getattr(scanner, name))
-        m.submodules.player_led_pad = led = io.Buffer("o", platform.request("led_g", 0,
-                                                                            dir="-"))
-        m.d.comb += led.o.eq(scanner.player_led)

@@ -32,7 +32,7 @@ it refused an image). The FIRE 1 button starts the job player, as the start inpu
 """
 
 from amaranth.build import Attrs, Pins, Resource, Subsignal
-from amaranth.hdl import Cat, ClockDomain, Elaboratable, Instance, Module, Signal
+from amaranth.hdl import ClockDomain, Elaboratable, Instance, Module
 from amaranth.lib import io
 from amaranth_boards.ulx3s import (ULX3S_12F_Platform, ULX3S_25F_Platform, ULX3S_45F_Platform,
                                    ULX3S_85F_Platform)
@@ -41,6 +41,8 @@ from ..gateware.build_config import BuildConfig, LINKS, MODES
 from ..gateware.clocking import XY2_100_BIT_RATE, check_clocks, default_baud
 from ..gateware.field.correction_table import CorrectionTable
 from ..gateware.top import GalvoScanTop
+from .pads import (player_pins, plain_inputs, plain_outputs, registered_outputs,
+                   running_led)
 from .pll import ECP5PLL, ecp5_pll_settings
 
 
@@ -222,70 +224,34 @@ class ULX3SScanner(Elaboratable):
         m.submodules.scanner = scanner = GalvoScanTop(
             self.config, table=self.table, settings=self.settings, correction=self.correction)
 
-        # The bus and the laser leave through the I/O cells' own flip-flops (which start low):
-        # the lines change together, whatever the placement, and no logic glitch reaches them.
+        # The bus and the laser through the I/O cells' output flip-flops (platforms/pads.py).
         xy2 = platform.request("xy2", 0, dir="-")
-        for name in ("clk", "sync", "x", "y"):
-            m.submodules[f"xy2_{name}_pad"] = pad = io.FFBuffer("o", getattr(xy2, name))
-            m.d.comb += pad.o.eq(getattr(scanner, f"xy2_{name}"))
         laser = platform.request("laser", 0, dir="-")
-        for name in ("power", "latch", "mo", "am", "prr", "enable", "guide"):
-            m.submodules[f"laser_{name}_pad"] = pad = io.FFBuffer("o", getattr(laser, name))
-            m.d.comb += pad.o.eq(getattr(scanner, f"laser_{name}"))
+        registered_outputs(m, scanner, {
+            **{f"xy2_{name}": getattr(xy2, name) for name in ("clk", "sync", "x", "y")},
+            **{f"laser_{name}": getattr(laser, name)
+               for name in ("power", "latch", "mo", "am", "prr", "enable", "guide")}})
 
-        # The links and the inputs: the cores synchronise their inputs, so plain buffers.
+        # The links and the machine's inputs.
         uart = platform.request("uart", 0, dir="-")
         spi = platform.request("host_spi", 0, dir="-")
-        inputs = {"uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n,
-                  "spi_copi": spi.copi,
-                  "interlock_open": platform.request("interlock", 0, dir="-"),
-                  "laser_alarm": platform.request("laser_alarm", 0, dir="-")}
-        outputs = {"uart_tx": uart.tx, "spi_cipo": spi.cipo}
-        for name, port in inputs.items():
-            m.submodules[f"{name}_pad"] = pad = io.Buffer("i", port)
-            m.d.comb += getattr(scanner, name).eq(pad.i)
-        for name, port in outputs.items():
-            m.submodules[f"{name}_pad"] = pad = io.Buffer("o", port)
-            m.d.comb += pad.o.eq(getattr(scanner, name))
-
-        running = Signal()
-        with m.If(scanner.xy2_sync):
-            m.d.sync += running.eq(1)
-        m.submodules.led_pad = led = io.Buffer("o", platform.request("led", 0, dir="-"))
-        m.d.comb += led.o.eq(running)
+        plain_inputs(m, scanner, {
+            "uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n, "spi_copi": spi.copi,
+            "interlock_open": platform.request("interlock", 0, dir="-"),
+            "laser_alarm": platform.request("laser_alarm", 0, dir="-")})
+        plain_outputs(m, scanner, {"uart_tx": uart.tx, "spi_cipo": spi.cipo})
+        running_led(m, scanner, platform.request("led", 0, dir="-"))
         if self.config.player:
-            self._player_pins(m, platform, scanner)
+            # The flash's clock pin is the configuration clock, reached after configuration
+            # only through USRMCLK (its tristate held low: driven).
+            m.submodules.flash_clk = Instance("USRMCLK", i_USRMCLKI=scanner.flash_clk,
+                                              i_USRMCLKTS=0)
+            # FIRE 1 starts the player too; LED 1 is the player's.
+            player_pins(m, scanner, flash=platform.request("spi_flash", 0, dir="-"),
+                        machine=platform.request("machine", 0, dir="-"),
+                        button=platform.request("button_fire", 0, dir="-"),
+                        led=platform.request("led", 1, dir="-"))
         return m
-
-    def _player_pins(self, m, platform, scanner):
-        """The configuration flash, the start inputs, the PLC's lines and LED 1."""
-        flash = platform.request("spi_flash", 0, dir="-")
-        # The flash's clock pin is the configuration clock, reached after configuration only
-        # through USRMCLK (its tristate held low: driven).
-        m.submodules.flash_clk = Instance("USRMCLK", i_USRMCLKI=scanner.flash_clk,
-                                          i_USRMCLKTS=0)
-        for name, port in (("cs_n", flash.cs), ("copi", flash.copi), ("wp", flash.wp),
-                           ("hold", flash.hold)):
-            m.submodules[f"flash_{name}_pad"] = pad = io.Buffer("o", port)
-            if name in ("wp", "hold"):
-                m.d.comb += pad.o.eq(0)         # (active-low pins: 0 = high, inactive)
-            elif name == "cs_n":
-                m.d.comb += pad.o.eq(~scanner.flash_cs_n)     # (the resource is active low)
-            else:
-                m.d.comb += pad.o.eq(scanner.flash_copi)
-        m.submodules.flash_cipo_pad = cipo = io.Buffer("i", flash.cipo)
-        m.d.comb += scanner.flash_cipo.eq(cipo.i)
-        machine = platform.request("machine", 0, dir="-")
-        m.submodules.start_pad = start = io.Buffer("i", machine.start_n)
-        m.submodules.fire_pad = fire = io.Buffer("i", platform.request("button_fire", 0,
-                                                                       dir="-"))
-        # (FIRE 1 reads 1 while pressed; start_n is active low.)
-        m.d.comb += scanner.start_n.eq(Cat(start.i, ~fire.i))
-        for name in ("busy", "ready"):
-            m.submodules[f"{name}_pad"] = pad = io.FFBuffer("o", getattr(machine, name))
-            m.d.comb += pad.o.eq(getattr(scanner, name))
-        m.submodules.player_led_pad = led = io.Buffer("o", platform.request("led", 1, dir="-"))
-        m.d.comb += led.o.eq(scanner.player_led)
 
 
 def wiring_table():

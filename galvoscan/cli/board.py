@@ -11,8 +11,7 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
-    from ..build import BOARDS, PRESETS, board_config
-    from ..gateware.field.correction_table import CorrectionTable
+    from ..build import PRESETS, board_config, starting_table
     from ..sim.board import PTYServer
     if args.preset not in PRESETS:
         fail(f"--preset must be one of {', '.join(PRESETS)}, not {args.preset!r}")
@@ -28,7 +27,7 @@ def _cmd_board(args):
         # for (a build takes --baud too).
         if args.board == "ulx3s":
             config = board_config("ulx3s")
-            contents = {"correction": CorrectionTable.identity(BOARDS["ulx3s"].correction_nodes)}
+            contents = {"correction": starting_table("ulx3s")}
         else:
             config, contents = PRESETS[args.preset], {}
         if args.baud is not None:

@@ -20,12 +20,10 @@ from amaranth.back import rtlil
 from amaranth.hdl import Cat, Elaboratable, Module, Mux, Signal
 from amaranth.lib.memory import Memory
 
-from galvoscan.build import PRESETS, board_config
+from galvoscan.build import PRESETS, board_config, starting_table
 from galvoscan.correction.files import load_table
-from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.top import DEFAULT_CORRECTION_NODES
 from galvoscan.link.client import HostClient
-from galvoscan.platforms.ulx3s import ULX3S_CORRECTION_NODES
 from galvoscan.sim.board import LASER_PINS, SimTransport, SimulatedBoard
 from galvoscan.sim.compiled import CompileError, find_compiler
 from galvoscan.sim.compiled.netlist import (ECP5_LUT4_MODEL, ECP5_MODELLED, LUT4_MODEL,
@@ -68,6 +66,19 @@ def host_moved(board):
     return moved
 
 
+def assert_a_host_session_alike(netlist, design, *, max_pin_late):
+    """The same :func:`session` on both: the same answers, the same bytes from the board,
+    the host's laser pins moved alike (armed: enable, the power latched, MO on; disarmed: all
+    off), the netlist's at most ``max_pin_late`` clocks late."""
+    assert session(netlist) == session(design)
+    assert list(netlist.from_board) == list(design.from_board)
+    design_moved, netlist_moved = host_moved(design), host_moved(netlist)
+    assert any(pins[1] for _, pins in design_moved) and design_moved[-1][1] == (0, 0, 0, 0)
+    assert [pins for _, pins in netlist_moved] == [pins for _, pins in design_moved]
+    pin_late = offsets([c for c, _ in design_moved], [c for c, _ in netlist_moved])
+    assert all(0 <= late_pin <= max_pin_late for late_pin in pin_late), pin_late
+
+
 @pytest.mark.toolchain
 @pytest.mark.slow
 @pytest.mark.xdist_group("icebreaker_build")
@@ -95,18 +106,11 @@ def test_the_default_builds_netlist_behaves_as_its_design(icebreaker_build):
                      [f[0] for f in netlist.frames[:frames]])
     # 15 µs of power-on reset (180 clocks), the reset's own clock and the output flip-flop's.
     assert 180 <= late <= 190
-    # A host: the same answers, and the laser's pins the same.
-    assert session(netlist) == session(design)
-    assert list(netlist.from_board) == list(design.from_board)
-    design_moved, netlist_moved = host_moved(design), host_moved(netlist)
-    # Armed: enable, the power latched (latch pulses), MO on; disarmed: all off.
-    assert any(pins[1] for _, pins in design_moved) and design_moved[-1][1] == (0, 0, 0, 0)
-    assert [pins for _, pins in netlist_moved] == [pins for _, pins in design_moved]
-    # The host's commands act at once on both (the power-on reset is long over): the netlist's
-    # pins are late by their output flip-flop's clock alone, give or take the UART bit
-    # its synchroniser catches the bytes in.
-    pin_late = offsets([c for c, _ in design_moved], [c for c, _ in netlist_moved])
-    assert all(0 <= late_pin <= 13 for late_pin in pin_late), pin_late
+    # A host: the same answers, and the laser's pins the same; the host's commands act at once
+    # on both (the power-on reset is long over): the netlist's pins are late by their output
+    # flip-flop's clock alone, give or take the UART bit its synchroniser catches the bytes in
+    # (12 clocks at 1 Mbaud).
+    assert_a_host_session_alike(netlist, design, max_pin_late=13)
 
 
 
@@ -117,7 +121,7 @@ def ulx3s_boards(ulx3s_build):
     assert code == 0
     return (SimulatedBoard(netlist=folder, backend="compiled"),
             SimulatedBoard(backend="compiled", config=board_config("ulx3s"),
-                           correction=CorrectionTable.identity(ULX3S_CORRECTION_NODES)))
+                           correction=starting_table("ulx3s")))
 
 
 @pytest.mark.toolchain
@@ -142,15 +146,9 @@ def test_the_ulx3s_builds_netlist_behaves_as_its_design(ulx3s_build):
     # start set, and the ideal PLL is locked from the first), the output flip-flop one.
     assert offsets([f[0] for f in design.frames[:frames]],
                    [f[0] for f in netlist.frames[:frames]]) == {3}
-    assert session(netlist) == session(design)
-    assert list(netlist.from_board) == list(design.from_board)
-    design_moved, netlist_moved = host_moved(design), host_moved(netlist)
-    assert any(pins[1] for _, pins in design_moved) and design_moved[-1][1] == (0, 0, 0, 0)
-    assert [pins for _, pins in netlist_moved] == [pins for _, pins in design_moved]
     # The host's commands act at once: late by the output flip-flop, give or take a UART bit
-    # (8 clocks).
-    pin_late = offsets([c for c, _ in design_moved], [c for c, _ in netlist_moved])
-    assert all(0 <= late_pin <= 9 for late_pin in pin_late), pin_late
+    # (8 clocks at 3 Mbaud).
+    assert_a_host_session_alike(netlist, design, max_pin_late=9)
     assert [pins for _, pins in netlist.laser_changes] == \
         [pins for _, pins in design.laser_changes]
 

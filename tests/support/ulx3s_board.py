@@ -5,9 +5,9 @@ builds to run this one too (tests/sim/test_compiled.py, on both backends)."""
 
 from dataclasses import replace
 
-from galvoscan.gateware.field.correction_table import CorrectionTable
+from galvoscan.build import starting_table
 from galvoscan.gateware.top import ScanSettings
-from galvoscan.platforms.ulx3s import ULX3S_CORRECTION_NODES, ULX3SScanner
+from galvoscan.platforms.ulx3s import ULX3SScanner
 
 
 def ulx3s_board(clock=8e6, *, settings=None, **options):
@@ -18,6 +18,6 @@ def ulx3s_board(clock=8e6, *, settings=None, **options):
     vector mode, as ``galvoscan mark`` finds a board)."""
     config = replace(ULX3SScanner.config(clock=clock), **options)
     return dict(config=config,
-                correction=CorrectionTable.identity(ULX3S_CORRECTION_NODES),
+                correction=starting_table("ulx3s"),
                 settings=ScanSettings(mode="vector", run=False) if settings is None
                 else settings)
