@@ -1,6 +1,6 @@
 """Bitstream builds with the YoWASP toolchain, and what nextpnr measured of them."""
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 import json
 import os
 from pathlib import Path
@@ -20,8 +20,9 @@ from .platforms.ulx3s import ULX3S_CORRECTION_NODES, ULX3SScanner, ulx3s_platfor
 from .toolchain import tool_env
 
 
-__all__ = ["BOARDS", "PRESETS", "BuildReport", "build_bitstream", "board_config",
-           "starting_table", "preset_register_map", "preset_settings"]
+__all__ = ["BOARDS", "PRESETS", "SIMULATED_BOARDS", "BuildReport", "build_bitstream",
+           "board_config", "starting_table", "simulated_bitstream", "preset_register_map",
+           "preset_settings"]
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,35 @@ PRESETS = {
     # stage, on the crystal.
     "cleaner": board_config("icebreaker", modes=("spiral", "raster"), interpolation=True),
 }
+
+
+def simulated_bitstream(board="icebreaker", *, preset="default", baud=None):
+    """What a simulated board of ``board``'s bitstream is built from (``board --sim``, and
+    ``mark``/``clean``/``test-grid --sim --board``): ``(config, contents)``, the
+    :class:`~galvoscan.gateware.build_config.BuildConfig` (an iCEBreaker ``preset``'s; the
+    ULX3S has one bitstream) at ``baud`` (default: the build's), and what its memories start
+    with (the ULX3S's correction table, as :func:`build_bitstream` gives it). A ``ValueError``
+    in one line for a preset the board has not."""
+    if board not in SIMULATED_BOARDS:
+        raise ValueError(f"the simulated board runs {' or '.join(SIMULATED_BOARDS)}'s "
+                         f"bitstream, not {board!r}'s")
+    if board == "ulx3s":
+        if preset != "default":
+            raise ValueError("--preset names an iCEBreaker bitstream; the ULX3S has one, with "
+                             "every feature")
+        config, contents = board_config("ulx3s"), {"correction": starting_table("ulx3s")}
+    else:
+        if preset not in PRESETS:
+            raise ValueError(f"--preset must be one of {', '.join(PRESETS)}, not {preset!r}")
+        config, contents = PRESETS[preset], {}
+    if baud is not None:
+        config = replace(config, baud=baud)
+    return config, contents
+
+
+#: The boards a simulated board can be of (the iCEstick's bitstream is the spiral alone, which
+#: ``galvoscan sim`` replays).
+SIMULATED_BOARDS = ("icebreaker", "ulx3s")
 
 
 def preset_register_map(name):

@@ -340,6 +340,9 @@ def check_backend_needs_sim(args):
     if getattr(args, "backend", None) is not None and not getattr(args, "sim", False):
         fail(f"--backend {args.backend} chooses the simulated board's simulator: it needs "
              f"--sim")
+    if getattr(args, "board", None) is not None and not getattr(args, "sim", False):
+        fail(f"--board {args.board} chooses the simulated board's bitstream: it needs --sim "
+             f"(a real board's is read off it)")
 
 
 def simulated_board(args, **kwargs):

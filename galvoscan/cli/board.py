@@ -1,6 +1,5 @@
 """``galvoscan board --sim``: a board without hardware, its serial port on a pseudo-terminal."""
 
-from dataclasses import replace
 import sys
 import time
 
@@ -11,27 +10,18 @@ __all__ = ["add_parsers"]
 
 
 def _cmd_board(args):
-    from ..build import PRESETS, board_config, starting_table
+    from ..build import simulated_bitstream
     from ..sim.board import PTYServer
-    if args.preset not in PRESETS:
-        fail(f"--preset must be one of {', '.join(PRESETS)}, not {args.preset!r}")
-    if args.board == "ulx3s" and args.preset != "default":
-        fail("--preset names an iCEBreaker bitstream; the ULX3S has one, with every feature")
+    try:
+        config, contents = simulated_bitstream(args.board, preset=args.preset, baud=args.baud)
+    except ValueError as error:
+        fail(error)
     if args.netlist:
         if args.backend == "python":
             fail("--netlist runs on the compiled backend (Amaranth simulates designs, not "
                  "netlists)")
         board = simulated_board(args, netlist=args.netlist)
     else:
-        # A bitstream's configuration and the table it starts with, at the serial rate asked
-        # for (a build takes --baud too).
-        if args.board == "ulx3s":
-            config = board_config("ulx3s")
-            contents = {"correction": starting_table("ulx3s")}
-        else:
-            config, contents = PRESETS[args.preset], {}
-        if args.baud is not None:
-            config = replace(config, baud=args.baud)
         board = simulated_board(args, config=config, **contents)
     speed = board.speed()
     timeout = board.answer_timeout_s()
@@ -82,6 +72,7 @@ def _fraction(speed):
 
 
 def add_parsers(commands):
+    from ..build import SIMULATED_BOARDS
     from ..gateware.clocking import DEFAULT_BAUD
     board = commands.add_parser(
         "board", help="serve a simulated board on a pseudo-terminal",
@@ -91,7 +82,7 @@ def add_parsers(commands):
                     "--port. It runs until Ctrl-C.")
     board.add_argument("--sim", action="store_true", required=True,
                        help="simulate the board (the only kind this command serves)")
-    board.add_argument("--board", choices=["icebreaker", "ulx3s"], default="icebreaker",
+    board.add_argument("--board", choices=SIMULATED_BOARDS, default="icebreaker",
                        help="whose bitstream: the iCEBreaker's (default) or the ULX3S's, "
                             "with every feature")
     board.add_argument("--baud", type=baud, default=None,

@@ -8,6 +8,8 @@ import sys
 from tqdm import tqdm
 
 from ..api import load_lens_table
+from ..build import SIMULATED_BOARDS, simulated_bitstream
+from ..platforms.ulx3s import ULX3S_BAUD, ULX3S_CLOCK_HZ
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.stream import JobAborted, JobInterrupted
 from ..plan.vector_job import frame_segments
@@ -17,7 +19,7 @@ from .args import add_backend_option, add_setting, baud, fail, open_transport, s
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
-           "has_link", "pair_mm", "load_lens_table", "stopped_in_one_line", "frame_job",
+           "has_link", "link_baud", "pair_mm", "load_lens_table", "stopped_in_one_line", "frame_job",
            "progress_bar"]
 
 
@@ -63,7 +65,20 @@ def add_job_link_options(parser):
                       help="serial rate of the bitstream (default: the profile's)")
     add_setting(link, TIMEOUT, default_text="the profile's; with --sim, from the simulator's "
                                              "measured speed")
+    link.add_argument("--board", choices=SIMULATED_BOARDS, default=None,
+                      help="with --sim: whose bitstream the simulated board runs: the "
+                           "iCEBreaker's default build (default; with the wobble stage for a "
+                           f"wobbled job) or the ULX3S's, every feature at {ULX3S_CLOCK_HZ / 1e6:g} MHz "
+                           f"and {ULX3S_BAUD / 1e6:g} Mbaud")
     add_backend_option(link, default=None)
+
+
+def link_baud(args, profile):
+    """The serial rate of the job's link: ``--baud``, else a simulated ULX3S's own, else the
+    profile's."""
+    if args.baud:
+        return args.baud
+    return ULX3S_BAUD if args.sim and args.board == "ulx3s" else profile.link.baud
 
 
 def has_link(args, profile):
@@ -74,9 +89,15 @@ def has_link(args, profile):
 def board_link(args, profile, *, wobble=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage)."""
-    baud_rate = args.baud or profile.link.baud
     if args.sim:
-        board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
+        # (The ULX3S's bitstream at its own rate unless told another: the profile's baud is
+        # the real machine's link.)
+        baud_rate = link_baud(args, profile)
+        if args.board == "ulx3s":
+            config, contents = simulated_bitstream("ulx3s", baud=baud_rate)
+            board = simulated_board(args, config=config, **contents)
+        else:
+            board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
         timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
         try:
@@ -87,6 +108,7 @@ def board_link(args, profile, *, wobble=False):
             if server.error is not None:
                 fail(f"the simulated board stopped: {server.error}")
         return
+    baud_rate = link_baud(args, profile)
     transport = open_transport(port=args.port or (None if args.spi else profile.link.port),
                                spi=args.spi or (None if args.port else profile.link.spi),
                                baud=baud_rate, timeout=args.timeout or profile.link.timeout_s)

@@ -19,11 +19,12 @@ from ..geometry.drawing import DrawingError
 from ..geometry.fill import LineOrder
 from ..geometry.field import PlanError
 from ..geometry.speed import path_length_mm
-from ..outputs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
+from ..outputs.stream import (JobStreamer, StreamReport, expected_underruns,
+                              link_segments_per_s)
 from ..plan.vector_job import hull_outline, plan_job_file
-from ..outputs.stream import link_segments_per_s
+from ..platforms.ulx3s import ULX3S_BAUD
 from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
-from .jobargs import (add_job_link_options, board_link, frame_job, has_link,
+from .jobargs import (add_job_link_options, board_link, frame_job, has_link, link_baud,
                       job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
 from .content import check_content_options, content_objects, part_serials
@@ -82,16 +83,16 @@ def _plan(args, profile, serial=None):
         fail(error)
 
 
-def _link_warning(job, baud):
-    if len(job.segments) <= QUEUE_DEPTH or job.estimate_s <= 0:
-        return None
-    needed = len(job.segments) / job.estimate_s
-    carried = link_segments_per_s(baud)
-    if needed > carried:
-        return (f"warning: the job needs {needed:,.0f} segments/s on average; the link at "
-                f"{baud:,} baud carries {carried:,.0f}: the queue will run dry and the laser "
-                f"pause (use a lower speed, a coarser --tolerance or a faster --baud build)")
-    return None
+def _link_warnings(job, baud):
+    """What the link at ``baud`` leaves the board short of, a line a layer that underruns
+    (:func:`~galvoscan.outputs.stream.expected_underruns`)."""
+    return [f"warning: {f'layer {label!r}: ' if label else ''}the link at {baud:,} baud "
+            f"({link_segments_per_s(baud):,.0f} segments/s) brings segments slower than the "
+            f"board marks them: expect about {count:,} underruns, a mark that finds the queue "
+            f"empty and waits for the next, laser off (longer jump delays, a lower speed, a "
+            f"coarser --tolerance or a faster link, as the ULX3S's {ULX3S_BAUD / 1e6:g} Mbaud, "
+            f"avoid them)"
+            for label, count in expected_underruns(job, baud)]
 
 
 def planned_job(args, *, profile=None, serial=None, quiet=False):
@@ -191,9 +192,7 @@ def _cmd_mark(args):
             counter.check_writable()
         except PlanError as error:
             fail(error)
-    baud = args.baud or profile.link.baud
-    warning = _link_warning(job, baud)
-    if warning:
+    for warning in _link_warnings(job, link_baud(args, profile)):
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     reports = []

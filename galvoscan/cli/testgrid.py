@@ -8,7 +8,7 @@ from ..geometry.field import PlanError
 from ..outputs.stream import JobStreamer
 from ..plan.test_grid import axis_values, plan_test_grid
 from ..settings.laser import POWER, PRR, SPEED
-from .args import fail, image_file, int_in, number_in, setting_type
+from .args import check_backend_needs_sim, fail, image_file, int_in, number_in, setting_type
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
                       progress_bar, stopped_in_one_line)
 from .machine import add_machine_option, profile_from
@@ -43,6 +43,7 @@ def _axis(what, setting):
 
 
 def _cmd_test_grid(args):
+    check_backend_needs_sim(args)
     profile = profile_from(args)
     prr = args.prr if args.prr is not None else profile.defaults.prr_khz
     try:

@@ -13,8 +13,8 @@ import numpy as np
 from .field import CENTRE, PlanError
 
 
-__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "jump_mark_lengths", "path_length_mm",
-           "settled_jumps"]
+__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "segment_seconds", "jump_mark_lengths",
+           "path_length_mm", "settled_jumps"]
 
 
 def path_length_mm(paths_mm):
@@ -126,14 +126,19 @@ def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_de
     whole frames (at least one). Mark and polygon delays, the host link and anything the board
     adds are not counted.
     """
+    return sum(segment_seconds(segments, pitch_units=pitch_units,
+                               pulses_per_point=pulses_per_point, prr_hz=prr_hz,
+                               jump_delay_us=jump_delay_us, frame_s=frame_s))
+
+
+def segment_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_delay_us,
+                    frame_s=10e-6):
+    """Each segment's share of :func:`estimate_seconds`, in s (a list, in order): what the
+    board takes at least to run it, so what the link must bring it in."""
     dwell_s = pulses_per_point / prr_hz
-    total = 0.0
-    for op, length in _walk(segments):
-        if op == "mark":
-            total += math.ceil(length / pitch_units - 1e-12) * dwell_s
-        else:
-            total += _jump_s(jump_delay_us, frame_s)
-    return total
+    jump_s = _jump_s(jump_delay_us, frame_s)
+    return [math.ceil(length / pitch_units - 1e-12) * dwell_s if op == "mark" else jump_s
+            for op, length in _walk(segments)]
 
 
 def jump_mark_lengths(segments, units_per_mm):

@@ -26,32 +26,80 @@ import time
 from dataclasses import dataclass, field
 
 from ..gateware.fields import pack
+from ..gateware.host.frames import COMMAND_BYTES
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH, VectorOp)
 from ..gateware.sources.vector import VecOpWord
 from ..geometry.corners import corner_frames
+from ..geometry.speed import segment_seconds
 from ..link.client import ClientError, encode_write, LinkLost
 
 
-__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH", "COUNTERS",
-           "DEFAULT_BATCH", "link_segments_per_s", "check_segment", "segment_words", "job_segments"]
+__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
+           "COUNTERS", "DEFAULT_BATCH", "link_segments_per_s", "expected_underruns",
+           "check_segment", "segment_words", "job_segments"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
 QUEUE_DEPTH = VECTOR_QUEUE_DEPTH
 #: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
 DEFAULT_BATCH = 128
-#: Frames a segment takes on the link (vec_x, vec_y, vec_op), bytes a frame, bits a byte (8N1).
-_FRAMES_PER_SEGMENT, _BYTES_PER_FRAME, _BITS_PER_BYTE = 3, 4, 10
+#: Bytes a segment takes on the serial line: its command frame (the end point and the
+#: operation together), COBS's code byte and the frame's delimiter; bits a byte (8N1).
+_SEGMENT_BYTES, _BITS_PER_BYTE = COMMAND_BYTES + 2, 10
 
 
 def link_segments_per_s(baud, *, batch=None):
-    """Segments a second the serial link carries at ``baud``, with the streamer's read of
-    ``fifo_free`` (a request and its answer) after every ``batch`` segments (default: the
-    streamer's)."""
+    """Segments a second the serial link carries at ``baud``: their frames back to back, and
+    a read of ``fifo_free`` (a frame of the same length) for every ``batch`` segments (default:
+    the streamer's), which the streamer makes when the queue is full. (Measured through the
+    simulated board's UART: 8,271 a second at 1 Mbaud and 24,864 at 3 Mbaud, docs/bench.json;
+    this gives 8,268 and 24,806.)"""
     batch = batch or DEFAULT_BATCH
-    frames = _FRAMES_PER_SEGMENT + 2 / batch
-    return baud / _BITS_PER_BYTE / _BYTES_PER_FRAME / frames
+    return baud / _BITS_PER_BYTE / (_SEGMENT_BYTES * (1 + 1 / batch))
+
+
+def expected_underruns(job, baud, *, queue_depth=QUEUE_DEPTH, batch=None):
+    """Marks of ``job`` (a planned :class:`~galvoscan.plan.vector_job.VectorJob`; a job of
+    layers, each layer's, streamed in turn) that will find the board's queue empty when it is
+    streamed at ``baud``: ``[(layer label or None, underruns)]`` for those that have any.
+
+    The streamer's own course, segment by segment: the link brings a segment every
+    ``1 / link_segments_per_s(baud)`` s, but no sooner than a place is free in the
+    ``queue_depth``-place queue; the board starts once the first batches are in (as
+    :meth:`JobStreamer.stream` does) and takes each segment no sooner than it has come and
+    the last one is done, a segment taking its
+    :func:`~galvoscan.geometry.speed.segment_seconds`. A mark whose end finds the next segment
+    not yet come is an underrun, as the board counts them. Those times leave out the mark and
+    polygon delays, so a board takes segments no faster than this supposes: an underrun may
+    be foretold that does not happen, hardly ever the other way round."""
+    period = 1 / link_segments_per_s(baud, batch=batch)
+    batch = batch or DEFAULT_BATCH
+    layers = [(layer.label, layer.job) for layer in job.layers] if job.layers else [(None, job)]
+    found = []
+    for label, part in layers:
+        registers = part.registers
+        segments = job_segments(part.segments)
+        seconds = segment_seconds(segments, pitch_units=registers["pitch"],
+                                  pulses_per_point=registers["pulses_per_point"],
+                                  prr_hz=registers["laser_prr"] * 100.0,
+                                  jump_delay_us=registers["jump_delay"])
+        # The board runs once the batch that leaves less than a batch free is in.
+        first = min(len(segments), batch * -(-(queue_depth - batch + 1) // batch), queue_depth)
+        come, taken = [], []
+        done = underruns = 0
+        for k, (op_seconds, (op, _, _)) in enumerate(zip(seconds, segments)):
+            room = taken[k - queue_depth] if k >= queue_depth else 0.0
+            come.append(max(come[-1] if come else 0.0, room) + period)
+            if k == 0:
+                done = first * period      # (the first ones come one after the other)
+            elif come[k] > done and segments[k - 1][0] == "mark":
+                underruns += 1
+            taken.append(max(done, come[k]))
+            done = taken[k] + op_seconds
+        if underruns:
+            found.append((label, underruns))
+    return found
 
 
 #: The board's counters a job reports, read before and after.
@@ -172,7 +220,7 @@ class JobStreamer:
     ----------
     board : :class:`~galvoscan.link.client.HostClient`
     batch : int
-        Most segments written between two reads of ``fifo_free`` (three frames each: the
+        Most segments written between two reads of ``fifo_free`` (a frame each: the
         frames in flight). A read waits for the board's answer, and over USB an answer
         takes a round trip (1 ms with the FTDI driver's low-latency mode, 16 ms without), so
         a batch must be long enough to carry the link past it: 128 segments are 15 ms at

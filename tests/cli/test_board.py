@@ -93,11 +93,12 @@ def test_a_board_slower_than_real_time_says_how_far_behind_it_is():
                            links=("uart",), backend="python")
     server = PTYServer(board, real_time=True)
     reports = []
-    timer = threading.Timer(1.0, server.stop)
+    timer = threading.Timer(1.5, server.stop)
     timer.start()
     server.serve_forever(report=reports.append, every_s=0.3)
     timer.join()
     # Amaranth's simulator runs this board at some 1/100 of real time: nearly all of the
-    # second is lag, reported as it grows.
-    assert reports and reports == sorted(reports) and 0.5 < reports[-1] < 1.0
+    # 1.5 s is lag, reported as it grows (on a machine busy with other tests too: the last
+    # report may come a third of a second before the end).
+    assert reports and reports == sorted(reports) and 0.5 < reports[-1] < 1.5
     assert board.now < 0.1

@@ -6,6 +6,7 @@ drawing's own geometry, written out here independently of the planner."""
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 
@@ -422,18 +423,26 @@ def test_the_profiles_lens_table_is_loaded_at_the_boards_size(tmp_path):
                                                    ("cor_write", 1)]
 
 
-@pytest.mark.parametrize("command", [["mark", "DRAWING"], ["clean", "--area", "5x5"]])
-def test_a_backend_without_sim_is_refused_before_anything(tmp_path, command):
-    """--backend picks the simulated board's simulator: on a real board's job it would
-    choose nothing, so it is one line, before any planning or link."""
+@pytest.mark.parametrize("command", [
+    ["mark", "DRAWING"], ["clean", "--area", "5x5"],
+    ["test-grid", "--speeds", "500:1000:2", "--powers", "10:20:2"]])
+@pytest.mark.parametrize("option, said", [
+    (["--backend", "python"], "--backend python chooses the simulated board's simulator: it "
+                              "needs --sim"),
+    (["--board", "ulx3s"], "--board ulx3s chooses the simulated board's bitstream: it needs "
+                           "--sim (a real board's is read off it)")])
+def test_a_backend_or_board_without_sim_is_refused_before_anything(tmp_path, command, option,
+                                                                    said):
+    """--backend and --board pick the simulated board's simulator and bitstream: on a real
+    board's job they would choose nothing, so each is one line, before any planning or
+    link."""
     drawing = tmp_path / "square.svg"
     drawing.write_text(SVG)
     argv = [str(drawing) if word == "DRAWING" else word for word in command]
     with pytest.raises(SystemExit) as stop:
-        main([*argv, "--backend", "python", "--port", str(tmp_path / "no-such-port")])
+        main([*argv, *option, "--port", str(tmp_path / "no-such-port")])
     message = str(stop.value.code)
-    assert message == "galvoscan: error: --backend python chooses the simulated board's " \
-                      "simulator: it needs --sim"
+    assert message.endswith(said) and "\n" not in message
 
 
 def test_origin_page_keeps_the_drawings_own_coordinates(tmp_path, capsys):
@@ -531,3 +540,74 @@ def test_each_jump_is_held_as_long_as_its_length_needs_on_the_wires(tmp_path, ca
     short_ones = [h for length, h in held if length < 1]
     assert long_ones and short_ones and max(short_ones) < 200 < min(long_ones)
     assert json.loads(out.out.strip().splitlines()[-1])["errors"] == 0
+
+
+# --- a photo through the link ----------------------------------------------------------------
+
+# A machine with quick mirrors (100 µs after a jump, 50 µs after a mark): a photo's thousands
+# of short marks and gaps then ask more segments a second of the link than 1 Mbaud carries.
+QUICK_MIRRORS = """
+[galvo]
+jump_delay_us = 100
+mark_delay_us = 50
+"""
+
+
+def photo(path, rows, columns=400):
+    """A grey photograph's stand-in: smooth shading from black to white in two directions,
+    as many dark cells alone as in runs once dithered."""
+    from PIL import Image
+    y, x = np.mgrid[0:rows, 0:columns]
+    grey = 128 + 100 * np.sin(x / 23) * np.cos((y + 100) / 17)
+    Image.fromarray(grey.clip(0, 255).astype(np.uint8)).save(path)
+    return path
+
+
+def test_a_60000_mark_photo_is_foretold_to_stream_at_3_mbaud_not_at_1(tmp_path):
+    """The streamer's course, foretold from the plan (expected_underruns: the board below holds
+    it to the simulated board's wires): a 24 mm photo of some 60,000 marks, with the default
+    profile's delays, keeps the queue full at both rates; with quick mirrors only at the
+    ULX3S's 3 Mbaud."""
+    import dataclasses
+    from galvoscan import api
+    from galvoscan.outputs.stream import expected_underruns
+    default = api.default_profile()
+    quick = dataclasses.replace(default, galvo=dataclasses.replace(
+        default.galvo, jump_delay_us=100, mark_delay_us=50))
+    picture = photo(tmp_path / "photo.png", 300)
+    for profile, at_1_mbaud in ((default, False), (quick, True)):
+        job = api.plan(api.Job(photos=[api.Photo(str(picture), width_mm=24)],
+                               speed_mm_s=1000), profile).vector_job
+        marks = sum(1 for a, b in zip(job.segments, job.segments[1:])
+                    if a[0] == "jump" and b[0] == "mark")
+        assert 55_000 <= marks <= 65_000
+        assert expected_underruns(job, 3_000_000) == []
+        [(layer, underruns)] = expected_underruns(job, 1_000_000) or [(None, 0)]
+        assert (underruns > marks // 2) == at_1_mbaud and layer is None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("board", ["icebreaker", "ulx3s"])
+def test_a_photo_streams_with_no_underrun_where_the_link_keeps_up(tmp_path, capsys, board):
+    """A strip of that photo (4,680 segments, nine times the queue) marked through the link,
+    on quick mirrors: the iCEBreaker's 1 Mbaud falls behind, as mark warns before any byte
+    (its count an upper bound: it leaves the mark delays out); the ULX3S's 3 Mbaud keeps the
+    queue from running dry, every mark to its end."""
+    machine = tmp_path / "machine.toml"
+    machine.write_text(QUICK_MIRRORS)
+    strip = photo(tmp_path / "strip.png", 16)
+    argv = ["mark", "--image", str(strip), "--width", "24", "--speed", "1000", "--machine",
+            str(machine), "--sim", "--board", board, *SIM_TIMEOUT, "--json"]
+    if board == "ulx3s":
+        result = run_json(argv, capsys)
+        assert "underruns" not in capsys.readouterr().err
+        assert result["segments"] == 4681
+        assert result["underruns"] == result["errors"] == result["rejected"] == 0
+        return
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert "the job was not marked as planned" in str(stop.value.code)
+    err = capsys.readouterr().err
+    foretold = int(re.search(r"expect about ([\d,]+) underruns", err)[1].replace(",", ""))
+    happened = int(re.search(r"underruns (\d+),", err)[1])
+    assert 0 < happened <= foretold <= 1.2 * happened, err
