@@ -1,7 +1,8 @@
 """Faults on the host link, between the real host code (``HostClient``, ``JobStreamer``) and
 the simulated board's pins, over both links: one bit flipped, a byte (or frame) dropped or
 inserted, the line held, or the link cut, in either direction, at any point of a real vector
-job (before arming, while armed, mid-segment). For every case:
+job (before arming, while armed, mid-segment); the UART at 1 Mbaud and at the ULX3S's 3 Mbaud.
+For every case:
 
 * no pulse off the planned marks (half a pitch), none at a power, PRR or pulses per point
   other than the plan's (read off the XY2-100 and DB25 wires);
@@ -292,12 +293,16 @@ def recover_and_run_again(board, make_link):
     return report
 
 
-LINKS = {"uart": (FaultyUART, SimUARTTransport), "spi": (FaultySPI, SimSPITransport)}
+#: Each link: its faulty and clean transports, and what its board differs in from BOARD. The
+#: UART at 3 Mbaud (the ULX3S's rate) runs at 24 MHz, its 8 clocks a bit as on the ULX3S.
+LINKS = {"uart": (FaultyUART, SimUARTTransport, {}),
+         "spi": (FaultySPI, SimSPITransport, {}),
+         "uart-3mbaud": (FaultyUART, SimUARTTransport, {"clk_freq": 24e6, "baud": 3_000_000})}
 
 
 def check_fault(link, fault, backend="compiled", recover=True, job=JOB):
-    board = SimBoard.powered_up(**dict(BOARD, backend=backend))
-    faulty, clean = LINKS[link]
+    faulty, clean, differs = LINKS[link]
+    board = SimBoard.powered_up(**dict(BOARD, backend=backend, **differs))
     transport = faulty(board, fault)
     outcome, result = run_job(board, transport, job)
     returned = board.clk_freq * board.now
@@ -351,7 +356,7 @@ def clean_run(link, job=JOB):
     (the examples below name a frame by what it writes), and the pulses it fires."""
     key = (link, tuple(job))
     if key not in _CLEAN:
-        board = SimBoard.powered_up(**BOARD)
+        board = SimBoard.powered_up(**dict(BOARD, **LINKS[link][2]))
         transport = LINKS[link][0](board, Fault("none", "to board", -1, 0))
         outcome, report = run_job(board, transport, job)
         assert outcome == "done" and report.clean, report
@@ -402,6 +407,14 @@ def test_the_first_trials_cases(link):
 @example(Fault("delay", "from board", 8, 0, seconds=0.03))
 def test_a_fault_on_the_uart(fault):
     check_fault("uart", fault)
+
+
+@pytest.mark.slow
+@fault_settings
+@given(faults)
+def test_a_fault_on_the_uart_at_3_mbaud(fault):
+    """The same at the ULX3S's rate, on a 24 MHz board (8 clocks a bit, as on the ULX3S)."""
+    check_fault("uart-3mbaud", fault)
 
 
 @pytest.mark.slow
