@@ -456,7 +456,7 @@ def netlist_design(build_dir):
                   script=script, ports=dict(pins), alarm_bits=alarm_bits, player=player,
                   settle_falling=True,
                   # A netlist's C++ is some 5 MB: the compiler's light optimisation (its
-                  # measured times in compiler.py), not -O2.
+                  # measured times in compiler.py), not -O3.
                   optimise=False,
                   description=f"the netlist {netlist.name}")
 
