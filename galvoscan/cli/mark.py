@@ -69,7 +69,7 @@ def _plan(args, profile, serial=None):
         for entry in entries["drawing"]:
             drawing = api.Drawing(entry["file"], origin=entry["origin"],
                                   offset_mm=entry["offset"], scale=entry["scale"],
-                                  rotate_deg=entry["rotate"])
+                                  rotate_deg=entry["rotate"], units=entry["units"])
             try:
                 drawings.append(api.mark_object(drawing, settings, profile,
                                                 tolerance_mm=args.tolerance))
