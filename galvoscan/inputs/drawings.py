@@ -115,11 +115,11 @@ def _scale_said(fits):
 def _chords_said(error, scale, tolerance_mm):
     """The refusal of a curve with too many chords: the element or entity, its size as
     marked, and the likely cause."""
-    what = error.what or "a curve"
     known = error.size_mm is not None and all(map(math.isfinite, error.size_mm))
     size = f", {_pair_said(*(v * scale for v in error.size_mm))}" if known else ""
-    return (f"{what}{size}{f' at --scale {scale:g}' if size and scale != 1 else ''}: a curve "
-            f"in it would take more than {MAX_CHORDS:,} chords within {tolerance_mm:g} mm: "
+    where = f"{error.what}{size}{f' at --scale {scale:g}' if size and scale != 1 else ''}: " \
+        "a curve in it" if error.what else "a curve"
+    return (f"{where} would take more than {MAX_CHORDS:,} chords within {tolerance_mm:g} mm: "
             f"coordinates far beyond any field (check the drawing's units: --units, or "
             f"--scale)")
 
