@@ -14,6 +14,7 @@ import argparse
 import sys
 from importlib.metadata import PackageNotFoundError, version
 
+from .args import FAILED, REFUSED, CLIError
 from . import (analyze, bench, board, build, clean, correct, link, machine, mark, prove, sim,
                standalone, testgrid)
 
@@ -38,8 +39,18 @@ class _OneLineParser(argparse.ArgumentParser):
     listed), not argparse's usage block; subcommands' parsers are of this class too."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
-                     f"options)\n")
+        self.exit(REFUSED, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
+                           f"options)\n")
+
+
+def _name_commands(parser):
+    """Each command's parser gives its name (``galvoscan mark``) to the arguments it parses:
+    the prefix of the errors said while it runs."""
+    parser.set_defaults(prog=parser.prog)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in set(action.choices.values()):
+                _name_commands(sub)
 
 
 def parser():
@@ -54,13 +65,23 @@ def parser():
     commands = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in GROUPS:
         group.add_parsers(commands)
+    _name_commands(top)
     return top
 
 
 def main(argv=None):
-    args = parser().parse_args(argv)
+    """Run the command ``argv`` gives (None: the process's). Every error is one line,
+    ``galvoscan COMMAND: error: …``, with exit status 2 when the command was refused before
+    any work (argparse's refusals and :func:`.args.fail`'s) and 1 when the work failed
+    (:func:`.args.failed`, a file that could not be written after all)."""
+    args = None
     try:
+        args = parser().parse_args(argv)
         return args.run(args) or 0
+    except CLIError as error:
+        error.prog = getattr(args, "prog", error.prog)      # (None: refused while parsed)
+        print(error, file=sys.stderr)
+        raise
     except BrokenPipeError:
         # Output piped into `head` and the like: stop quietly.
         sys.stderr.close()
@@ -74,5 +95,6 @@ def main(argv=None):
         # A file that could not be written or read after all (a full disk, a lost device):
         # one line, not a traceback. Paths are checked when parsed, so this is the exception.
         where = f" {error.filename}" if error.filename else ""
-        print(f"galvoscan: error:{where} {error.strerror or error}", file=sys.stderr)
-        return 1
+        print(f"{getattr(args, 'prog', 'galvoscan')}: error:{where} {error.strerror or error}",
+              file=sys.stderr)
+        return FAILED

@@ -22,7 +22,7 @@ from ..geometry.speed import path_length_mm
 from ..outputs.stream import QUEUE_DEPTH, JobStreamer, StreamReport
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..outputs.stream import link_segments_per_s
-from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
+from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link,
                       job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
@@ -237,14 +237,14 @@ def _cmd_mark(args):
                 (f" (damaged on the link and sent again {report.resent} time(s): every "
                  f"frame landed)" if counters["errors"] else ""))
             if not report.clean:
-                fail("the board refused segments or the queue ran dry: the job was not marked "
+                failed("the board refused segments or the queue ran dry: the job was not marked "
                      "as planned (see the counts above)" +
                      ("; the serial was not advanced" if serial is not None else ""))
             if counter is not None and not args.sim:
                 try:
                     counter.advance()       # this part is marked: its number is taken
                 except PlanError as error:
-                    fail(error)
+                    failed(error)
         # Every part's, summed: the marks and pulses off the wires are all of them too.
         every = StreamReport.total(reports)
         counts = every.counters

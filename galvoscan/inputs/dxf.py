@@ -355,8 +355,8 @@ def _units(code, asked, notes):
 
 def _read_dxf(data, tolerance_mm, units_asked=None):
     """``(polylines in mm, closed flags, skipped, notes, styles, (what the units were taken
-    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a :data:`~.reading.UNITS` key), in
-    place of the file's $INSUNITS."""
+    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a
+    :data:`~.reading.UNITS` key), in place of the file's $INSUNITS."""
 
     # recover reads damaged text files in any encoding; binary DXF it does not (it takes the
     # sentinel for a group code), so that is loaded as ezdxf.readfile loads it, then audited.

@@ -90,8 +90,8 @@ _SVG_UNITS = {None, "", "px", "mm", "cm", "in", "pt", "pc", "%", "em", "ex"}
 
 
 def _svg_units(document, asked, notes):
-    """``(to_mm, (what the units were taken from, mm a unit))``: ``to_mm`` the 2 × 3 affine map from
-    svgelements' px (the root's viewBox applied) to mm, Y up. ``asked`` (a
+    """``(to_mm, (what the units were taken from, mm a unit))``: ``to_mm`` the 2 × 3 affine
+    map from svgelements' px (the root's viewBox applied) to mm, Y up. ``asked`` (a
     :data:`~.reading.UNITS` key): the drawing's own numbers, its user units, are in that unit
     (the root's width, height and viewBox undone); None: as its width, height and viewBox
     say."""
@@ -123,8 +123,8 @@ def _element_said(element):
 
 def _read_svg(data, tolerance_mm, units_asked=None):
     """``(polylines in mm, closed flags, skipped, notes, styles, (what the units were taken
-    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a :data:`~.reading.UNITS` key), in
-    place of the root's width, height and viewBox."""
+    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a
+    :data:`~.reading.UNITS` key), in place of the root's width, height and viewBox."""
 
     data, notes = screen_svg(data)
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)

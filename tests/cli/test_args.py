@@ -34,7 +34,7 @@ def _one_line_error(capsys, argv):
     with pytest.raises(SystemExit) as exit:
         main(argv)
     assert exit.value.code not in (0, None)
-    err = capsys.readouterr().err.strip() or str(exit.value.code)
+    err = capsys.readouterr().err.strip() or str(exit.value)
     lines = err.splitlines()
     assert "Traceback" not in err
     return lines[-1]
@@ -171,3 +171,24 @@ def test_argument_errors_are_one_line_for_every_command(capsys, tail):
         assert exit.value.code == 2, argv
         assert len(err.strip().splitlines()) == 1 and "usage:" not in err, (argv, err)
         assert "--help` lists the options" in err, (argv, err)
+
+
+def test_refusals_have_one_prefix_and_status_and_failed_work_another_status(tmp_path, capsys):
+    """argparse's refusal and the command's own (before any work) read alike: the command's
+    name, exit status 2. Work that fails once begun (here, the board's port) is status 1."""
+    drawing = tmp_path / "square.svg"
+    drawing.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                       'viewBox="0 0 10 10"><rect width="5" height="5"/></svg>')
+    said = {}
+    for name, argv in {"argparse": ["mark", str(drawing), "--speed", "fast"],
+                       "command": ["mark", "--estimate"],
+                       "work": ["mark", str(drawing), "--port", str(tmp_path / "no-port")]
+                       }.items():
+        with pytest.raises(SystemExit) as exit:
+            main(argv)
+        said[name] = exit.value.code, capsys.readouterr().err.splitlines()[-1]
+    assert said["argparse"][0] == said["command"][0] == 2 and said["work"][0] == 1
+    assert said["argparse"][1].startswith("galvoscan mark: error: argument --speed: ")
+    assert said["command"][1] == "galvoscan mark: error: give a drawing (FILE) or something " \
+                                 "to make (--text, --code, --image)"
+    assert said["work"][1].startswith(f"galvoscan mark: error: cannot open {tmp_path}")
