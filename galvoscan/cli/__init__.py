@@ -11,6 +11,7 @@ they share.
 """
 
 import argparse
+import difflib
 import sys
 from importlib.metadata import PackageNotFoundError, version
 
@@ -36,11 +37,31 @@ def _version():
 
 class _OneLineParser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (what was wrong, and where the options are
-    listed), not argparse's usage block; subcommands' parsers are of this class too."""
+    listed), not argparse's usage block; subcommands' parsers are of this class too.
+
+    An option a command does not know is refused by that command's parser (argparse leaves
+    it to the top one, whose help does not list it), with the nearest of its options."""
 
     def error(self, message):
         self.exit(REFUSED, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
                            f"options)\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras and not self._subparsers:         # a command's own parser: its options
+            self.error(f"unrecognized arguments: {' '.join(extras)}{self._nearest(extras)}")
+        return namespace, extras
+
+    def _nearest(self, extras):
+        """`` (did you mean --speed?)`` for the first unknown option like one of ours."""
+        for word in extras:
+            if word.startswith("--"):
+                near = difflib.get_close_matches(word.split("=")[0], [
+                    flag for flag in self._option_string_actions if flag.startswith("--")],
+                    n=1)
+                if near:
+                    return f" (did you mean {near[0]}?)"
+        return ""
 
 
 def _name_commands(parser):
