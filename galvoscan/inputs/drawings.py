@@ -112,16 +112,24 @@ def _scale_said(fits):
     return f"{math.floor(fits * 10 ** digits) / 10 ** digits:g}"
 
 
+def _ways_out(mm_per_unit, scale_said):
+    """What a drawing too large may be marked with: its numbers taken as mm, when it was
+    read in a larger unit; a ``scale_said`` (or none)."""
+    return "give " + ", or ".join(
+        (["--units mm if its numbers are millimetres"] if mm_per_unit > 1 else []) +
+        [scale_said]) if scale_said or mm_per_unit > 1 else "check its units (--units)"
+
+
 def _chords_said(error, scale, tolerance_mm):
     """The refusal of a curve with too many chords: the element or entity, its size as
-    marked, and the likely cause."""
+    marked, the units it was read in, and the ways out."""
     known = error.size_mm is not None and all(map(math.isfinite, error.size_mm))
     size = f", {_pair_said(*(v * scale for v in error.size_mm))}" if known else ""
-    where = f"{error.what}{size}{f' at --scale {scale:g}' if size and scale != 1 else ''}: " \
-        "a curve in it" if error.what else "a curve"
+    said, mm_per_unit = error.units or (None, 1.0)
+    where = f"{error.what}{size}{f' at --scale {scale:g}' if size and scale != 1 else ''}" \
+        f"{f' ({said})' if said else ''}: a curve in it" if error.what else "a curve"
     return (f"{where} would take more than {MAX_CHORDS:,} chords within {tolerance_mm:g} mm: "
-            f"coordinates far beyond any field (check the drawing's units: --units, or "
-            f"--scale)")
+            f"coordinates far beyond any field: {_ways_out(mm_per_unit, 'a smaller --scale')}")
 
 
 def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units_said, scale):
@@ -159,11 +167,9 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units
     if max(width, height) > MAX_EXTENT_MM:
         said, mm_per_unit = units_said
         fits = MAX_EXTENT_MM / max(width, height) * scale      # the largest scale that fits
-        ways = (["--units mm if its numbers are millimetres"] if mm_per_unit > 1 else []) + \
-            ([f"--scale {_scale_said(fits)} or less"] if fits >= SCALES[0] else [])
+        scale_said = f"--scale {_scale_said(fits)} or less" if fits >= SCALES[0] else None
         raise DrawingError(
             f"{path}: {_pair_said(width, height)}"
             f"{f' at --scale {scale:g}' if scale != 1 else ''} ({said}), more than "
-            f"{MAX_EXTENT_MM / 1000:g} m: "
-            f"{'give ' + ', or '.join(ways) if ways else 'check its units (--units)'}")
+            f"{MAX_EXTENT_MM / 1000:g} m: {_ways_out(mm_per_unit, scale_said)}")
     return drawing

@@ -397,7 +397,8 @@ def _read_dxf(data, tolerance_mm, units_asked=None):
             try:
                 _dxf_entity(entity, tolerance_mm / factor, out, skipped)
             except TooManyChords:
-                raise TooManyChords(_entity_said(entity), _size_mm(entity, factor)) from None
+                raise TooManyChords(_entity_said(entity), _size_mm(entity, factor),
+                                    (units_said, factor)) from None
             # A block's entities go with the reference's layer.
             layer = str(entity.dxf.get("layer", "0"))
             styles += [PathStyle(colour=colour, layer=layer) for _, _, colour in out[before:]]

@@ -25,12 +25,13 @@ UNITS = {"mm": (1.0, "millimetres"), "cm": (10.0, "centimetres"), "m": (1000.0, 
 
 class TooManyChords(DrawingError):
     """A curve that would take more than :data:`MAX_CHORDS` chords. The reader adds the
-    element or entity it is in (``what``) and that one's size in the drawing's mm
-    (``size_mm``: width, height, or None), and :func:`.drawings.load_drawing` says it."""
+    element or entity it is in (``what``), that one's size in the drawing's mm (``size_mm``:
+    width, height, or None) and the units it took the drawing's numbers in (``units``: what
+    they were taken from, mm a unit), and :func:`.drawings.load_drawing` says it."""
 
-    def __init__(self, what=None, size_mm=None):
+    def __init__(self, what=None, size_mm=None, units=None):
         super().__init__(f"a curve that would take more than {MAX_CHORDS:,} chords")
-        self.what, self.size_mm = what, size_mm
+        self.what, self.size_mm, self.units = what, size_mm, units
 
 
 def _one_line(error):

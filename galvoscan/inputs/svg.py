@@ -157,7 +157,7 @@ def _read_svg(data, tolerance_mm, units_asked=None):
                     tuple(np.abs(to_mm[:, :2]) @ [box[2] - box[0], box[3] - box[1]])
             except Exception:               # (svgelements cannot bound it: said without)
                 size = None
-            raise TooManyChords(_element_said(element), size) from None
+            raise TooManyChords(_element_said(element), size, units_said) from None
     return paths, closed, _counted(skipped), notes, styles, units_said
 
 

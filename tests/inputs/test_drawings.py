@@ -269,7 +269,7 @@ def test_huge_curves_are_refused_before_they_are_flattened(tmp_path):
     assert len(lines) == len(paths)
     for path, line in zip(paths, lines):
         # (The bulge's arc is one a drawing 500 m wide can hold: refused for its size.)
-        assert line.startswith(f"{path}: ") and ("check the drawing's units" in line or
+        assert line.startswith(f"{path}: ") and ("more than 1,000,000 chords" in line or
                                                  "more than 10 m" in line), line
 
 

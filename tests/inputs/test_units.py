@@ -110,22 +110,44 @@ def test_too_many_chords_names_the_entity_and_its_size(tmp_path):
     with pytest.raises(SystemExit) as refusal:
         main(["mark", str(tmp_path / "circle.dxf"), "--estimate"])
     assert str(refusal.value).endswith(
-        f"circle.dxf: CIRCLE entity #{circle.dxf.handle}, 2,000,000,000 × 2,000,000,000 m: a "
-        f"curve in "
-        f"it would take more than 1,000,000 chords within 0.01 mm: coordinates far beyond any "
-        f"field (check the drawing's units: --units, or --scale)")
+        f"circle.dxf: CIRCLE entity #{circle.dxf.handle}, 2,000,000,000 × 2,000,000,000 m "
+        f"(its $INSUNITS 4, millimetres): a curve in it would take more than 1,000,000 chords "
+        f"within 0.01 mm: coordinates far beyond any field: give a smaller --scale")
     doc, msp = new_dxf()
     text = msp.add_text("HUGE", height=1e9)
     doc.saveas(tmp_path / "text.dxf")
     with pytest.raises(SystemExit, match=rf"text.dxf: TEXT entity #{text.dxf.handle}, [\d,]+ × "
-                                         rf"[\d,]+ m at --scale 0.001: a curve in it would take "
-                                         rf"more than 1,000,000 chords"):
+                                         rf"[\d,]+ m at --scale 0.001 \(its \$INSUNITS 4, "
+                                         rf"millimetres\): a curve in it would take more than "
+                                         rf"1,000,000 chords"):
         main(["mark", str(tmp_path / "text.dxf"), "--scale", "0.001", "--estimate"])
     (tmp_path / "path.svg").write_text(svg('<path id="wild" d="M0 0 C 9e14 9e14 -9e14 9e14 1 '
                                            '0"/>'))
     with pytest.raises(SystemExit, match=r"path.svg: <path id='wild'> element, [\d,]+ × "
-                                         r"[\d,]+ m: a curve in it would take more than"):
+                                         r"[\d,]+ m \(its width 100mm and height 100mm: 1 mm "
+                                         r"a unit\): a curve in it would take more than"):
         main(["mark", str(tmp_path / "path.svg"), "--estimate"])
+
+
+def test_text_in_a_metres_file_of_mm_numbers(tmp_path, capsys):
+    """As ezdxf's text_alignments.dxf: lines of text 2.5 high in a file that says metres.
+    Its glyphs, 2.5 m high at 0.01 mm, are refused by their chords (naming the entity, its
+    size and the file's units), not after gigabytes of points; with --units mm, marked."""
+    doc, msp = new_dxf(units=6)
+    for row in range(3):
+        text = msp.add_text("The quick brown fox jumps over the lazy dog, twice or thrice",
+                            height=2.5)
+        text.set_placement((0, 8 * row))
+    doc.saveas(tmp_path / "text.dxf")
+    with pytest.raises(SystemExit, match=r"text.dxf: TEXT entity #[0-9A-F]+, [\d.]+ × [\d.]+ "
+                                         r"m \(its \$INSUNITS 6, metres\): a curve in it would "
+                                         r"take more than 1,000,000 chords within 0.01 mm: "
+                                         r"coordinates far beyond any field: give --units mm if "
+                                         r"its numbers are millimetres, or a smaller --scale$"):
+        main(["mark", str(tmp_path / "text.dxf"), "--estimate"])
+    capsys.readouterr()
+    width, height = size_of(estimate(capsys, tmp_path / "text.dxf", "--units", "mm")).expected
+    assert 80 < width < 100 and 18 < height < 22          # (three lines 8 apart)
 
 
 def test_a_drawing_scaled_down_is_flattened_for_its_marked_size(tmp_path):
