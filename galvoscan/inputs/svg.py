@@ -101,9 +101,10 @@ def _svg_units(document, asked, notes):
     px_per_user = np.array([[m.a, m.c, m.e], [m.b, m.d, m.f]], dtype=float)
     if asked is None:
         per_unit = MM_PER_PX * math.sqrt(abs(np.linalg.det(px_per_user[:, :2])))
-        said = (f"its width {width} and height {height}" if width and height else
-                "no width and height: its numbers taken as px, 96 per inch")
-        said += f": {per_unit:.4g} mm a unit" if width and height else ""
+        size = " and ".join(f"{name} {value}" for name, value in
+                            (("width", width), ("height", height)) if value)
+        said = f"its {size}: {per_unit:.4g} mm a unit" if size else \
+            "no width and height: its numbers taken as px, 96 per inch"
         return np.array([[MM_PER_PX, 0, 0], [0, -MM_PER_PX, 0]]), (said, per_unit)
     mm, name = UNITS[asked]
     if abs(np.linalg.det(px_per_user[:, :2])) < 1e-300:
