@@ -33,7 +33,7 @@ from .correction.upload import upload_table
 from .gateware.fields import WobbleShape
 from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
-from .inputs.drawings import load_drawing
+from .inputs.drawings import UNITS, load_drawing
 from .geometry.fill import HatchSet, LineOrder
 from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers
@@ -59,7 +59,7 @@ __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAY
            "load_profile",
            "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
            "FTDISPITransport",
-           "PlanError"]
+           "PlanError", "UNITS"]
 
 
 # --- what a job is made of -------------------------------------------------------------------
@@ -68,12 +68,15 @@ __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAY
 class Drawing:
     """An SVG or DXF drawing, ``origin`` (``centre``, ``lower-left`` or ``page``: the
     drawing's own 0,0) placed at ``offset_mm`` from the field's centre, scaled by ``scale``
-    about its centre and turned ``rotate_deg`` counter-clockwise."""
+    about its centre and turned ``rotate_deg`` counter-clockwise; ``units``: the unit its
+    numbers are in (``mm``, ``cm``, ``m``, ``in``, ``pt``, ``px``: :data:`UNITS`), in place
+    of those it declares (None: those)."""
     path: str
     origin: str = "centre"
     offset_mm: tuple = (0.0, 0.0)
     scale: float = 1.0
     rotate_deg: float = 0.0
+    units: str = None
 
 
 @dataclass(frozen=True)
@@ -211,8 +214,8 @@ def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.
     if isinstance(item, Drawing):
         placement = Placement(origin=item.origin, offset_mm=tuple(item.offset_mm),
                               scale=item.scale, rotate_deg=item.rotate_deg)
-        return MarkObject(load_drawing(item.path, tolerance_mm=tolerance_mm), placement,
-                          settings)
+        return MarkObject(load_drawing(item.path, tolerance_mm=tolerance_mm, units=item.units,
+                                       scale=item.scale), placement, settings)
     if isinstance(item, Text):
         spec = TextSpec(fields(item.text, serial=serial), item.height_mm, font=item.font,
                         align=item.align, letter_spacing_mm=item.letter_spacing_mm,

@@ -57,7 +57,7 @@ def test_suite_needs_a_checkout(tmp_path, capsys):
     import pytest
     with pytest.raises(SystemExit) as stop:
         main(["bench", "--quick", "--suite", str(tmp_path)])
-    message = str(stop.value.code)
+    message = str(stop.value)
     assert "not a galvoscan checkout" in message and "\n" not in message
 
 

@@ -18,7 +18,11 @@ from .study import (PAPER_FIELDS_MM, SWEEP_SIGMAS, Setup, run_spiral,
 from .wobble import WOBBLE_AMPLITUDES_UM, WOBBLE_FREQUENCIES_HZ, wobble_study
 
 
-__all__ = ["ROWS", "format_table", "run_analyze"]
+__all__ = ["ROWS", "format_table", "run_analyze", "AnalysisInputError"]
+
+
+class AnalysisInputError(ValueError):
+    """A setting the analysis cannot be run with (the command line says it in one line)."""
 
 
 #: Metric rows of the printed table: key, label, format.
@@ -131,7 +135,7 @@ def run_analyze(args):
                                  "must be at most 100 kHz with --wobble")
             galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
         except ValueError as error:
-            raise SystemExit(f"galvoscan: error: {error}")
+            raise AnalysisInputError(str(error)) from None
         return _run_wobble(args, head, laser, galvo)
 
     try:
@@ -168,7 +172,7 @@ def run_analyze(args):
                                  interpolation=interpolation) if args.compare else []
         bar.close()
     except ValueError as error:
-        raise SystemExit(f"galvoscan: error: {error}")
+        raise AnalysisInputError(str(error)) from None
 
     written = []
     if not args.no_plots:

@@ -11,9 +11,11 @@ they share.
 """
 
 import argparse
+import difflib
 import sys
 from importlib.metadata import PackageNotFoundError, version
 
+from .args import FAILED, REFUSED, CLIError
 from . import (analyze, bench, board, build, clean, correct, link, machine, mark, prove, sim,
                standalone, testgrid)
 
@@ -35,11 +37,41 @@ def _version():
 
 class _OneLineParser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (what was wrong, and where the options are
-    listed), not argparse's usage block; subcommands' parsers are of this class too."""
+    listed), not argparse's usage block; subcommands' parsers are of this class too.
+
+    An option a command does not know is refused by that command's parser (argparse leaves
+    it to the top one, whose help does not list it), with the nearest of its options."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
-                     f"options)\n")
+        self.exit(REFUSED, f"{self.prog}: error: {message} (`{self.prog} --help` lists the "
+                           f"options)\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras and not self._subparsers:         # a command's own parser: its options
+            self.error(f"unrecognized arguments: {' '.join(extras)}{self._nearest(extras)}")
+        return namespace, extras
+
+    def _nearest(self, extras):
+        """`` (did you mean --speed?)`` for the first unknown option like one of ours."""
+        for word in extras:
+            if word.startswith("--"):
+                near = difflib.get_close_matches(word.split("=")[0], [
+                    flag for flag in self._option_string_actions if flag.startswith("--")],
+                    n=1)
+                if near:
+                    return f" (did you mean {near[0]}?)"
+        return ""
+
+
+def _name_commands(parser):
+    """Each command's parser gives its name (``galvoscan mark``) to the arguments it parses:
+    the prefix of the errors said while it runs."""
+    parser.set_defaults(prog=parser.prog)
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in set(action.choices.values()):
+                _name_commands(sub)
 
 
 def parser():
@@ -54,13 +86,23 @@ def parser():
     commands = top.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for group in GROUPS:
         group.add_parsers(commands)
+    _name_commands(top)
     return top
 
 
 def main(argv=None):
-    args = parser().parse_args(argv)
+    """Run the command ``argv`` gives (None: the process's). Every error is one line,
+    ``galvoscan COMMAND: error: …``, with exit status 2 when the command was refused before
+    any work (argparse's refusals and :func:`.args.fail`'s) and 1 when the work failed
+    (:func:`.args.failed`, a file that could not be written after all)."""
+    args = None
     try:
+        args = parser().parse_args(argv)
         return args.run(args) or 0
+    except CLIError as error:
+        error.prog = getattr(args, "prog", error.prog)      # (None: refused while parsed)
+        print(error, file=sys.stderr)
+        raise
     except BrokenPipeError:
         # Output piped into `head` and the like: stop quietly.
         sys.stderr.close()
@@ -74,5 +116,6 @@ def main(argv=None):
         # A file that could not be written or read after all (a full disk, a lost device):
         # one line, not a traceback. Paths are checked when parsed, so this is the exception.
         where = f" {error.filename}" if error.filename else ""
-        print(f"galvoscan: error:{where} {error.strerror or error}", file=sys.stderr)
-        return 1
+        print(f"{getattr(args, 'prog', 'galvoscan')}: error:{where} {error.strerror or error}",
+              file=sys.stderr)
+        return FAILED

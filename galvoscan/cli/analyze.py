@@ -4,7 +4,7 @@ import json
 from pathlib import Path
 
 from ..analysis.galvo import GalvoModel
-from .args import (INTERPOLATIONS, add_table_options, field_mm, number_in, output_dir,
+from .args import (INTERPOLATIONS, add_table_options, fail, field_mm, number_in, output_dir,
                    register_int)
 
 
@@ -15,8 +15,11 @@ def _cmd_analyze(args):
     if args.delays:
         return _cmd_delays(args)
     # Here: analysis.report takes 1.7 s to import; `galvoscan --help` need not wait.
-    from ..analysis.report import run_analyze
-    return run_analyze(args)
+    from ..analysis.report import AnalysisInputError, run_analyze
+    try:
+        return run_analyze(args)
+    except AnalysisInputError as error:
+        fail(error)
 
 
 def _cmd_delays(args):

@@ -14,7 +14,8 @@ from ..settings.laser import BAUD, LINK_TIMEOUT_S, PASSES, POWER, PRR, SPEED, TI
 from ..settings.schema import SettingError, number_text as _number
 
 
-__all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "field_mm",
+__all__ = ["CLIError", "REFUSED", "FAILED", "fail", "failed", "int_in", "number_in",
+           "register_int", "sigma", "field_mm",
            "table_points", "output_file", "image_file", "output_dir", "read_text",
            "add_table_options", "table_from", "settings_from", "INTERPOLATIONS", "baud", "add_baud_option",
            "add_link_options", "open_transport", "open_link", "add_backend_option",
@@ -22,15 +23,36 @@ __all__ = ["CLIError", "fail", "int_in", "number_in", "register_int", "sigma", "
            "power_percent", "passes"]
 
 
-class CLIError(SystemExit):
-    """A one-line error: ``galvoscan: error: …`` on stderr and exit status 1."""
+#: Exit statuses. A refusal (the command line, a file or a setting it names, found wrong
+#: before any work: nothing built, sent or written) is 2, as argparse's own refusals are, so
+#: that a script tells "I asked wrongly" from "the work failed" (a board, a link, a tool):
+#: 1. Both are said alike, ``galvoscan COMMAND: error: …``, in one line.
+REFUSED, FAILED = 2, 1
 
-    def __init__(self, message):
-        super().__init__(f"galvoscan: error: {message}")
+
+class CLIError(SystemExit):
+    """A one-line error and its exit status (:data:`REFUSED` or :data:`FAILED`):
+    :func:`galvoscan.cli.main` says it on stderr as ``galvoscan COMMAND: error: …`` (its
+    ``prog``, the command's, set there), as argparse says its own."""
+
+    prog = "galvoscan"
+
+    def __init__(self, message, status=REFUSED):
+        super().__init__(status)
+        self.message = str(message)
+
+    def __str__(self):
+        return f"{self.prog}: error: {self.message}"
 
 
 def fail(message):
-    raise CLIError(message)
+    """Refuse, before any work: one line, exit status 2."""
+    raise CLIError(message, REFUSED)
+
+
+def failed(message):
+    """The work failed (a board, a link, a tool, after it began): one line, exit status 1."""
+    raise CLIError(message, FAILED)
 
 
 # --- numbers -------------------------------------------------------------------------------------
@@ -311,9 +333,9 @@ def open_transport(*, port=None, spi=None, baud=None, timeout=LINK_TIMEOUT_S, sc
             return FTDISPITransport(spi, frequency=sck)
         return SerialTransport(port, baud=baud or DEFAULT_BAUD, timeout=timeout)
     except ClientError as error:
-        fail(error)
+        failed(error)
     except Exception as error:   # serial.SerialException and the like: say what failed
-        fail(f"cannot open {spi or port}: {error}")
+        failed(f"cannot open {spi or port}: {error}")
 
 
 def open_link(args):
@@ -359,6 +381,6 @@ def simulated_board(args, **kwargs):
                               **kwargs)
     except CompileError as error:
         if kwargs.get("netlist"):
-            fail(f"the netlist cannot be simulated: {error}")
-        fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
-             f"Amaranth's)")
+            failed(f"the netlist cannot be simulated: {error}")
+        failed(f"the compiled simulator cannot be built: {error} (--backend python runs "
+               f"Amaranth's)")

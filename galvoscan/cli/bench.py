@@ -4,7 +4,7 @@ import json
 from pathlib import Path
 import sys
 
-from .args import add_backend_option, fail, output_file, read_text
+from .args import add_backend_option, fail, failed, output_file, read_text
 
 
 __all__ = ["add_parsers"]
@@ -34,8 +34,8 @@ def _cmd_bench(args):
     if args.docs:
         try:
             write_docs(args.docs, result)
-        except (OSError, ValueError) as error:
-            fail(error)
+        except (OSError, ValueError) as error:  # (after the run: the work failed)
+            failed(error)
     if args.json:
         print(json.dumps(result, indent=2))
     else:

@@ -1,9 +1,8 @@
 """``galvoscan board --sim``: a board without hardware, its serial port on a pseudo-terminal."""
 
-import sys
 import time
 
-from .args import add_backend_option, baud, fail, simulated_board
+from .args import add_backend_option, baud, fail, failed, simulated_board
 
 
 __all__ = ["add_parsers"]
@@ -56,9 +55,7 @@ def _cmd_board(args):
     finally:
         server.stop()
     if server.error is not None:
-        print(f"galvoscan: error: the simulated board stopped: {server.error}",
-              file=sys.stderr)
-        return 1
+        failed(f"the simulated board stopped: {server.error}")
     wall = time.monotonic() - started
     print(f"stopped after {board.now * 1e3:.1f} ms of board time in {wall:.0f} s "
           f"({_fraction((board.now - board_started) / max(wall, 1e-9))} of real time): "

@@ -12,7 +12,7 @@ from ..correction.files import load_table, TableFileError
 from ..gateware.clocking import check_clocks
 from ..gateware.field.correction_table import CorrectionTable, TABLE_SIZES
 from ..toolchain import tool, ToolchainError
-from .args import (add_baud_option, add_table_options, fail, int_in, number_in, output_dir,
+from .args import (add_baud_option, add_table_options, fail, failed, int_in, number_in, output_dir,
                    output_file, settings_from, table_from)
 
 
@@ -102,8 +102,10 @@ def _cmd_build(args):
                                  clock=args.clock, bit_rate=args.bit_rate, device=args.device,
                                  **({} if args.baud is None else {"baud": args.baud}),
                                  **features)
-    except (ValueError, BuildError) as error:   # a clock the PLL cannot make, timing not met
+    except ValueError as error:                 # a clock the PLL cannot make: refused
         fail(error)
+    except BuildError as error:                 # timing not met, a tool that failed
+        failed(error)
     if args.json:
         print(json.dumps(report.as_dict(), indent=2))
         return 0

@@ -12,6 +12,7 @@ contour, outline) :mod:`galvoscan.plan.layer_keys`', which a layer's keys are re
 from dataclasses import dataclass, field
 
 from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
+from ..inputs.drawings import SCALES, UNITS
 from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
@@ -204,8 +205,14 @@ OPTIONS = (
         type=pair_mm("--offset"), default=(0.0, 0.0), metavar="X,Y",
         help="where in the field, mm from its centre (default: 0,0; a negative X as "
              "--offset=-5,2)"), section="drawing"),
+    Option("--units", "placement", dict(
+        choices=list(UNITS), default=None,
+        help="the unit the drawing's numbers are in, in place of the units it declares (an "
+             "SVG's width, height and viewBox; a DXF's $INSUNITS): " +
+             ", ".join(f"{unit} ({name})" for unit, (_, name) in UNITS.items()) +
+             "; pt and px are 1/72 and 1/96 in"), section="drawing"),
     Option("--scale", "placement", dict(
-        type=number_in("scale", 1e-3, 1e3), default=1.0, metavar="K",
+        type=number_in("scale", *SCALES), default=1.0, metavar="K",
         help="size factor, about the drawing's centre (default: 1)"), section="drawing"),
     Option("--rotate", "placement", dict(
         type=number_in("rotate", -360, 360), default=0.0, metavar="DEG",

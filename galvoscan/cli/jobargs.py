@@ -15,7 +15,8 @@ from ..outputs.stream import JobAborted, JobInterrupted
 from ..plan.vector_job import frame_segments
 from ..sim.board import PTYServer
 from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
-from .args import add_backend_option, add_setting, baud, fail, open_transport, simulated_board
+from .args import (add_backend_option, add_setting, baud, fail, failed, open_transport,
+                   simulated_board)
 
 
 __all__ = ["add_job_options", "add_job_link_options", "job_settings_values", "board_link",
@@ -106,7 +107,7 @@ def board_link(args, profile, *, wobble=False):
         finally:
             server.stop()
             if server.error is not None:
-                fail(f"the simulated board stopped: {server.error}")
+                failed(f"the simulated board stopped: {server.error}")
         return
     baud_rate = link_baud(args, profile)
     transport = open_transport(port=args.port or (None if args.spi else profile.link.port),
@@ -129,9 +130,9 @@ def stopped_in_one_line(*, on_complete=None):
         raise JobInterrupted(f"{error}{more}") from error
     except JobAborted as error:
         more = on_complete() if error.complete and on_complete is not None else ""
-        fail(f"job stopped, laser disarmed: {error}{more}")
+        failed(f"job stopped, laser disarmed: {error}{more}")
     except (ClientError, OSError) as error:
-        fail(f"job stopped, laser disarm sent: the link failed: {error}")
+        failed(f"job stopped, laser disarm sent: the link failed: {error}")
 
 
 def frame_job(streamer, profile, outline_mm, times, registers, *, timeout_s, say, what):

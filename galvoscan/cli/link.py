@@ -3,7 +3,7 @@ written and read over the serial port or SPI."""
 
 import json
 
-from .args import add_link_options, fail, open_link, table_points
+from .args import add_link_options, fail, failed, open_link, table_points
 
 
 __all__ = ["add_parsers", "register_table"]
@@ -89,8 +89,8 @@ def _cmd_send(args):
                 else:
                     board.write(name, value)
                 print(f"{name} = {value}{' (read back)' if args.verify else ''}")
-        except ClientError as error:
-            fail(error)
+        except ClientError as error:           # the board or the link, once opened
+            failed(error)
     return 0
 
 
@@ -104,8 +104,8 @@ def _cmd_read(args):
         board = HostClient(link)
         try:
             values = {name: board.read(name) for name in args.names}
-        except ClientError as error:
-            fail(error)
+        except ClientError as error:           # the board or the link, once opened
+            failed(error)
     if args.json:
         print(json.dumps(values))
     else:
@@ -127,8 +127,8 @@ def _cmd_reset(args):
             flags = Status.from_bits(board.read("status"))
             free = board.read("fifo_free") if Capabilities.from_bits(
                 board.read("caps")).vector else None
-        except ClientError as error:
-            fail(error)
+        except ClientError as error:           # the board or the link, once opened
+            failed(error)
     latched = [name for name in ("interlock", "watchdog", "alarm", "link")
                if getattr(flags, f"fault_{name}")]
     print("reset: every register back to its power-up value (laser disarmed)" +

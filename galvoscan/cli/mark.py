@@ -23,7 +23,7 @@ from ..outputs.stream import (JobStreamer, StreamReport, expected_underruns,
                               link_segments_per_s)
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..platforms.ulx3s import ULX3S_BAUD
-from .args import check_backend_needs_sim, fail, image_file, int_in, read_text
+from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link, link_baud,
                       job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
@@ -70,7 +70,7 @@ def _plan(args, profile, serial=None):
         for entry in entries["drawing"]:
             drawing = api.Drawing(entry["file"], origin=entry["origin"],
                                   offset_mm=entry["offset"], scale=entry["scale"],
-                                  rotate_deg=entry["rotate"])
+                                  rotate_deg=entry["rotate"], units=entry["units"])
             try:
                 drawings.append(api.mark_object(drawing, settings, profile,
                                                 tolerance_mm=args.tolerance))
@@ -236,14 +236,14 @@ def _cmd_mark(args):
                 (f" (damaged on the link and sent again {report.resent} time(s): every "
                  f"frame landed)" if counters["errors"] else ""))
             if not report.clean:
-                fail("the board refused segments or the queue ran dry: the job was not marked "
+                failed("the board refused segments or the queue ran dry: the job was not marked "
                      "as planned (see the counts above)" +
                      ("; the serial was not advanced" if serial is not None else ""))
             if counter is not None and not args.sim:
                 try:
                     counter.advance()       # this part is marked: its number is taken
                 except PlanError as error:
-                    fail(error)
+                    failed(error)
         # Every part's, summed: the marks and pulses off the wires are all of them too.
         every = StreamReport.total(reports)
         counts = every.counters

@@ -8,7 +8,7 @@ import sys
 import time
 
 from ..toolchain import ToolchainError
-from .args import fail, output_dir
+from .args import fail, failed, output_dir
 
 
 __all__ = ["add_parsers"]
@@ -57,7 +57,7 @@ def _cmd_prove(args):
                 print(f"  {result.name} {result.task} {result.status} in "
                       f"{result.seconds:.1f} s", file=sys.stderr, flush=True)
     except ToolchainError as error:          # Yices or the YoWASP tools missing
-        fail(error)
+        failed(error)
     rows = [results[key] for key in work]
     for proof in selected:
         print(f"{proof.name}: {sum(r.seconds for r in rows if r.name == proof.name):.1f} s",

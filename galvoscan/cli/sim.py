@@ -12,7 +12,7 @@ from ..gateware.host.regmap import BY_NAME
 from ..gateware.settings import ScanSettings
 from ..gateware.sources.spiral import PARK_FRAMES
 from ..inputs.job_file import JobError, parse_job
-from .args import (INTERPOLATIONS, add_backend_option, add_table_options, fail, image_file,
+from .args import (INTERPOLATIONS, add_backend_option, add_table_options, fail, failed, image_file,
                    int_in, number_in, output_file, prr_khz, read_text, register_int, settings_from,
                    table_from)
 
@@ -286,9 +286,9 @@ def _compiled_or_one_line(command, args):
         return command(args)
     except CompileError as error:
         if args.netlist:
-            fail(f"the netlist cannot be simulated: {error}")
-        fail(f"the compiled simulator cannot be built: {error} (--backend python runs "
-             f"Amaranth's)")
+            failed(f"the netlist cannot be simulated: {error}")
+        failed(f"the compiled simulator cannot be built: {error} (--backend python runs "
+               f"Amaranth's)")
 
 
 def add_parsers(commands):

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from ..settings.laser import PRESS_TIMEOUT
-from .args import add_backend_option, add_setting, fail, int_in, output_file, read_bytes
+from .args import add_backend_option, add_setting, fail, failed, int_in, output_file, read_bytes
 from .machine import add_machine_option, profile_from
 from .job_reports import FIELD_FRAME
 from .mark import add_drawing_options, add_plan_outputs, planned_job
@@ -135,7 +135,7 @@ def _cmd_flash(args):
             finally:
                 configured = release()
     except FlashingError as error:
-        fail(error)
+        failed(error)
     finally:
         bar.close()
     for address, data in regions:
@@ -145,7 +145,7 @@ def _cmd_flash(args):
     print(f"{what}{f' (the file {args.to})' if args.to else ''}")
     if configured is False:             # (the ULX3S's ECP5 says whether it took the flash)
         if bitstream is not None:
-            fail("the ECP5 did not configure from the bitstream written (DONE stays low)")
+            failed("the ECP5 did not configure from the bitstream written (DONE stays low)")
         print("galvoscan: note: the ECP5 did not configure from the flash (DONE stays low): "
               "is there a bitstream at 0? (galvoscan flash BITSTREAM writes one)",
               file=sys.stderr)
@@ -195,8 +195,8 @@ def _cmd_standalone(args):
             board.run_for(step)
             waited += step
             if waited > args.timeout:
-                fail(f"the player was still busy after {args.timeout:g} s of the board's "
-                     f"time (--timeout)")
+                failed(f"the player was still busy after {args.timeout:g} s of the board's "
+                       f"time (--timeout)")
         result = PlayerResult(status.result)
         presses.append(result)
         print(f"press {len(presses)}: {result.label}", file=sys.stderr if args.json else

@@ -8,7 +8,7 @@ from ..geometry.field import PlanError
 from ..outputs.stream import JobStreamer
 from ..plan.test_grid import axis_values, plan_test_grid
 from ..settings.laser import POWER, PRR, SPEED
-from .args import check_backend_needs_sim, fail, image_file, int_in, number_in, setting_type
+from .args import check_backend_needs_sim, fail, failed, image_file, int_in, number_in, setting_type
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
                       progress_bar, stopped_in_one_line)
 from .machine import add_machine_option, profile_from
@@ -94,7 +94,7 @@ def _cmd_test_grid(args):
                     report = streamer.run_vector(job.segments, job.registers,
                                                  timeout_s=timeout, ready_timeout_s=timeout)
                     if not report.clean:
-                        fail("the board refused frames or the queue ran dry: the grid was not "
+                        failed("the board refused frames or the queue ran dry: the grid was not "
                              "marked as planned")
                     if entry is not None:
                         entry["pulses"] = report.pulses if board is None else \

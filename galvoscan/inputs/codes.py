@@ -22,7 +22,7 @@ from ..geometry.drawing import Drawing
 from ..geometry.field import PlanError
 
 
-__all__ = ["CodeKind", "CodeFill", "CodeSpec", "code_modules", "code_drawing"]
+__all__ = ["CodeKind", "CodeFill", "CodeSpec", "code_modules", "code_drawing", "data_said"]
 
 
 class CodeKind(enum.Enum):
@@ -42,6 +42,15 @@ class CodeFill(enum.Enum):
 QUIET_MODULES = {CodeKind.QR: 4, CodeKind.DATAMATRIX: 1, CodeKind.CODE128: 10}
 #: QR's error-correction levels (the share of the symbol that may be lost: 7 … 30 %).
 QR_LEVELS = ("L", "M", "Q", "H")
+#: A code's data is shown whole up to this many characters, else cut with an ellipsis: a
+#: URL cut without one reads as the whole URL, and the user takes the code for a wrong one.
+DATA_SHOWN = 40
+
+
+def data_said(data):
+    """``data`` quoted as the notes, refusals and the preview's title show it: whole, or its
+    first :data:`DATA_SHOWN` characters and "…" inside the quotes."""
+    return repr(data if len(data) <= DATA_SHOWN else data[:DATA_SHOWN - 1] + "…")
 
 
 @dataclass(frozen=True)
@@ -91,7 +100,7 @@ def code_modules(spec):
         symbol = zxingcpp.create_barcode(spec.data, formats[spec.kind], **options)
         image = np.asarray(symbol.to_image(scale=1, add_quiet_zones=False))
     except (ValueError, RuntimeError) as error:
-        raise PlanError(f"{spec.kind.value} cannot hold {spec.data[:40]!r}: "
+        raise PlanError(f"{spec.kind.value} cannot hold {data_said(spec.data)}: "
                         f"{' '.join(str(error).split()) or type(error).__name__}") from None
     dark = image < 128
     return dark[:1] if spec.kind is CodeKind.CODE128 else dark
@@ -135,7 +144,7 @@ def code_drawing(spec):
     for path in paths:
         path.flags.writeable = False
     quiet = spec.quiet * module
-    name = f"{spec.kind.value} code {spec.data[:20]!r}"
+    name = f"{spec.kind.value} code {data_said(spec.data)}"
     notes = (f"{name}: {columns} × {rows if not height else 1} modules of "
              f"{module * 1000:.0f} µm, {spec.size_mm:g} mm wide; keep {quiet:.2f} mm clear "
              f"around it (its quiet zone, {spec.quiet} module{'' if spec.quiet == 1 else 's'})",)

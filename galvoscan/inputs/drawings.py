@@ -15,20 +15,22 @@ import numpy as np
 
 from ..geometry.drawing import Drawing, DrawingError
 from .dxf import _read_dxf
-from .reading import _counted, _one_line
+from .reading import MAX_CHORDS, UNITS, TooManyChords, _counted, _one_line
 from .svg import _read_svg
 
 
-__all__ = ["load_drawing"]
+__all__ = ["load_drawing", "UNITS"]
 
 
 #: Refused beyond this extent: no lens field is 10 m wide, so it is a unit mistake.
 MAX_EXTENT_MM = 10_000.0
+#: The sizes a drawing may be placed at, smallest and largest (``mark --scale``).
+SCALES = (1e-3, 1e3)
 #: Below this, two consecutive points are one (float noise of transforms and flattening).
 SAME_POINT_MM = 1e-9
 
 
-def load_drawing(path, *, tolerance_mm=0.01):
+def load_drawing(path, *, tolerance_mm=0.01, units=None, scale=1.0):
     """Read an SVG or DXF drawing.
 
     Parameters
@@ -36,7 +38,15 @@ def load_drawing(path, *, tolerance_mm=0.01):
     path : str or os.PathLike
         ``.svg`` or ``.dxf`` (by suffix, any case).
     tolerance_mm : float
-        The largest distance allowed between a chord and the curve it stands for.
+        The largest distance allowed between a chord and the curve it stands for, as marked
+        (at ``scale``).
+    units : str or None
+        The unit the drawing's numbers are in (a key of :data:`UNITS`: ``mm``, ``cm``, ``m``,
+        ``in``, ``pt``, ``px``), in place of what it declares (an SVG's width, height and
+        viewBox; a DXF's $INSUNITS); None: what it declares.
+    scale : float
+        The size factor it will be placed at (the drawing returned is not scaled): curves are
+        flattened for the size they are marked at, and the size refused beyond is that size.
 
     Returns
     -------
@@ -55,6 +65,13 @@ def load_drawing(path, *, tolerance_mm=0.01):
         raise DrawingError(f"{path}: not a drawing galvoscan reads (.svg, .dxf, .job)")
     if not (tolerance_mm > 0 and math.isfinite(tolerance_mm)):
         raise DrawingError(f"{path}: the flattening tolerance must be > 0 mm, not {tolerance_mm}")
+    if units is not None and units not in UNITS:
+        raise DrawingError(f"{path}: units {units!r}: one of {', '.join(UNITS)}")
+    if not (scale > 0 and math.isfinite(scale)):
+        raise DrawingError(f"{path}: the scale must be > 0, not {scale}")
+    # The chords are made in the drawing's own mm: finer where it is scaled down (a chord
+    # 0.01 mm off as marked is 10 mm off in a drawing marked at 1/1000).
+    tolerance = tolerance_mm / scale
     try:
         data = path.read_bytes()
     except IsADirectoryError:
@@ -67,17 +84,57 @@ def load_drawing(path, *, tolerance_mm=0.01):
         raise DrawingError(f"{path}: empty file")
     try:
         reader = _read_svg if suffix == ".svg" else _read_dxf
-        raw, closed, skipped, notes, styles = reader(data, tolerance_mm)
+        raw, closed, skipped, notes, styles, units_said = reader(data, tolerance, units)
+    except TooManyChords as error:
+        raise DrawingError(f"{path}: {_chords_said(error, scale, tolerance_mm)}") from None
     except DrawingError as error:
         raise DrawingError(f"{path}: {error}") from None
     except Exception as error:              # the libraries raise many types on bad input
         kind = suffix[1:].upper()
         raise DrawingError(f"{path}: not a readable {kind} file ({_one_line(error)})") from None
-    return _finish(path, raw, closed, skipped, notes, tolerance_mm, styles)
+    return _finish(path, raw, closed, skipped, notes, tolerance, styles, units_said, scale)
 
 
-def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles):
-    """Clean the polylines up and check them: one rule set for both formats."""
+def _pair_said(width_mm, height_mm):
+    """A width and height as a person reads them: both in m when the larger is a metre or
+    more, else in mm; 3 figures, thousands grouped (``1,200 × 800 m``)."""
+    per, unit = (1000.0, "m") if max(width_mm, height_mm) >= 1000 else (1.0, "mm")
+
+    def figures(mm):
+        value = float(f"{mm / per:.3g}")
+        return f"{value:,.0f}" if value >= 100 else f"{value:g}"
+    return f"{figures(width_mm)} × {figures(height_mm)} {unit}"
+
+
+def _scale_said(fits):
+    """The largest scale that fits, rounded down to 2 figures (it must fit as said)."""
+    digits = 1 - math.floor(math.log10(fits))
+    return f"{math.floor(fits * 10 ** digits) / 10 ** digits:g}"
+
+
+def _ways_out(mm_per_unit, scale_said):
+    """What a drawing too large may be marked with: its numbers taken as mm, when it was
+    read in a larger unit; a ``scale_said`` (or none)."""
+    return "give " + ", or ".join(
+        (["--units mm if its numbers are millimetres"] if mm_per_unit > 1 else []) +
+        [scale_said]) if scale_said or mm_per_unit > 1 else "check its units (--units)"
+
+
+def _chords_said(error, scale, tolerance_mm):
+    """The refusal of a curve with too many chords: the element or entity, its size as
+    marked, the units it was read in, and the ways out."""
+    known = error.size_mm is not None and all(map(math.isfinite, error.size_mm))
+    size = f", {_pair_said(*(v * scale for v in error.size_mm))}" if known else ""
+    said, mm_per_unit = error.units or (None, 1.0)
+    where = f"{error.what}{size}{f' at --scale {scale:g}' if size and scale != 1 else ''}" \
+        f"{f' ({said})' if said else ''}: a curve in it" if error.what else "a curve"
+    return (f"{where} would take more than {MAX_CHORDS:,} chords within {tolerance_mm:g} mm: "
+            f"coordinates far beyond any field: {_ways_out(mm_per_unit, 'a smaller --scale')}")
+
+
+def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units_said, scale):
+    """Clean the polylines up and check them: one rule set for both formats (``tolerance_mm``
+    in the drawing's own mm, ``scale`` the size it is marked at)."""
     paths, closed, kept, degenerate = [], [], [], 0
     for points, is_closed, style in zip(raw, closed_flags, styles):
         points = np.array(points, dtype=float).reshape(-1, 2)
@@ -106,9 +163,13 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles):
     drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes),
                       tuple(kept))
     xmin, ymin, xmax, ymax = drawing.bounds()
-    if max(xmax - xmin, ymax - ymin) > MAX_EXTENT_MM:
-        said = [note for note in notes if "units" in note]
-        raise DrawingError(f"{path}: {xmax - xmin:.6g} × {ymax - ymin:.6g} mm, more than "
-                           f"{MAX_EXTENT_MM / 1000:g} m: check the drawing's units"
-                           f"{f' ({said[0]})' if said else ''}")
+    width, height = (xmax - xmin) * scale, (ymax - ymin) * scale
+    if max(width, height) > MAX_EXTENT_MM:
+        said, mm_per_unit = units_said
+        fits = MAX_EXTENT_MM / max(width, height) * scale      # the largest scale that fits
+        scale_said = f"--scale {_scale_said(fits)} or less" if fits >= SCALES[0] else None
+        raise DrawingError(
+            f"{path}: {_pair_said(width, height)}"
+            f"{f' at --scale {scale:g}' if scale != 1 else ''} ({said}), more than "
+            f"{MAX_EXTENT_MM / 1000:g} m: {_ways_out(mm_per_unit, scale_said)}")
     return drawing

@@ -14,7 +14,7 @@ from logging.handlers import BufferingHandler
 import math
 
 import numpy as np
-from ezdxf import colors, recover, units
+from ezdxf import bbox, colors, recover, units
 from ezdxf.addons import MTextExplode, text2path
 from ezdxf.document import Drawing
 from ezdxf.entities.boundary_paths import EdgePath, PolylinePath
@@ -23,7 +23,7 @@ from ezdxf.lldxf.tagger import binary_tags_loader
 from ezdxf.math import bulge_to_arc, ConstructionArc
 
 from ..geometry.drawing import DrawingError, PathStyle
-from .reading import _chords, _counted, _one_line, _round_chords
+from .reading import UNITS, TooManyChords, _chords, _counted, _one_line, _round_chords
 
 
 __all__ = []                                # nothing public: load_drawing reads DXF files
@@ -33,9 +33,11 @@ __all__ = []                                # nothing public: load_drawing reads
 _TEXT_TYPES = {"TEXT", "MTEXT", "ATTRIB"}
 #: How a binary DXF file starts (AutoCAD's DXF reference, "Binary DXF Files").
 _BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
+#: The $INSUNITS codes of :data:`~.reading.UNITS`' units (AutoCAD's DXF reference, $INSUNITS).
+_INSUNITS = {1: "in", 4: "mm", 5: "cm", 6: "m"}
 #: mm per $INSUNITS unit where the definition is exact (ezdxf's table has 1 in = 25.4000000001).
-_EXACT_MM = {1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0, 8: 25.4e-6, 9: 0.0254, 10: 914.4,
-             13: 1e-3, 14: 100.0}
+_EXACT_MM = {**{code: UNITS[unit][0] for code, unit in _INSUNITS.items()}, 2: 304.8,
+             8: 25.4e-6, 9: 0.0254, 10: 914.4, 13: 1e-3, 14: 100.0}
 
 
 def _xy(vertices):
@@ -323,7 +325,38 @@ def _dxf_entity(entity, tolerance, out, skipped, matrix=None, depth=0, block_col
                     closed, colour))
 
 
-def _read_dxf(data, tolerance_mm):
+def _units(code, asked, notes):
+    """``(mm per unit, what the units were taken from)``: ``asked`` (a :data:`~.reading.UNITS`
+    key, None: the file's), else the file's $INSUNITS ``code``; how, said in ``notes``."""
+    try:
+        name = UNITS[_INSUNITS[code]][1] if code in _INSUNITS else units.decode(code)
+    except (IndexError, TypeError, ValueError):     # a code AutoCAD does not define
+        name = "a unit unknown to ezdxf"
+    declared = f"its $INSUNITS {code}, {name}" if code else "no $INSUNITS: taken as mm"
+    if asked is not None:
+        notes.append(f"DXF numbers taken as {UNITS[asked][1]} (--units {asked}; "
+                     f"{declared})")
+        return UNITS[asked][0], f"--units {asked}"
+    if code == units.InsertUnits.Unitless:
+        notes.append("DXF has no units ($INSUNITS 0): taken as mm")
+        return 1.0, declared
+    if code in _EXACT_MM:
+        factor = _EXACT_MM[code]
+        if factor != 1.0:
+            notes.append(f"DXF units {units.decode(code)} ($INSUNITS {code}): "
+                         f"{factor:g} mm each")
+        return factor, declared
+    try:
+        return units.conversion_factor(code, units.InsertUnits.Millimeters), declared
+    except (TypeError, ValueError):
+        raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm "
+                           f"(--units says what they are)") from None
+
+
+def _read_dxf(data, tolerance_mm, units_asked=None):
+    """``(polylines in mm, closed flags, skipped, notes, styles, (what the units were taken
+    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a
+    :data:`~.reading.UNITS` key), in place of the file's $INSUNITS."""
 
     # recover reads damaged text files in any encoding; binary DXF it does not (it takes the
     # sentinel for a group code), so that is loaded as ezdxf.readfile loads it, then audited.
@@ -351,20 +384,7 @@ def _read_dxf(data, tolerance_mm):
     notes = [f"ezdxf: {_one_line(record.getMessage())}" for record in said.buffer[:3]]
     if auditor.has_fixes:
         notes.append(f"ezdxf repaired {len(auditor.fixes)} problem(s) in the DXF")
-    code = document.units
-    if code == units.InsertUnits.Unitless:
-        notes.append("DXF has no units ($INSUNITS 0): taken as mm")
-        factor = 1.0
-    elif code in _EXACT_MM:
-        factor = _EXACT_MM[code]
-        if factor != 1.0:
-            notes.append(f"DXF units {units.decode(code)} ($INSUNITS {code}): "
-                         f"{factor:g} mm each")
-    else:
-        try:
-            factor = units.conversion_factor(code, units.InsertUnits.Millimeters)
-        except (TypeError, ValueError):
-            raise DrawingError(f"DXF units $INSUNITS {code} cannot be converted to mm") from None
+    factor, units_said = _units(document.units, units_asked, notes)
     out, styles, skipped = [], [], Counter()
     hidden = {layer.dxf.name.lower() for layer in document.layers
               if layer.is_off() or layer.is_frozen()}
@@ -374,9 +394,30 @@ def _read_dxf(data, tolerance_mm):
             skipped["entity on a hidden layer"] += 1
         else:                               # flattened in the drawing's own units
             before = len(out)
-            _dxf_entity(entity, tolerance_mm / factor, out, skipped)
+            try:
+                _dxf_entity(entity, tolerance_mm / factor, out, skipped)
+            except TooManyChords:
+                raise TooManyChords(_entity_said(entity), _size_mm(entity, factor),
+                                    (units_said, factor)) from None
             # A block's entities go with the reference's layer.
             layer = str(entity.dxf.get("layer", "0"))
             styles += [PathStyle(colour=colour, layer=layer) for _, _, colour in out[before:]]
     skipped = _counted(skipped)
-    return [p * factor for p, _, _ in out], [c for _, c, _ in out], skipped, notes, styles
+    return ([p * factor for p, _, _ in out], [c for _, c, _ in out], skipped, notes, styles,
+            (units_said, factor))
+
+
+def _entity_said(entity):
+    """An entity as CAD names it: its type and handle (``CIRCLE entity #2F``)."""
+    handle = entity.dxf.get("handle", None)
+    return f"{entity.dxftype()} entity{f' #{handle}' if handle else ''}"
+
+
+def _size_mm(entity, factor):
+    """The entity's width and height in mm (ezdxf's bounding box of its control points), or
+    None where ezdxf cannot say."""
+    try:
+        box = bbox.extents([entity], fast=True)
+        return (box.size.x * factor, box.size.y * factor) if box.has_data else None
+    except Exception:                       # (a damaged entity: the refusal goes without it)
+        return None

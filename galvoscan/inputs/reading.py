@@ -1,6 +1,8 @@
-"""What the SVG and DXF readers share: curves flattened into a bounded number of chords
-(:func:`_chords`, :func:`_round_chords`), what a file holds but is not marked counted in words
-(:func:`_counted`), and a library's error said in one line (:func:`_one_line`)."""
+"""What the SVG and DXF readers share: the units a drawing's numbers may be in
+(:data:`UNITS`), curves flattened into a bounded number of chords (:func:`_chords`,
+:func:`_round_chords`; :class:`TooManyChords` names the entity), what a file holds but is not
+marked counted in words (:func:`_counted`), and a library's error said in one line
+(:func:`_one_line`)."""
 
 import math
 import re
@@ -13,6 +15,23 @@ from ..geometry.drawing import DrawingError
 #: lens field (a unit mistake, a damaged file), refused before the points are made: a Bézier
 #: with a control point at 9e14 would have taken 240 million points, gigabytes.
 MAX_CHORDS = 1_000_000
+
+#: The units a drawing's numbers may be said to be in (``mark --units``, a job file's
+#: ``units``), in place of those it declares: mm each, and the word a refusal says.
+#: (pt and px are CSS's: 1/72 and 1/96 in, as SVG and every browser take them.)
+UNITS = {"mm": (1.0, "millimetres"), "cm": (10.0, "centimetres"), "m": (1000.0, "metres"),
+         "in": (25.4, "inches"), "pt": (25.4 / 72, "points"), "px": (25.4 / 96, "pixels")}
+
+
+class TooManyChords(DrawingError):
+    """A curve that would take more than :data:`MAX_CHORDS` chords. The reader adds the
+    element or entity it is in (``what``), that one's size in the drawing's mm (``size_mm``:
+    width, height, or None) and the units it took the drawing's numbers in (``units``: what
+    they were taken from, mm a unit), and :func:`.drawings.load_drawing` says it."""
+
+    def __init__(self, what=None, size_mm=None, units=None):
+        super().__init__(f"a curve that would take more than {MAX_CHORDS:,} chords")
+        self.what, self.size_mm, self.units = what, size_mm, units
 
 
 def _one_line(error):
@@ -31,8 +50,7 @@ def _counted(counter, hints=None):
 def _chords(n):
     """``n``, the chords a curve is about to be flattened into, if it is not too many."""
     if not n <= MAX_CHORDS:                 # (nan too)
-        raise DrawingError(f"a curve that would take more than {MAX_CHORDS:,} chords: "
-                           f"coordinates far beyond any field (check the drawing's units)")
+        raise TooManyChords()
     return n
 
 

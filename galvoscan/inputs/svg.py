@@ -11,12 +11,12 @@ import svgelements as svg
 
 from ..geometry.drawing import DrawingError, PathStyle
 from ..geometry.field import PlanError
-from .reading import _chords, _counted, _round_chords
+from .reading import UNITS, TooManyChords, _chords, _counted, _round_chords
 from .svg_screen import FLOW_ATTRIBUTE, FLOW_X_ATTRIBUTE, LAYER_ATTRIBUTE, screen_svg
 from .text import svg_text_outlines
 
 
-MM_PER_PX = 25.4 / 96                       # svgelements gives px at 96 ppi
+MM_PER_PX = UNITS["px"][0]                  # svgelements gives px at 96 ppi
 
 
 def _arc_points(arc, tolerance_px):
@@ -89,45 +89,103 @@ def _svg_subpaths(path, tolerance_px):
 _SVG_UNITS = {None, "", "px", "mm", "cm", "in", "pt", "pc", "%", "em", "ex"}
 
 
-def _read_svg(data, tolerance_mm):
+def _svg_units(document, asked, notes):
+    """``(to_mm, (what the units were taken from, mm a unit))``: ``to_mm`` the 2 × 3 affine
+    map from svgelements' px (the root's viewBox applied) to mm, Y up. ``asked`` (a
+    :data:`~.reading.UNITS` key): the drawing's own numbers, its user units, are in that unit
+    (the root's width, height and viewBox undone); None: as its width, height and viewBox
+    say."""
+    width, height = (document.values.get(name) for name in ("width", "height"))
+    viewport = document.viewbox_transform
+    m = svg.Matrix(viewport) if viewport else svg.Matrix()
+    px_per_user = np.array([[m.a, m.c, m.e], [m.b, m.d, m.f]], dtype=float)
+    if asked is None:
+        per_unit = MM_PER_PX * math.sqrt(abs(np.linalg.det(px_per_user[:, :2])))
+        size = " and ".join(f"{name} {value}" for name, value in
+                            (("width", width), ("height", height)) if value)
+        said = f"its {size}: {per_unit:.4g} mm a unit" if size else \
+            "no width and height: its numbers taken as px, 96 per inch"
+        return np.array([[MM_PER_PX, 0, 0], [0, -MM_PER_PX, 0]]), (said, per_unit)
+    mm, name = UNITS[asked]
+    if abs(np.linalg.det(px_per_user[:, :2])) < 1e-300:
+        raise DrawingError("the SVG's viewBox or size is zero wide or high")
+    inverse = np.linalg.inv(px_per_user[:, :2])
+    user = np.column_stack([inverse, -inverse @ px_per_user[:, 2]])
+    notes.append(f"SVG numbers taken as {name} (--units {asked}; its width {width}, height "
+                 f"{height})")
+    return np.diag([mm, -mm]) @ user, (f"--units {asked}", mm)
+
+
+def _element_said(element):
+    """An SVG element as its file names it: its tag, and its id if it has one."""
+    tag, name = element.values.get("tag") or type(element).__name__.lower(), element.id
+    return f"<{tag}{f' id={name!r}' if name else ''}> element"
+
+
+def _read_svg(data, tolerance_mm, units_asked=None):
+    """``(polylines in mm, closed flags, skipped, notes, styles, (what the units were taken
+    from, mm a unit))``; ``units_asked``: the unit the numbers are in (a
+    :data:`~.reading.UNITS` key), in place of the root's width, height and viewBox."""
 
     data, notes = screen_svg(data)
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
     # svgelements reads a size in a unit it does not know as plain px: the drawing would come
-    # out at a scale nobody asked for. Refuse it instead.
+    # out at a scale nobody asked for. Refuse it instead (unless the units are given).
     for name in ("width", "height"):
         text = document.values.get(name)
-        if text is not None and svg.Length(text).units not in _SVG_UNITS:
+        if units_asked is None and text is not None and \
+                svg.Length(text).units not in _SVG_UNITS:
             raise DrawingError(f"the SVG's {name} {str(text)[:30]!r} is in a unit galvoscan "
-                               f"does not know (mm, cm, in, pt, pc, px or none)")
+                               f"does not know (mm, cm, in, pt, pc, px or none; or give "
+                               f"--units)")
+    to_mm, units_said = _svg_units(document, units_asked, notes)
+    # Flattened within the tolerance where the map to mm stretches most.
+    tolerance_px = tolerance_mm / np.linalg.norm(to_mm[:, :2], 2)
+
+    def in_mm(points_px):
+        return points_px @ to_mm[:, :2].T + to_mm[:, 2]
+
     paths, closed, styles, skipped = [], [], [], Counter()
     for element in document.elements():
         if not isinstance(element, (svg.Shape, svg.Text, svg.Image)):
             continue                        # groups, the document, <use> (its copy follows)
-        if str(element.values.get("visibility", "")).lower() in ("hidden", "collapse"):
-            skipped["hidden element"] += 1
-        elif isinstance(element, svg.Text):
-            if element.text and element.text.strip():
-                found = _svg_text(element, tolerance_mm / MM_PER_PX)
-                if isinstance(found, str):
-                    skipped[found] += 1
-                    continue
-                style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
-                for points_px in found:
-                    paths.append(points_px * [MM_PER_PX, -MM_PER_PX])  # Y down → Y up
-                    closed.append(True)
-                    styles.append(style)
-        elif isinstance(element, svg.Image):
-            skipped["image element"] += 1
-        else:
+        try:
+            _read_element(element, tolerance_px, in_mm, paths, closed, styles, skipped)
+        except TooManyChords:
+            try:
+                box = element.bbox()
+                size = None if box is None else \
+                    tuple(np.abs(to_mm[:, :2]) @ [box[2] - box[0], box[3] - box[1]])
+            except Exception:               # (svgelements cannot bound it: said without)
+                size = None
+            raise TooManyChords(_element_said(element), size, units_said) from None
+    return paths, closed, _counted(skipped), notes, styles, units_said
+
+
+def _read_element(element, tolerance_px, in_mm, paths, closed, styles, skipped):
+    """One shape, text or image: its polylines in mm appended, or why not counted."""
+    if str(element.values.get("visibility", "")).lower() in ("hidden", "collapse"):
+        skipped["hidden element"] += 1
+    elif isinstance(element, svg.Text):
+        if element.text and element.text.strip():
+            found = _svg_text(element, tolerance_px)
+            if isinstance(found, str):
+                skipped[found] += 1
+                return
             style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
-            # Path(shape) keeps the shape's own transform aside: abs() applies it.
-            for points_px, is_closed in _svg_subpaths(abs(svg.Path(element)),
-                                                      tolerance_mm / MM_PER_PX):
-                paths.append(points_px * [MM_PER_PX, -MM_PER_PX])      # Y down → Y up
-                closed.append(is_closed)
+            for points_px in found:
+                paths.append(in_mm(points_px))
+                closed.append(True)
                 styles.append(style)
-    return paths, closed, _counted(skipped), notes, styles
+    elif isinstance(element, svg.Image):
+        skipped["image element"] += 1
+    else:
+        style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
+        # Path(shape) keeps the shape's own transform aside: abs() applies it.
+        for points_px, is_closed in _svg_subpaths(abs(svg.Path(element)), tolerance_px):
+            paths.append(in_mm(points_px))
+            closed.append(is_closed)
+            styles.append(style)
 
 
 def _svg_text(element, tolerance_px):

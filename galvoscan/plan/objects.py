@@ -7,7 +7,7 @@ import math
 
 from ..geometry.field import Placement, PlanError
 from ..geometry.fill import Contour, HatchSet, LineOrder
-from ..inputs.codes import CodeFill, CodeKind, code_drawing
+from ..inputs.codes import CodeFill, CodeKind, code_drawing, data_said
 from ..inputs.photo import photo_drawing
 
 
@@ -58,7 +58,7 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
     # reach a little past its module: readers take dots that touch).
     smallest = spot_mm * (DOT_OVERLAP if spec.fill is CodeFill.DOTS else 1.0)
     if module < smallest:
-        raise PlanError(f"{spec.kind.value} code {spec.data[:20]!r}: modules of "
+        raise PlanError(f"{spec.kind.value} code {data_said(spec.data)}: modules of "
                         f"{module * 1000:.0f} µm, less than the {spot_mm * 1000:.0f} µm spot"
                         f"{' (a dot may be 4/3 of its module)' if spec.fill is CodeFill.DOTS else ''}"
                         f": a larger --size, or less data")

@@ -313,7 +313,7 @@ def test_analyze_cli_rejects_bad_arguments(argv, message, capsys):
         main(["analyze", "--no-plots", "--quiet"] + argv)
     assert exit.value.code != 0
     captured = capsys.readouterr()
-    assert message in captured.err + str(exit.value.code)
+    assert message in captured.err + str(exit.value)
 
 
 @settings(max_examples=200, deadline=None)

@@ -67,4 +67,4 @@ def test_analyze_wobble_prints_json_and_refuses_a_prr_above_the_frame_rate(capsy
     assert {m["hz"] for m in result["frequencies"]} == {500, 1000, 2000, 4000, 8000}
     with pytest.raises(SystemExit) as stop:
         main(["analyze", "--wobble", "--prr", "200", "--no-plots"])
-    assert "at most 100 kHz" in str(stop.value.code) and "\n" not in str(stop.value.code)
+    assert "at most 100 kHz" in str(stop.value) and "\n" not in str(stop.value)

@@ -34,7 +34,7 @@ def _one_line_error(capsys, argv):
     with pytest.raises(SystemExit) as exit:
         main(argv)
     assert exit.value.code not in (0, None)
-    err = capsys.readouterr().err.strip() or str(exit.value.code)
+    err = capsys.readouterr().err.strip() or str(exit.value)
     lines = err.splitlines()
     assert "Traceback" not in err
     return lines[-1]
@@ -171,3 +171,75 @@ def test_argument_errors_are_one_line_for_every_command(capsys, tail):
         assert exit.value.code == 2, argv
         assert len(err.strip().splitlines()) == 1 and "usage:" not in err, (argv, err)
         assert "--help` lists the options" in err, (argv, err)
+
+
+def _commands():
+    """Each command's own parser (not a group of them, as ``machine``) with its long options."""
+    return [(where, p, sorted(flag for flag in p._option_string_actions if
+                              flag.startswith("--") and flag not in ("--help",)))
+            for where, p in _parsers(parser()) if not p._subparsers]
+
+
+def test_a_mistyped_option_gets_the_nearest_and_the_commands_help(capsys):
+    """`mark --sped` was left to the top parser: no suggestion, and `galvoscan --help`, which
+    does not list mark's options."""
+    with pytest.raises(SystemExit) as exit:
+        main(["mark", "drawing.svg", "--sped", "100"])
+    assert exit.value.code == 2
+    assert capsys.readouterr().err == (
+        "galvoscan mark: error: unrecognized arguments: --sped 100 (did you mean --speed?) "
+        "(`galvoscan mark --help` lists the options)\n")
+    with pytest.raises(SystemExit):
+        main(["machine", "show", "--machien=m.toml"])
+    assert capsys.readouterr().err == (
+        "galvoscan machine show: error: unrecognized arguments: --machien=m.toml (did you "
+        "mean --machine?) (`galvoscan machine show --help` lists the options)\n")
+
+
+@given(st.data())
+def test_every_commands_mistyped_options_are_one_line_with_its_help(data):
+    """Any command, any of its options with a letter dropped inside (not a prefix, which
+    argparse takes as the option): one line naming that command's help; a suggestion, when
+    there is one, is one of its options."""
+    import contextlib
+    import io
+    where, _, flags = data.draw(st.sampled_from(_commands()), label="command")
+    if not flags:
+        return
+    flag = data.draw(st.sampled_from([f for f in flags if len(f) > 4] or [None]), label="option")
+    if flag is None:
+        return
+    cut = data.draw(st.integers(3, len(flag) - 2), label="letter dropped")
+    typo = flag[:cut] + flag[cut + 1:]
+    if typo in flags or any(f.startswith(typo) for f in flags):
+        return                          # (another option, or one's abbreviation)
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), pytest.raises(SystemExit) as exit:
+        main(where.split()[1:] + [f"{typo}=1"])
+    line, = err.getvalue().splitlines()
+    assert exit.value.code == 2
+    assert line.startswith(f"{where}: error: ") and line.endswith(
+        f"(`{where} --help` lists the options)"), line
+    if "did you mean" in line:
+        assert line.split("did you mean ")[1].split("?")[0] in flags, line
+
+
+def test_refusals_have_one_prefix_and_status_and_failed_work_another_status(tmp_path, capsys):
+    """argparse's refusal and the command's own (before any work) read alike: the command's
+    name, exit status 2. Work that fails once begun (here, the board's port) is status 1."""
+    drawing = tmp_path / "square.svg"
+    drawing.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                       'viewBox="0 0 10 10"><rect width="5" height="5"/></svg>')
+    said = {}
+    for name, argv in {"argparse": ["mark", str(drawing), "--speed", "fast"],
+                       "command": ["mark", "--estimate"],
+                       "work": ["mark", str(drawing), "--port", str(tmp_path / "no-port")]
+                       }.items():
+        with pytest.raises(SystemExit) as exit:
+            main(argv)
+        said[name] = exit.value.code, capsys.readouterr().err.splitlines()[-1]
+    assert said["argparse"][0] == said["command"][0] == 2 and said["work"][0] == 1
+    assert said["argparse"][1].startswith("galvoscan mark: error: argument --speed: ")
+    assert said["command"][1] == "galvoscan mark: error: give a drawing (FILE) or something " \
+                                 "to make (--text, --code, --image)"
+    assert said["work"][1].startswith(f"galvoscan mark: error: cannot open {tmp_path}")

@@ -88,17 +88,19 @@ def test_a_board_faster_than_real_time_keeps_the_hosts_clock():
 
 def test_a_board_slower_than_real_time_says_how_far_behind_it_is():
     import threading
+    import time
     from galvoscan.sim.board import PTYServer, SimulatedBoard
     board = SimulatedBoard(clk_freq=4e6, baud=115_200, modes=("spiral",), correction=None,
                            links=("uart",), backend="python")
     server = PTYServer(board, real_time=True)
     reports = []
     timer = threading.Timer(1.5, server.stop)
+    started = time.monotonic()
     timer.start()
     server.serve_forever(report=reports.append, every_s=0.3)
     timer.join()
+    wall = time.monotonic() - started
     # Amaranth's simulator runs this board at some 1/100 of real time: nearly all of the
-    # 1.5 s is lag, reported as it grows (on a machine busy with other tests too: the last
-    # report may come a third of a second before the end).
-    assert reports and reports == sorted(reports) and 0.5 < reports[-1] < 1.5
+    # wall time is lag, reported as it grows (never more than the wall time itself).
+    assert reports and reports == sorted(reports) and 0.5 < reports[-1] <= wall
     assert board.now < 0.1

@@ -84,7 +84,7 @@ def test_impossible_jobs_are_one_line(kwargs, words):
 def test_bad_command_lines_are_refused_before_the_link(args, words, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["clean", *args, *NOPORT])
-    message = str(stop.value.code) if stop.value.code not in (1, 2) else \
+    message = str(stop.value) if stop.value.code not in (1, 2) else \
         capsys.readouterr().err
     assert words in message
     assert "Traceback" not in message and "cannot open" not in message

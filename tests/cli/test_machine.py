@@ -28,7 +28,7 @@ def one_line_error(capsys, argv):
     with pytest.raises(SystemExit) as exit:
         main(argv)
     assert exit.value.code not in (0, None)
-    err = capsys.readouterr().err.strip() or str(exit.value.code)
+    err = capsys.readouterr().err.strip() or str(exit.value)
     assert "Traceback" not in err
     lines = err.splitlines()
     assert len(lines) == 1, lines
@@ -140,7 +140,7 @@ def test_show_correction_table(here, capsys):
 def test_show_bad_profile_one_line(here, capsys, text, piece):
     (here / "bad.toml").write_text(text)
     line = one_line_error(capsys, ["machine", "show", "--machine", "bad.toml"])
-    assert line.startswith("galvoscan: error: bad.toml")
+    assert line.startswith("galvoscan machine show: error: bad.toml")
     assert piece in line
 
 
@@ -161,15 +161,16 @@ def test_show_folder_one_line(here, capsys):
 
 
 def test_bad_profile_in_a_real_process(here):
-    """The whole program: exit status 1 and exactly one line on stderr."""
+    """The whole program: exit status 2 (refused before any work) and exactly one line on
+    stderr, naming the command."""
     (here / "bad.toml").write_bytes(b"[laser]\nspot_mm = 0\n")
     done = subprocess.run([sys.executable, "-m", "galvoscan.cli", "machine", "show",
                            "--machine", "bad.toml"], capture_output=True, text=True,
                           timeout=120)
-    assert done.returncode == 1
+    assert done.returncode == 2
     assert done.stderr.splitlines() == [
-        "galvoscan: error: bad.toml: [laser] spot_mm must be a number from 0.001 to 10 (mm), "
-        "not 0"]
+        "galvoscan machine show: error: bad.toml: [laser] spot_mm must be a number from "
+        "0.001 to 10 (mm), not 0"]
     assert done.stdout == ""
 
 
@@ -203,7 +204,8 @@ def test_profile_from_a_bad_file_is_a_cli_error(here):
     (here / "m.toml").write_text("[galvo]\njump_delay_us = 70000\n")
     with pytest.raises(CLIError) as error:
         profile_from(_parser().parse_args(["--machine", "m.toml"]))
-    assert str(error.value.code).startswith("galvoscan: error: m.toml: [galvo] jump_delay_us")
+    assert error.value.code == 2
+    assert str(error.value).startswith("galvoscan: error: m.toml: [galvo] jump_delay_us")
 
 
 @pytest.mark.parametrize("text, key", [
@@ -219,7 +221,7 @@ def test_bad_delays_in_a_profile_are_one_line_errors(here, text, key):
     (here / "m.toml").write_text(f"[galvo]\n{text}\n")
     with pytest.raises(CLIError) as error:
         profile_from(_parser().parse_args(["--machine", "m.toml"]))
-    message = str(error.value.code)
+    message = str(error.value)
     assert message.startswith(f"galvoscan: error: m.toml: [galvo] {key}")
     assert "\n" not in message and "Traceback" not in message
 

@@ -108,7 +108,7 @@ def test_bad_wobble_profiles_are_one_line(text, piece):
 def refused(args):
     with pytest.raises(SystemExit) as stop:
         main(args)
-    message = str(stop.value.code)
+    message = str(stop.value)
     assert "\n" not in message and "Traceback" not in message
     return message
 

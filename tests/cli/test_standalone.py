@@ -167,7 +167,7 @@ def test_flash_ulx3s_onto_an_issi_flash(tmp_path, fast_flash, monkeypatch, capsy
     monkeypatch.setattr(spi_flash, "SPIFlashModel",
                         type("IS25WP128", (IS25LPModel,), {"jedec_id": b"\x9d\x70\x18"}))
     other = tmp_path / "other.bin"
-    with pytest.raises(SystemExit, match=r"^galvoscan: error: the flash answers JEDEC id "
+    with pytest.raises(SystemExit, match=r"^galvoscan flash: error: the flash answers JEDEC id "
                                          r"9d 70 18, a part galvoscan has no driver for: "
                                          r"write it with another programmer") as error:
         main(args + ["--to", str(other)])

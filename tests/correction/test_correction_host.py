@@ -380,7 +380,7 @@ def test_cli_errors(argv, message, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SystemExit) as exit_info:
         main(argv)
-    text = str(exit_info.value.code) + capsys.readouterr().err
+    text = str(exit_info.value) + capsys.readouterr().err
     assert message in text
 
 

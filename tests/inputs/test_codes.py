@@ -4,11 +4,12 @@ read back by zxing-cpp's decoder (a reader written apart from the encoder's use 
 
 import json
 
+from hypothesis import given, strategies as st
 import numpy as np
 import pytest
 
 from galvoscan.cli import main
-from galvoscan.inputs.codes import CodeSpec, code_drawing, code_modules
+from galvoscan.inputs.codes import DATA_SHOWN, CodeSpec, code_drawing, code_modules, data_said
 from galvoscan.geometry.field import PlanError
 
 from sim_board import VECTOR_BOARD, quick_sim_board
@@ -148,3 +149,31 @@ def test_a_drawing_in_a_codes_quiet_zone_is_refused(tmp_path):
         main(["mark", str(svg), "--data", "x", "--estimate"])
     with pytest.raises(SystemExit, match="give a drawing"):
         main(["mark", "--estimate"])
+
+
+@given(st.text(min_size=1, max_size=3 * DATA_SHOWN))
+def test_a_codes_data_is_said_whole_or_cut_with_an_ellipsis(data):
+    """Never cut without a sign: a URL cut short reads as a whole, wrong one."""
+    said = eval(data_said(data))                    # (a repr: its quotes and escapes undone)
+    if len(data) <= DATA_SHOWN:
+        assert said == data
+    else:
+        assert said.endswith("…") and data.startswith(said[:-1]) and len(said) == DATA_SHOWN
+
+
+def test_a_codes_data_in_the_note_and_the_preview_title(tmp_path, capsys, monkeypatch):
+    """The note and the preview's title show a URL whole (it was cut at 20 characters,
+    'https://example.com/', with no sign of it) or, past 40 characters, with "…"."""
+    import galvoscan.plan.preview
+    titles = []
+    monkeypatch.setattr(galvoscan.plan.preview, "preview",
+                        lambda path, *a, title, **k: titles.append(title))
+    short, long = "https://example.com/lot/7731", "https://example.com/products/2026/lot/7731"
+    for data in (short, long):
+        assert main(["mark", "--code", "qr", "--data", data, "--size", "20", "--estimate",
+                     "--preview", str(tmp_path / "code.png")]) == 0
+    out = capsys.readouterr().out
+    cut = "'https://example.com/products/2026/lot/7…'"
+    assert f"note: qr code {short!r}: " in out and f"note: qr code {cut}: " in out
+    assert titles[0].startswith(f"qr code {short!r}: ")
+    assert titles[1].startswith(f"qr code {cut}: ")

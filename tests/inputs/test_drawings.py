@@ -210,7 +210,8 @@ def test_absurd_size_and_non_finite(tmp_path):
     doc, msp = new_dxf(units=6)                 # metres
     msp.add_line((0, 0), (11, 0))
     doc.saveas(tmp_path / "big.dxf")
-    refused(tmp_path / "big.dxf", "check the drawing's units")
+    refused(tmp_path / "big.dxf", "11 × 0 m (its $INSUNITS 6, metres), more than 10 m: give "
+            "--units mm if its numbers are millimetres, or --scale 0.9 or less")
     (tmp_path / "inf.svg").write_text(svg('<line x1="0" y1="0" x2="1e400" y2="5"/>'))
     refused(tmp_path / "inf.svg", "not finite")
 
@@ -267,7 +268,9 @@ def test_huge_curves_are_refused_before_they_are_flattened(tmp_path):
     lines = run.stdout.splitlines()
     assert len(lines) == len(paths)
     for path, line in zip(paths, lines):
-        assert line.startswith(f"{path}: ") and "check the drawing's units" in line, line
+        # (The bulge's arc is one a drawing 500 m wide can hold: refused for its size.)
+        assert line.startswith(f"{path}: ") and ("more than 1,000,000 chords" in line or
+                                                 "more than 10 m" in line), line
 
 
 def test_damaged_dxf_value_is_refused_with_what_ezdxf_found(tmp_path):

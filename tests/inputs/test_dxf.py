@@ -282,10 +282,11 @@ def test_dxf_text_in_a_missing_font_or_with_missing_characters(tmp_path):
 
 def test_a_drawing_too_large_names_the_units_the_file_gives(tmp_path):
     """ezdxf's new files are in metres: a 30 mm line drawn as 30 is 30 m, and the refusal
-    says the file's units, not only 'check the drawing's units'."""
+    says the size, the file's units, and the ways out."""
     from galvoscan.geometry.drawing import DrawingError
     doc, msp = new_dxf(units=6)
     msp.add_line((0, 0), (30, 0))
-    with pytest.raises(DrawingError, match=r"check the drawing's units \(DXF units m "
-                                           r"\(\$INSUNITS 6\): 1000 mm each\)"):
+    with pytest.raises(DrawingError, match=r": 30 × 0 m \(its \$INSUNITS 6, metres\), more "
+                                           r"than 10 m: give --units mm if its numbers are "
+                                           r"millimetres, or --scale 0.33 or less$"):
         load_dxf(tmp_path, doc)

@@ -56,7 +56,7 @@ def test_the_grid_and_its_settings():
 def test_bad_grids_are_one_line(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["test-grid", *argv, "--estimate"])
-    message = str(stop.value.code) + capsys.readouterr().err
+    message = str(stop.value) + capsys.readouterr().err
     assert words in message and "Traceback" not in message
 
 

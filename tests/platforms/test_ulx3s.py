@@ -86,7 +86,7 @@ def test_build_refuses_in_one_line(argv, message):
     board = [] if "--device" in argv else ["--board", "ulx3s"]
     with pytest.raises(SystemExit, match=re.escape(message)) as refusal:
         main(["build", *board, *argv])
-    assert "\n" not in str(refusal.value.code)
+    assert "\n" not in str(refusal.value)
 
 
 @pytest.mark.toolchain
