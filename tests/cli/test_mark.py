@@ -13,6 +13,7 @@ import sys
 import numpy as np
 import pytest
 
+from galvoscan.bench_sim import shaded_picture
 from galvoscan.cli import main
 
 from sim_board import VECTOR_BOARD, quick_sim_board
@@ -554,16 +555,6 @@ mark_delay_us = 50
 """
 
 
-def photo(path, rows, columns=400):
-    """A grey photograph's stand-in: smooth shading from black to white in two directions,
-    as many dark cells alone as in runs once dithered."""
-    from PIL import Image
-    y, x = np.mgrid[0:rows, 0:columns]
-    grey = 128 + 100 * np.sin(x / 23) * np.cos((y + 100) / 17)
-    Image.fromarray(grey.clip(0, 255).astype(np.uint8)).save(path)
-    return path
-
-
 def test_a_60000_mark_photo_is_foretold_to_stream_at_3_mbaud_not_at_1(tmp_path):
     """The streamer's course, foretold from the plan (expected_underruns: the board below holds
     it to the simulated board's wires): a 24 mm photo of some 60,000 marks, with the default
@@ -575,7 +566,7 @@ def test_a_60000_mark_photo_is_foretold_to_stream_at_3_mbaud_not_at_1(tmp_path):
     default = api.default_profile()
     quick = dataclasses.replace(default, galvo=dataclasses.replace(
         default.galvo, jump_delay_us=100, mark_delay_us=50))
-    picture = photo(tmp_path / "photo.png", 300)
+    picture = shaded_picture(tmp_path / "photo.png", 300)
     for profile, at_1_mbaud in ((default, False), (quick, True)):
         job = api.plan(api.Job(photos=[api.Photo(str(picture), width_mm=24)],
                                speed_mm_s=1000), profile).vector_job
@@ -596,7 +587,7 @@ def test_a_photo_streams_with_no_underrun_where_the_link_keeps_up(tmp_path, caps
     queue from running dry, every mark to its end."""
     machine = tmp_path / "machine.toml"
     machine.write_text(QUICK_MIRRORS)
-    strip = photo(tmp_path / "strip.png", 16)
+    strip = shaded_picture(tmp_path / "strip.png", 16)
     argv = ["mark", "--image", str(strip), "--width", "24", "--speed", "1000", "--machine",
             str(machine), "--sim", "--board", board, *SIM_TIMEOUT, "--json"]
     if board == "ulx3s":
