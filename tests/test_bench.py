@@ -41,6 +41,14 @@ def test_bench_quick(capsys):
     ulx3s = link["stream_ulx3s"]
     assert ulx3s["baud"] == 3_000_000 and ulx3s["clock_mhz"] == 24 and ulx3s["errors"] == 0
     assert 20_000 <= ulx3s["segments_per_s"] < 3_000_000 / 10 / 12
+    # A strip of the bench's photo (quick mirrors), streamed whole at 3 Mbaud: no underrun
+    # foretold or counted there, and some foretold at 1 Mbaud; every segment (a jump after
+    # each mark, the job's last one added) taken.
+    photo = link["photo"]
+    assert photo["baud"] == 3_000_000 and photo["segments"] == 2 * photo["marks"] + 1
+    assert photo["underruns"] == photo["foretold_underruns"]["3"] == 0 < \
+        photo["foretold_underruns"]["1"]
+    assert photo["errors"] == photo["rejected"] == 0 and photo["board_s"] > photo["estimate_s"]
     # Both boards' default bitstreams on the compiled board, against real time.
     assert set(result["real_time"]) == {"icebreaker", "ulx3s"}
     assert [f["clock_mhz"] for f in result["real_time"].values()] == [12, 24]
