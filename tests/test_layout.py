@@ -1,6 +1,6 @@
 """The host's package layout: no import cycle among galvoscan's modules, and no package importing
-one above it in the data flow (settings → link and profile → geometry → inputs → plan →
-outputs → sim → the API → the CLI).
+one above it in the data flow (settings → link, profile and flashing → geometry → inputs →
+plan → outputs → sim → the API → the CLI).
 
 The graph is grimp's, of every import in the source (those inside functions too), built from a
 copy of the four source folders in their installed layout: the editable install maps
@@ -31,7 +31,9 @@ LAYERS = (
     "galvoscan.plan",
     "galvoscan.inputs",
     "galvoscan.geometry",
-    ("galvoscan.profile", "galvoscan.link"),
+    # (flashing: the board's flash written from bytes, the job image's layout its only
+    # dependency, below the packages that make the image; the CLI calls it.)
+    ("galvoscan.profile", "galvoscan.link", "galvoscan.flashing"),
     "galvoscan.settings",
 )
 

@@ -89,20 +89,20 @@ def _check_plays_jobs(bitstream):
 
 
 def _cmd_flash(args):
-    from .. import flashing
     from ..flashing import FlashingError, ModelPort, flash_regions, program
     from ..outputs.image import ImageError, read_image
     from .jobargs import progress_bar
     ulx3s = args.board == "ulx3s"
+    # The board's FPGA (its bitstream's check) and the board (its FTDI's URL and opening).
     if ulx3s:
-        from .. import flashing_ecp5 as writer
+        from ..flashing import ecp5 as fpga, ulx3s as board
     else:
-        writer = flashing
+        from ..flashing import ice40 as fpga, icebreaker as board
     bitstream = read_bytes(args.bitstream, "bitstream") if args.bitstream else None
     job = read_bytes(args.job, "job image") if args.job else None
     try:
         # (A file that is no bitstream for the board: first.)
-        regions = flash_regions(bitstream, job, check=writer.check_bitstream)
+        regions = flash_regions(bitstream, job, check=fpga.check_bitstream)
         if job is not None:
             # The player's own checks, and the marker's register file's, before any byte
             # goes out.
@@ -124,12 +124,12 @@ def _cmd_flash(args):
             what = program(ModelPort(model), regions, progress=bar.update, any_flash=ulx3s)
             path.write_bytes(bytes(model.memory))
         else:
-            url = args.url or writer.DEFAULT_URL
+            url = args.url or board.DEFAULT_URL
             if ulx3s:
                 # (The ECP5 is checked against the bitstream before its configuration goes.)
-                port, release = writer.open_ulx3s(url, bitstream=bitstream)
+                port, release = board.open_ulx3s(url, bitstream=bitstream)
             else:
-                port, release = writer.open_icebreaker(url)
+                port, release = board.open_icebreaker(url)
             try:
                 what = program(port, regions, progress=bar.update, any_flash=ulx3s)
             finally:

@@ -1,14 +1,20 @@
 """`galvoscan store`, `flash` and `standalone` (galvoscan/cli/standalone.py), and the flash
-writer under `flash` (galvoscan/flashing.py) driving pyspiflash into the W25Q128JV model (and
-into the ISSI IS25LP128 some ULX3S revisions carry); the ULX3S's writer itself is
-tests/test_flashing_ecp5.py's."""
+writer under `flash` (galvoscan/flashing/writer.py) driving pyspiflash into the W25Q128JV model
+(and into the ISSI IS25LP128 some ULX3S revisions carry); the ULX3S's writer itself is
+tests/flashing/test_ulx3s.py's."""
 
 import json
 
 import pyftdi.ftdi
 import pytest
+import spiflash.serialflash as serialflash
 
+import galvoscan.flashing.ecp5
+import galvoscan.flashing.icebreaker
+import galvoscan.flashing.jtag
+import galvoscan.flashing.writer
 import galvoscan.sim.spi_flash as spi_flash
+from galvoscan import flashing
 from galvoscan.cli import main
 from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
 from galvoscan.gateware.player.image_format import JOB_OFFSET
@@ -53,11 +59,9 @@ class FakeClock:
 
 @pytest.fixture
 def fast_flash(monkeypatch):
-    import spiflash.serialflash as serialflash
-    import galvoscan.flashing as flashing
-    import galvoscan.flashing_ecp5 as flashing_ecp5
     clock = FakeClock()
-    for module in (serialflash, flashing, flashing_ecp5):
+    for module in (serialflash, flashing.writer, flashing.icebreaker, flashing.jtag,
+                   flashing.ecp5):
         monkeypatch.setattr(module, "time", clock)
     return clock
 

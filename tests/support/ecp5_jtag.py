@@ -1,6 +1,6 @@
-"""A ULX3S as its flash writer (galvoscan/flashing_ecp5.py) sees it over USB, modelled for the
-tests: the FT231X in synchronous bit-bang, the ECP5's JTAG TAP it clocks, and the SPI flash
-behind the ECP5's background SPI (galvoscan.sim.spi_flash's W25Q128JV model).
+"""A ULX3S as its flash writer (galvoscan/flashing/: ulx3s.py, ecp5.py, jtag.py) sees it over
+USB, modelled for the tests: the FT231X in synchronous bit-bang, the ECP5's JTAG TAP it clocks,
+and the SPI flash behind the ECP5's background SPI (galvoscan.sim.spi_flash's W25Q128JV model).
 
 Written from the documents, not from the driver, so that it catches the driver's mistakes:
 

@@ -2,7 +2,7 @@
 galvoscan's W25Q128JV model (galvoscan/sim/spi_flash.py), whose reads, page program, erases,
 power-down and busy rules the two parts share, with the ISSI's JEDEC id and the block
 protection of its status register. Written from ISSI's documents, not from the driver
-(galvoscan/flash_chips.py):
+(galvoscan/flashing/chips.py):
 
 * Read JEDEC ID (9Fh): 9D 60 18 (9D 60 16 and 9D 60 17 for the IS25LP032 and IS25LP064).
 * The status register: WIP bit 0, WEL bit 1, BP0-BP3 bits 2-5, QE bit 6, SRWD bit 7; BP0-BP3,

@@ -1,10 +1,11 @@
-"""The ULX3S's flash writer (galvoscan/flashing_ecp5.py): through pyftdi's bit-bang calls, a
-model of the FT231X, of the ECP5's TAP and its background SPI, and of the flash behind it
-(tests/support/ecp5_jtag.py, written from IEEE 1149.1, Lattice's tables and FTDI's
-documents, not from the driver), with pyspiflash and galvoscan.flashing.program writing as they
-write the iCEBreaker's; and drivers broken on purpose, which the same test fails. The flash is
-the iCEBreaker's W25Q128JV, or the ISSI IS25LP128 other ULX3S revisions carry
-(tests/support/issi_flash.py), which galvoscan/flash_chips.py drives."""
+"""The ULX3S's flash writer (galvoscan/flashing/ulx3s.py, through galvoscan/flashing/ecp5.py
+and galvoscan/flashing/jtag.py): through pyftdi's bit-bang calls, a model of the FT231X, of
+the ECP5's TAP and its background SPI, and of the flash behind it (tests/support/ecp5_jtag.py,
+written from IEEE 1149.1, Lattice's tables and FTDI's documents, not from the driver), with
+pyspiflash and galvoscan.flashing.program writing as they write the iCEBreaker's; and drivers
+broken on purpose, which the same test fails. The flash is the iCEBreaker's W25Q128JV, or the
+ISSI IS25LP128 other ULX3S revisions carry (tests/support/issi_flash.py), which
+galvoscan/flashing/chips.py drives."""
 
 import random
 from functools import partial
@@ -15,12 +16,14 @@ import pytest
 import spiflash.serialflash as serialflash
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-import galvoscan.flash_chips as flash_chips
-import galvoscan.flashing as flashing
-import galvoscan.flashing_ecp5 as flashing_ecp5
-from galvoscan.flash_chips import DRIVERS, IS25LPFlashDevice
-from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
-from galvoscan.flashing_ecp5 import DEFAULT_URL, check_bitstream, open_ulx3s
+import galvoscan.flashing.chips
+import galvoscan.flashing.ecp5
+import galvoscan.flashing.jtag
+import galvoscan.flashing.writer
+from galvoscan import flashing
+from galvoscan.flashing import FlashingError, flash_regions, program
+from galvoscan.flashing.ecp5 import check_bitstream
+from galvoscan.flashing.ulx3s import DEFAULT_URL, open_ulx3s
 from galvoscan.gateware.player.image_format import JOB_OFFSET
 from galvoscan.outputs.image import job_image
 from galvoscan.sim.spi_flash import SPIFlashModel
@@ -51,7 +54,7 @@ def ulx3s(monkeypatch, *, idcode=LFE5U_25F, contents=OLD, tdo=None, state="Test-
     from them, the FT231X that pyftdi's ``Ftdi()`` opens; one clock for all of them and for
     the sleeps."""
     clock = Clock()
-    for module in (serialflash, flashing, flashing_ecp5):
+    for module in (serialflash, flashing.writer, flashing.jtag, flashing.ecp5):
         monkeypatch.setattr(module, "time", clock)
     flash = part(contents)              # (in deep power-down, as a design may leave it)
     ecp5 = ECP5(flash, idcode=idcode, clock=clock, state=state,
@@ -77,7 +80,6 @@ def untouched(board):
     design still running, the FTDI closed."""
     return (board.ecp5.carried_out == [] and board.flash.commands == []
             and board.ecp5.configured and board.ftdi.closed)
-
 
 def test_writes_the_bitstream_and_a_job_through_the_ecp5(monkeypatch):
     board = ulx3s(monkeypatch)
@@ -173,17 +175,17 @@ def test_a_random_bitstream_is_refused_or_written_exactly(monkeypatch, data):
 BROKEN = {
     # The flash's bytes sent LSB first, as JTAG shifts them.
     "bits not reversed": lambda monkeypatch: monkeypatch.setattr(
-        flashing_ecp5, "_REVERSED", bytes(range(256))),
+        flashing.ecp5, "_REVERSED", bytes(range(256))),
     # The running design keeps the flash.
     "configuration not cleared": lambda monkeypatch: monkeypatch.setattr(
-        flashing_ecp5, "_clear_configuration", lambda jtag: None),
+        flashing.ecp5, "_clear_configuration", lambda jtag: None),
     # LSC_PROG_SPI without its key.
     "no background SPI key": lambda monkeypatch: monkeypatch.setattr(
-        flashing_ecp5, "SPI_KEY", 0),
+        flashing.ecp5, "SPI_KEY", 0),
     # The busy flag never read (BYPASS's register, which always reads 0): the next
     # instruction comes while the ECP5 still erases.
     "busy not waited for": lambda monkeypatch: monkeypatch.setattr(
-        flashing_ecp5, "LSC_CHECK_BUSY", flashing_ecp5.BYPASS),
+        flashing.ecp5, "LSC_CHECK_BUSY", flashing.ecp5.BYPASS),
 }
 
 
@@ -199,28 +201,7 @@ def test_a_broken_driver_fails(monkeypatch, fault):
     assert bytes(board.flash.memory[:len(OLD)]) == OLD and board.ftdi.closed
 
 
-@pytest.mark.parametrize("data, message", [
-    (b"\xff\x00GS\x00\xff\x7e\xaa\x99\x7e" + bytes(300), "it is an iCE40's: flash it with "
-                                                         "--board icebreaker"),
-    (b"hello" * 100, "is not an ECP5 bitstream .* give the .bit galvoscan build"),
-    (b"\xff\x00x\x00\xff\xff\xff\xbd\xb3\xff\xff\x22\x00\x00\x00", "has no VERIFY_ID"),
-    (ecp5_bitstream(0x12345679), "is for IDCODE 0x12345679, which is no ECP5"),
-    (ecp5_bitstream(LFE5U_25F, bytes(JOB_OFFSET)), "would overlap the job image at 0x100000 "
-                                                   r"\(.*ecppack --compress\)"),
-])
-def test_check_bitstream_refuses(data, message):
-    with pytest.raises(FlashingError, match=message):
-        check_bitstream(data)
-
-
-def test_check_bitstream_takes_ecppacks_layouts():
-    assert check_bitstream(ecp5_bitstream(LFE5U_85F)) == LFE5U_85F
-    # No comment (a raw .bin), and ecppack's --spimode command before the CRC reset.
-    assert check_bitstream(b"\xff\xff\xbd\xb3\xff\xff" + b"\x79\x00\x00\x00"
-                           + b"\x3b\x00\x00\x00\xe2\x00\x00\x00\x21\x11\x10\x43") == 0x21111043
-
-
-# --- the parts, by JEDEC id ---------------------------------------------------------------------
+# --- the parts the ULX3S carries --------------------------------------------------------------
 
 def test_writes_an_issi_flash_through_the_ecp5(monkeypatch):
     """The IS25LP128 of other ULX3S revisions, unprotected as it leaves the factory: erased,
@@ -255,7 +236,7 @@ def test_an_issi_flash_left_protected_fails(monkeypatch):
     """The driver broken on purpose: the protection not cleared, every erase and program is
     inhibited and the read-back says so, in one line."""
     board = ulx3s(monkeypatch, part=partial(IS25LPModel, status=SR_BP))
-    monkeypatch.setattr(flash_chips, "clear_protection", lambda device: None)
+    monkeypatch.setattr(flashing.chips, "clear_protection", lambda device: None)
     with pytest.raises(FlashingError, match=r"reads back .* the write failed") as error:
         write(bitstream(600), a_job())
     assert "\n" not in str(error.value)
@@ -276,90 +257,3 @@ def test_an_issi_flash_whose_status_register_is_locked_is_not_erased(monkeypatch
     assert board.flash.nonvolatile == SR_BP | SR_SRWD and not board.flash.write_enabled
     assert bytes(board.flash.memory[:len(OLD)]) == OLD
     assert board.ecp5.configured and board.ftdi.closed
-
-
-def part(jedec, model=SPIFlashModel):
-    """``model`` answering ``jedec``: the commands pyspiflash's '25' drivers give are the
-    W25Q's (and the IS25LP's) for all of these."""
-    return type("Part", (model,), {"jedec_id": jedec})
-
-
-NO_DRIVER = "a part galvoscan has no driver for: write it with another programmer"
-
-
-@pytest.mark.parametrize("jedec, any_flash, outcome", [
-    (b"\xc2\x20\x18", True, "Macronix MX25E06128 16 MiB"),   # (pyspiflash's name)
-    (b"\xef\x40\x18", True, "Winbond W25Q128 16 MiB"),
-    (b"\x9d\x60\x18", True, "ISSI IS25LP128 16 MiB"),
-    (b"\x9d\x60\x17", True, "ISSI IS25LP064 8 MiB"),
-    (b"\x9d\x60\x16", True, "ISSI IS25LP032 4 MiB"),
-    (b"\xc2\x20\x18", False, FlashingError("JEDEC id c2 20 18, not a Winbond W25Q")),
-    (b"\x9d\x60\x18", False, FlashingError("JEDEC id 9d 60 18, not a Winbond W25Q")),
-    # ISSI's 1.8 V IS25WP128, which no ULX3S carries, and an SST25, whose pyspiflash
-    # driver cannot write.
-    (b"\x9d\x70\x18", True, FlashingError(f"^the flash answers JEDEC id 9d 70 18, {NO_DRIVER}")),
-    (b"\xbf\x25\x41", True, FlashingError(f"JEDEC id bf 25 41, {NO_DRIVER}")),
-    (b"\xff\xff\xff", True, FlashingError(r"no flash answers \(JEDEC id ff ff ff\)")),
-])
-def test_the_ulx3s_takes_any_flash_galvoscan_knows(monkeypatch, jedec, any_flash, outcome):
-    """The ULX3S's part differs between board revisions; the iCEBreaker's is a W25Q. Through
-    ModelPort, as ``flash --to FILE`` writes; an unknown part is named by its id in one line
-    before any erase."""
-    clock = Clock()
-    monkeypatch.setattr(serialflash, "time", clock)
-    monkeypatch.setattr(flashing, "time", clock)
-    model = part(jedec, IS25LPModel if jedec[0] == 0x9D else SPIFlashModel)(powered_down=False)
-    job = a_job()
-    regions = flash_regions(job=job)
-    if isinstance(outcome, Exception):
-        with pytest.raises(FlashingError, match=str(outcome)) as error:
-            program(ModelPort(model, clock=clock.monotonic), regions, any_flash=any_flash)
-        assert "\n" not in str(error.value)
-        assert model.commands[2:] == []         # (after the wake-up and the JEDEC id)
-    else:
-        assert program(ModelPort(model, clock=clock.monotonic), regions,
-                       any_flash=any_flash) == outcome
-        assert bytes(model.memory[JOB_OFFSET:JOB_OFFSET + len(job)]) == job
-
-
-def test_an_issi_flash_through_modelport_by_blocks_and_sectors(monkeypatch):
-    """A bitstream over 64 KB blocks and a job (``flash --to FILE``'s path) onto a protected
-    IS25LP128: the BP bits cleared, 64 KB and 4 KB erases, each region read back."""
-    clock = Clock()
-    monkeypatch.setattr(serialflash, "time", clock)
-    monkeypatch.setattr(flashing, "time", clock)
-    model = IS25LPModel(b"\0" * (JOB_OFFSET + 8192), status=SR_BP | SR_QE)
-    new, job = bitstream(200_000), a_job()
-    written = []
-    what = program(ModelPort(model, clock=clock.monotonic),
-                   flash_regions(new, job, check=check_bitstream), progress=written.append,
-                   any_flash=True)
-    assert what == "ISSI IS25LP128 16 MiB" and sum(written) == len(new) + len(job)
-    memory = bytes(model.memory)
-    assert memory[:len(new)] == new
-    # (The rest of the bitstream's last sector erased; what lies beyond it untouched.)
-    end = -(-len(new) // 4096) * 4096
-    assert memory[len(new):end] == b"\xff" * (end - len(new)) and memory[end:end + 8] == bytes(8)
-    assert memory[JOB_OFFSET:JOB_OFFSET + len(job)] == job
-    assert {0xD8, 0x20} <= set(model.commands)
-    assert model.nonvolatile == SR_QE and model.refused == [] and model.ignored == []
-
-
-def test_a_region_beyond_a_smaller_issi_part_is_refused_before_any_erase(monkeypatch):
-    clock = Clock()
-    monkeypatch.setattr(serialflash, "time", clock)
-    model = part(b"\x9d\x60\x16", IS25LPModel)(powered_down=False, status=SR_BP)
-    with pytest.raises(FlashingError, match=r"^3,200,000 bytes at 0x100000 do not fit the "
-                                            r"flash \(ISSI IS25LP032 4 MiB, 4,194,304 bytes\)$"):
-        program(ModelPort(model, clock=clock.monotonic), flash_regions(job=bytes(3_200_000)),
-                any_flash=True)
-    assert model.commands[2:] == [] and model.nonvolatile == SR_BP
-
-
-def test_the_drivers_are_pyspiflashs_in_its_order_and_the_issis():
-    """galvoscan's table in place of pyspiflash's private pick: every public driver it has
-    (but the SST25's, whose write() cannot work), in the order its _get_flash tries them."""
-    public = [driver for name, driver in vars(serialflash).items()
-              if name.endswith("FlashDevice") and not name.startswith("_")]
-    assert list(DRIVERS) == [driver for driver in public
-                             if driver is not serialflash.Sst25FlashDevice] + [IS25LPFlashDevice]

@@ -1,52 +1,28 @@
-"""Writing the iCEBreaker's configuration flash: the bitstream at 0 and a job image at
-:data:`~galvoscan.gateware.player.image_format.JOB_OFFSET` (``galvoscan flash``), with what PyPI
-has: pyftdi drives the board's FTDI (channel A, whose SPI pins the flash and the FPGA share),
-pyspiflash the W25Q128JV on it, and libusb comes from the libusb-package wheel.
+"""Writing a board's configuration flash over SPI, whatever the board: the bitstream at 0 and a
+job image at :data:`~galvoscan.gateware.player.image_format.JOB_OFFSET` (``galvoscan flash``),
+each erased, written and read back by pyspiflash's driver for the part (or galvoscan's own,
+:mod:`.chips`) through a port that stands where pyftdi's ``SpiPort`` stands: the iCEBreaker's
+FTDI (:mod:`.icebreaker`), the ULX3S's ECP5 over JTAG (:mod:`.ecp5`), or a flash image file
+(:class:`ModelPort`). Everything is checked before the first byte goes to the board: the
+bitstream (by the board's check, the iCE40's by default: :mod:`.ice40`), the regions' sizes.
 
-While the flash is written the FPGA is held in reset (CRESET_B, FTDI ADBUS7, low), as iceprog
-holds it, so its pins leave the flash alone; after the write and its read-back, CRESET_B goes
-high and the FPGA configures from the new bitstream. Everything is checked before the first
-byte goes to the board: the bitstream's preamble and size (it must end below the job image),
-the image as the player will check it.
-
-The ULX3S's flash is written by the same :func:`program` through its ECP5's JTAG
-(:mod:`galvoscan.flashing_ecp5`), whose port stands where pyftdi's SPI port stands here; its
-part differs between board revisions, and :mod:`galvoscan.flash_chips` picks the driver by
-the JEDEC id it answers (pyspiflash's, or galvoscan's own for the ISSI IS25LP).
+pyusb, under pyftdi, loads libusb from the libusb-package wheel (:func:`use_wheel_libusb`), so
+that no system package is needed to open either board.
 """
 
 import time
 
-from .gateware.player.image_format import FLASH_BYTES, JOB_OFFSET
+from ..gateware.player.image_format import FLASH_BYTES, JOB_OFFSET
+from .errors import FlashingError, missing_dependency
+from .ice40 import check_bitstream
 
 
-__all__ = ["FlashingError", "check_bitstream", "flash_regions", "program", "ModelPort",
-           "open_icebreaker", "use_wheel_libusb", "DEFAULT_URL"]
+__all__ = ["flash_regions", "program", "ModelPort", "use_wheel_libusb", "SPI_HZ"]
 
 
-#: The iCEBreaker's FTDI, channel A (pyftdi's URL).
-DEFAULT_URL = "ftdi://ftdi:2232h/1"
-#: An iCE40 bitstream's synchronisation word (after an optional comment).
-ICE40_PREAMBLE = b"\x7e\xaa\x99\x7e"
-#: The FTDI's pins: the flash's /CS on ADBUS4 (pyftdi's /CS 1), CRESET_B on ADBUS7.
-FLASH_CS = 1
-CRESET_PIN = 1 << 7
-#: SPI clock while writing.
+#: The SPI clock a flash is written at: the iCEBreaker's FTDI's, and what :class:`ModelPort`
+#: reports.
 SPI_HZ = 6e6
-
-
-class FlashingError(Exception):
-    """What stops a write, in one line."""
-
-
-def check_bitstream(data, *, name="the bitstream"):
-    """Refuse what is not an iCE40 bitstream, or one that would reach the job image."""
-    if ICE40_PREAMBLE not in data[:256]:
-        raise FlashingError(f"{name} is not an iCE40 bitstream (no 7E AA 99 7E preamble): "
-                            f"give the .bin galvoscan build writes")
-    if len(data) > JOB_OFFSET:
-        raise FlashingError(f"{name} is {len(data):,} bytes: it would overlap the job image "
-                            f"at {JOB_OFFSET:#x}")
 
 
 def flash_regions(bitstream=None, job=None, *, check=check_bitstream):
@@ -68,11 +44,13 @@ def flash_regions(bitstream=None, job=None, *, check=check_bitstream):
 
 def _flash_device(port, *, any_flash=False):
     """The flash's driver on ``port``, woken from power-down, its JEDEC id checked: the
-    iCEBreaker's W25Q, or with ``any_flash`` any part :mod:`galvoscan.flash_chips` has a
-    driver for (pyspiflash's, and the ISSI IS25LP several ULX3S revisions carry)."""
-    # (Loaded when a flash is written, as pyftdi is: pyspiflash imports it.)
+    iCEBreaker's W25Q, or with ``any_flash`` any part :mod:`.chips` has a driver for
+    (pyspiflash's, and the ISSI IS25LP several ULX3S revisions carry)."""
+    # (Loaded when a flash is written, as pyftdi is: pyspiflash imports it, and so do the
+    # parts' drivers. A missing pyftdi is then said in one line by the board's opening,
+    # before this, not by an import of galvoscan.flashing.)
     from spiflash.serialflash import SerialFlashManager, W25xFlashDevice
-    from .flash_chips import flash_device
+    from .chips import flash_device
     port.exchange(b"\xab")              # release from deep power-down (the FPGA's may be)
     time.sleep(10e-6)                   # tRES1, 3 µs
     jedec = bytes(SerialFlashManager.read_jedec_id(port))
@@ -99,10 +77,11 @@ def _flash_device(port, *, any_flash=False):
 def program(port, regions, *, progress=None, any_flash=False):
     """Erase, write and read back each of ``regions`` on the flash behind ``port`` (a pyftdi
     :class:`~pyftdi.spi.SpiPort`, :class:`ModelPort`, or the ULX3S's
-    :class:`~galvoscan.flashing_ecp5.BackgroundSPI`); ``progress(bytes)`` as it goes;
-    ``any_flash``: take any part :mod:`galvoscan.flash_chips` knows, not only a W25Q, its
-    block protection cleared first where it has one set (the IS25LP's). Returns the flash's
-    description. A flash or a link that fails is a :class:`FlashingError`."""
+    :class:`~.ecp5.BackgroundSPI`); ``progress(bytes)`` as it goes; ``any_flash``: take any
+    part :mod:`.chips` knows, not only a W25Q, its block protection cleared first where it
+    has one set (the IS25LP's). Returns the flash's description. A flash or a link that
+    fails is a :class:`FlashingError`."""
+    # (Loaded when a flash is written: see _flash_device.)
     from spiflash.serialflash import SerialFlashError
     try:
         return _program(port, regions, progress, any_flash)
@@ -115,8 +94,9 @@ def program(port, regions, *, progress=None, any_flash=False):
 
 
 def _program(port, regions, progress, any_flash):
+    # (Loaded when a flash is written: see _flash_device.)
     from spiflash.serialflash import SerialFlashRequestError
-    from .flash_chips import clear_protection
+    from .chips import clear_protection
     device = _flash_device(port, any_flash=any_flash)
     for address, data in regions:
         # (A smaller part than the 16 MiB the image format assumes: before any erase.)
@@ -175,11 +155,12 @@ class ModelPort:
 def use_wheel_libusb():
     """Have pyusb (under pyftdi) load libusb from the libusb-package wheel, not the system's;
     returns the function that gives pyusb its own lookup back. One-line errors."""
+    # (Imported here, when a board is opened: a missing one is said in one line.)
     try:
         import libusb_package
         import usb.backend.libusb1
     except ImportError as error:
-        raise FlashingError(_missing(error)) from None
+        raise FlashingError(missing_dependency(error)) from None
     backend = usb.backend.libusb1.get_backend(find_library=libusb_package.find_library)
     if backend is None:
         raise FlashingError("libusb (from the libusb-package wheel) does not load here")
@@ -189,37 +170,3 @@ def use_wheel_libusb():
     def restore():
         usb.backend.libusb1.get_backend = original
     return restore
-
-
-def _missing(error):
-    return f"flashing needs {error.name} (pip install galvoscan installs it)"
-
-
-def open_icebreaker(url=DEFAULT_URL):
-    """``(port, release)``: the flash's SPI port on the board's FTDI with the FPGA held in
-    reset; ``release()`` lets it configure and closes the FTDI. One-line errors."""
-    restore = use_wheel_libusb()
-    try:
-        from pyftdi.ftdi import FtdiError
-        from pyftdi.spi import SpiController
-        from pyftdi.usbtools import UsbToolsError
-    except ImportError as error:
-        restore()
-        raise FlashingError(_missing(error)) from None
-    controller = SpiController(cs_count=FLASH_CS + 1)
-    try:
-        controller.configure(url, frequency=SPI_HZ)
-    except (FtdiError, UsbToolsError, ValueError, OSError) as error:
-        restore()
-        raise FlashingError(f"no iCEBreaker at {url} ({error}): is it plugged in, and may "
-                            f"this user open it (a udev rule for 0403:6010)?") from None
-    gpio = controller.get_gpio()
-    gpio.set_direction(CRESET_PIN, CRESET_PIN)
-    gpio.write(0)                       # CRESET_B low: the FPGA lets go of the flash
-    time.sleep(0.01)
-
-    def release():
-        gpio.write(CRESET_PIN)          # CRESET_B high: the FPGA configures
-        controller.terminate()
-        restore()
-    return controller.get_port(FLASH_CS, freq=SPI_HZ), release

@@ -1,16 +1,11 @@
-"""Writing the ULX3S's configuration flash (``galvoscan flash --board ulx3s``) through its
-ECP5's JTAG, in Python on pyftdi, with the bitstream at 0 and a job image at
-:data:`~galvoscan.gateware.player.image_format.JOB_OFFSET` as on the iCEBreaker.
-
-The ULX3S's USB chip is an FT231X (0403:6015), a UART with no MPSSE engine: the ECP5's JTAG
-hangs on the UART's modem pins, which pyftdi drives in synchronous bit-bang (as fujprog and
-openFPGALoader's ``ft231X`` cable do), two pin writes a TCK period. The flash is not on those
-pins; the ECP5 reaches it for us. Its JTAG instruction LSC_PROG_SPI, given its 16-bit key,
-turns the TAP's Shift-DR into the flash's SPI bus ("background SPI"): TCK clocks the flash
+"""The ULX3S's ECP5 as the flash writer tells it over JTAG (:mod:`.jtag`): its bitstream
+checked, its configuration cleared, and its flash reached through it. The flash is not on the
+JTAG's pins; the ECP5 reaches it for us. Its JTAG instruction LSC_PROG_SPI, given its 16-bit
+key, turns the TAP's Shift-DR into the flash's SPI bus ("background SPI"): TCK clocks the flash
 (MCLK), TDI goes to the flash's input, the flash's output comes out of TDO, /CS is low while
 the TAP is in Shift-DR. :class:`BackgroundSPI` makes one SPI transaction of each
-``exchange()``, pyftdi's ``SpiPort`` call, so that :func:`galvoscan.flashing.program` and
-pyspiflash erase, write and read back this flash as they do the iCEBreaker's.
+``exchange()``, pyftdi's ``SpiPort`` call, so that :func:`~.writer.program` and pyspiflash
+erase, write and read back this flash as they do the iCEBreaker's.
 
 The sequence is openFPGALoader's for an ECP5's external flash (src/lattice.cpp:
 ``program_extFlash`` after ``prepare_flash_access``, ``clearSRAM``, ``EnableISC``,
@@ -32,38 +27,14 @@ whom openFPGALoader credits for the key; its ``enter_spi_background_mode``) agre
 
 import time
 
-import numpy as np
-
-from .flashing import FlashingError, _missing, use_wheel_libusb
-from .gateware.player.image_format import JOB_OFFSET
-
-
-__all__ = ["DEFAULT_URL", "ECP5_IDCODES", "check_bitstream", "open_ulx3s", "connect",
-           "FtdiBitbang", "JTAG", "BackgroundSPI"]
+from ..gateware.player.image_format import JOB_OFFSET
+from .errors import FlashingError
+from .ice40 import ICE40_PREAMBLE
+from .jtag import BITBANG_HZ, JTAG
 
 
-#: The ULX3S's FT231X (0403:6015), pyftdi's URL (``ft-x``: pyftdi's name for the FT-X series).
-DEFAULT_URL = "ftdi://ftdi:ft-x/1"
+__all__ = ["ECP5_IDCODES", "check_bitstream", "connect", "ECP5TAP", "BackgroundSPI"]
 
-#: The FT231X's bit-bang bits are its UART pins (D0-D7: TXD, RXD, RTS, CTS, DTR, DSR, DCD, RI);
-#: the ULX3S wires its ECP5's JTAG to four of them: TCK on DSR, TMS on DCD, TDI on RI, TDO on
-#: CTS. From openFPGALoader's src/board.hpp, the "ulx3s" entry (JTAG_BITBANG_BOARD on the
-#: "ft231X" cable with TMS = FT232RL_DCD, TCK = FT232RL_DSR, TDI = FT232RL_RI,
-#: TDO = FT232RL_CTS), and fujprog.c's cable_hw_map for 0403:6015 "ULX3S FPGA ..." (tck 0x20,
-#: tms 0x40, tdi 0x80, tdo 0x08): the two agree.
-TCK = 1 << 5
-TMS = 1 << 6
-TDI = 1 << 7
-TDO = 1 << 3
-#: Pin writes a second in bit-bang (pyftdi's bit-bang rate, fujprog's 1 M): two a TCK period,
-#: so TCK is 500 kHz at most; the USB round trips of synchronous bit-bang keep it well below.
-BITBANG_HZ = 1_000_000
-#: Pin writes sent before their samples are read: synchronous bit-bang samples the pins for
-#: every byte written and holds the output while the FT231X's 512-byte buffer towards the host
-#: is full, so a chunk must fit in it (fujprog's is 384 on Linux, openFPGALoader's 512).
-CHUNK_BYTES = 384
-#: How long the FTDI may take to return a chunk's samples, s.
-READ_TIMEOUT_S = 2.0
 
 #: ECP5 IDCODEs and their parts (openFPGALoader's src/part.hpp; ecpprog's lattice_cmds.h lists
 #: the same): a ULX3S carries an LFE5U-12F, -25F, -45F or -85F.
@@ -129,7 +100,7 @@ def check_bitstream(data, *, name="the bitstream"):
         start = len(data) if end < 0 else end
     preamble = data.find(ECP5_PREAMBLE, start, start + 64)
     if preamble < 0 or data[start:preamble].strip(b"\xff"):
-        ice40 = b"\x7e\xaa\x99\x7e" in data[:256]
+        ice40 = ICE40_PREAMBLE in data[:256]
         raise FlashingError(f"{name} is not an ECP5 bitstream (no FF FF BD B3 preamble after "
                             f"its comment): "
                             + ("it is an iCE40's: flash it with --board icebreaker" if ice40
@@ -163,122 +134,9 @@ def _verify_id(data, at):
     return None
 
 
-# --- the JTAG port --------------------------------------------------------------------------
-
-#: IEEE 1149.1's TAP controller: state → (the next state with TMS low, with TMS high).
-_TAP = {
-    "reset": ("idle", "reset"),
-    "idle": ("idle", "select_dr"),
-    "select_dr": ("capture_dr", "select_ir"),
-    "capture_dr": ("shift_dr", "exit1_dr"),
-    "shift_dr": ("shift_dr", "exit1_dr"),
-    "exit1_dr": ("pause_dr", "update_dr"),
-    "pause_dr": ("pause_dr", "exit2_dr"),
-    "exit2_dr": ("shift_dr", "update_dr"),
-    "update_dr": ("idle", "select_dr"),
-    "select_ir": ("capture_ir", "reset"),
-    "capture_ir": ("shift_ir", "exit1_ir"),
-    "shift_ir": ("shift_ir", "exit1_ir"),
-    "exit1_ir": ("pause_ir", "update_ir"),
-    "pause_ir": ("pause_ir", "exit2_ir"),
-    "exit2_ir": ("shift_ir", "update_ir"),
-    "update_ir": ("idle", "select_dr"),
-}
-
-
-def _paths():
-    """Every state → every state: the shortest TMS sequence (breadth first)."""
-    paths = {}
-    for start in _TAP:
-        found = {start: ()}
-        frontier = [start]
-        while frontier:
-            following = []
-            for state in frontier:
-                for tms, after in enumerate(_TAP[state]):
-                    if after not in found:
-                        found[after] = found[state] + (tms,)
-                        following.append(after)
-            frontier = following
-        paths[start] = found
-    return paths
-
-
-_PATHS = _paths()
-
-
-def _tick(tms, tdi):
-    """One TCK period: TMS and TDI set with TCK low, then TCK high (the TAP's rising edge)."""
-    pins = (TMS if tms else 0) | (TDI if tdi else 0)
-    return bytes((pins, pins | TCK))
-
-
-#: A byte shifted LSB first with TMS low: its 16 pin writes.
-_SHIFT = [b"".join(_tick(0, value >> bit & 1) for bit in range(8)) for value in range(256)]
-#: Each byte with its bits reversed: the flash takes MSB first, JTAG shifts LSB first.
-_REVERSED = bytes(int(f"{value:08b}"[::-1], 2) for value in range(256))
-
-
-class JTAG:
-    """An IEEE 1149.1 TAP driven through a bit-bang port: ``pins.clock(data)`` writes the pin
-    bytes of ``data`` in turn and returns, for each, the pins sampled just before it was
-    written (FTDI's synchronous bit-bang). A TCK period is two writes, TCK low then high; TDO
-    is read from the second's sample, taken while TCK is still low, after the falling edge
-    that put the bit on TDO (and before the rising edge that shifts the next)."""
-
-    def __init__(self, pins):
-        self.pins = pins
-        self.state = None               # unknown until reset()
-
-    def reset(self):
-        """Test-Logic-Reset, whatever the state: five TMS-high clocks reach it from any."""
-        self.pins.clock(_tick(1, 1) * 6)
-        self.state = "reset"
-
-    def _go(self, goal):
-        """The pin writes that take the TAP to ``goal``."""
-        path = _PATHS[self.state][goal]
-        self.state = goal
-        return b"".join(_tick(tms, 1) for tms in path)
-
-    def idle(self, clocks):
-        """Run-Test/Idle for ``clocks`` TCK periods."""
-        self.pins.clock(self._go("idle") + _tick(0, 1) * clocks)
-
-    def shift_ir(self, instruction, *, end="idle"):
-        """Shift the 8-bit ``instruction`` into IR; then go to ``end``."""
-        self._shift("shift_ir", bytes((instruction,)), 8, False, end)
-
-    def shift_dr(self, data, bits=None, *, read=False, end="idle"):
-        """Shift ``bits`` (all of ``data``'s by default) of ``data`` into DR, LSB first; with
-        ``read``, return what came out of TDO, packed the same way. ``end="shift_dr"`` stays
-        in Shift-DR (the next shift continues it)."""
-        return self._shift("shift_dr", bytes(data), 8 * len(data) if bits is None else bits,
-                           read, end)
-
-    def _shift(self, where, data, bits, read, end):
-        head = self._go(where)
-        body = bytearray(b"".join(_SHIFT[value] for value in data)[:2 * bits])
-        tail = b""
-        if end != where:
-            # The last bit leaves with TMS high (to Exit1), then on to ``end``.
-            body[-2] |= TMS
-            body[-1] |= TMS
-            self.state = _TAP[where][1]
-            tail = self._go(end)
-        samples = self.pins.clock(head + bytes(body) + tail)
-        if not read:
-            return None
-        tdo = np.frombuffer(samples, np.uint8)[len(head) + 1:len(head) + 2 * bits:2] & TDO
-        return np.packbits(tdo != 0, bitorder="little").tobytes()
-
-    # --- the ECP5's instructions -----------------------------------------------------------
-
-    def read(self, instruction, length):
-        """``length`` bytes of the data register ``instruction`` selects."""
-        # (Exit1-IR straight to Shift-DR, not through Run-Test/Idle, as openFPGALoader does.)
-        self.shift_ir(instruction, end="exit1_ir")
-        return self.shift_dr(bytes(length), read=True)
+class ECP5TAP(JTAG):
+    """The ECP5's TAP: :class:`~.jtag.JTAG` with the ECP5's instructions for its IDCODE, its
+    status register and its configuration commands."""
 
     def idcode(self):
         return int.from_bytes(self.read(IDCODE_PUB, 4), "little")
@@ -302,6 +160,10 @@ class JTAG:
                                     f"{self.status():#010x})")
             time.sleep(POLL_S)
         return self.status()
+
+
+#: Each byte with its bits reversed: the flash takes MSB first, JTAG shifts LSB first.
+_REVERSED = bytes(int(f"{value:08b}"[::-1], 2) for value in range(256))
 
 
 class BackgroundSPI:
@@ -341,16 +203,16 @@ class BackgroundSPI:
         return got[:readlen] if duplex else got[len(out):]
 
 
-# --- the board --------------------------------------------------------------------------------
+# --- the flash opened through the ECP5 --------------------------------------------------------
 
 def connect(pins, *, idcode=None):
     """``(port, release)`` on a ULX3S's JTAG through the bit-bang port ``pins`` (``clock()``
-    and ``close()``, :class:`FtdiBitbang`): its ECP5 checked (``idcode``: the one the
+    and ``close()``, :class:`~.jtag.FtdiBitbang`): its ECP5 checked (``idcode``: the one the
     bitstream is for; None: any ECP5), its configuration cleared, the flash opened to
     Shift-DR; ``port`` is the flash's :class:`BackgroundSPI`. ``release()`` sends
     LSC_REFRESH, closes ``pins`` and returns whether the ECP5 configured from the flash.
     One-line errors; a wrong FPGA is refused before anything on the board changes."""
-    jtag = JTAG(pins)
+    jtag = ECP5TAP(pins)
     try:
         jtag.reset()
         _check_idcode(jtag.idcode(), idcode)
@@ -431,75 +293,3 @@ def _refresh(jtag):
             return False
         time.sleep(10 * POLL_S)
     return True
-
-
-class FtdiBitbang:
-    """The FT231X's pins in synchronous bit-bang (a pyftdi ``Ftdi`` opened so): ``clock()``
-    writes pin bytes and returns the pins sampled before each (FTDI AN232R-01: "the data bus
-    pins are read first, before data from the USB RX FIFO is transmitted"), a chunk at a time;
-    ``close()`` gives the FTDI back to its UART (and the kernel's serial driver)."""
-
-    def __init__(self, ftdi, *, on_close=None):
-        self.ftdi = ftdi
-        self._on_close = on_close
-
-    def clock(self, data):
-        samples = bytearray()
-        try:
-            for start in range(0, len(data), CHUNK_BYTES):
-                chunk = data[start:start + CHUNK_BYTES]
-                self.ftdi.write_data(chunk)
-                samples += self._read(len(chunk))
-        except (OSError, ValueError) as error:     # (pyftdi's and pyusb's, a lost device)
-            raise FlashingError(f"the link to the ULX3S's FTDI failed ({error}); the flash "
-                                f"may be half written: run galvoscan flash again") from None
-        return bytes(samples)
-
-    def _read(self, size):
-        got = bytearray()
-        deadline = time.monotonic() + READ_TIMEOUT_S
-        while len(got) < size:
-            got += self.ftdi.read_data_bytes(size - len(got), attempt=4)
-            if len(got) < size and time.monotonic() > deadline:
-                raise FlashingError(f"the ULX3S's FTDI returned {len(got)} of {size} pin "
-                                    f"samples in bit-bang: unplug the board, plug it in again "
-                                    f"and retry")
-        return got
-
-    def close(self):
-        try:
-            self.ftdi.close()
-        finally:
-            if self._on_close:
-                self._on_close()
-
-
-def open_ulx3s(url=DEFAULT_URL, *, bitstream=None):
-    """``(port, release)`` as :func:`galvoscan.flashing.open_icebreaker` gives them, for the
-    ULX3S at ``url``: the flash's :class:`BackgroundSPI` through the ECP5, which must be the
-    FPGA ``bitstream`` (if given) is for; ``release()`` lets the ECP5 configure from the flash,
-    closes the FTDI and returns whether it configured. One-line errors."""
-    idcode = check_bitstream(bitstream) if bitstream is not None else None
-    return connect(_open_ftdi(url), idcode=idcode)
-
-
-def _open_ftdi(url):
-    restore = use_wheel_libusb()
-    try:
-        from pyftdi.ftdi import Ftdi, FtdiError
-        from pyftdi.usbtools import UsbToolsError
-    except ImportError as error:
-        restore()
-        raise FlashingError(_missing(error)) from None
-    ftdi = Ftdi()
-    try:
-        # TCK, TMS and TDI out, the rest in; a 1 ms latency timer, as fujprog finds synchronous
-        # bit-bang needs.
-        ftdi.open_bitbang_from_url(url, direction=TCK | TMS | TDI, latency=1,
-                                   baudrate=BITBANG_HZ, sync=True)
-    except (FtdiError, UsbToolsError, ValueError, OSError) as error:
-        restore()
-        raise FlashingError(f"no ULX3S at {url} ({error}): is it plugged in, may this user "
-                            f"open it (a udev rule for 0403:6015), and has no serial terminal "
-                            f"got its port?") from None
-    return FtdiBitbang(ftdi, on_close=restore)

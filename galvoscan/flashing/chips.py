@@ -1,4 +1,4 @@
-"""The SPI flash parts :func:`galvoscan.flashing.program` writes, picked by their JEDEC id: those
+"""The SPI flash parts :func:`~.writer.program` writes, picked by their JEDEC id: those
 pyspiflash has drivers for, and the ISSI IS25LP series (IS25LP032, IS25LP064, IS25LP128, and
 the IS25LP128F, which answers as the IS25LP128), which pyspiflash 0.6 has none for and several
 ULX3S revisions carry.
