@@ -12,6 +12,8 @@ import json
 import sys
 from pathlib import Path
 
+from ..flashing.icebreaker import DEFAULT_URL as ICEBREAKER_URL
+from ..flashing.ulx3s import DEFAULT_URL as ULX3S_URL
 from ..settings.laser import PRESS_TIMEOUT
 from .args import add_backend_option, add_setting, fail, failed, int_in, output_file, read_bytes
 from .machine import add_machine_option, profile_from
@@ -277,8 +279,8 @@ def add_parsers(commands):
                        help="the board (default icebreaker)")
     where = flash.add_mutually_exclusive_group()
     where.add_argument("--url",
-                       help="pyftdi URL of the board's FTDI (default: ftdi://ftdi:2232h/1, on "
-                            "the ULX3S ftdi://ftdi:ft-x/1)")
+                       help=f"pyftdi URL of the board's FTDI (default: {ICEBREAKER_URL}, on "
+                            f"the ULX3S {ULX3S_URL})")
     where.add_argument("--to", type=output_file, metavar="FILE",
                        help="write a 16 MiB flash image file instead of a board (for another "
                             "programmer; a file that is one already is updated as a board's "
