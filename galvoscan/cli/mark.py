@@ -137,8 +137,8 @@ def _draw_preview(args, job, drawing, profile):
         groups = [(f"{lj.label}: {path_length_mm(lj.job.paths_mm):.1f} mm"
                    f"{f' × {lj.settings.passes} passes' if lj.settings.passes > 1 else ''}",
                    lj.colour, lj.job.paths_mm) for lj in job.layers]
-    preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
-            groups=groups)
+    preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
+            spot_mm=profile.laser.spot_mm, title=title, groups=groups)
 
 
 def _cmd_mark(args):

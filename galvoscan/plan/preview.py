@@ -1,9 +1,13 @@
 """The preview of a marking job: marks, the jumps between them, the field and the drawing's box,
-in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display)."""
+in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display).
+
+Marks are drawn as wide as the spot that burns them, in millimetres, so the picture's darkness
+is the dose: a photo's dithered cells, 50 µm apart, read as the picture they make, not as
+lines of a width in points that would merge its light areas into dark ones."""
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.collections import LineCollection
+from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
@@ -18,6 +22,33 @@ def _jump_lines(paths):
     next one's start."""
     ends = [np.zeros(2)] + [p[-1] for p in paths[:-1]]
     return [np.array([end, p[0]]) for end, p in zip(ends, paths)]
+
+
+class _SpotLines(LineCollection):
+    """Marks as strokes the spot's diameter wide in the axes' millimetres, with round ends: a
+    line swept by a round spot, exactly. Matplotlib strokes in points, so the width is worked
+    out from the axes' scale when drawn, after the layout and the equal aspect have fixed
+    it, for the panel it is in (each panel has its own scale)."""
+
+    def __init__(self, segments, *, spot_mm, **kwargs):
+        super().__init__(segments, capstyle="round", joinstyle="round", **kwargs)
+        self._spot_mm = spot_mm
+
+    def draw(self, renderer):
+        # Display units a millimetre across (pixels, or points in a vector file), and the
+        # figure's dpi the same drawing's (savefig sets it): points = mm × that × 72 / dpi.
+        per_mm = abs(self.axes.transData.transform([1.0, 0.0]) -
+                     self.axes.transData.transform([0.0, 0.0]))[0]
+        self.set_linewidth(self._spot_mm * per_mm * 72 / self.figure.dpi)
+        super().draw(renderer)
+
+
+def _spot_dots(dots, spot_mm, colour, ax):
+    """Marks of no length as filled discs of the spot's diameter, in data units (mm)."""
+    return EllipseCollection(np.full(len(dots), spot_mm), np.full(len(dots), spot_mm),
+                             np.zeros(len(dots)), units="xy", offsets=dots,
+                             offset_transform=ax.transData, facecolors=colour,
+                             edgecolors="none", linewidths=0, zorder=2)
 
 
 #: Pixels apart below which marked lines run together in a panel: there, a detail panel.
@@ -64,7 +95,7 @@ def _detail_window(paths, bounds, px_per_mm):
     return cx, cy, max(_DETAIL_LINES * spacing, 1e-3)
 
 
-def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
+def preview(path, paths_mm, *, jumps=True, field_mm, spot_mm, title="", groups=None):
     """Write the picture of a job.
 
     Parameters
@@ -77,6 +108,8 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
         Draw the jumps as thin dashed grey lines.
     field_mm : float
         The field's size (the lens's): its square is outlined.
+    spot_mm : float
+        The laser spot's diameter, mm: marks are drawn this wide (a dot this across).
     title : str
         Above the picture.
     groups : sequence of (str, colour, paths), optional
@@ -143,13 +176,24 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
                         label=f"jumps {jump_mm:.1f} mm"))
         if paths:
             for label, colour, part in groups:
-                ax.add_collection(LineCollection(part, colors=colour, linewidths=0.7, zorder=2))
-                # A dot (a mark of no length: a code's module, a photo's lone pixel) as a dot.
-                dots = np.array([p[0] for p in part if not np.ptp(p, axis=0).any()])
+                # Not snapped to pixels: a photo's lines are finer than a pixel of a panel,
+                # and snapped they would pile onto whole pixel rows.
+                # A dot (a mark of no length: a code's module, a photo's lone pixel) as the
+                # spot's disc (a stroke of no length draws nothing).
+                still = [not np.ptp(p, axis=0).any() for p in part]
+                ax.add_collection(_SpotLines([p for p, s in zip(part, still) if not s],
+                                             spot_mm=spot_mm, colors=colour, zorder=2,
+                                             snap=False))
+                dots = np.array([p[0] for p, s in zip(part, still) if s])
                 if len(dots):
-                    ax.plot(dots[:, 0], dots[:, 1], linestyle="none", marker=".",
-                            markersize=2, color=colour, zorder=2)
+                    ax.add_collection(_spot_dots(dots, spot_mm, colour, ax))
                     label += f", {len(dots)} dots"
+                if kind == "detail":
+                    # The detail is where the marks are too close to tell apart: there, each
+                    # mark's path as a hairline over its spot-wide stroke, so the lines can
+                    # be counted where their spots run together.
+                    ax.add_collection(LineCollection(part, colors="white", linewidths=0.4,
+                                                     alpha=0.8, zorder=2.5))
                 keep(Line2D([], [], color=colour, linewidth=0.7, label=label))
             x0, y0, x1, y1 = bounds
             ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
