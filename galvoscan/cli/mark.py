@@ -282,7 +282,7 @@ def add_drawing_options(parser):
 def add_plan_outputs(group):
     """``--preview`` and ``--estimate``."""
     group.add_argument("--preview", type=image_file, metavar="PNG",
-                       help="draw the marks, jumps and field")
+                       help="draw the marks (each the spot's width, mm), jumps and field")
     group.add_argument("--estimate", action="store_true",
                        help="print the plan and the estimated time; send or write nothing")
 
