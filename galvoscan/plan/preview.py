@@ -28,18 +28,22 @@ class _SpotLines(LineCollection):
     """Marks as strokes the spot's diameter wide in the axes' millimetres, with round ends: a
     line swept by a round spot, exactly. Matplotlib strokes in points, so the width is worked
     out from the axes' scale when drawn, after the layout and the equal aspect have fixed
-    it, for the panel it is in (each panel has its own scale)."""
+    it, for the panel it is in (each panel has its own scale). ``most_pt``: a width in
+    points the stroke is never wider than (None: none)."""
 
-    def __init__(self, segments, *, spot_mm, **kwargs):
-        super().__init__(segments, capstyle="round", joinstyle="round", **kwargs)
+    def __init__(self, segments, *, spot_mm, most_pt=None, **kwargs):
+        kwargs.setdefault("capstyle", "round")
+        super().__init__(segments, joinstyle="round", **kwargs)
         self._spot_mm = spot_mm
+        self._most_pt = most_pt
 
     def draw(self, renderer):
         # Display units a millimetre across (pixels, or points in a vector file), and the
         # figure's dpi the same drawing's (savefig sets it): points = mm × that × 72 / dpi.
         per_mm = abs(self.axes.transData.transform([1.0, 0.0]) -
                      self.axes.transData.transform([0.0, 0.0]))[0]
-        self.set_linewidth(self._spot_mm * per_mm * 72 / self.figure.dpi)
+        width = self._spot_mm * per_mm * 72 / self.figure.dpi
+        self.set_linewidth(width if self._most_pt is None else min(width, self._most_pt))
         super().draw(renderer)
 
 
@@ -49,6 +53,13 @@ def _spot_dots(dots, spot_mm, colour, ax):
                              np.zeros(len(dots)), units="xy", offsets=dots,
                              offset_transform=ax.transData, facecolors=colour,
                              edgecolors="none", linewidths=0, zorder=2)
+
+
+#: The jumps' ink at most (their length times their width) as a share of the area they
+#: cross, where they are densest: a drawing's few jumps stay hairlines, and a photo's,
+#: one across its every light gap, are thinned to a fifth of a row (drawn dashed in grey,
+#: they darken its light areas by some 5 % of black).
+_JUMP_INK = 0.2
 
 
 #: Pixels apart below which marked lines run together in a panel: there, a detail panel.
@@ -61,18 +72,16 @@ _DETAIL_LINES = 30
 _DENSITY_CELLS = 16
 
 
-def _detail_window(paths, bounds, px_per_mm):
-    """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
-    tell apart at ``px_per_mm``: their spacing (a cell's area over the length marked in it)
-    in the densest cell of a grid over the drawing under :data:`_MERGED_PX`; None where they
-    are not."""
+def _density(paths, bounds):
+    """The length of ``paths`` in each cell of a grid of :data:`_DENSITY_CELLS` a side over
+    ``bounds`` (mm per cell; what lies outside is counted in the edge cells), and the cells'
+    side, mm."""
     x0, y0, x1, y1 = bounds
     cell = max(x1 - x0, y1 - y0, 1e-6) / _DENSITY_CELLS
+    density = np.zeros((_DENSITY_CELLS, _DENSITY_CELLS))
     starts = np.concatenate([p[:-1] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
     ends = np.concatenate([p[1:] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
     lengths = np.hypot(*(ends - starts).T)
-    if not lengths.sum() > 0:
-        return None
     # Each segment as samples a quarter of a cell apart, each carrying its share of length.
     count = np.maximum(1, np.ceil(lengths / (cell / 4))).astype(int)
     share = np.repeat(lengths / count, count)
@@ -82,8 +91,19 @@ def _detail_window(paths, bounds, px_per_mm):
                                                                           axis=0)
     column = np.clip(((samples[:, 0] - x0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
     row = np.clip(((samples[:, 1] - y0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
-    density = np.zeros((_DENSITY_CELLS, _DENSITY_CELLS))
     np.add.at(density, (row, column), share)
+    return density, cell
+
+
+def _detail_window(paths, bounds, px_per_mm):
+    """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
+    tell apart at ``px_per_mm``: their spacing (a cell's area over the length marked in it)
+    in the densest cell of a grid over the drawing under :data:`_MERGED_PX`; None where they
+    are not."""
+    x0, y0 = bounds[:2]
+    density, cell = _density(paths, bounds)
+    if not density.sum() > 0:
+        return None
     r, c = np.unravel_index(np.argmax(density), density.shape)
     spacing = cell * cell / density[r, c]
     if not spacing * px_per_mm < _MERGED_PX:
@@ -150,6 +170,11 @@ def preview(path, paths_mm, *, jumps=True, field_mm, spot_mm, title="", groups=N
     panel_px = 5.3 * 110                            # a panel's width, about, in pixels
     detail = _detail_window(paths, bounds, panel_px / (size * 1.15 if zoom else field_mm)) \
         if bounds is not None else None
+    # The jumps' width: their ink a share of the cell they are densest in.
+    jump_width_mm = 0.0
+    if jump_mm > 0:
+        density, cell = _density(jump_lines, bounds)
+        jump_width_mm = _JUMP_INK * cell * cell / density.max()
     count = 1 + zoom + (detail is not None)
     figure = Figure(figsize=(6.2 * count, 7.4) if count > 1 else (7, 7.6), dpi=110,
                     layout="constrained")
@@ -170,8 +195,12 @@ def preview(path, paths_mm, *, jumps=True, field_mm, spot_mm, title="", groups=N
                     label=f"field {field_mm:g} mm"))
         if jumps and jump_lines:
             # Under the marks: a jump is where the laser is off, the marks are what matters.
-            ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,
-                                             linestyles=(0, (4, 3)), zorder=1))
+            # A hairline, but never so wide that the jumps' ink passes a share of the square
+            # the drawing spans: a photo's jumps cross its every light gap, and even a
+            # spot wide they would grey the light areas as the marks do the dark.
+            ax.add_collection(_SpotLines(jump_lines, spot_mm=jump_width_mm, most_pt=0.5,
+                                         colors="0.55", linestyles=(0, (4, 3)),
+                                         capstyle="butt", zorder=1, snap=False))
             keep(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
                         label=f"jumps {jump_mm:.1f} mm"))
         if paths:

@@ -195,29 +195,33 @@ def _cells(picture, size):
     return 1 - np.asarray(grey, dtype=float) / 255
 
 
-def preview_against_source(png, source, spot_mm=0.05):
+def preview_against_source(png, source, box_mm=None, spot_mm=0.05):
     """Pearson's r between the preview's darkness over the photo's area and the source
-    picture's, on 1 mm cells (the frame's ring of cells left out: it is in both)."""
+    picture's, on 1 mm cells (the frame's ring of cells left out: it is in both). The photo
+    is centred at (0, 0); ``box_mm``: the drawing's box ``(x0, y0, x1, y1)``, mm (None: the
+    photo's marks', through its edge cells' centres, half a cell in from its edge)."""
     from PIL import Image
     rgb = np.asarray(Image.open(png).convert("RGB"))
     left, top, right, bottom = _blue_box(rgb)
-    # The box is drawn through the edge cells' centres: half a cell in from the photo's edge.
-    (w, h), cell = PHOTO_MM, spot_mm
-    per_mm_x = (right - left) / (w - cell)
-    per_mm_y = (bottom - top) / (h - cell)
-    assert per_mm_x == pytest.approx(per_mm_y, rel=0.02)      # the box found is the photo's
-    area = Image.fromarray(rgb).crop((left - per_mm_x * cell / 2, top - per_mm_y * cell / 2,
-                                      right + per_mm_x * cell / 2,
-                                      bottom + per_mm_y * cell / 2))
+    w, h = PHOTO_MM
+    x0, y0, x1, y1 = box_mm or (-w / 2 + spot_mm / 2, -h / 2 + spot_mm / 2,
+                                w / 2 - spot_mm / 2, h / 2 - spot_mm / 2)
+    per_mm_x, per_mm_y = (right - left) / (x1 - x0), (bottom - top) / (y1 - y0)
+    assert per_mm_x == pytest.approx(per_mm_y, rel=0.02)      # the box found is the drawing's
+    area = Image.fromarray(rgb).crop((left + (-w / 2 - x0) * per_mm_x,
+                                      top + (y1 - h / 2) * per_mm_y,
+                                      left + (w / 2 - x0) * per_mm_x,
+                                      top + (y1 + h / 2) * per_mm_y))
     shown, wanted = _cells(area, PHOTO_MM)[1:-1, 1:-1], _cells(source, PHOTO_MM)[1:-1, 1:-1]
     return np.corrcoef(shown.ravel(), wanted.ravel())[0, 1]
 
 
 #: The least correlation a photo's preview keeps with its source. Measured, drawn at the spot's
-#: size: r = 0.998 (shading) and 0.9999 (shapes), the saved job's the same. Drawn in points as
-#: before (0.7 pt lines, 2 pt dots): the shading's r was -0.44, its preview the dose inverted
-#: (black shapes on white stay solid either way: 0.999). The jumps, dashed under the marks, grey
-#: a light area by some 0.15 without changing r.
+#: size: r = 0.996 (shading) and 0.9999 (shapes) zoomed in, the saved job's the same, and 0.998
+#: (shading) in a field panel at a quarter of a pixel a row. Drawn in points as before (0.7 pt
+#: lines, 2 pt dots, 0.5 pt jumps): the shading's r was -0.44 zoomed in, its preview the dose
+#: inverted, and -0.12 in the field panel, a black block; black shapes on white stay solid
+#: either way (0.999).
 MIN_R = 0.9
 
 
@@ -259,3 +263,19 @@ def test_marks_are_the_spots_width_in_millimetres(tmp_path):
         reach = int(spot_mm * per_mm)
         disc = dark[centre_y - reach:centre_y + reach + 1, centre_x - reach:centre_x + reach + 1]
         assert disc.sum() == pytest.approx(np.pi / 4 * (spot_mm * per_mm) ** 2, rel=0.15)
+
+
+def test_a_photo_in_a_field_wide_job_shows_its_dose(tmp_path):
+    """A photo in a job that spans the field (two dots at its corners): no zoomed panel, the
+    photo drawn in the field panel at some 5 pixels a mm, its rows a quarter of a pixel
+    apart. Its darkness still follows the source's: the strokes' area shades each pixel, and
+    the jumps across its light gaps are thinned, not laid over them a hairline each."""
+    from galvoscan import api
+    source = _shading()
+    source.save(tmp_path / "photo.png")
+    plan = api.plan(api.Job(photos=(api.Photo(str(tmp_path / "photo.png"), PHOTO_MM[0]),)))
+    corners = [np.array([[-46.0, -46], [-46, -46]]), np.array([[46.0, 46], [46, 46]])]
+    out = tmp_path / "field.png"
+    preview(out, list(plan.vector_job.paths_mm) + corners, field_mm=110, spot_mm=0.05)
+    r = preview_against_source(out, source, box_mm=(-46, -46, 46, 46))
+    assert r >= MIN_R, r
