@@ -137,8 +137,8 @@ def _draw_preview(args, job, drawing, profile):
         groups = [(f"{lj.label}: {path_length_mm(lj.job.paths_mm):.1f} mm"
                    f"{f' × {lj.settings.passes} passes' if lj.settings.passes > 1 else ''}",
                    lj.colour, lj.job.paths_mm) for lj in job.layers]
-    preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm, title=title,
-            groups=groups)
+    preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
+            spot_mm=profile.laser.spot_mm, title=title, groups=groups)
 
 
 def _cmd_mark(args):
@@ -282,7 +282,7 @@ def add_drawing_options(parser):
 def add_plan_outputs(group):
     """``--preview`` and ``--estimate``."""
     group.add_argument("--preview", type=image_file, metavar="PNG",
-                       help="draw the marks, jumps and field")
+                       help="draw the marks (each the spot's width, mm), jumps and field")
     group.add_argument("--estimate", action="store_true",
                        help="print the plan and the estimated time; send or write nothing")
 

@@ -69,7 +69,7 @@ def _cmd_test_grid(args):
         from ..plan.preview import preview
         paths = [p for c in cells for p in c.job.paths_mm] + list(labels.paths_mm)
         preview(args.preview, paths, field_mm=profile.field.size_mm,
-                title=f"test grid: {len(cells)} squares")
+                spot_mm=profile.laser.spot_mm, title=f"test grid: {len(cells)} squares")
         say(f"wrote {args.preview}")
     record = {"prr_khz": prr, "estimate_s": round(total, 3),
               "cells": [{"speed_mm_s": round(c.speed_mm_s, 2), "power_percent": c.power_percent,

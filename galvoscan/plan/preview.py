@@ -1,9 +1,13 @@
 """The preview of a marking job: marks, the jumps between them, the field and the drawing's box,
-in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display)."""
+in field mm (matplotlib Figure objects on the Agg canvas: no pyplot state, no display).
+
+Marks are drawn as wide as the spot that burns them, in millimetres, so the picture's darkness
+is the dose: a photo's dithered cells, 50 µm apart, read as the picture they make, not as
+lines of a width in points that would merge its light areas into dark ones."""
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.collections import LineCollection
+from matplotlib.collections import EllipseCollection, LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
@@ -20,6 +24,44 @@ def _jump_lines(paths):
     return [np.array([end, p[0]]) for end, p in zip(ends, paths)]
 
 
+class _SpotLines(LineCollection):
+    """Marks as strokes the spot's diameter wide in the axes' millimetres, with round ends: a
+    line swept by a round spot, exactly. Matplotlib strokes in points, so the width is worked
+    out from the axes' scale when drawn, after the layout and the equal aspect have fixed
+    it, for the panel it is in (each panel has its own scale). ``most_pt``: a width in
+    points the stroke is never wider than (None: none)."""
+
+    def __init__(self, segments, *, spot_mm, most_pt=None, **kwargs):
+        kwargs.setdefault("capstyle", "round")
+        super().__init__(segments, joinstyle="round", **kwargs)
+        self._spot_mm = spot_mm
+        self._most_pt = most_pt
+
+    def draw(self, renderer):
+        # Display units a millimetre across (pixels, or points in a vector file), and the
+        # figure's dpi the same drawing's (savefig sets it): points = mm × that × 72 / dpi.
+        per_mm = abs(self.axes.transData.transform([1.0, 0.0]) -
+                     self.axes.transData.transform([0.0, 0.0]))[0]
+        width = self._spot_mm * per_mm * 72 / self.figure.dpi
+        self.set_linewidth(width if self._most_pt is None else min(width, self._most_pt))
+        super().draw(renderer)
+
+
+def _spot_dots(dots, spot_mm, colour, ax):
+    """Marks of no length as filled discs of the spot's diameter, in data units (mm)."""
+    return EllipseCollection(np.full(len(dots), spot_mm), np.full(len(dots), spot_mm),
+                             np.zeros(len(dots)), units="xy", offsets=dots,
+                             offset_transform=ax.transData, facecolors=colour,
+                             edgecolors="none", linewidths=0, zorder=2)
+
+
+#: The jumps' ink at most (their length times their width) as a share of the area they
+#: cross, where they are densest: a drawing's few jumps stay hairlines, and a photo's,
+#: one across its every light gap, are thinned to a fifth of a row (drawn dashed in grey,
+#: they darken its light areas by some 5 % of black).
+_JUMP_INK = 0.2
+
+
 #: Pixels apart below which marked lines run together in a panel: there, a detail panel.
 _MERGED_PX = 4
 #: Lines across a detail panel (its side, in the lines' own spacing).
@@ -30,18 +72,16 @@ _DETAIL_LINES = 30
 _DENSITY_CELLS = 16
 
 
-def _detail_window(paths, bounds, px_per_mm):
-    """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
-    tell apart at ``px_per_mm``: their spacing (a cell's area over the length marked in it)
-    in the densest cell of a grid over the drawing under :data:`_MERGED_PX`; None where they
-    are not."""
+def _density(paths, bounds):
+    """The length of ``paths`` in each cell of a grid of :data:`_DENSITY_CELLS` a side over
+    ``bounds`` (mm per cell; what lies outside is counted in the edge cells), and the cells'
+    side, mm."""
     x0, y0, x1, y1 = bounds
     cell = max(x1 - x0, y1 - y0, 1e-6) / _DENSITY_CELLS
+    density = np.zeros((_DENSITY_CELLS, _DENSITY_CELLS))
     starts = np.concatenate([p[:-1] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
     ends = np.concatenate([p[1:] for p in paths if len(p) > 1] or [np.zeros((0, 2))])
     lengths = np.hypot(*(ends - starts).T)
-    if not lengths.sum() > 0:
-        return None
     # Each segment as samples a quarter of a cell apart, each carrying its share of length.
     count = np.maximum(1, np.ceil(lengths / (cell / 4))).astype(int)
     share = np.repeat(lengths / count, count)
@@ -51,8 +91,19 @@ def _detail_window(paths, bounds, px_per_mm):
                                                                           axis=0)
     column = np.clip(((samples[:, 0] - x0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
     row = np.clip(((samples[:, 1] - y0) / cell).astype(int), 0, _DENSITY_CELLS - 1)
-    density = np.zeros((_DENSITY_CELLS, _DENSITY_CELLS))
     np.add.at(density, (row, column), share)
+    return density, cell
+
+
+def _detail_window(paths, bounds, px_per_mm):
+    """``(cx, cy, side)`` of a detail panel, mm, where the marks are too close together to
+    tell apart at ``px_per_mm``: their spacing (a cell's area over the length marked in it)
+    in the densest cell of a grid over the drawing under :data:`_MERGED_PX`; None where they
+    are not."""
+    x0, y0 = bounds[:2]
+    density, cell = _density(paths, bounds)
+    if not density.sum() > 0:
+        return None
     r, c = np.unravel_index(np.argmax(density), density.shape)
     spacing = cell * cell / density[r, c]
     if not spacing * px_per_mm < _MERGED_PX:
@@ -64,7 +115,7 @@ def _detail_window(paths, bounds, px_per_mm):
     return cx, cy, max(_DETAIL_LINES * spacing, 1e-3)
 
 
-def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
+def preview(path, paths_mm, *, jumps=True, field_mm, spot_mm, title="", groups=None):
     """Write the picture of a job.
 
     Parameters
@@ -77,6 +128,8 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
         Draw the jumps as thin dashed grey lines.
     field_mm : float
         The field's size (the lens's): its square is outlined.
+    spot_mm : float
+        The laser spot's diameter, mm: marks are drawn this wide (a dot this across).
     title : str
         Above the picture.
     groups : sequence of (str, colour, paths), optional
@@ -117,6 +170,11 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
     panel_px = 5.3 * 110                            # a panel's width, about, in pixels
     detail = _detail_window(paths, bounds, panel_px / (size * 1.15 if zoom else field_mm)) \
         if bounds is not None else None
+    # The jumps' width: their ink a share of the cell they are densest in.
+    jump_width_mm = 0.0
+    if jump_mm > 0:
+        density, cell = _density(jump_lines, bounds)
+        jump_width_mm = _JUMP_INK * cell * cell / density.max()
     count = 1 + zoom + (detail is not None)
     figure = Figure(figsize=(6.2 * count, 7.4) if count > 1 else (7, 7.6), dpi=110,
                     layout="constrained")
@@ -137,19 +195,34 @@ def preview(path, paths_mm, *, jumps=True, field_mm, title="", groups=None):
                     label=f"field {field_mm:g} mm"))
         if jumps and jump_lines:
             # Under the marks: a jump is where the laser is off, the marks are what matters.
-            ax.add_collection(LineCollection(jump_lines, colors="0.55", linewidths=0.5,
-                                             linestyles=(0, (4, 3)), zorder=1))
+            # A hairline, but never so wide that the jumps' ink passes a share of the square
+            # the drawing spans: a photo's jumps cross its every light gap, and even a
+            # spot wide they would grey the light areas as the marks do the dark.
+            ax.add_collection(_SpotLines(jump_lines, spot_mm=jump_width_mm, most_pt=0.5,
+                                         colors="0.55", linestyles=(0, (4, 3)),
+                                         capstyle="butt", zorder=1, snap=False))
             keep(Line2D([], [], color="0.55", linewidth=0.5, linestyle=(0, (4, 3)),
                         label=f"jumps {jump_mm:.1f} mm"))
         if paths:
             for label, colour, part in groups:
-                ax.add_collection(LineCollection(part, colors=colour, linewidths=0.7, zorder=2))
-                # A dot (a mark of no length: a code's module, a photo's lone pixel) as a dot.
-                dots = np.array([p[0] for p in part if not np.ptp(p, axis=0).any()])
+                # Not snapped to pixels: a photo's lines are finer than a pixel of a panel,
+                # and snapped they would pile onto whole pixel rows.
+                # A dot (a mark of no length: a code's module, a photo's lone pixel) as the
+                # spot's disc (a stroke of no length draws nothing).
+                still = [not np.ptp(p, axis=0).any() for p in part]
+                ax.add_collection(_SpotLines([p for p, s in zip(part, still) if not s],
+                                             spot_mm=spot_mm, colors=colour, zorder=2,
+                                             snap=False))
+                dots = np.array([p[0] for p, s in zip(part, still) if s])
                 if len(dots):
-                    ax.plot(dots[:, 0], dots[:, 1], linestyle="none", marker=".",
-                            markersize=2, color=colour, zorder=2)
+                    ax.add_collection(_spot_dots(dots, spot_mm, colour, ax))
                     label += f", {len(dots)} dots"
+                if kind == "detail":
+                    # The detail is where the marks are too close to tell apart: there, each
+                    # mark's path as a hairline over its spot-wide stroke, so the lines can
+                    # be counted where their spots run together.
+                    ax.add_collection(LineCollection(part, colors="white", linewidths=0.4,
+                                                     alpha=0.8, zorder=2.5))
                 keep(Line2D([], [], color=colour, linewidth=0.7, label=label))
             x0, y0, x1, y1 = bounds
             ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="tab:blue",
