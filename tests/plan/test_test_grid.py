@@ -11,7 +11,8 @@ from hypothesis import given, settings, strategies as st
 
 from galvoscan.cli import main
 from galvoscan.cli.testgrid import _axis
-from galvoscan.plan.test_grid import plan_test_grid
+from galvoscan.geometry.field import PlanError
+from galvoscan.plan.test_grid import grid_pitches, plan_test_grid
 from galvoscan.profile.machine import default_profile
 from galvoscan.settings.laser import SPEED
 
@@ -211,3 +212,29 @@ def test_each_square_is_marked_at_its_settings_on_the_board(tmp_path, capsys):
     assert slow["pulses"] > 0 and fast["pulses"] > 0
     assert 1.6 < slow["pulses"] / fast["pulses"] < 2.4
 
+
+
+@settings(max_examples=60, deadline=None)
+@given(speeds=st.lists(st.floats(0.1, 20_000), min_size=1, max_size=6),
+       pulses=st.one_of(st.none(), st.integers(-2, 300)),
+       prr_khz=st.sampled_from([20, 50, 100, 150, 200]))
+def test_random_speeds_share_one_pulses_per_point_or_are_one_line(speeds, pulses, prr_khz):
+    """Any speeds, any pulses per point (or none given), any PRR: every column at one number
+    of pulses per point (the one given), each speed ``pitch × PRR / N`` and the nearest a
+    whole pitch makes at N; or one line (PlanError)."""
+    profile = default_profile()
+    units_per_mm, prr_hz = profile.units_per_mm, prr_khz * 1e3
+    top = int(profile.laser.spot_mm / 2 * units_per_mm + 1e-9)
+    try:
+        pitches = grid_pitches(speeds, prr_hz, units_per_mm,
+                               max_pitch_mm=profile.laser.spot_mm / 2, pulses_per_point=pulses)
+    except PlanError as error:
+        assert str(error) and "\n" not in str(error)
+        return
+    n = pitches[0].pulses_per_point
+    assert {p.pulses_per_point for p in pitches} == {n} and prr_hz / n <= 100e3
+    assert pulses is None or n == pulses
+    made = _speeds_made(speeds, prr_hz, units_per_mm, top, n)
+    for p, v in zip(pitches, made):
+        assert p.speed_mm_s == pytest.approx(p.pitch_units / units_per_mm * prr_hz / n)
+        assert p.speed_mm_s == pytest.approx(v, rel=1e-9)
