@@ -82,9 +82,9 @@ def grid_pitches(speeds, prr_hz, units_per_mm, *, max_pitch_mm, pulses_per_point
         choose_pitch(v, prr_hz, units_per_mm, max_pitch_mm=max_pitch_mm, strict="range")
     if pulses_per_point is not None:
         return _pitches_at(speeds, prr_hz, units_per_mm, max_pitch_mm, pulses_per_point)
-    fewest = max(1, math.ceil(prr_hz / 100e3 - 1e-9))       # a point a 10 µs frame at most
     best, best_score = None, None
-    for pulses in range(fewest, PULSES.high + 1):
+    # (choose_pitch refuses too few pulses for the PRR: more points a second than frames.)
+    for pulses in range(PULSES.low, PULSES.high + 1):
         try:
             pitches = _pitches_at(speeds, prr_hz, units_per_mm, max_pitch_mm, pulses)
         except PlanError:
