@@ -55,6 +55,8 @@ def _cmd_clean(args):
         f"{args.centre[1]:g}) mm: {job.speed_mm_s:.0f} mm/s, one pass {job.pass_s:.3f} s")
     say(f"laser {power:g} % ({job.power_w:.3g} W), {prr:g} kHz: {_passes(job.passes)}, "
         f"{job.seconds:.3f} s, mean dose {job.dose_j_cm2:.3g} J/cm²")
+    for note in job.notes:
+        say(f"note: {note}")
     if args.estimate or not has_link(args, profile):
         if not args.estimate:
             say("no board given (--port, --spi or --sim): nothing sent")
@@ -66,7 +68,7 @@ def _cmd_clean(args):
                 "power_w": round(job.power_w, 4), "prr_khz": prr,
                 "passes": round(job.passes, 4), "whole_passes": math.floor(job.passes + 1e-9),
                 "seconds": round(job.seconds, 6),
-                "dose_j_cm2": job.dose_j_cm2}))
+                "dose_j_cm2": job.dose_j_cm2, "notes": list(job.notes)}))
         return 0
     registers = dict(job.registers)
     if profile.correction_table() is not None:

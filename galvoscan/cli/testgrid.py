@@ -7,8 +7,9 @@ import sys
 from ..geometry.field import PlanError
 from ..outputs.stream import JobStreamer
 from ..plan.test_grid import axis_values, plan_test_grid
-from ..settings.laser import POWER, PRR, SPEED
-from .args import check_backend_needs_sim, fail, failed, image_file, int_in, number_in, setting_type
+from ..settings.laser import POWER, PRR, PULSES, SPEED
+from .args import (add_setting, check_backend_needs_sim, fail, failed, image_file, int_in,
+                   number_in, setting_type)
 from .jobargs import (add_job_link_options, board_link, has_link, load_lens_table,
                       progress_bar, stopped_in_one_line)
 from .machine import add_machine_option, profile_from
@@ -47,17 +48,21 @@ def _cmd_test_grid(args):
     profile = profile_from(args)
     prr = args.prr if args.prr is not None else profile.defaults.prr_khz
     try:
-        cells, labels = plan_test_grid(args.speeds, args.powers, profile, prr_khz=prr,
-                                       cell_mm=args.cell, gap_mm=args.gap,
-                                       label_height_mm=args.label_height,
-                                       label_speed_mm_s=args.label_speed,
-                                       label_power_percent=args.label_power,
-                                       hatch_mm=args.hatch, passes=args.passes)
-    except PlanError as error:
+        grid = plan_test_grid(args.speeds, args.powers, profile, prr_khz=prr,
+                              cell_mm=args.cell, gap_mm=args.gap,
+                              label_height_mm=args.label_height,
+                              label_speed_mm_s=args.label_speed,
+                              label_power_percent=args.label_power,
+                              hatch_mm=args.hatch, passes=args.passes,
+                              pulses_per_point=args.pulses_per_point)
+    except (PlanError, ValueError) as error:
         fail(error)
+    cells, labels = grid.cells, grid.labels
     say = (lambda line: print(line, file=sys.stderr)) if args.json else print
     total = sum(c.job.estimate_s for c in cells) + labels.estimate_s
-    say(f"{len(cells)} square{'' if len(cells) == 1 else 's'} of {args.cell:g} mm, {prr:g} kHz, labels at "
+    pulses = grid.pulses_per_point
+    say(f"{len(cells)} square{'' if len(cells) == 1 else 's'} of {args.cell:g} mm, {prr:g} kHz, "
+        f"{pulses} pulse{'' if pulses == 1 else 's'} per point in every square, labels at "
         f"{args.label_speed:g} mm/s; estimated time {total:.1f} s")
     for c in cells:
         say(f"  {c.speed_mm_s:7.1f} mm/s  {c.power_percent:5.1f} %  at ({c.centre_mm[0]:g}, "
@@ -71,7 +76,10 @@ def _cmd_test_grid(args):
         preview(args.preview, paths, field_mm=profile.field.size_mm,
                 spot_mm=profile.laser.spot_mm, title=f"test grid: {len(cells)} squares")
         say(f"wrote {args.preview}")
-    record = {"prr_khz": prr, "estimate_s": round(total, 3),
+    for note in grid.notes:
+        say(f"note: {note}")
+    record = {"prr_khz": prr, "pulses_per_point": pulses, "notes": list(grid.notes),
+              "estimate_s": round(total, 3),
               "cells": [{"speed_mm_s": round(c.speed_mm_s, 2), "power_percent": c.power_percent,
                          "centre_mm": list(c.centre_mm),
                          "estimate_s": round(c.job.estimate_s, 3)} for c in cells]}
@@ -115,8 +123,11 @@ def add_parsers(commands):
                     "speed, a row a power), each hatched and outlined at its own settings "
                     "and marked as a job of its own, the columns and rows labelled in a "
                     "single-line font; centred in the field. meerk40t calls it a material "
-                    "test. Each speed is the nearest the machine makes (whole galvo units "
-                    "and pulses a point), and its label says so.")
+                    "test. Every square is marked at one number of pulses per point (the one "
+                    "that makes the asked speeds best, or --pulses-per-point), so that the "
+                    "columns differ in speed alone; each speed is the nearest the machine "
+                    "makes at it (whole galvo units), its label says the speed made, and a "
+                    "note says which columns are more than 2 % from the speed asked.")
     grid.add_argument("--speeds", type=_axis("--speeds", SPEED), required=True,
                       metavar="A:B:N", help=f"marking speeds, {SPEED.unit}: N from A to B "
                                             f"(or one)")
@@ -125,6 +136,7 @@ def add_parsers(commands):
                                             f"(or one)")
     grid.add_argument("--prr", type=setting_type(PRR), default=None, metavar=PRR.metavar,
                       help=f"pulse repetition rate, {PRR.unit} (default: the profile's)")
+    add_setting(grid, PULSES, default_text="the one that makes the asked speeds best")
     grid.add_argument("--passes", type=int_in(1, 100, "passes"), default=1, metavar="N",
                       help="times each square is marked (default 1)")
     grid.add_argument("--cell", type=number_in("cell", 0.5, 100), default=5.0, metavar="MM",

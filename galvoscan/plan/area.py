@@ -10,7 +10,7 @@ averages to over the area.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..analysis.galvo import FRAME_PERIOD
 from ..analysis.patterns import ScanHead, spiral_amplitude, spiral_dwell_for_speed, spiral_frames
@@ -45,6 +45,8 @@ class AreaJob:
         The pattern's speed as built (spiral: the fastest axis's commanded speed).
     bounds_mm : tuple
         ``(xmin, ymin, xmax, ymax)`` in field mm.
+    notes : list of str
+        What the plan says (the speed made, when more than 2 % from the one asked).
     """
     pattern: str
     registers: dict
@@ -55,6 +57,7 @@ class AreaJob:
     speed_mm_s: float
     bounds_mm: tuple
     power_w: float
+    notes: list = field(default_factory=list)
 
 
 def _units(head, mm):
@@ -98,6 +101,16 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
         points = spiral_frames(table, dwell=1, amp=amp, interpolation="off")
         steps = [max(abs(b - a) for a, b in zip(axis, axis[1:])) for axis in (points.x, points.y)]
         built_speed = float(head.mm(max(steps))) / (dwell * FRAME_PERIOD)
+        fastest = built_speed * dwell           # a point a frame
+        if speed_mm_s > fastest * 1.02:
+            raise PlanError(f"{speed_mm_s:g} mm/s is out of reach for the spiral over "
+                            f"{width:g} x {height:g} mm: {fastest:.0f} mm/s at most (a point "
+                            f"a 10 µs frame); a slower speed, a larger area, or the raster")
+        between = (f"the spiral makes over {width:g} x {height:g} mm ({fastest:.0f} mm/s over "
+                   f"a whole number of 10 µs frames a point: {fastest / (dwell - 1):.0f} or "
+                   f"{built_speed:.0f})" if dwell > 1 else "")
+        made = f"cleaned at {built_speed:.0f} mm/s"
+        nearest = "the faster not over it"
         registers.update(mode=Mode.SPIRAL.value, dwell=dwell, amp_x=amp[0], amp_y=amp[1],
                          center_x=FIELD_CENTRE + _units(head, cx),
                          center_y=FIELD_CENTRE + _units(head, cy))
@@ -105,14 +118,21 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
     else:
         step = _units(head, speed_mm_s * FRAME_PERIOD)
         spacing = max(1, _units(head, profile.laser.spot_mm / 2))
-        if not 1 <= step <= BY_NAME["ras_step"].high:
+        if step < 1:
             raise PlanError(f"{speed_mm_s:g} mm/s is under one galvo unit a frame: too slow "
                             f"for the raster")
+        if step > BY_NAME["ras_step"].high:
+            raise PlanError(f"{speed_mm_s:g} mm/s is over {BY_NAME['ras_step'].high} galvo "
+                            f"units a frame: too fast for the raster")
         corner = (FIELD_CENTRE + _units(head, bounds[0]), FIELD_CENTRE + _units(head, bounds[1]))
         size = (_units(head, width), _units(head, height))
         # Lines one spacing apart, each ``ceil(width / step)`` frames and its end point.
         pass_frames = (size[1] // spacing + 1) * (math.ceil(size[0] / step) + 1)
         built_speed = float(head.mm(step)) / FRAME_PERIOD
+        between = (f"the raster makes (whole galvo units a 10 µs frame, "
+                   f"{float(head.mm(1)) / FRAME_PERIOD:.1f} mm/s each)")
+        made = f"cleaned at the nearest, {built_speed:.1f} mm/s"
+        nearest = ""
         registers.update(mode=Mode.RASTER.value, ras_x=corner[0], ras_y=corner[1],
                          ras_w=size[0], ras_h=size[1], ras_spacing=spacing, ras_step=step,
                          ras_flags=0, ras_turn_gate=0)
@@ -128,6 +148,11 @@ def plan_area_job(*, area_mm, centre_mm, pattern, speed_mm_s, power_percent, prr
         seconds = dose_j_cm2 * area_cm2 / power_w if power_w > 0 else math.inf
         if not math.isfinite(seconds):
             raise PlanError("a dose needs power above 0 %")
+    # As mark does (geometry.speed.choose_pitch): a speed out of reach is refused above, one
+    # within reach but more than 2 % from any the pattern makes is said, with the one made.
+    error = (built_speed - speed_mm_s) / speed_mm_s
+    notes = [f"{speed_mm_s:g} mm/s falls between the speeds {between}: {made} "
+             f"({error:+.1%}{', ' + nearest if nearest else ''})"] if abs(error) > 0.02 else []
     return AreaJob(pattern=pattern, registers=registers, pass_s=pass_s, seconds=seconds,
                    passes=seconds / pass_s, dose_j_cm2=pass_dose * seconds / pass_s,
-                   speed_mm_s=built_speed, bounds_mm=bounds, power_w=power_w)
+                   speed_mm_s=built_speed, bounds_mm=bounds, power_w=power_w, notes=notes)

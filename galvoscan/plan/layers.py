@@ -242,8 +242,10 @@ def plan_layers(objects, layers, settings, profile):
         if not held:
             continue
         if layer is None:
-            planned.append(LayerJob(None, settings, plan_objects(held, settings, profile),
-                                    preview_colour(None, k)))
+            job = plan_objects(held, settings, profile)
+            if layers:
+                job = _named(job, held, len(planned) + 1, "the rest")
+            planned.append(LayerJob(None, settings, job, preview_colour(None, k)))
             continue
         held = [replace(o, fill=_layer_fill(layer, o)) for o in held]
         layer_settings = layer.settings(settings)
@@ -251,8 +253,20 @@ def plan_layers(objects, layers, settings, profile):
             job = plan_objects(held, layer_settings, profile)
         except (PlanError, ValueError) as error:
             raise PlanError(f"layer {layer.match!r}: {error}") from None
+        job = _named(job, held, len(planned) + 1, layer.match)
         planned.append(LayerJob(layer, layer_settings, job, preview_colour(layer, k)))
     return planned
+
+
+def _named(job, objects, number, label):
+    """``job`` with each note of its own plan (its speed, its stalls, its jumps: what its
+    settings make) naming its layer as the plan's lines do (``layer 2 'text': …``,
+    :func:`galvoscan.cli.layers.describe_layers`): a job of layers says them all together,
+    and a note that a layer stalls must say which. The drawings' own notes (said once, with
+    the first part) are left as they are."""
+    drawings = {note for o in objects for note in (*o.drawing.notes, *o.drawing.skipped)}
+    return replace(job, notes=[note if note in drawings else f"layer {number} {label!r}: {note}"
+                               for note in job.notes])
 
 
 def _layer_fill(layer, o):

@@ -47,6 +47,7 @@ _PULSES_REGISTER = BY_NAME["pulses_per_point"]
 #: A layer's ``pulses``: the pitch follows the speed, not the other way round.
 PULSES = Setting("pulses_per_point", "integer", "", _PULSES_REGISTER.low,
                  _PULSES_REGISTER.high, what="pulses per point", key="pulses",
+                 flag="--pulses-per-point", metavar="N",
                  help="laser pulses a point (the pitch then follows the speed)")
 WOBBLE = Setting("wobble_um", "number", "µm", 0, 10_000, what="wobble", flag="--wobble",
                  key="wobble", metavar="UM", default_said=_WOBBLE,

@@ -9,9 +9,11 @@ import pytest
 from galvoscan.cli import main
 from galvoscan.plan.area import plan_area_job
 from galvoscan.geometry.field import PlanError
+from galvoscan.gateware.sources.spiral_table import SpiralTable
 from galvoscan.profile.machine import default_profile
 
 from sim_board import quick_sim_board
+from spiral_model import spiral_points
 
 
 NOPORT = ["--port", "/nonexistent/ttyUSB9"]
@@ -125,3 +127,78 @@ def test_the_passes_say_how_the_last_one_ends(how, words, capsys):
     assert words in err
     record = json.loads(out)
     assert record["whole_passes"] == math.floor(record["passes"] + 1e-9)
+
+
+def _spiral_fastest_mm_s(registers, field_mm=110):
+    """The spiral's fastest axis speed at a point a frame, from its registers, by the plain
+    model of the scanner (tests/support/spiral_model.py): the largest step between points
+    of a whole pattern (and back to its first), over one 10 µs frame."""
+    table = SpiralTable()
+    count = math.lcm(table.points, table.points - 2)
+    points = spiral_points(table.x, table.y, count + 1, x_range=(0, table.points - 1),
+                           y_range=(1, table.points - 2),
+                           gain=(registers["amp_x"], registers["amp_y"]),
+                           centre=(registers["center_x"], registers["center_y"]))
+    step = max(abs(b[axis] - a[axis]) for a, b in zip(points, points[1:]) for axis in (0, 1))
+    return step * field_mm / 65536 / 10e-6
+
+
+@pytest.mark.parametrize("area, speed", [("10x10", 5000), ("10x10", 3000), ("10x10", 1000),
+                                         ("10x10", 4250), ("3x2", 2000), ("30x5", 700),
+                                         ("1x1", 1700)])
+def test_the_spiral_says_the_speed_it_makes(area, speed, capsys):
+    """The spiral holds each point a whole number of frames, the fewest that keep the axes at
+    or under the speed asked: it cleans at the fastest speed / frames (the model's), and says
+    so in a note when that is more than 2 % from the speed asked (mark's rule)."""
+    width, height = (float(v) for v in area.split("x"))
+    job = plan(area_mm=(width, height), centre_mm=(0, 0), speed_mm_s=speed)
+    fastest = _spiral_fastest_mm_s(job.registers)
+    frames = next(d for d in range(1, 10_000) if fastest / d <= speed * (1 + 1e-9))
+    assert main(["clean", "--area", area, "--speed", str(speed), "--estimate", "--json"]) == 0
+    out, err = capsys.readouterr()
+    record = json.loads(out)
+    made = fastest / frames
+    assert job.registers["dwell"] == frames
+    assert record["speed_mm_s"] == pytest.approx(made, abs=1e-3)
+    off = abs(made - speed) / speed > 0.02
+    assert len(record["notes"]) == off
+    notes = [line for line in err.splitlines() if line.startswith("note: ")]
+    assert len(notes) == off
+    if off:
+        assert f"{speed:g} mm/s falls between" in notes[0]
+        assert f"cleaned at {made:.0f} mm/s" in notes[0]
+
+
+@pytest.mark.parametrize("speed", [150, 200, 1000, 1100, 2500])
+def test_the_raster_says_the_speed_it_makes(speed, capsys):
+    """The raster steps whole galvo units a 10 µs frame: the nearest to the speed asked, said
+    in a note when more than 2 % off."""
+    assert main(["clean", "--area", "10x10", "--pattern", "raster", "--speed", str(speed),
+                 "--estimate", "--json"]) == 0
+    out, err = capsys.readouterr()
+    record = json.loads(out)
+    unit_mm_s = 110 / 65536 / 10e-6
+    made = round(speed / unit_mm_s) * unit_mm_s
+    assert record["speed_mm_s"] == pytest.approx(made, abs=1e-3)
+    off = abs(made - speed) / speed > 0.02
+    notes = [line for line in err.splitlines() if line.startswith("note: ")]
+    assert len(record["notes"]) == len(notes) == off
+    if off:
+        assert f"cleaned at the nearest, {made:.1f} mm/s" in err
+
+
+@pytest.mark.parametrize("area, speed", [("1x1", 5000), ("2x2", 9000), ("1x3", 5500)])
+def test_a_speed_past_the_spirals_fastest_is_refused(area, speed, capsys):
+    """Faster than the spiral goes at a point a frame (by the model), as mark refuses a speed
+    out of reach: one line with the fastest, before any link."""
+    width, height = (float(v) for v in area.split("x"))
+    fastest = _spiral_fastest_mm_s(plan(area_mm=(width, height), centre_mm=(0, 0),
+                                        speed_mm_s=100).registers)
+    assert speed > fastest * 1.02
+    with pytest.raises(SystemExit) as stop:
+        main(["clean", "--area", area, "--speed", str(speed), *NOPORT])
+    message = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert f"{speed:g} mm/s is out of reach for the spiral" in message
+    assert f"{fastest:.0f} mm/s at most" in message
+    assert "Traceback" not in message and "cannot open" not in message

@@ -356,3 +356,38 @@ def test_a_blocks_entities_take_their_own_colours(tmp_path):
     document.saveas(tmp_path / "block.dxf")
     drawing = load_drawing(tmp_path / "block.dxf")
     assert [s.colour for s in drawing.styles] == ["#ff0000", "#0000ff", "#0000ff"]
+
+
+def test_the_stall_note_names_the_layer_that_stalls(tmp_path, capsys):
+    """Two layers, one stepping a point faster than the board sets up a segment (100 kHz, a
+    pulse a point: 100,000 points a second against 12 MHz / 140 set-up clocks), the other
+    not (the profile's 50 kHz): one stall note, naming the layer as the plan's layer lines
+    do, with that layer's joints between two marks counted off its own segments."""
+    from galvoscan import api
+    from galvoscan.gateware.host.regmap import DEFAULT_CLOCK_HZ
+    from galvoscan.gateware.sources.dda import SETUP_CLOCKS
+
+    svg = tmp_path / "layers.svg"
+    svg.write_text(LAYERED_SVG)
+    assert main(["mark", str(svg), "--layer", "Inner", "prr=100", "pulses=1", "speed=1007",
+                 "--estimate"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    planned = api.plan(api.Job(drawings=(api.Drawing(str(svg)),),
+                               layers=(Layer("Inner", prr_khz=100, pulses_per_point=1,
+                                             speed_mm_s=1007),)))
+    layer_jobs = planned.vector_job.layers
+    assert len(layer_jobs) == 2
+    stalling = [(number, lj) for number, lj in enumerate(layer_jobs, 1)
+                if lj.job.registers["laser_prr"] * 100 / lj.job.registers["pulses_per_point"]
+                > DEFAULT_CLOCK_HZ / SETUP_CLOCKS]
+    assert [lj.label for _, lj in stalling] == ["Inner"]
+    (number, inner), = stalling
+    joints = sum(1 for a, b in zip(inner.job.segments, inner.job.segments[1:])
+                 if a[0] == b[0] == "mark")
+    assert joints > 0
+    name = f"layer {number} 'Inner'"
+    assert any(line.startswith(name + " (") for line in lines)      # the layer's own line
+    stalls = [line for line in lines if "stalls" in line]
+    assert stalls == [line for line in lines if line.startswith(f"note: {name}: ")
+                      and f"expect about {joints} stalls" in line]
+    assert len(stalls) == 1
