@@ -2,23 +2,10 @@
 the profile's default variable jump delay, a photo's estimate against one delay for every
 jump, and what the link brings against what the board takes."""
 
-import numpy as np
-from PIL import Image
-
 from galvoscan import api
 from galvoscan.outputs.stream import expected_underruns, link_segments_per_s
 from galvoscan.profile.machine import default_profile, parse_profile
-
-
-def grey_photo(path, size=(400, 300)):
-    """A photograph's stand-in: smooth grey shading (a ramp and a soft bump), 8-bit grey."""
-    width, height = size
-    y, x = np.mgrid[0:height, 0:width]
-    shade = 0.5 * x / (width - 1) + 0.3 * y / (height - 1) + \
-        0.35 * np.exp(-((x - 0.6 * width) ** 2 + (y - 0.4 * height) ** 2) / (2 * 70.0 ** 2))
-    shade = (shade - shade.min()) / (shade.max() - shade.min())
-    Image.fromarray((255 * shade).astype(np.uint8), "L").save(path)
-    return path
+from photos import grey_photo
 
 
 def test_a_photos_estimate_drops_with_the_default_jump_delays(tmp_path):
