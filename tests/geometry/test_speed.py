@@ -132,3 +132,16 @@ def test_each_jump_is_held_as_long_as_rtcs_variable_jump_delay_needs():
         assert count * delay >= need - 1, (length, count, delay)      # whole µs, rounded up
     # Quicker than every jump held as long as the longest: the short ones wait less.
     assert sum(holds) * (math.ceil(delay / 10) + 1) < len(holds) * (50 + 1)
+
+
+def test_jumps_held_once_wait_as_long_as_a_jump_across_the_field():
+    """Held once each (a .job's, ``settle=False``), every jump waits what the first, from
+    wherever the head was, may need: a jump corner to corner, 500 µs, though the job's own
+    are short."""
+    from galvoscan.profile.machine import default_profile
+    profile = default_profile()
+    segments = [("jump", 32768 + 100, 32768), ("mark", 32768 + 200, 32768),
+                ("jump", 32768 + 300, 32768), ("mark", 32768 + 400, 32768)]
+    settled, delay, extra, longest = settled_jumps(segments, profile, profile.units_per_mm,
+                                                   settle=False)
+    assert (settled, delay, extra, longest) == (segments, 500, 0, 500)
