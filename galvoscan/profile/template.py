@@ -26,6 +26,9 @@ def profile_text():
     """The commented profile ``galvoscan machine init`` writes: the defaults, every key
     explained (unit, range, purpose)."""
     d = default_profile()
+    # Here: outputs.stream is above the profile.
+    from ..outputs.stream import link_segments_per_s
+    link_us = round(2 / link_segments_per_s(d.link.baud) * 1e6)
     s = _span
     n = _toml_num
     return f"""\
@@ -91,12 +94,12 @@ guide = {"true" if d.laser.guide else "false"}
 # board counts {FRAME_US} µs frames: each wait is rounded up to a whole frame. A photo's
 # thousands of short gaps between dark cells so no longer each wait as long as a jump
 # across the field.
-# The defaults are a 10 mm head's (the JD1403 galvo of Wan et al. 2018, as
-# `galvoscan analyze` models it): its 1 % step (1.1 mm on a 110 mm field) settles in
-# 0.3 ms and its 10 % step in 0.7 ms; a jump of a few 50 µm cells takes some 200 µs to
-# come within 10 µm. They also keep a photo's jumps and marks no quicker for the board
-# than the link brings them at 1 Mbaud: shorter waits would empty the board's queue.
-# Measure your head's with a test mark and set these from it.
+# The defaults: a 10 mm head's, as `galvoscan analyze` models it (the JD1403 galvo of
+# Wan et al. 2018: a 1 % step settles in 0.3 ms, a 10 % step in 0.7 ms), where a 0.2 mm
+# jump comes within 10 µm of its end in about 200 µs and a 5 mm one in about 515 µs;
+# and the link: at {d.link.baud:,} baud it takes {link_us} µs to bring a jump and its mark, so
+# short jumps waiting less would let a photo empty the board's queue. Measure your
+# head's with a test mark and set these from it.
 # Wait after a jump of jump_length_limit_mm or longer. {s("galvo", "jump_delay_us")}.
 jump_delay_us = {n(d.galvo.jump_delay_us)}
 # Wait after the shortest jump (length 0): at most jump_delay_us (left out, and more
