@@ -10,8 +10,8 @@ comment on every key (:func:`galvoscan.profile.template.profile_text`)::
     [link]      port, baud, spi, timeout_s
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
     [galvo]     jump_delay_us, min_jump_delay_us, jump_length_limit_mm, max_speed_mm_s,
-                laser_on_delay_us,
-                laser_off_delay_us, mark_delay_us, polygon_delay_us, polygon_scaled
+                laser_on_delay_us, laser_off_delay_us, mark_delay_us, polygon_delay_us,
+                polygon_scaled
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
 
@@ -186,9 +186,9 @@ class MachineProfile:
     def jump_delay_register(self, jump_mm=None):
         """``jump_delay`` (µs) for a jump of ``jump_mm`` (None: across the whole field,
         corner to corner, as a jump from wherever the head was may be), as SCANLAB's RTC's
-        variable jump delay has it: ``jump_delay_us`` for a jump of ``jump_length_limit_mm`` or longer (or for
-        every jump, the limit 0), and for a shorter one ``min_jump_delay_us`` and the
-        difference in proportion to its length; rounded *up* to a whole µs, at most what the
+        variable jump delay has it: ``jump_delay_us`` for a jump of ``jump_length_limit_mm``
+        or longer (or for every jump, the limit 0), and for a shorter one
+        ``min_jump_delay_us`` and the difference in proportion to its length; rounded *up* to a whole µs, at most what the
         register holds (65 535 µs). The board rounds it up to whole 10 µs frames."""
         if jump_mm is None:
             jump_mm = self.field.size_mm * math.sqrt(2)
