@@ -260,3 +260,44 @@ def test_bench_docs_refuses_before_the_run(tmp_path, capsys, content, extra, mes
     # The refusal alone: no step of the run was started.
     assert err.splitlines() == [line for line in err.splitlines()
                                 if line.startswith("galvoscan bench: error: ")]
+
+
+def test_marking_pages_photo_figures_are_the_plans(tmp_path):
+    """The marking page's figures for a photo under the default jump delays and under one delay
+    for every jump are what planning the tests' grey photo gives, and its link time is the
+    link's."""
+    from galvoscan import api
+    from galvoscan.outputs.stream import link_segments_per_s
+    from galvoscan.profile.machine import default_profile, parse_profile
+    from photos import grey_photo
+    text = " ".join(page("user/marking.md").split())
+    found = re.search(r"A 30 mm photo of smooth grey shading \(400 × 300 px, the tests' "
+                      r"`grey_photo`\) plans in ([\d.]+) s and ([\d,]+) segments, against "
+                      r"([\d.]+) s and ([\d,]+) with 500 µs after every jump", text)
+    assert found, "the marking page's photo figures"
+    defaults = re.search(r"by default (\d+) µs for a jump of 0, (\d+) µs from (\d+) mm on", text)
+    galvo = default_profile().galvo
+    assert defaults and tuple(map(float, defaults.groups())) == (
+        galvo.min_jump_delay_us, galvo.jump_delay_us, galvo.jump_length_limit_mm)
+    job = api.Job(photos=(api.Photo(str(grey_photo(tmp_path / "grey.png")), 30.0),))
+    for profile, (seconds, segments) in ((default_profile(), found.group(1, 2)),
+                                         (parse_profile("[galvo]\njump_length_limit_mm = 0\n"),
+                                          found.group(3, 4))):
+        planned = api.plan(job, profile).vector_job
+        assert (f"{planned.estimate_s:.1f}", f"{len(planned.segments):,}") == (seconds, segments)
+    link = re.search(r"the link at 1 Mbaud takes (\d+) µs to bring a jump and its mark", text)
+    assert link and int(link[1]) == round(2 / link_segments_per_s(1_000_000) * 1e6)
+
+
+def test_first_jobs_plan_is_what_mark_prints(tmp_path, capsys, monkeypatch):
+    """The first-job page's plan of the logo is what `mark` prints for its command today."""
+    block = re.search(r"```text\n\.venv/bin/galvoscan (mark docs/marking/logo\.svg [^\n]*)\n"
+                      r"(.*?)```", page("user/first-job.md"), re.S)
+    assert block, "the first-job page's mark command"
+    args = block[1].split()
+    args[args.index("--preview") + 1] = str(tmp_path / "logo.png")
+    args[1] = str(ROOT / args[1])
+    monkeypatch.chdir(tmp_path)                  # no galvoscan.toml: the default profile
+    assert main(args) == 0
+    printed = capsys.readouterr().out.replace(str(tmp_path / "logo.png"), "logo.png")
+    assert printed == block[2]

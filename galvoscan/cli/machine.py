@@ -69,9 +69,12 @@ def _describe(profile):
         where = f"SPI {link.spi}"
     else:
         where = f"not set (give --port or --spi; serial at {link.baud} baud)"
-    settle = f" + {_n(galvo.settle_us_per_mm)} µs per mm of jump" \
-        if galvo.settle_us_per_mm else ""
-    jump_10mm = profile.jump_delay_register(10)
+    if profile.variable_jump_delay:
+        jumps = (f"{_n(galvo.min_jump_delay_us)} µs (a jump of 0) … "
+                 f"{_n(galvo.jump_delay_us)} µs (one of {_n(galvo.jump_length_limit_mm)} mm "
+                 f"or longer), in proportion to its length")
+    else:
+        jumps = f"{_n(galvo.jump_delay_us)} µs after every jump"
     power_reg = profile.power_register(d.power_percent)
     rows = [
         ("profile", source),
@@ -89,9 +92,9 @@ def _describe(profile):
         ("spot", f"{_n(laser.spot_mm)} mm"),
         ("guide laser", "yes" if laser.guide else "no"),
         ("[galvo]", None),
-        ("jump delay", f"{_n(galvo.jump_delay_us)} µs{settle} "
-                       f"(jump_delay {profile.jump_delay_register(0)}, in {FRAME_US} µs frames)"),
-        ("  for a 10 mm jump", f"{jump_10mm} µs"),
+        ("jump delay", f"{jumps} (the board counts {FRAME_US} µs frames)"),
+        ("  for a 0.1 / 1 / 10 mm jump", " / ".join(str(profile.jump_delay_register(mm))
+                                                    for mm in (0.1, 1, 10)) + " µs"),
         ("max speed", f"{_n(galvo.max_speed_mm_s)} mm/s"),
         ("laser on / off delay", f"{_n(galvo.laser_on_delay_us)} / "
                                  f"{_n(galvo.laser_off_delay_us)} µs"),

@@ -157,21 +157,25 @@ def _jump_s(delay_us, frame_s=10e-6):
 def settled_jumps(segments, profile, units_per_mm, *, settle=True):
     """``(segments, jump_delay, extra, longest)``: the jumps each held as long as its own
     length needs, when that is quicker than holding every one for the longest's (``longest``,
-    the jump delay that takes; ``settle=False``: that, every jump held once).
+    the jump delay that takes; ``settle=False``: that, every jump held once). The job's first
+    jump, from wherever the head was, is held as long as one across the whole field.
 
     The board has one jump delay; a jump to where the head already is holds it once more. So
-    the delay is set to what makes the whole job quickest, and a jump whose settling
-    (``jump_delay_us + settle_us_per_mm × length``) needs more is followed by as many such
-    jumps as it needs: a photo's thousands of short gaps no longer each wait for its longest
-    jump. The job's first jump, from wherever the head was, is held for a jump across the
-    whole field."""
+    the delay is set to what makes the whole job quickest, and a jump whose settling needs
+    more (:meth:`~galvoscan.profile.machine.MachineProfile.jump_delay_register`, RTC's
+    variable jump delay) is followed by as many such jumps as it needs: a photo's thousands
+    of short gaps no longer each wait for its longest jump."""
     lengths = [length / units_per_mm if op == "jump" else None for op, length in _walk(segments)]
     jumps = [length for length in lengths if length is not None]
-    longest = profile.jump_delay_register(max(jumps, default=0.0))
-    if not settle or not jumps or profile.galvo.settle_us_per_mm <= 0:
+    if not jumps:
+        return segments, profile.jump_delay_register(), 0, profile.jump_delay_register()
+    # The first jump, from wherever the head was: as long as one across the field.
+    needs = [profile.jump_delay_register()] + [profile.jump_delay_register(length)
+                                                for length in jumps[1:]]
+    longest = max(needs)
+    if not settle or not profile.variable_jump_delay:
         return segments, longest, 0, longest
-    needs = np.array([profile.jump_delay_register(profile.field.size_mm * math.sqrt(2))] +
-                     [profile.jump_delay_register(length) for length in jumps[1:]], float)
+    needs = np.array(needs, float)
     # Each delay in whole frames: how many holds each jump takes, and what they cost.
     frames = np.arange(1, max(1, math.ceil(needs.max() / 10)) + 1)
     holds = np.ceil(needs[None, :] / (10.0 * frames[:, None]) - 1e-9).clip(min=1)

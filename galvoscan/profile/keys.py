@@ -167,7 +167,20 @@ def _closest(name, known, cutoff=0.6):
     return close[0] if close else None
 
 
+#: Keys a profile once had, and what says the same now: an old file is refused with the way
+#: to write it, not with a guess at a name.
+_RETIRED = {
+    ("galvo", "settle_us_per_mm"): "a jump's delay is RTC's variable jump delay now: "
+                                   "min_jump_delay_us for a jump of length 0, jump_delay_us for "
+                                   "one of jump_length_limit_mm or longer, in proportion between "
+                                   "(settle_us_per_mm = 0: jump_length_limit_mm = 0)",
+}
+
+
 def _unknown_key(name, section, path):
+    if (section, name) in _RETIRED:
+        return ProfileError(f"{path}: [{section}] {name} is no longer a key: "
+                            f"{_RETIRED[section, name]}")
     known = [k.name for k in SECTIONS[section]]
     near = _closest(name, known)
     hint = f"; did you mean {near}?" if near else ""

@@ -9,8 +9,9 @@ comment on every key (:func:`galvoscan.profile.template.profile_text`)::
     [field]     size_mm, correction
     [link]      port, baud, spi, timeout_s
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
-    [galvo]     jump_delay_us, settle_us_per_mm, max_speed_mm_s, laser_on_delay_us,
-                laser_off_delay_us, mark_delay_us, polygon_delay_us, polygon_scaled
+    [galvo]     jump_delay_us, min_jump_delay_us, jump_length_limit_mm, max_speed_mm_s,
+                laser_on_delay_us, laser_off_delay_us, mark_delay_us, polygon_delay_us,
+                polygon_scaled
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
 
@@ -35,7 +36,7 @@ and the register ranges; its public names are re-exported here), and the comment
 :mod:`galvoscan.profile.template` (above it: the template reads the defaults from here).
 """
 
-from dataclasses import dataclass, field as _field
+from dataclasses import dataclass, field as _field, replace
 import math
 import os
 from pathlib import Path
@@ -105,10 +106,14 @@ class GalvoSection:
     defaults are what ``galvoscan analyze --delays`` finds for Wan et al.'s JD1403 galvo (a
     10 mm head lagging its set point by some 80 µs) at 1 m/s: a line's ends and corners within
     20 % of its mid-line dose."""
-    #: Laser-off wait after every jump, µs (rounded up to whole 10 µs frames).
+    #: Laser-off wait after a jump of ``jump_length_limit_mm`` or longer, µs (RTC's
+    #: JumpDelay; the board rounds it up to whole 10 µs frames).
     jump_delay_us: float = _default("galvo", "jump_delay_us")
-    #: Extra wait per mm of jump, µs/mm (0: the same delay for every jump).
-    settle_us_per_mm: float = _default("galvo", "settle_us_per_mm")
+    #: Laser-off wait after a jump of length 0, µs (RTC's MinJumpDelay).
+    min_jump_delay_us: float = _default("galvo", "min_jump_delay_us")
+    #: Jumps this long or longer wait ``jump_delay_us``, mm (RTC's JumpLengthLimit; 0: every
+    #: jump does).
+    jump_length_limit_mm: float = _default("galvo", "jump_length_limit_mm")
     #: Fastest marking speed a job may ask for, mm/s.
     max_speed_mm_s: float = _default("galvo", "max_speed_mm_s")
     #: The laser switches on this long after a mark's first point (negative: before), µs.
@@ -172,14 +177,29 @@ class MachineProfile:
     def mm_per_unit(self):
         return self.field.size_mm / FULL_RANGE
 
-    def jump_delay_register(self, jump_mm=0.0):
-        """``jump_delay`` (µs) for a jump of ``jump_mm``: ``jump_delay_us + settle_us_per_mm ×
-        jump_mm`` rounded *up* to a whole µs, at most what the register holds (65 535 µs); the
-        board rounds it up to whole 10 µs frames."""
+    @property
+    def variable_jump_delay(self):
+        """Jumps shorter than ``jump_length_limit_mm`` wait less than ``jump_delay_us``."""
+        galvo = self.galvo
+        return galvo.jump_length_limit_mm > 0 and galvo.min_jump_delay_us < galvo.jump_delay_us
+
+    def jump_delay_register(self, jump_mm=None):
+        """``jump_delay`` (µs) for a jump of ``jump_mm`` (None: across the whole field,
+        corner to corner, as a jump from wherever the head was may be), as SCANLAB's RTC's
+        variable jump delay has it: ``jump_delay_us`` for a jump of ``jump_length_limit_mm``
+        or longer (or for every jump, the limit 0), and for a shorter one
+        ``min_jump_delay_us`` and the difference in proportion to its length; rounded *up* to a whole µs, at most what the
+        register holds (65 535 µs). The board rounds it up to whole 10 µs frames."""
+        if jump_mm is None:
+            jump_mm = self.field.size_mm * math.sqrt(2)
         if isinstance(jump_mm, bool) or not isinstance(jump_mm, (int, float)) or \
                 not math.isfinite(jump_mm) or jump_mm < 0:
             raise ValueError(f"a jump length must be a number of mm from 0 up, not {jump_mm!r}")
-        us = self.galvo.jump_delay_us + self.galvo.settle_us_per_mm * jump_mm
+        galvo = self.galvo
+        us = galvo.jump_delay_us
+        if self.variable_jump_delay and jump_mm < galvo.jump_length_limit_mm:
+            us = galvo.min_jump_delay_us + (galvo.jump_delay_us - galvo.min_jump_delay_us) * \
+                jump_mm / galvo.jump_length_limit_mm
         # 1e-9: 500 µs is 500, not 501 because of a rounding error in the sum.
         return max(_JUMP.low, min(_JUMP.high, math.ceil(us - 1e-9)))
 
@@ -243,7 +263,8 @@ class MachineProfile:
                       "prr_khz": list(self.laser.prr_khz), "spot_mm": self.laser.spot_mm,
                       "guide": self.laser.guide},
             "galvo": {"jump_delay_us": self.galvo.jump_delay_us,
-                      "settle_us_per_mm": self.galvo.settle_us_per_mm,
+                      "min_jump_delay_us": self.galvo.min_jump_delay_us,
+                      "jump_length_limit_mm": self.galvo.jump_length_limit_mm,
                       "max_speed_mm_s": self.galvo.max_speed_mm_s,
                       **{key: getattr(self.galvo, key) for key in DELAY_KEYS},
                       "polygon_scaled": self.galvo.polygon_scaled},
@@ -256,6 +277,7 @@ class MachineProfile:
                 "units_per_mm": self.units_per_mm,
                 "mm_per_unit": self.mm_per_unit,
                 "jump_delay_us_0mm": self.jump_delay_register(0),
+                "jump_delay_us_1mm": self.jump_delay_register(1),
                 "jump_delay_us_10mm": self.jump_delay_register(10),
                 "delay_registers": self.delay_registers(),
                 "default_power_register": self.power_register(self.defaults.power_percent),
@@ -343,6 +365,14 @@ def parse_profile(text, *, path=DEFAULT_PROFILE_NAME):
         raise ProfileError(f"{path}: [defaults] prr_khz must lie within the laser's "
                            f"{_num(low)} … {_num(high)} kHz ([laser] prr_khz), not "
                            f"{_num(defaults.prr_khz)}")
+    if galvo.min_jump_delay_us > galvo.jump_delay_us:
+        if "min_jump_delay_us" in sections.get("galvo", {}):
+            raise ProfileError(f"{path}: [galvo] min_jump_delay_us must be at most jump_delay_us "
+                               f"({_num(galvo.jump_delay_us)} µs; a short jump waits no longer "
+                               f"than a long one), not {_num(galvo.min_jump_delay_us)}")
+        # Its default, above a jump delay the file gives: that delay after every jump, as the
+        # file says.
+        built["galvo"] = galvo = replace(galvo, min_jump_delay_us=galvo.jump_delay_us)
     if defaults.speed_mm_s > galvo.max_speed_mm_s:
         raise ProfileError(f"{path}: [defaults] speed_mm_s must be at most [galvo] "
                            f"max_speed_mm_s ({_num(galvo.max_speed_mm_s)} mm/s), not "

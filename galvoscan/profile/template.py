@@ -26,6 +26,9 @@ def profile_text():
     """The commented profile ``galvoscan machine init`` writes: the defaults, every key
     explained (unit, range, purpose)."""
     d = default_profile()
+    # Here: outputs.stream is above the profile.
+    from ..outputs.stream import link_segments_per_s
+    link_us = round(2 / link_segments_per_s(d.link.baud) * 1e6)
     s = _span
     n = _toml_num
     return f"""\
@@ -83,14 +86,29 @@ spot_mm = {n(d.laser.spot_mm)}
 guide = {"true" if d.laser.guide else "false"}
 
 [galvo]
-# Wait after every jump, laser off, for the mirrors to settle before marking resumes,
-# in µs. The board counts {FRAME_US} µs frames: rounded up to a whole frame.
-# {s("galvo", "jump_delay_us")}.
+# The wait after a jump, laser off, for the mirrors to settle before marking resumes,
+# in µs, grows with the jump's length as in SCANLAB's RTC (its variable jump delay: the
+# jump delay of set_scanner_delays, and MinJumpDelay and JumpLengthLimit of
+# set_delay_mode): a jump of jump_length_limit_mm or longer waits jump_delay_us, a
+# shorter one min_jump_delay_us and the difference in proportion to its length. The
+# board counts {FRAME_US} µs frames: each wait is rounded up to a whole frame. A photo's
+# thousands of short gaps between dark cells so no longer each wait as long as a jump
+# across the field.
+# The defaults: a 10 mm head's, as `galvoscan analyze` models it (the JD1403 galvo of
+# Wan et al. 2018: a 1 % step settles in 0.3 ms, a 10 % step in 0.7 ms), where a 0.2 mm
+# jump comes within 10 µm of its end in about 200 µs and a 5 mm one in about 515 µs;
+# and the link: at {d.link.baud:,} baud it takes {link_us} µs to bring a jump and its mark, so
+# short jumps waiting less would let a photo empty the board's queue. Measure your
+# head's with a test mark and set these from it.
+# Wait after a jump of jump_length_limit_mm or longer. {s("galvo", "jump_delay_us")}.
 jump_delay_us = {n(d.galvo.jump_delay_us)}
-# Extra wait per mm of jump, in µs/mm, added to jump_delay_us: long jumps settle longer
-# (a variable jump delay). 0 = the same wait after every jump.
-# {s("galvo", "settle_us_per_mm")}.
-settle_us_per_mm = {n(d.galvo.settle_us_per_mm)}
+# Wait after the shortest jump (length 0): at most jump_delay_us (left out, and more
+# than a jump_delay_us given: jump_delay_us, every jump waiting that).
+# {s("galvo", "min_jump_delay_us")}.
+min_jump_delay_us = {n(d.galvo.min_jump_delay_us)}
+# The jump length from which every jump waits jump_delay_us, in mm; 0: every jump
+# waits jump_delay_us, whatever its length. {s("galvo", "jump_length_limit_mm")}.
+jump_length_limit_mm = {n(d.galvo.jump_length_limit_mm)}
 # Fastest marking or cleaning speed a job may ask for, in mm/s: faster is refused. Take
 # it from the scan head's data sheet. {s("galvo", "max_speed_mm_s")}.
 max_speed_mm_s = {n(d.galvo.max_speed_mm_s)}

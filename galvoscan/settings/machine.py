@@ -22,7 +22,7 @@ from .schema import ProfileKey, Setting
 
 
 __all__ = ["SIZE", "CORRECTION", "PORT", "SPI", "MAX_POWER", "SPOT", "GUIDE", "JUMP_DELAY",
-           "SETTLE", "MAX_SPEED", "LASER_ON_DELAY", "LASER_OFF_DELAY", "MARK_DELAY",
+           "MIN_JUMP_DELAY", "JUMP_LENGTH_LIMIT", "MAX_SPEED", "LASER_ON_DELAY", "LASER_OFF_DELAY", "MARK_DELAY",
            "POLYGON_DELAY", "POLYGON_SCALED", "DELAYS", "LASER_DELAYS", "PROFILE"]
 
 
@@ -43,9 +43,11 @@ SPOT = Setting("spot_mm", "number", "mm", 0.001, 10, default=0.05,
                help="spot diameter at focus: what line spacings and previews are drawn from")
 GUIDE = Setting("guide", "bool", default=True,
                 help="a guide (red pointer) laser is wired to the board's guide output")
-SETTLE = Setting("settle_us_per_mm", "number", "µs/mm", 0, 10_000, default=0.0,
-                 help="extra wait per mm of jump, added to the jump delay: long jumps settle "
-                      "longer")
+JUMP_LENGTH_LIMIT = Setting("jump_length_limit_mm", "number", "mm", 0, 3000, default=5.0,
+                            help="jumps this long or longer wait jump_delay_us, shorter ones "
+                                 "from min_jump_delay_us up in proportion to their length "
+                                 "(RTC's variable jump delay); 0: every jump waits "
+                                 "jump_delay_us")
 MAX_SPEED = Setting("max_speed_mm_s", "number", "mm/s", 1, 100_000, default=10_000.0,
                     help="fastest marking speed a job may ask for (the scan head's)")
 POLYGON_SCALED = Setting("polygon_scaled", "bool", default=True,
@@ -63,6 +65,13 @@ def _delay(register, help):
 
 JUMP_DELAY = _delay("jump_delay", f"laser-off wait after every jump, for the mirrors to settle "
                                   f"(rounded up to whole {FRAME_US} µs frames)")
+#: The jump delay of the shortest jump (RTC's MinJumpDelay): not a register of its own, but
+#: what the host works a jump's delay out from, so the register's range.
+MIN_JUMP_DELAY = Setting("min_jump_delay_us", "number", "µs", JUMP_DELAY.low, JUMP_DELAY.high,
+                         default=240.0,
+                         help="laser-off wait after a jump of length 0, at most jump_delay_us "
+                              "(left out: jump_delay_us if that is less): a jump shorter than "
+                              "jump_length_limit_mm waits in proportion between the two")
 LASER_ON_DELAY = _delay("laser_on_delay", "the laser switches on this long after a mark's "
                                           "first point (negative: before)")
 LASER_OFF_DELAY = _delay("laser_off_delay", "the laser stays on this long after a mark's last "
@@ -98,8 +107,16 @@ PROFILE = {
                    ("spot_mm", SPOT, {}), ("guide", GUIDE, {})),
     # The delays' defaults are what `galvoscan analyze --delays` finds for Wan et al.'s JD1403
     # galvo at 1 m/s (galvoscan.profile.machine.GalvoSection).
-    "galvo": _keys("galvo", ("jump_delay_us", JUMP_DELAY, dict(default=500.0, kind="number")),
-                   ("settle_us_per_mm", SETTLE, {}), ("max_speed_mm_s", MAX_SPEED, {}),
+    # The jump delays are RTC's variable jump delay (JumpDelay, MinJumpDelay and
+    # JumpLengthLimit): their defaults, and where they come from, are the template's comment.
+    "galvo": _keys("galvo", ("jump_delay_us", JUMP_DELAY, dict(
+                       default=500.0, kind="number",
+                       help=f"laser-off wait after a jump of jump_length_limit_mm or longer, "
+                            f"for the mirrors to settle (rounded up to whole {FRAME_US} µs "
+                            f"frames)")),
+                   ("min_jump_delay_us", MIN_JUMP_DELAY, {}),
+                   ("jump_length_limit_mm", JUMP_LENGTH_LIMIT, {}),
+                   ("max_speed_mm_s", MAX_SPEED, {}),
                    ("laser_on_delay_us", LASER_ON_DELAY, dict(default=100.0, kind="number")),
                    ("laser_off_delay_us", LASER_OFF_DELAY, dict(default=50.0, kind="number")),
                    ("mark_delay_us", MARK_DELAY, dict(default=100.0, kind="number")),

@@ -93,14 +93,18 @@ def test_show_prints_user_units(here, capsys):
     assert captured.err == ""                  # the file is there: no note
     assert "galvoscan.toml" in out
     for piece in ("110 × 110 mm", "595.782 galvo units per mm", "20 W", "20 … 200 kHz",
-                  "0.05 mm", "500 µs", "10 mm jump", "jump_delay 500", "laser on / off delay", "100 / 50 µs", "10000 mm/s", "1000 mm/s",
+                  "0.05 mm", "240 µs (a jump of 0) … 500 µs (one of 5 mm or longer)",
+                  # 240 + 260 × 0.1/5 = 245.2 µs, rounded up; 240 + 260 × 1/5; the long one
+                  "0.1 / 1 / 10 mm jump  246 / 292 / 500 µs",
+                  "laser on / off delay", "100 / 50 µs", "10000 mm/s", "1000 mm/s",
                   "10 %", "laser_power 26", "50 kHz (laser_prr 500)", "identity table"):
         assert piece in out, piece
 
 
 def test_show_json_parses(here, capsys):
     (here / "m.toml").write_text('[link]\nport = "/dev/ttyUSB1"\n'
-                                 '[galvo]\njump_delay_us = 300\nsettle_us_per_mm = 20\n')
+                                 '[galvo]\njump_delay_us = 700\nmin_jump_delay_us = 300\n'
+                                 'jump_length_limit_mm = 20\n')
     assert main(["machine", "show", "--machine", "m.toml", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["source"] == "m.toml"
@@ -108,7 +112,9 @@ def test_show_json_parses(here, capsys):
     assert data["field"]["size_mm"] == 110
     assert data["laser"]["prr_khz"] == [20, 200]
     assert data["derived"]["jump_delay_us_0mm"] == 300
-    assert data["derived"]["jump_delay_us_10mm"] == 500            # 300 + 20 × 10 µs
+    assert data["derived"]["jump_delay_us_1mm"] == 320             # 300 + 400 × 1/20 µs
+    assert data["derived"]["jump_delay_us_10mm"] == 500            # 300 + 400 × 10/20 µs
+    assert data["galvo"]["jump_length_limit_mm"] == 20
     assert data["derived"]["delay_registers"]["laser_on_delay"] == 100
     assert data["derived"]["units_per_mm"] == pytest.approx(65536 / 110)
 

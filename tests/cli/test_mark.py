@@ -503,16 +503,17 @@ def test_cross_hatch_and_contour_marked_off_the_wires(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_each_jump_is_held_as_long_as_its_length_needs_on_the_wires(tmp_path, capsys):
-    """With a settling time per mm, each jump is held (on the XY2-100 wires, before its first
-    pulse on the DB25 pins) at least ``jump_delay_us + settle_us_per_mm × length``: the long
-    jump across the field its long hold, the many short ones between dashes short ones, not
-    each the longest's."""
+    """With RTC's variable jump delay, each jump is held (on the XY2-100 wires, before its
+    first pulse on the DB25 pins) at least what its length needs: 50 µs and 20 µs a mm up to
+    100 mm (``min_jump_delay_us`` 50, ``jump_delay_us`` 2050 at ``jump_length_limit_mm``
+    100): the long jump across the field its long hold, the many short ones between dashes
+    short ones, not each the longest's."""
     import json
     import numpy as np
     from sim_board import VECTOR_BOARD, quick_sim_board
     machine = tmp_path / "machine.toml"
-    machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 50\n"
-                       "settle_us_per_mm = 20\n")
+    machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\nmin_jump_delay_us = 50\n"
+                       "jump_delay_us = 2050\njump_length_limit_mm = 100\n")
     dashes = "".join(f'<path d="M {x0 + 0.6 * k:.1f} 50 h 0.3" stroke="black"/>'
                      for x0 in (5, 85) for k in range(12))
     svg = tmp_path / "dashes.svg"

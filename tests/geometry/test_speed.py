@@ -9,7 +9,8 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 
 from galvoscan.geometry.field import PlanError
-from galvoscan.geometry.speed import Pitch, choose_pitch, estimate_seconds, jump_mark_lengths
+from galvoscan.geometry.speed import (Pitch, choose_pitch, estimate_seconds, jump_mark_lengths,
+                                      settled_jumps)
 
 
 def brute_force(speed, prr, units_per_mm, max_pitch_mm, max_point_hz=100e3):
@@ -97,3 +98,50 @@ def test_jump_mark_lengths_by_hand():
     mark_mm, jump_mm = jump_mark_lengths(SEGMENTS, 10)
     assert mark_mm == pytest.approx(70.5)
     assert jump_mm == pytest.approx(30 + 40.5)
+
+
+# --- each jump held as long as its length needs -----------------------------------------------
+
+def test_each_jump_is_held_as_long_as_rtcs_variable_jump_delay_needs():
+    """Jumps of several lengths under the default profile's variable jump delay (240 µs for a
+    jump of 0, 500 µs from 5 mm): each, with the jumps to the same point that follow it, waits
+    at least 240 µs + 52 µs a mm up to 5 mm, 500 beyond; the first, from wherever the head
+    was, as long as a jump across the field (500 µs)."""
+    from galvoscan.profile.machine import default_profile
+    profile = default_profile()
+    units_per_mm = profile.units_per_mm
+    lengths_mm = [0.05, 0.05, 0.3, 1.0, 2.5, 4.9, 5.0, 12.0, 0.1, 40.0, 0.05]
+    segments, x = [], 32768.0
+    for length in lengths_mm:
+        x += length * units_per_mm
+        segments += [("jump", round(x), 32768), ("mark", round(x) + 30, 32768)]
+        x = round(x) + 30
+    settled, delay, extra, longest = settled_jumps(segments, profile, units_per_mm)
+    assert longest == 500
+    assert len(settled) == len(segments) + extra
+    holds = []                                   # each jump and the repeats that follow it
+    for segment, previous in zip(settled, [None] + settled[:-1]):
+        if segment[0] == "jump":
+            if segment == previous:
+                holds[-1] += 1
+            else:
+                holds.append(1)
+    assert len(holds) == len(lengths_mm)
+    for number, (length, count) in enumerate(zip(lengths_mm, holds)):
+        need = 500 if number == 0 or length >= 5 else 240 + (500 - 240) * length / 5
+        assert count * delay >= need - 1, (length, count, delay)      # whole µs, rounded up
+    # Quicker than every jump held as long as the longest: the short ones wait less.
+    assert sum(holds) * (math.ceil(delay / 10) + 1) < len(holds) * (50 + 1)
+
+
+def test_jumps_held_once_wait_as_long_as_a_jump_across_the_field():
+    """Held once each (a .job's, ``settle=False``), every jump waits what the first, from
+    wherever the head was, may need: a jump corner to corner, 500 µs, though the job's own
+    are short."""
+    from galvoscan.profile.machine import default_profile
+    profile = default_profile()
+    segments = [("jump", 32768 + 100, 32768), ("mark", 32768 + 200, 32768),
+                ("jump", 32768 + 300, 32768), ("mark", 32768 + 400, 32768)]
+    settled, delay, extra, longest = settled_jumps(segments, profile, profile.units_per_mm,
+                                                   settle=False)
+    assert (settled, delay, extra, longest) == (segments, 500, 0, 500)

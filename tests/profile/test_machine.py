@@ -7,6 +7,7 @@ import math
 import os
 import re
 
+from hypothesis import given, settings, strategies as st
 import pytest
 
 from galvoscan.correction.files import save_table
@@ -31,7 +32,8 @@ RANGES = {
     ("galvo", "laser_off_delay_us"): (0, 1023, False),
     ("galvo", "mark_delay_us"): (0, 4095, False),
     ("galvo", "polygon_delay_us"): (0, 4095, False),
-    ("galvo", "settle_us_per_mm"): (0, 10_000, False),
+    ("galvo", "min_jump_delay_us"): (0, 65_535, False),      # the jump_delay register's
+    ("galvo", "jump_length_limit_mm"): (0, 3000, False),
     ("galvo", "max_speed_mm_s"): (1, 100_000, False),
     ("defaults", "speed_mm_s"): (0.1, 100_000, False),
     ("defaults", "power_percent"): (0, 100, False),
@@ -54,6 +56,7 @@ OTHER_KEYS = {
 COMPANIONS = {
     ("defaults", "speed_mm_s"): {("galvo", "max_speed_mm_s"): "100000"},
     ("galvo", "max_speed_mm_s"): {("defaults", "speed_mm_s"): "0.5"},
+    ("galvo", "min_jump_delay_us"): {("galvo", "jump_delay_us"): "65535"},
 }
 def with_value(section, key, value):
     entries = dict(COMPANIONS.get((section, key), {}))
@@ -279,6 +282,32 @@ def test_unknown_key_without_a_near_one_lists_the_known():
 def test_key_in_the_wrong_section():
     refused("[laser]\njump_delay_us = 300\n", "[laser] jump_delay_us",
             "did you mean [galvo] jump_delay_us?")
+
+
+def test_a_short_jump_waiting_longer_than_a_long_one_refused():
+    refused("[galvo]\nmin_jump_delay_us = 600\n", "[galvo] min_jump_delay_us must be at most "
+            "jump_delay_us (500 µs", "not 600")
+    refused("[galvo]\njump_delay_us = 100\nmin_jump_delay_us = 100.5\n", "at most jump_delay_us "
+            "(100 µs", "not 100.5")
+    # Left out, its default gives way to a shorter jump delay: that after every jump.
+    profile = parse_profile("[galvo]\njump_delay_us = 100\n")
+    assert profile.galvo.min_jump_delay_us == 100 and not profile.variable_jump_delay
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from(["min_jump_delay_us", "jump_length_limit_mm", "jump_delay_us"]),
+       st.one_of(st.floats(max_value=-1e-9), st.floats(min_value=70000), st.just(math.nan),
+                 st.text("ab5 .-", max_size=5), st.booleans()))
+def test_bad_jump_delays_refused(key, value):
+    """Negative, too long, not a number: one line naming the key."""
+    written = json.dumps(value) if isinstance(value, (str, bool)) else repr(value)
+    text = f"[galvo]\n{key} = {written}\n"
+    refused(text, f"[galvo] {key} must be")
+
+
+def test_the_old_settling_key_says_what_replaced_it():
+    refused("[galvo]\nsettle_us_per_mm = 0\n", "[galvo] settle_us_per_mm is no longer a key",
+            "min_jump_delay_us", "jump_length_limit_mm = 0")
 
 
 def test_unknown_section_suggests_the_near_one():

@@ -2,9 +2,11 @@
 turned into register values by hand-worked examples, out-of-range values refused in one line,
 and the profile as JSON and as a frozen, hashable value."""
 
+from fractions import Fraction
 import json
 import math
 
+from hypothesis import given, settings, strategies as st
 import pytest
 
 from galvoscan.profile.machine import MachineProfile, default_profile, parse_profile
@@ -51,23 +53,66 @@ def test_power_outside_refused():
             default_profile().power_register(percent)
 
 
+def rtc_jump_delay_us(short, long, limit, jump):
+    """SCANLAB's RTC's variable jump delay, in exact fractions (``short``, ``long``,
+    ``limit``, ``jump`` as decimal text): ``long`` for a jump of ``limit`` or longer (every
+    jump when ``limit`` is 0), else ``short`` and the difference in proportion to the jump's
+    length; the register's whole µs, rounded up and held to its 0 … 65535."""
+    short, long, limit, jump = (Fraction(v) for v in (short, long, limit, jump))
+    us = long if limit == 0 or jump >= limit else short + (long - short) * jump / limit
+    return min(65535, math.ceil(us))
+
+
+#: (profile lines, jump in mm, the jump delay register), worked by hand.
 JUMP_US = [
-    ("", 0, 500),
-    ("", 100, 500),
-    ("jump_delay_us = 505.2", 0, 506),                       # rounded up to a µs
-    ("jump_delay_us = 10", 0, 10),
-    ("jump_delay_us = 10\nsettle_us_per_mm = 0.5", 0.1, 11),  # 10.05 µs
-    ("settle_us_per_mm = 20", 10, 700),                      # 500 + 200 µs
-    ("settle_us_per_mm = 3", 1 / 3, 501),                    # 501 µs
-    ("jump_delay_us = 65535", 0, 65535),
-    ("jump_delay_us = 65535\nsettle_us_per_mm = 10000", 2000, 65535),   # clamped
+    ("", "0", 240),                                          # the defaults: 240 µs at 0 …
+    ("", "1", 292),                                          # 240 + 260 × 1/5
+    ("", "2.5", 370),
+    ("", "0.05", 243),                                       # 242.6, rounded up
+    ("", "5", 500),                                          # … 500 µs from 5 mm on
+    ("", "100", 500),
+    ("jump_length_limit_mm = 0", "0", 500),                  # one delay for every jump
+    ("jump_delay_us = 505.2\njump_length_limit_mm = 0", "0", 506),   # rounded up to a µs
+    ("jump_delay_us = 10", "0", 10),                         # the short one its default's …
+    ("jump_delay_us = 10", "3", 10),                         # … at most: 10 µs every jump
+    ("min_jump_delay_us = 0\njump_length_limit_mm = 110", "55", 250),
+    ("min_jump_delay_us = 10.05\njump_length_limit_mm = 100", "0", 11),
+    ("jump_delay_us = 65535\nmin_jump_delay_us = 65535", "0", 65535),
 ]
 
 
 def test_jump_delay_register():
     for galvo, jump_mm, us in JUMP_US:
         profile = parse_profile(f"[galvo]\n{galvo}\n")
-        assert profile.jump_delay_register(jump_mm) == us, (galvo, jump_mm)
+        assert profile.jump_delay_register(float(jump_mm)) == us, (galvo, jump_mm)
+
+
+@pytest.mark.parametrize("short, long, limit", [
+    ("240", "500", "5"), ("20", "500", "110"), ("0", "65535", "2000"), ("100", "100", "5"),
+    ("10", "85", "10"), ("0", "0", "3")])
+def test_each_jump_waits_what_rtc_gives_it(short, long, limit):
+    """Each jump's delay, for lengths from 0 past the limit, is RTC's rule's."""
+    profile = parse_profile(f"[galvo]\nmin_jump_delay_us = {short}\njump_delay_us = {long}\n"
+                            f"jump_length_limit_mm = {limit}\n")
+    for jump in ("0", "0.05", "0.1", "0.3333", "1", "2.5", "4.99", "5", "7.5", "10", "55",
+                 "110", "155.6", "2000"):
+        assert profile.jump_delay_register(float(jump)) == \
+            rtc_jump_delay_us(short, long, limit, jump), jump
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0, 65535), st.floats(0, 65535), st.floats(0, 3000),
+       st.floats(0, 4000, allow_nan=False))
+def test_jump_delay_is_rtcs_and_grows_with_length(short, long, limit, jump):
+    short, long = sorted((short, long))
+    profile = parse_profile(f"[galvo]\nmin_jump_delay_us = {short!r}\n"
+                            f"jump_delay_us = {long!r}\njump_length_limit_mm = {limit!r}\n")
+    us = profile.jump_delay_register(jump)
+    # (Less by one where the float sum lands within 1e-9 µs above a whole µs.)
+    exact = rtc_jump_delay_us(repr(short), repr(long), repr(limit), repr(jump))
+    assert exact - 1 <= us <= exact
+    assert math.ceil(short - 1e-9) <= us <= math.ceil(long)
+    assert profile.jump_delay_register(jump * 2) >= us
 
 
 def test_jump_length_refused():
@@ -92,6 +137,7 @@ def test_delay_registers_from_the_profile():
 def test_as_dict_is_json():
     data = json.loads(json.dumps(default_profile().as_dict()))
     assert data["derived"]["jump_delay_us_10mm"] == 500
+    assert data["derived"]["jump_delay_us_1mm"] == 292              # 240 + 260 × 1/5
     assert data["derived"]["default_prr_register"] == 500
     assert data["derived"]["default_power_register"] == 26
     assert data["source"] is None

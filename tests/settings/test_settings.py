@@ -216,6 +216,8 @@ def test_profile_keys_are_the_settings(section, name):
     value = f"[{key.low!r}, {key.high!r}]" if key.kind == "pair" else repr(key.high)
     if (section, name) == ("defaults", "speed_mm_s"):      # at most [galvo] max_speed_mm_s
         value = f"{value}\n[galvo]\nmax_speed_mm_s = {value}"
+    if (section, name) == ("galvo", "min_jump_delay_us"):    # at most jump_delay_us
+        value = f"{value}\njump_delay_us = {value}"
     parse_profile(f"[{section}]\n{name} = {value}\n")
     for outside in (key.high + step, key.low - step):
         with pytest.raises(ProfileError, match=f"{name} must be"):
