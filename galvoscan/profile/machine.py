@@ -188,8 +188,9 @@ class MachineProfile:
         corner to corner, as a jump from wherever the head was may be), as SCANLAB's RTC's
         variable jump delay has it: ``jump_delay_us`` for a jump of ``jump_length_limit_mm``
         or longer (or for every jump, the limit 0), and for a shorter one
-        ``min_jump_delay_us`` and the difference in proportion to its length; rounded *up* to a whole µs, at most what the
-        register holds (65 535 µs). The board rounds it up to whole 10 µs frames."""
+        ``min_jump_delay_us`` and the difference in proportion to its length; rounded *up* to
+        a whole µs, at most what the register holds (65 535 µs). The board rounds it up to
+        whole 10 µs frames."""
         if jump_mm is None:
             jump_mm = self.field.size_mm * math.sqrt(2)
         if isinstance(jump_mm, bool) or not isinstance(jump_mm, (int, float)) or \
