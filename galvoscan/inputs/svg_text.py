@@ -84,6 +84,52 @@ def _font_dirs():
     return [d for d in dict.fromkeys(dirs) if os.path.isdir(d)]
 
 
+#: Font files by their names' endings.
+_FONT_SUFFIXES = (".ttf", ".otf", ".ttc", ".otc")
+#: Fonts whose glyphs are no letters, left out of what usvg reads: Last Resort draws every
+#: character as a box naming its Unicode block (matplotlib ships it, macOS has one), and
+#: usvg's per-character fallback would set a whole word in it.
+_NOT_TEXT_FONTS = ("lastresort",)
+
+
+def _font_files():
+    """``[(folder, [its font files, relative, POSIX])]`` for each font folder."""
+    found = []
+    for folder in _font_dirs():
+        files = []
+        for inside, _, names in sorted(os.walk(folder)):
+            for name in sorted(names):
+                if name.lower().endswith(_FONT_SUFFIXES) and \
+                        not name.lower().startswith(_NOT_TEXT_FONTS):
+                    files.append(Path(os.path.relpath(os.path.join(inside, name),
+                                                      folder)).as_posix())
+        found.append((folder, files))
+    return found
+
+
+@functools.lru_cache(maxsize=None)
+def _characters_of(font_file):
+    """The code points a font file has glyphs for (its first face's)."""
+    from matplotlib.ft2font import FT2Font
+    try:
+        return frozenset(FT2Font(font_file).get_charmap())
+    except (RuntimeError, OSError, ValueError):
+        return frozenset()
+
+
+def _in_no_font(characters):
+    """The characters (spaces aside) that no font usvg reads has a glyph for: usvg would draw
+    a box for them (the font's .notdef), or nothing."""
+    left = {ch for ch in characters if not ch.isspace()}
+    for folder, files in _font_files():
+        for name in files:
+            if not left:
+                return left
+            have = _characters_of(os.path.join(folder, name))
+            left = {ch for ch in left if ord(ch) not in have}
+    return left
+
+
 @functools.lru_cache(maxsize=1)
 def _usvg():
     """``(engine, module)``: usvg compiled once a process (and cached on disk by wasmtime
@@ -106,19 +152,22 @@ atexit.register(_usvg.cache_clear)
 
 def _run_usvg(arguments, svg_bytes):
     """usvg's ``(exit status, standard output, standard error)`` for ``arguments``, the SVG on
-    its standard input; the font folders readable at their own paths."""
+    its standard input; the font folders readable as ``/fonts/0``, ``/fonts/1``… (WASI's
+    paths are POSIX paths, whatever the host's are)."""
     import wasmtime
     engine, module = _usvg()
-    dirs = _font_dirs()
-    fonts = ["--skip-system-fonts"] + [a for d in dirs for a in ("--use-fonts-dir", d)]
+    folders = _font_files()
+    fonts = ["--skip-system-fonts"] + [a for number, (_, files) in enumerate(folders)
+                                       for name in files
+                                       for a in ("--use-font-file", f"/fonts/{number}/{name}")]
     with tempfile.TemporaryDirectory(prefix="galvoscan-usvg-") as folder:
         stdin, stdout, stderr = (os.path.join(folder, name) for name in ("in", "out", "err"))
         Path(stdin).write_bytes(svg_bytes)
         wasi = wasmtime.WasiConfig()
         wasi.argv = ["usvg", *fonts, *arguments]
         wasi.stdin_file, wasi.stdout_file, wasi.stderr_file = stdin, stdout, stderr
-        for folder_read in dirs:
-            wasi.preopen_dir(folder_read, folder_read)
+        for number, (folder_read, _) in enumerate(folders):
+            wasi.preopen_dir(folder_read, f"/fonts/{number}")
         linker = wasmtime.Linker(engine)
         linker.define_wasi()
         store = wasmtime.Store(engine)
@@ -203,25 +252,28 @@ def _substitute_fonts(root, installed, notes):
 
 # --- control characters -----------------------------------------------------------------------
 
-def _without_controls(text):
-    """``(text, how many left out)``: control characters (Unicode's Cc, but tab, line feed
-    and carriage return, which SVG's whitespace rules turn into spaces) taken out."""
-    if not text:
-        return text, 0
-    kept = "".join(ch for ch in text if ch in _WHITESPACE_CONTROLS or
-                   unicodedata.category(ch) != "Cc")
-    return kept, len(text) - len(kept)
+def _is_control(ch):
+    """Unicode's control characters (Cc), but tab, line feed and carriage return, which SVG's
+    whitespace rules turn into spaces."""
+    return ch not in _WHITESPACE_CONTROLS and unicodedata.category(ch) == "Cc"
 
 
-def _strip_controls(text_element):
-    """Control characters in a text's content left out; how many."""
+def _strip(text_element, leave_out):
+    """The characters of a text's content for which ``leave_out`` holds taken out; how
+    many."""
     count = 0
+
+    def kept(text):
+        nonlocal count
+        if not text:
+            return text
+        new = "".join(ch for ch in text if not leave_out(ch))
+        count += len(text) - len(new)
+        return new
     for element in text_element.iter():
-        element.text, n = _without_controls(element.text)
-        count += n
+        element.text = kept(element.text)
         if element is not text_element:
-            element.tail, n = _without_controls(element.tail)
-            count += n
+            element.tail = kept(element.tail)
     return count
 
 
@@ -314,10 +366,17 @@ def texts_as_paths(data):
     for element in texts + [e for e in root.iter() if _kind(e) == "use"]:
         if not element.get("id"):
             element.set("id", new_id(f"galvoscan-{_kind(element)}"))
-    controls = sum(_strip_controls(text) for text in texts)
+    controls = sum(_strip(text, _is_control) for text in texts)
     if controls:
         notes.append(f"{controls} control character{'s' if controls > 1 else ''} in <text> "
                      f"left out (never a glyph)")
+    missing = _in_no_font("".join("".join(text.itertext()) for text in texts))
+    if missing:
+        count = sum(_strip(text, missing.__contains__) for text in texts)
+        shown = "".join(sorted(missing))
+        notes.append(f"{count} character{'s' if count > 1 else ''} in <text> that no "
+                     f"installed font has ({shown[:20]!r}{'…' if len(shown) > 20 else ''}) "
+                     f"left out")
     _substitute_fonts(root, installed_families(), notes)
 
     # The copy usvg lays out: its shapes out, but those a textPath follows.

@@ -136,6 +136,17 @@ def test_tab_newline_and_return_are_never_glyphs(tmp_path):
     assert "2 control characters in <text> left out (never a glyph)" in control.notes
 
 
+def test_a_character_no_font_has_is_left_out_and_said(tmp_path):
+    """A character no installed font has (an unassigned code point, one of the last private
+    plane's) is no box (.notdef, or Last Resort's block name), and no other letter is set in
+    a box's font: said in a note."""
+    letters = load_svg(tmp_path, '<text x="5" y="50" font-size="10">AB</text>')
+    boxed = load_svg(tmp_path, '<text x="5" y="50" font-size="10">A&#x378;&#x10FFFD;B</text>')
+    assert len(boxed.paths) == len(letters.paths)
+    assert boxed.notes == ("2 characters in <text> that no installed font has "
+                           "('\\u0378\\U0010fffd') left out",)
+
+
 def test_mixed_sizes_follow_on(tmp_path):
     """A larger tspan's glyph after a smaller one's and before the next: none on another."""
     d = load_svg(tmp_path, '<text x="5" y="50" font-size="10">L<tspan font-size="30">I'
