@@ -64,7 +64,7 @@ _SHAPES = {"path", "rect", "circle", "ellipse", "line", "polyline", "polygon", "
 _WHITESPACE_CONTROLS = "\t\n\r"
 #: What of usvg's paths the SVG reader reads: colour (stroke, else fill) and visibility.
 _PAINT = ("fill", "stroke", "visibility")
-_FONT_FAMILY_IN_STYLE = re.compile(r"(font-family\s*:\s*)([^;]*)", re.IGNORECASE)
+_FONT_FAMILY_IN_STYLE = re.compile(r"(font-family\s*:\s*)([^;}]*)", re.IGNORECASE)
 
 
 def _kind(element):
@@ -228,10 +228,18 @@ def _family_substitute(value, installed):
 
 
 def _substitute_fonts(root, installed, notes):
-    """Each font-family (attribute or style property) whose first family is missing, given
-    its substitute, with a note (counted) naming it."""
+    """Each font-family (attribute, style property or style sheet's declaration) whose first
+    family is missing, given its substitute, with a note (counted) naming it."""
     said = Counter()
+
+    def replaced(match):
+        new, note = _family_substitute(match.group(2), installed)
+        if note:
+            said[note] += 1
+        return match.group(1) + new
     for element in root.iter():
+        if _kind(element) == "style" and element.text and "font-family" in element.text:
+            element.text = _FONT_FAMILY_IN_STYLE.sub(replaced, element.text)
         value = element.get("font-family")
         if value is not None:
             new, note = _family_substitute(value, installed)
@@ -240,11 +248,6 @@ def _substitute_fonts(root, installed, notes):
                 said[note] += 1
         style = element.get("style")
         if style and "font-family" in style.lower():
-            def replaced(match):
-                new, note = _family_substitute(match.group(2), installed)
-                if note:
-                    said[note] += 1
-                return match.group(1) + new
             element.set("style", _FONT_FAMILY_IN_STYLE.sub(replaced, style))
     for note, count in said.items():
         notes.append(note + (f" ({count} elements)" if count > 1 else ""))

@@ -173,6 +173,10 @@ def test_a_missing_font_is_replaced_by_its_generic_family_and_said(tmp_path):
                                 'DejaVu Serif">Mark</text>')
     np.testing.assert_allclose(listed.bounds(), serif.bounds(), atol=1e-6)
     assert listed.notes == ("font 'No Such' is not installed: set in DejaVu Serif in its place",)
+    sheet = load_svg(tmp_path, '<style>.plate { font-family: "No Such Font 1234" }</style>'
+                               '<text class="plate" x="5" y="50">Mark</text>')
+    np.testing.assert_allclose(sheet.bounds(), generic.bounds(), atol=1e-6)
+    assert sheet.notes == missing.notes
 
 
 def test_too_much_text_is_one_line(tmp_path):
