@@ -179,6 +179,14 @@ def test_a_missing_font_is_replaced_by_its_generic_family_and_said(tmp_path):
     assert sheet.notes == missing.notes
 
 
+def test_text_spaced_past_any_scale_is_one_line(tmp_path):
+    """Letters spaced 10^10 px apart: a drawing too large at any scale, refused in one line
+    (found by the test below: the refusal failed on having no scale to offer)."""
+    with pytest.raises(DrawingError, match=r"more than 10 m") as refusal:
+        load_svg(tmp_path, '<text x="5" y="50" letter-spacing="1e10">ab</text>')
+    assert "\n" not in str(refusal.value)
+
+
 def test_too_much_text_is_one_line(tmp_path):
     with pytest.raises(DrawingError, match=r"hold 20,001 characters: 20,000 at most$"):
         load_svg(tmp_path, f'<text x="5" y="50">{"a" * 20_001}</text>')
@@ -192,11 +200,17 @@ _LISTS = st.text(alphabet="0123456789.,- e%x", max_size=20)
 @settings(max_examples=40, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(content=st.text(alphabet=_XML_CHARACTERS, max_size=40), rotate=_LISTS, dy=_LISTS,
-       size=_LISTS)
-def test_bad_text_is_marked_or_one_line(tmp_path, content, rotate, dy, size):
-    """Any text and any x, dy, rotate and font-size lists: a drawing, or one line."""
+       size=_LISTS, spacing=_LISTS,
+       family=st.text(alphabet=st.sampled_from("abc ,'\"-;:}"), max_size=16),
+       space=st.sampled_from(["default", "preserve", "junk"]))
+def test_bad_text_is_marked_or_one_line(tmp_path, content, rotate, dy, size, spacing, family,
+                                        space):
+    """Any text and any dy, rotate, font-size and letter-spacing lists, font-family and
+    xml:space: a drawing, or one line."""
     from xml.sax.saxutils import escape, quoteattr
-    body = (f'<text x="5" y="50" rotate={quoteattr(rotate)} font-size={quoteattr(size)}>'
+    body = (f'<text x="5" y="50" rotate={quoteattr(rotate)} font-size={quoteattr(size)} '
+            f'font-family={quoteattr(family)} style={quoteattr("font-family:" + family)} '
+            f'letter-spacing={quoteattr(spacing)} xml:space="{space}">'
             f'{escape(content)}<tspan dy={quoteattr(dy)}>{escape(content[::-1])}</tspan>'
             f'</text><rect width="1" height="1"/>')
     try:
@@ -205,3 +219,30 @@ def test_bad_text_is_marked_or_one_line(tmp_path, content, rotate, dy, size):
         assert "\n" not in str(error)
     else:
         assert all(np.isfinite(p).all() for p in drawing.paths)
+
+
+def test_text_in_a_use_and_a_layer(tmp_path):
+    """A text a <use> copies is marked where the copy is, on the use's layer; a text in an
+    Inkscape layer is on it; a text in <defs> alone is not marked."""
+    d = load_svg(tmp_path, '<defs><text id="t" x="0" y="10" font-size="8">A</text></defs>'
+                           '<g inkscape:groupmode="layer" inkscape:label="Copies" '
+                           'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape">'
+                           '<use xlink:href="#t" x="20"/></g>'
+                           '<g inkscape:groupmode="layer" inkscape:label="Words" '
+                           'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape">'
+                           '<text x="50" y="10" font-size="8" fill="#ff0000">B</text></g>')
+    layers = {style.layer for style in d.styles}
+    assert layers == {"Copies", "Words"} and not d.skipped
+    copies = [p for p, s in zip(d.paths, d.styles) if s.layer == "Copies"]
+    assert min(p[:, 0].min() for p in copies) > 20            # moved by the use, not at 0
+    words = [s for s in d.styles if s.layer == "Words"]
+    assert {s.colour for s in words} == {"#ff0000"}
+
+
+def test_a_file_usvg_refuses_leaves_its_text_out_counted(tmp_path):
+    """usvg reads no SVG of zero size: its texts are counted as left out, with usvg's
+    reason; the shapes svgelements reads are still marked."""
+    d = load_svg(tmp_path, '<text x="5" y="50">A</text><rect width="3" height="3"/>',
+                 size='width="0" height="0"')
+    assert len(d.paths) == 1
+    assert d.skipped == ("1 text element left out (SVG has an invalid size.)",)
