@@ -3,6 +3,7 @@ resvg's own test files against resvg's reference pictures of them (drawn by anot
 resvg, in Noto Sans, the suite's font, which these tests add to the fonts found); the issue's
 cases measured on the marks; bad text never a crash."""
 
+import json
 from pathlib import Path
 import xml.etree.ElementTree as ElementTree
 
@@ -15,6 +16,7 @@ from galvoscan.inputs import svg_text
 from galvoscan.inputs.drawings import load_drawing
 
 from drawings import load_svg
+from sim_board import VECTOR_BOARD, quick_sim_board
 
 
 DATA = Path(__file__).parent.parent / "data" / "resvg_text"
@@ -114,6 +116,39 @@ def test_a_wrong_layout_is_caught(name, attribute, tmp_path, noto_sans):
     drawing = load_drawing(_text_only(source / f"{name}.svg", tmp_path))
     overlap = _overlap(_filled(drawing), _reference(name))
     assert overlap < MIN_OVERLAP - 0.1
+
+
+#: The overlap of the burn off the simulated board's wires with the reference picture: the
+#: spot's discs on the hatch lines (0.2 mm apart) and the outline reach 0.1 mm past the glyphs'
+#: edges, half a reference pixel; measured 0.88 on text-rotate (about 0.65 and 0.82 with discs of
+#: 0.08 and 0.15 mm).
+MIN_WIRE_OVERLAP = 0.8
+
+
+@pytest.mark.slow
+def test_marks_off_the_wires_match_the_reference_picture(tmp_path, capsys, noto_sans):
+    """resvg's rotate test marked on the simulated board, hatched: the points off the XY2-100
+    wires, each a disc of half the hatch spacing, against resvg's picture of the file."""
+    from galvoscan.cli import main
+    machine = tmp_path / "machine.toml"
+    machine.write_text("[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 100\n")
+    with quick_sim_board(**VECTOR_BOARD):
+        assert main(["mark", str(_text_only(DATA / "text-rotate.svg", tmp_path)), "--hatch",
+                     "0.2", "--origin", "page", "--speed", "2000", "--prr", "50",
+                     "--machine", str(machine), "--sim", "--timeout", "600", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["errors"] == result["underruns"] == 0
+    marks = np.array(result["drawing_marks"])      # the SVG's own mm, Y down
+    per_mm = PX_PER_MM * PICTURE / SIDE * SUPERSAMPLE
+    size, r = PICTURE * SUPERSAMPLE, 0.1 * per_mm
+    burnt = np.zeros((size, size), dtype=bool)
+    yy, xx = np.mgrid[0:size, 0:size]
+    for x, y in marks * per_mm:
+        box = (slice(max(0, int(y - r - 1)), int(y + r + 2)),
+               slice(max(0, int(x - r - 1)), int(x + r + 2)))
+        burnt[box] |= (xx[box] - x) ** 2 + (yy[box] - y) ** 2 <= r * r
+    coverage = burnt.reshape(PICTURE, SUPERSAMPLE, PICTURE, SUPERSAMPLE).mean(axis=(1, 3))
+    assert _overlap(coverage, _reference("text-rotate")) >= MIN_WIRE_OVERLAP
 
 
 # --- the issue's cases, in the installed fonts --------------------------------------------------
