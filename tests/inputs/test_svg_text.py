@@ -120,8 +120,8 @@ def test_a_wrong_layout_is_caught(name, attribute, tmp_path, noto_sans):
 
 #: The overlap of the burn off the simulated board's wires with the reference picture: the
 #: spot's discs on the hatch lines (0.2 mm apart) and the outline reach 0.1 mm past the glyphs'
-#: edges, half a reference pixel; measured 0.88 on text-rotate (about 0.65 and 0.82 with discs of
-#: 0.08 and 0.15 mm).
+#: edges, half a reference pixel; measured 0.88 on text-rotate (about 0.65 and 0.82 with
+#: discs of 0.08 and 0.15 mm).
 MIN_WIRE_OVERLAP = 0.8
 
 
