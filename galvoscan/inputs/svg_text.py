@@ -400,7 +400,12 @@ def texts_as_paths(data):
          "-", "-c"], ElementTree.tostring(layout))
     said = [" ".join(line.split(":", 1)[-1].split()) for line in err.splitlines()
             if line.strip() and not line.startswith("Preparing")]
-    outlines = [] if status != 0 else _outlines(out, owners)
+    outlines = []
+    if status == 0:
+        try:
+            outlines = _outlines(out, owners)
+        except (ElementTree.ParseError, ValueError, DrawingError) as error:
+            status, said = -1, [f"usvg's output not read: {' '.join(str(error).split())}"]
 
     drawn = Counter(owner for owner, *_ in outlines)
     by_id = {element.get("id"): element for element in root.iter() if element.get("id")}
