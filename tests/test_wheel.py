@@ -197,13 +197,15 @@ def test_wheel_regs_export_and_sim(installed):
 
 
 def test_wheel_plans_a_drawing(installed):
-    """The job path's libraries (svgelements, ezdxf, shapely, the TOML reader) come with it."""
+    """The job path's libraries (svgelements, ezdxf, shapely, the TOML reader, usvg for SVG
+    text and wasmtime to run it) come with it."""
     script, where, _ = installed
     result = _run(script, "machine", "init", "wheel.toml", cwd=where)
     assert result.returncode == 0, result.stderr
     (where / "box.svg").write_text(
         '<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="4mm" viewBox="0 0 4 4">'
-        '<rect x="1" y="1" width="2" height="2"/></svg>')
+        '<rect x="1" y="1" width="2" height="2"/>'
+        '<text x="1" y="3.9" font-size="0.8" font-family="sans-serif">A</text></svg>')
     result = _run(script, "mark", "box.svg", "--machine", "wheel.toml", "--hatch", "0.5",
                   "--estimate", cwd=where)
     assert result.returncode == 0, result.stderr

@@ -117,7 +117,8 @@ def _ways_out(mm_per_unit, scale_said):
     read in a larger unit; a ``scale_said`` (or none)."""
     return "give " + ", or ".join(
         (["--units mm if its numbers are millimetres"] if mm_per_unit > 1 else []) +
-        [scale_said]) if scale_said or mm_per_unit > 1 else "check its units (--units)"
+        ([scale_said] if scale_said else [])) if scale_said or mm_per_unit > 1 else \
+        "check its units (--units)"
 
 
 def _chords_said(error, scale, tolerance_mm):

@@ -1,8 +1,8 @@
 """The SVG reader of :func:`.drawings.load_drawing`: an SVG file (svgelements) as polylines in
 mm, Y up: shapes and paths with their transforms, arcs and Béziers flattened, ``<text>`` as glyph
-outlines of an installed font (:mod:`.text`), after :mod:`.svg_screen` has screened it."""
+outlines laid out by resvg's usvg (:mod:`.svg_text`), after :mod:`.svg_screen` has screened
+it."""
 
-from collections import Counter
 import io
 import math
 
@@ -10,10 +10,9 @@ import numpy as np
 import svgelements as svg
 
 from ..geometry.drawing import DrawingError, PathStyle
-from ..geometry.field import PlanError
 from .reading import UNITS, TooManyChords, _chords, _counted, _round_chords
-from .svg_screen import FLOW_ATTRIBUTE, FLOW_X_ATTRIBUTE, LAYER_ATTRIBUTE, screen_svg
-from .text import svg_text_outlines
+from .svg_screen import LAYER_ATTRIBUTE, screen_svg
+from .svg_text import texts_as_paths
 
 
 MM_PER_PX = UNITS["px"][0]                  # svgelements gives px at 96 ppi
@@ -128,6 +127,9 @@ def _read_svg(data, tolerance_mm, units_asked=None):
     :data:`~.reading.UNITS` key), in place of the root's width, height and viewBox."""
 
     data, notes = screen_svg(data)
+    # Each <text> as its glyphs' outlines, <path> elements read below as any other shape.
+    data, text_notes, skipped = texts_as_paths(data)
+    notes += text_notes
     document = svg.SVG.parse(io.BytesIO(data), reify=True, ppi=96)
     # svgelements reads a size in a unit it does not know as plain px: the drawing would come
     # out at a scale nobody asked for. Refuse it instead (unless the units are given).
@@ -145,7 +147,7 @@ def _read_svg(data, tolerance_mm, units_asked=None):
     def in_mm(points_px):
         return points_px @ to_mm[:, :2].T + to_mm[:, 2]
 
-    paths, closed, styles, skipped = [], [], [], Counter()
+    paths, closed, styles = [], [], []
     for element in document.elements():
         if not isinstance(element, (svg.Shape, svg.Text, svg.Image)):
             continue                        # groups, the document, <use> (its copy follows)
@@ -167,16 +169,9 @@ def _read_element(element, tolerance_px, in_mm, paths, closed, styles, skipped):
     if str(element.values.get("visibility", "")).lower() in ("hidden", "collapse"):
         skipped["hidden element"] += 1
     elif isinstance(element, svg.Text):
-        if element.text and element.text.strip():
-            found = _svg_text(element, tolerance_px)
-            if isinstance(found, str):
-                skipped[found] += 1
-                return
-            style = PathStyle(_svg_colour(element), element.values.get(LAYER_ATTRIBUTE))
-            for points_px in found:
-                paths.append(in_mm(points_px))
-                closed.append(True)
-                styles.append(style)
+        # (Only where the file is no XML that ElementTree reads, which svgelements reads no
+        # better: every other <text> is outlines by now.)
+        skipped["text element left out (not laid out)"] += 1
     elif isinstance(element, svg.Image):
         skipped["image element"] += 1
     else:
@@ -186,34 +181,6 @@ def _read_element(element, tolerance_px, in_mm, paths, closed, styles, skipped):
             paths.append(in_mm(points_px))
             closed.append(is_closed)
             styles.append(style)
-
-
-def _svg_text(element, tolerance_px):
-    """A ``<text>`` (or ``<tspan>``: svgelements gives each its own) as glyph outlines in px,
-    placed by its x, y, anchor and transform; or, for a font that is not installed, what is
-    said of it instead."""
-    weight = element.font_weight if element.font_weight not in (None, "") else "normal"
-    before = element.values.get(FLOW_ATTRIBUTE)
-    x0 = element.x
-    if before is not None:                          # follows on from the text before it
-        try:
-            x0 = float(element.values.get(FLOW_X_ATTRIBUTE))      # its dx in it
-        except (TypeError, ValueError):
-            before = None
-    try:
-        outlines, _ = svg_text_outlines(
-            element.text, element.font_family, float(element.font_size or 16),
-            weight=weight, style=element.values.get("font-style") or "normal",
-            anchor=element.anchor or "start", tolerance=tolerance_px, before=before or "")
-    except PlanError as error:
-        return f"text element left out: its {error} (convert text to paths)"
-    m = element.transform
-    placed = []
-    for glyph in outlines:
-        x = x0 + glyph[:, 0]
-        y = element.y - glyph[:, 1]                 # the glyphs' Y up, the SVG's down
-        placed.append(np.column_stack([m.a * x + m.c * y + m.e, m.b * x + m.d * y + m.f]))
-    return placed
 
 
 def _svg_colour(element):

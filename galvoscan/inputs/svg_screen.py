@@ -19,13 +19,7 @@ inside it (an inner layer's own in place of its parent's), so each shape knows i
 import xml.etree.ElementTree as ElementTree
 
 
-__all__ = ["screen_svg", "LAYER_ATTRIBUTE", "FLOW_ATTRIBUTE", "FLOW_X_ATTRIBUTE"]
-
-#: A ``<tspan>`` that follows on from the text before it (it has no x of its own) is given
-#: these: the x its line started at, and the text before it since (svgelements places it at
-#: its parent's x, on top of that text). A tspan's tail becomes a tspan of its own.
-FLOW_X_ATTRIBUTE = "data-galvoscan-flow-x"
-FLOW_ATTRIBUTE = "data-galvoscan-flow"
+__all__ = ["screen_svg", "LAYER_ATTRIBUTE"]
 
 #: The attribute each Inkscape layer group is given, its label: what a shape's layer is read
 #: from (as an attribute the SVG's own styling cannot have set).
@@ -77,46 +71,6 @@ def _circular_uses(root):
     return circular
 
 
-def _first_number(text):
-    """The first of an x or dx list (``"1 2 3"``), 0 for none or a bad one."""
-    try:
-        return float(str(text).replace(",", " ").split()[0]) if text else 0.0
-    except ValueError:
-        return 0.0
-
-
-def _flow_tspans(root):
-    """Mark each ``<tspan>`` without an x with where its line starts and the text before it;
-    a tspan's tail text becomes a tspan after it. Whether anything was marked."""
-    changed = False
-    for text in [e for e in root.iter() if _kind(e) == "text"]:
-        start, before = _first_number(text.get("x")), text.text or ""
-        for child in list(text):
-            if _kind(child) != "tspan":
-                continue
-            # Its dx moves it and what follows it: kept in the line's start.
-            if child.get("x") is None:
-                start += _first_number(child.get("dx"))
-                child.set(FLOW_X_ATTRIBUTE, repr(start))
-                child.set(FLOW_ATTRIBUTE, before)
-                changed = True
-            else:
-                start = _first_number(child.get("x")) + _first_number(child.get("dx"))
-                before = ""
-            before += child.text or ""
-            if child.tail and child.tail.strip():
-                # (A space it starts with goes to the text before it: svgelements strips it.)
-                if child.tail[0].isspace():
-                    before += " "
-                tail = ElementTree.Element(child.tag, {FLOW_X_ATTRIBUTE: repr(start),
-                                                       FLOW_ATTRIBUTE: before})
-                tail.text, child.tail = child.tail.strip(), None
-                text.insert(list(text).index(child) + 1, tail)
-                before += tail.text
-                changed = True
-    return changed
-
-
 def screen_svg(data):
     """``(data, notes)``: the SVG's bytes with the elements above left out (a note for
     each) and its layers named. A file that is not well-formed XML is handed on as it is, for svgelements to say
@@ -145,8 +99,7 @@ def screen_svg(data):
     for number, group in enumerate(layers, 1):
         group.set(LAYER_ATTRIBUTE, group.get(_INKSCAPE + "label") or group.get("id") or
                   f"layer {number}")
-    flowed = _flow_tspans(root)
-    if not left_out and not layers and not flowed:
+    if not left_out and not layers:
         return data, []
     for element in left_out:
         if element in parents:

@@ -1,7 +1,7 @@
 """Text (galvoscan/inputs/text.py, `mark --text`): capital height, alignment, spacing and lines
 measured on the shapes; the marks off the simulated board's wires against matplotlib's own
 rendering of the same font (Agg fills the glyph curves itself: none of our flattening,
-hatching, placement or board is in it); and an SVG's <text> (text.svg_text_outlines, read by
+hatching, placement or board is in it); and an SVG's <text> (laid out by usvg, svg_text.py, read by
 drawing.py) against matplotlib's own extents of its glyphs."""
 
 import json
