@@ -26,6 +26,10 @@ from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
                                            LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
 from galvoscan.platforms.ulx3s import wiring_table
 
+#: Bits a command frame takes on the serial line: ten bytes, COBS's code byte and the zero that
+#: ends it, 10 bits each (8N1).
+FRAME_LINE_BITS = (10 + 1 + 1) * 10
+
 
 ROOT = Path(__file__).parent.parent
 DOCS = ROOT / "docs"
@@ -267,7 +271,6 @@ def test_marking_pages_photo_figures_are_the_plans(tmp_path):
     for every jump are what planning the tests' grey photo gives, and its link time is the
     link's."""
     from galvoscan import api
-    from galvoscan.outputs.stream import link_segments_per_s
     from galvoscan.profile.machine import default_profile, parse_profile
     from photos import grey_photo
     text = " ".join(page("user/marking.md").split())
@@ -286,7 +289,7 @@ def test_marking_pages_photo_figures_are_the_plans(tmp_path):
         planned = api.plan(job, profile).vector_job
         assert (f"{planned.estimate_s:.1f}", f"{len(planned.segments):,}") == (seconds, segments)
     link = re.search(r"the link at 1 Mbaud takes (\d+) µs to bring a jump and its mark", text)
-    assert link and int(link[1]) == round(2 / link_segments_per_s(1_000_000) * 1e6)
+    assert link and int(link[1]) == round(2 * FRAME_LINE_BITS / 1_000_000 * 1e6)
 
 
 def test_first_jobs_plan_is_what_mark_prints(tmp_path, capsys, monkeypatch):

@@ -33,7 +33,10 @@ LAYERS = (
     "galvoscan.geometry",
     # (flashing: the board's flash written from bytes, the job image's layout its only
     # dependency, below the packages that make the image; the CLI calls it.)
-    ("galvoscan.profile", "galvoscan.link", "galvoscan.flashing"),
+    ("galvoscan.profile", "galvoscan.flashing"),
+    # (The link below the profile: the profile's template says how long the line takes to
+    # bring a frame.)
+    "galvoscan.link",
     "galvoscan.settings",
 )
 

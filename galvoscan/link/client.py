@@ -36,7 +36,18 @@ from ..gateware.host.regmap import BY_ADDRESS, BY_NAME, READ_FLAG
 __all__ = ["ClientError", "LinkLost", "WriteRefused", "HostClient", "SerialTransport",
            "FTDISPITransport", "HostClock", "PacketTransport", "ClockedTransport", "encode_command",
            "encode_write", "encode_read", "decode_answer", "Answer", "parse_assignment",
-           "REASONS"]
+           "REASONS", "frame_seconds"]
+
+
+#: Bytes a command frame takes on the serial line: its own, COBS's code byte (a frame of
+#: COMMAND_BYTES has no zero run longer than 254) and the zero that ends it; bits a byte (8N1).
+_LINE_BYTES, _BITS_PER_BYTE = COMMAND_BYTES + 2, 10
+
+
+def frame_seconds(baud):
+    """Seconds a command frame (a register write, or a vector segment: its end point and
+    its operation together) takes on the UART at ``baud``."""
+    return _LINE_BYTES * _BITS_PER_BYTE / baud
 
 
 #: Reasons for a refusal, by the number an answer carries.

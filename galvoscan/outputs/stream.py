@@ -26,13 +26,12 @@ import time
 from dataclasses import dataclass, field
 
 from ..gateware.fields import pack
-from ..gateware.host.frames import COMMAND_BYTES
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH, VectorOp)
 from ..gateware.sources.vector import VecOpWord
 from ..geometry.corners import corner_frames
 from ..geometry.speed import segment_seconds
-from ..link.client import ClientError, encode_write, LinkLost
+from ..link.client import ClientError, LinkLost, encode_write, frame_seconds
 
 
 __all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
@@ -44,19 +43,15 @@ __all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE
 QUEUE_DEPTH = VECTOR_QUEUE_DEPTH
 #: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
 DEFAULT_BATCH = 128
-#: Bytes a segment takes on the serial line: its command frame (the end point and the
-#: operation together), COBS's code byte and the frame's delimiter; bits a byte (8N1).
-_SEGMENT_BYTES, _BITS_PER_BYTE = COMMAND_BYTES + 2, 10
-
-
 def link_segments_per_s(baud, *, batch=None):
-    """Segments a second the serial link carries at ``baud``: their frames back to back, and
-    a read of ``fifo_free`` (a frame of the same length) for every ``batch`` segments (default:
-    the streamer's), which the streamer makes when the queue is full. (Measured through the
-    simulated board's UART: 8,271 a second at 1 Mbaud and 24,864 at 3 Mbaud, docs/bench.json;
-    this gives 8,268 and 24,806.)"""
+    """Segments a second the serial link carries at ``baud``: their frames back to back
+    (:func:`~galvoscan.link.client.frame_seconds`), and a read of ``fifo_free`` (a frame of
+    the same length) for every ``batch`` segments (default: the streamer's), which the
+    streamer makes when the queue is full. (Measured through the simulated board's UART:
+    8,271 a second at 1 Mbaud and 24,864 at 3 Mbaud, docs/bench.json; this gives 8,268 and
+    24,806.)"""
     batch = batch or DEFAULT_BATCH
-    return baud / _BITS_PER_BYTE / (_SEGMENT_BYTES * (1 + 1 / batch))
+    return 1 / (frame_seconds(baud) * (1 + 1 / batch))
 
 
 def expected_underruns(job, baud, *, queue_depth=QUEUE_DEPTH, batch=None):

@@ -7,6 +7,7 @@ and the defaults from :func:`galvoscan.profile.machine.default_profile` (the dec
 too), so the template cannot disagree with what is checked.
 """
 
+from ..link.client import frame_seconds
 from .keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num
 from .machine import DEFAULT_PROFILE_NAME, default_profile
 
@@ -26,9 +27,9 @@ def profile_text():
     """The commented profile ``galvoscan machine init`` writes: the defaults, every key
     explained (unit, range, purpose)."""
     d = default_profile()
-    # Here: outputs.stream is above the profile.
-    from ..outputs.stream import link_segments_per_s
-    link_us = round(2 / link_segments_per_s(d.link.baud) * 1e6)
+    # A jump and its mark: two frames on the line (the streamer's reads of the queue, one a
+    # batch of 128, aside).
+    link_us = round(2 * frame_seconds(d.link.baud) * 1e6)
     s = _span
     n = _toml_num
     return f"""\

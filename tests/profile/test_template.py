@@ -6,9 +6,12 @@ import re
 import pytest
 
 from galvoscan.analysis.galvo import GalvoModel
-from galvoscan.outputs.stream import link_segments_per_s
 from galvoscan.profile.machine import default_profile
 from galvoscan.profile.template import profile_text
+
+#: Bits a command frame takes on the serial line: ten bytes, COBS's code byte and the zero that
+#: ends it, 10 bits each (8N1).
+FRAME_LINE_BITS = (10 + 1 + 1) * 10
 
 
 def comment():
@@ -40,7 +43,7 @@ def test_the_link_figure_is_the_links():
     assert found
     baud = int(found[1].replace(",", ""))
     assert baud == default_profile().link.baud
-    assert int(found[2]) == round(2 / link_segments_per_s(baud) * 1e6)
+    assert int(found[2]) == round(2 * FRAME_LINE_BITS / baud * 1e6)
 
 
 def test_the_default_jump_delays_are_no_shorter_than_the_model_needs():
