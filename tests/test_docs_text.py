@@ -304,3 +304,37 @@ def test_first_jobs_plan_is_what_mark_prints(tmp_path, capsys, monkeypatch):
     assert main(args) == 0
     printed = capsys.readouterr().out.replace(str(tmp_path / "logo.png"), "logo.png")
     assert printed == block[2]
+
+
+def test_the_readmes_photo_is_what_its_command_draws(tmp_path, monkeypatch):
+    """The README's photo example: its source is matplotlib's sample photograph, and its
+    preview is what the command beside it draws today (the same size, the same picture: the
+    darkness of 20-pixel blocks alike to r > 0.99, so that a new matplotlib's anti-aliasing
+    does not fail it, where a preview of another job would)."""
+    import matplotlib.cbook
+    import numpy as np
+    from PIL import Image
+    command = re.search(r"\.venv/bin/galvoscan (mark --image docs/marking/hopper\.jpg [^\n`]*)",
+                        README)
+    assert command, "the README's photo command"
+    args = command[1].split()
+    assert args[-2:] == ["--preview", "hopper-preview.png"]
+    sample = Path(matplotlib.cbook.get_sample_data("grace_hopper.jpg", asfileobj=False))
+    assert (ROOT / "docs" / "marking" / "hopper.jpg").read_bytes() == sample.read_bytes()
+    args[args.index("--image") + 1] = str(ROOT / "docs" / "marking" / "hopper.jpg")
+    args[-1] = str(tmp_path / "hopper-preview.png")
+    monkeypatch.chdir(tmp_path)                  # no galvoscan.toml: the default profile
+    assert main(args) == 0
+
+    def grey(path):
+        with Image.open(path) as image:
+            return np.asarray(image.convert("L"), dtype=float)
+
+    def blocks(pixels):
+        h, w = (s - s % 20 for s in pixels.shape)
+        return pixels[:h, :w].reshape(h // 20, 20, w // 20, 20).mean(axis=(1, 3)).ravel()
+
+    drawn = grey(tmp_path / "hopper-preview.png")
+    committed = grey(ROOT / "docs" / "marking" / "hopper-preview.png")
+    assert drawn.shape == committed.shape
+    assert np.corrcoef(blocks(drawn), blocks(committed))[0, 1] > 0.99
