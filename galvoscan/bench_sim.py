@@ -12,7 +12,7 @@ from .sim.link import Timed, spi_transfer
 
 
 __all__ = ["phy_rate", "link_figures", "stream_figures", "real_time_figures", "PHOTO_GALVO",
-           "shaded_picture", "photo_figures", "replay_figures", "backend_figures"]
+           "shaded_picture", "photo_profile", "photo_figures", "replay_figures", "backend_figures"]
 
 
 # --- XY2-100 -------------------------------------------------------------------------------------
@@ -205,19 +205,25 @@ def shaded_picture(path, rows=300, columns=400):
     return path
 
 
+def photo_profile():
+    """The default machine profile with :data:`PHOTO_GALVO`'s quick mirrors."""
+    from dataclasses import replace
+    from .profile.machine import default_profile
+    profile = default_profile()
+    return replace(profile, galvo=replace(profile.galvo, **PHOTO_GALVO))
+
+
 def photo_figures(folder, *, rows=300, width_mm=24, speed_mm_s=1000):
     """A photo through the link: :func:`shaded_picture` ``width_mm`` wide at ``speed_mm_s``,
     planned for a machine with :data:`PHOTO_GALVO`'s quick mirrors, the underruns foretold at
-    1 and 3 Mbaud (:func:`~galvoscan.outputs.stream.expected_underruns`), and streamed whole
+    1 and 3 Mbaud (:func:`~galvoscan.outputs.link_budget.expected_underruns`), and streamed whole
     through the ULX3S bitstream's UART at 3 Mbaud on the compiled board: its marks, segments,
     underruns and the board's and the wall's seconds."""
-    from dataclasses import replace
-    from .api import Job, Photo, default_profile, plan, run
+    from .api import Job, Photo, plan, run
     from .build import board_config, starting_table
-    from .outputs.stream import expected_underruns
+    from .outputs.link_budget import expected_underruns
     from .sim.board import SimulatedBoard
-    profile = default_profile()
-    profile = replace(profile, galvo=replace(profile.galvo, **PHOTO_GALVO))
+    profile = photo_profile()
     picture = shaded_picture(Path(folder) / "photo.png", rows=rows)
     planned = plan(Job(photos=[Photo(str(picture), width_mm=width_mm)], speed_mm_s=speed_mm_s),
                    profile)

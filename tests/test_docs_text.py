@@ -26,9 +26,7 @@ from galvoscan.platforms.icebreaker import (ALARM_PMOD_PINS, INTERLOCK_PMOD_PIN,
                                            LASER_PMOD_PINS, SPI_PMOD_PINS, XY2_PMOD_PINS)
 from galvoscan.platforms.ulx3s import wiring_table
 
-#: Bits a command frame takes on the serial line: ten bytes, COBS's code byte and the zero that
-#: ends it, 10 bits each (8N1).
-FRAME_LINE_BITS = (10 + 1 + 1) * 10
+from link_codec import FRAME_LINE_BITS
 
 
 ROOT = Path(__file__).parent.parent

@@ -19,8 +19,8 @@ from ..geometry.drawing import DrawingError
 from ..geometry.fill import LineOrder
 from ..geometry.field import PlanError
 from ..geometry.speed import path_length_mm
-from ..outputs.stream import (JobStreamer, StreamReport, expected_underruns,
-                              link_segments_per_s)
+from ..outputs.link_budget import expected_underruns, link_segments_per_s
+from ..outputs.stream import JobStreamer, StreamReport
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..platforms.ulx3s import ULX3S_BAUD
 from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
@@ -85,7 +85,7 @@ def _plan(args, profile, serial=None):
 
 def _link_warnings(job, baud):
     """What the link at ``baud`` leaves the board short of, a line a layer that underruns
-    (:func:`~galvoscan.outputs.stream.expected_underruns`)."""
+    (:func:`~galvoscan.outputs.link_budget.expected_underruns`)."""
     return [f"warning: {f'layer {label!r}: ' if label else ''}the link at {baud:,} baud "
             f"({link_segments_per_s(baud):,.0f} segments/s) brings segments slower than the "
             f"board marks them: expect about {count:,} underruns, a mark that finds the queue "

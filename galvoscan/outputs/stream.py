@@ -30,73 +30,17 @@ from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode
                                     VECTOR_QUEUE_DEPTH, VectorOp)
 from ..gateware.sources.vector import VecOpWord
 from ..geometry.corners import corner_frames
-from ..geometry.speed import segment_seconds
-from ..link.client import ClientError, LinkLost, encode_write, frame_seconds
+from ..link.client import ClientError, LinkLost, encode_write
 
 
 __all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
-           "COUNTERS", "DEFAULT_BATCH", "link_segments_per_s", "expected_underruns",
-           "check_segment", "segment_words", "job_segments"]
+           "COUNTERS", "DEFAULT_BATCH", "check_segment", "segment_words", "job_segments"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
 QUEUE_DEPTH = VECTOR_QUEUE_DEPTH
 #: Segments the streamer writes between two reads of ``fifo_free`` (see :class:`JobStreamer`).
 DEFAULT_BATCH = 128
-def link_segments_per_s(baud, *, batch=None):
-    """Segments a second the serial link carries at ``baud``: their frames back to back
-    (:func:`~galvoscan.link.client.frame_seconds`), and a read of ``fifo_free`` (a frame of
-    the same length) for every ``batch`` segments (default: the streamer's), which the
-    streamer makes when the queue is full. (Measured through the simulated board's UART:
-    8,271 a second at 1 Mbaud and 24,864 at 3 Mbaud, docs/bench.json; this gives 8,268 and
-    24,806.)"""
-    batch = batch or DEFAULT_BATCH
-    return 1 / (frame_seconds(baud) * (1 + 1 / batch))
-
-
-def expected_underruns(job, baud, *, queue_depth=QUEUE_DEPTH, batch=None):
-    """Marks of ``job`` (a planned :class:`~galvoscan.plan.vector_job.VectorJob`; a job of
-    layers, each layer's, streamed in turn) that will find the board's queue empty when it is
-    streamed at ``baud``: ``[(layer label or None, underruns)]`` for those that have any.
-
-    The streamer's own course, segment by segment: the link brings a segment every
-    ``1 / link_segments_per_s(baud)`` s, but no sooner than a place is free in the
-    ``queue_depth``-place queue; the board starts once the first batches are in (as
-    :meth:`JobStreamer.stream` does) and takes each segment no sooner than it has come and
-    the last one is done, a segment taking its
-    :func:`~galvoscan.geometry.speed.segment_seconds`. A mark whose end finds the next segment
-    not yet come is an underrun, as the board counts them. Those times leave out the mark and
-    polygon delays, so a board takes segments no faster than this supposes: an underrun may
-    be foretold that does not happen, hardly ever the other way round."""
-    period = 1 / link_segments_per_s(baud, batch=batch)
-    batch = batch or DEFAULT_BATCH
-    layers = [(layer.label, layer.job) for layer in job.layers] if job.layers else [(None, job)]
-    found = []
-    for label, part in layers:
-        registers = part.registers
-        segments = job_segments(part.segments)
-        seconds = segment_seconds(segments, pitch_units=registers["pitch"],
-                                  pulses_per_point=registers["pulses_per_point"],
-                                  prr_hz=registers["laser_prr"] * 100.0,
-                                  jump_delay_us=registers["jump_delay"])
-        # The board runs once the batch that leaves less than a batch free is in.
-        first = min(len(segments), batch * -(-(queue_depth - batch + 1) // batch), queue_depth)
-        come, taken = [], []
-        done = underruns = 0
-        for k, (op_seconds, (op, _, _)) in enumerate(zip(seconds, segments)):
-            room = taken[k - queue_depth] if k >= queue_depth else 0.0
-            come.append(max(come[-1] if come else 0.0, room) + period)
-            if k == 0:
-                done = first * period      # (the first ones come one after the other)
-            elif come[k] > done and segments[k - 1][0] == "mark":
-                underruns += 1
-            taken.append(max(done, come[k]))
-            done = taken[k] + op_seconds
-        if underruns:
-            found.append((label, underruns))
-    return found
-
-
 #: The board's counters a job reports, read before and after.
 COUNTERS = ("vec_underruns", "vec_stalls", "vec_rejected", "errors")
 _COUNTER_TOP = 0xFFFF

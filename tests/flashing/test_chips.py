@@ -4,7 +4,6 @@ FILE``'s path) onto the W25Q128JV model and the IS25LP128 model (tests/support/i
 written from ISSI's documents, not from the driver). The IS25LP through the ULX3S's ECP5 is
 tests/flashing/test_ulx3s.py's."""
 
-import random
 
 import pytest
 import spiflash.serialflash as serialflash
@@ -15,24 +14,13 @@ from galvoscan.flashing import FlashingError, ModelPort, flash_regions, program
 from galvoscan.flashing.chips import DRIVERS, IS25LPFlashDevice
 from galvoscan.flashing.ecp5 import check_bitstream
 from galvoscan.gateware.player.image_format import JOB_OFFSET
-from galvoscan.outputs.image import job_image
 from galvoscan.sim.spi_flash import SPIFlashModel
 
-from ecp5_jtag import Clock, ecp5_bitstream
+from ecp5_jtag import Clock
+from flash_writes import a_job, bitstream
 from issi_flash import SR_BP, SR_QE, IS25LPModel
 
 
-LFE5U_25F = 0x41111043
-
-
-def bitstream(size, seed=1, idcode=LFE5U_25F):
-    rng = random.Random(seed)
-    return ecp5_bitstream(idcode, bytes(rng.getrandbits(8) for _ in range(size)))
-
-
-def a_job():
-    segments = [("jump", 100, 200), ("mark", 3000, 200), ("mark", 3000, 2500)]
-    return job_image(segments, {"pitch": 40, "laser_power": 128})
 
 
 def part(jedec, model=SPIFlashModel):

@@ -7,7 +7,6 @@ broken on purpose, which the same test fails. The flash is the iCEBreaker's W25Q
 ISSI IS25LP128 other ULX3S revisions carry (tests/support/issi_flash.py), which
 galvoscan/flashing/chips.py drives."""
 
-import random
 from functools import partial
 from types import SimpleNamespace
 
@@ -25,27 +24,15 @@ from galvoscan.flashing import FlashingError, flash_regions, program
 from galvoscan.flashing.ecp5 import check_bitstream
 from galvoscan.flashing.ulx3s import DEFAULT_URL, open_ulx3s
 from galvoscan.gateware.player.image_format import JOB_OFFSET
-from galvoscan.outputs.image import job_image
 from galvoscan.sim.spi_flash import SPIFlashModel
 
 from ecp5_jtag import ECP5, Clock, FakeFtdi, ecp5_bitstream
+from flash_writes import LFE5U_25F, LFE5U_85F, a_job, bitstream
 from issi_flash import SR_BP, SR_QE, SR_SRWD, IS25LPModel
 
 
-LFE5U_25F = 0x41111043
-LFE5U_85F = 0x41113043
 #: What the board's flash holds before: a bitstream the ECP5 runs (it reads the flash).
 OLD = ecp5_bitstream(LFE5U_25F, b"old design" * 50)
-
-
-def bitstream(size, seed=1, idcode=LFE5U_25F):
-    rng = random.Random(seed)
-    return ecp5_bitstream(idcode, bytes(rng.getrandbits(8) for _ in range(size)))
-
-
-def a_job():
-    segments = [("jump", 100, 200), ("mark", 3000, 200), ("mark", 3000, 2500)]
-    return job_image(segments, {"pitch": 40, "laser_power": 128})
 
 
 def ulx3s(monkeypatch, *, idcode=LFE5U_25F, contents=OLD, tdo=None, state="Test-Logic-Reset",

@@ -3,7 +3,7 @@ the profile's default variable jump delay, a photo's estimate against one delay 
 jump, and what the link brings against what the board takes."""
 
 from galvoscan import api
-from galvoscan.outputs.stream import expected_underruns, link_segments_per_s
+from galvoscan.outputs.link_budget import expected_underruns, link_segments_per_s
 from galvoscan.profile.machine import default_profile, parse_profile
 from photos import grey_photo
 

@@ -9,9 +9,7 @@ from galvoscan.analysis.galvo import GalvoModel
 from galvoscan.profile.machine import default_profile
 from galvoscan.profile.template import profile_text
 
-#: Bits a command frame takes on the serial line: ten bytes, COBS's code byte and the zero that
-#: ends it, 10 bits each (8N1).
-FRAME_LINE_BITS = (10 + 1 + 1) * 10
+from link_codec import FRAME_LINE_BITS
 
 
 def comment():

@@ -21,6 +21,10 @@ _TABLE = _table()
 #: The refusal reasons an answer's code carries (bit 7 set).
 REASON = {"check": 1, "sequence": 2, "register": 3}
 
+#: Bits a command frame takes on the serial line: ten bytes, COBS's code byte and the zero that
+#: ends it, 10 bits each (8N1).
+FRAME_LINE_BITS = (10 + 1 + 1) * 10
+
 
 def crc16(data, crc=0xFFFF):
     for byte in data:
