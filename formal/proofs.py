@@ -12,11 +12,12 @@ from .laser import LaserSafetySpec
 from ..gateware.laser.controller import LaserController, clocks_at_least
 from .xy2_100 import XY2TransmitterSpec
 from .player import PlayerSpec
+from .vector import FreeDDASequencer, PixelLineSpec
 from ..gateware.player.player import JobPlayer
 
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
-           "correction_proof", "correction_link_proof", "player_proof",
+           "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof",
            "LASER_PROOF_PARAMETERS"]
 
 
@@ -287,6 +288,22 @@ def correction_link_proof(*, make_stage=None, helpers=True, refuse_while_waiting
         bmc_harness=lambda: harness(points_at_origin=True))
 
 
+def pixel_line_proof(harness, *, make_sequencer=None, helpers=True, name=None):
+    """Pixel words and bits only ever keep the laser off (:mod:`.vector`'s ``harness``:
+    ``"words"`` or ``"dark_lines"``), on the vector sequencer as built with pixel lines and
+    the delays, its interpolator free. Helper invariants on its slot, held point and pixel
+    bits make the induction a few clocks deep; a line's first point is held within ten."""
+    make_sequencer = make_sequencer or FreeDDASequencer
+    said = {"words": "pixel words and jumps alone never light the laser",
+            "dark_lines": "pixel lines whose bits are 0 never light the laser: not a point, "
+                          "not the first, not a corner hold, not past the words"}[harness]
+    return Proof(
+        name=name or f"pixel_lines_{harness}",
+        description=f"vector sequencer with pixel lines (any line the DDA steps): {said}",
+        harness=lambda: PixelLineSpec(make_sequencer(), harness=harness, helpers=helpers),
+        depth=4, cover_depth=14, bmc_depth=16)
+
+
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
@@ -303,4 +320,6 @@ PROOFS = [
     correction_proof(),
     correction_link_proof(),
     player_proof(),
+    pixel_line_proof("words"),
+    pixel_line_proof("dark_lines"),
 ]

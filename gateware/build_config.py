@@ -89,6 +89,10 @@ class BuildConfig:
         Build vector mode's RTC delays (laser-on, laser-off, mark, polygon). Without them
         their registers are left out and ``vec_op`` takes only 0 and 1. They need a clock of
         a whole number of MHz; False without vector mode.
+    pixel_lines : bool
+        Build vector mode's pixel lines (:class:`~.sources.vector.VectorSequencer`): a line
+        swept at one speed, each point lit or not by a bit of the pixel words queued after
+        it, for photos and dense fills. Needs the vector delays (their ``vec_op`` word).
     player : bool
         Build the job player (:class:`~.player.player.JobPlayer`), its flash reader and start
         input: a press of ``start_n`` plays the job image in the flash, with no host. Needs
@@ -113,6 +117,7 @@ class BuildConfig:
     wobble: bool = False
     spiral_interpolation: bool = True
     vector_delays: bool = False
+    pixel_lines: bool = False
     player: bool = False
     start_debounce_ms: int = DEFAULT_DEBOUNCE_MS
     mo_lead: float = 5e-3
@@ -161,6 +166,10 @@ class BuildConfig:
             Wobble.check_frame_rate(self.bit_rate / FRAME_BITS)
         put("spiral_interpolation", bool(self.spiral_interpolation) and "spiral" in modes)
         put("vector_delays", bool(self.vector_delays) and "vector" in modes)
+        put("pixel_lines", bool(self.pixel_lines) and "vector" in modes)
+        if self.pixel_lines and not self.vector_delays:
+            raise ValueError("pixel lines come with vector mode's delays (their vec_op word): "
+                             "build them with vector_delays=True")
         put("player", bool(self.player))
         if self.player and not ("vector" in modes and self.laser):
             raise ValueError("the job player plays vector jobs: it needs vector mode and the "
@@ -198,7 +207,7 @@ class BuildConfig:
                 "correction": self.correction, "wobble": self.wobble,
                 "delays": self.vector_delays, "interpolation": self.spiral_interpolation,
                 "uart": "uart" in self.links, "spi": "spi" in self.links,
-                "player": self.player}
+                "player": self.player, "pixel_lines": self.pixel_lines}
 
     def register_map(self, *, table_points=DEFAULT_TABLE_POINTS,
                      correction_nodes=DEFAULT_CORRECTION_NODES, resets=None):
@@ -212,7 +221,7 @@ class BuildConfig:
             table_points=table_points, correction_nodes=correction_nodes,
             modes=self.modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            player=self.player, resets=resets,
+            pixel_lines=self.pixel_lines, player=self.player, resets=resets,
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
                    "vec_depth": self.vector_queue_depth if "vector" in self.modes else 0,
@@ -222,7 +231,8 @@ class BuildConfig:
         """One line a person reads: the clock, the modes and what else is built."""
         built = [name for name, on in (("correction", self.correction),
                                        ("interpolation", self.spiral_interpolation),
-                                       ("delays", self.vector_delays), ("wobble", self.wobble),
+                                       ("delays", self.vector_delays),
+                                       ("pixel lines", self.pixel_lines), ("wobble", self.wobble),
                                        ("player", self.player), ("laser", self.laser)) if on]
         return (f"{self.clk_freq / 1e6:g} MHz, XY2 {self.bit_rate / 1e6:g} Mbit/s, "
                 f"{self.baud:,} baud; modes {','.join(self.modes)}; links "

@@ -96,6 +96,7 @@ Capabilities = data.StructLayout({
     "uart": 1,              # the UART link
     "spi": 1,               # the SPI link
     "player": 1,            # the job player, its flash reader and start input
+    "pixel_lines": 1,       # vector mode's pixel lines (vec_op bit 8)
 })
 
 

@@ -273,7 +273,8 @@ class GalvoScanTop(wiring.Component):
         if "vector" in self.config.modes:
             sequencer = DirectedVectorSequencer if self.config.wobble else VectorSequencer
             vector = sources[Mode.VECTOR] = sequencer(frame_us=int(self.config.frame_us),
-                                                      delays=self.config.vector_delays)
+                                                      delays=self.config.vector_delays,
+                                                      pixel_lines=self.config.pixel_lines)
             # vec_flush (and soft_reset) start the vector path afresh: queue, sequencer (and
             # the wobble and the laser delays, below).
             self._vector_flush = flush = Signal()
@@ -406,7 +407,8 @@ class GalvoScanTop(wiring.Component):
     def _elaborate_vector_queue(self, m, regs, vector, status):
         """The queue between the ``vec_op`` register and the vector sequencer."""
         queue = VectorQueue(depth=self.config.vector_queue_depth,
-                            delays=self.config.vector_delays)
+                            delays=self.config.vector_delays,
+                            pixel_lines=self.config.pixel_lines)
         m.submodules.queue = ResetInserter(self._vector_flush)(queue)
         decoder = self._decoder
         m.d.comb += [

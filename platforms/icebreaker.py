@@ -188,7 +188,7 @@ class ICEBreakerScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=2_000_000,
                baud=DEFAULT_BAUD, wobble=False, interpolation=False, delays=False,
-               player=False):
+               pixel_lines=False, player=False):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of an iCEBreaker
         bitstream with these options; ``ValueError`` for one the UP5K cannot hold (checked
         before anything is built).
@@ -199,7 +199,8 @@ class ICEBreakerScanner(Elaboratable):
         exactly); ``interpolation`` the spiral's interpolator and ``delays`` vector mode's RTC
         delays (off by default: beside all three modes neither fits the UP5K); ``player`` the
         job player (the flash read after configuration, the machine's lines on PMOD1B in place
-        of the SPI link).
+        of the SPI link); ``pixel_lines`` vector mode's pixel lines (with the delays, and
+        beside one scan mode at most: vector alone fits).
         """
         clk_freq, _ = system_clock(None if clock == CRYSTAL_HZ else clock, bit_rate, baud)
         modes = MODES if modes is None else tuple(modes)
@@ -216,12 +217,21 @@ class ICEBreakerScanner(Elaboratable):
                              "scan modes: leave one out with --modes (spiral,vector fits)")
         if interpolation and "spiral" not in modes:
             raise ValueError("the interpolator is the spiral's: build it with the spiral mode")
+        if pixel_lines and not (delays and "vector" in modes):
+            raise ValueError("pixel lines are vector mode's, with its delays: build them with "
+                             "--modes vector and --delays")
+        if pixel_lines and len(set(modes)) > 1:
+            raise ValueError("pixel lines do not fit the UP5K beside another scan mode: build "
+                             "them with --modes vector")
+        if pixel_lines and player:
+            raise ValueError("pixel lines do not fit the UP5K beside the job player")
         if player and "vector" not in modes:
             raise ValueError("the job player plays vector jobs: build it with the vector mode")
         return BuildConfig(
             modes=modes, clk_freq=clk_freq, bit_rate=bit_rate, baud=baud,
             correction=correction is not None, laser_alarms=len(ALARM_PMOD_PINS[1].split()),
             wobble=wobble, spiral_interpolation=interpolation, vector_delays=delays,
+            pixel_lines=pixel_lines,
             # The SPI link's pins are the player's machine lines.
             player=player, links=("uart",) if player else LINKS)
 

@@ -195,10 +195,11 @@ class ULX3SScanner(Elaboratable):
 
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
-               baud=None, wobble=True, interpolation=True, delays=True, player=True):
+               baud=None, wobble=True, interpolation=True, delays=True, pixel_lines=True,
+               player=True):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
-        RTC delays, wobble, the job player, both links). ``clock`` in Hz (None: 24 MHz) must
+        RTC delays, pixel lines, wobble, the job player, both links). ``clock`` in Hz (None: 24 MHz) must
         be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
         where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
@@ -213,6 +214,7 @@ class ULX3SScanner(Elaboratable):
             correction=correction is not None, laser_alarms=2,
             wobble=wobble and "vector" in modes,
             spiral_interpolation=interpolation, vector_delays=delays,
+            pixel_lines=pixel_lines and delays and "vector" in modes,
             player=player and "vector" in modes, links=LINKS)
 
     def elaborate(self, platform):

@@ -69,10 +69,11 @@ class RegisterMap:
     laser : bool
     wobble : bool
     vector_delays : bool
+    pixel_lines : bool
     """
 
     def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
-                 wobble=False, vector_delays=False):
+                 wobble=False, vector_delays=False, pixel_lines=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -85,6 +86,7 @@ class RegisterMap:
         self.laser = laser
         self.wobble = wobble
         self.vector_delays = vector_delays
+        self.pixel_lines = pixel_lines
 
     def __iter__(self):
         return iter(self.registers)
@@ -107,7 +109,7 @@ class RegisterMap:
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
-                 vector_delays=False, player=False, resets=None, fixed=None):
+                 vector_delays=False, pixel_lines=False, player=False, resets=None, fixed=None):
     """The register map of a build (by default, the default build's: the same defaults as
     :class:`~galvoscan.gateware.top.GalvoScanTop`).
 
@@ -131,6 +133,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     vector_delays : bool
         The build has vector mode's laser and scanner delays (else their registers are left
         out and ``vec_op`` takes only 0 and 1).
+    pixel_lines : bool
+        The build has pixel lines (and the delays): ``vec_op`` takes bit 8, ``pixels``.
     player : bool
         The build has the job player (else its ``player`` register is left out).
     resets : dict of str to int, optional
@@ -170,6 +174,14 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         every["vec_op"] = replace(every["vec_op"], high=1, width=1, unit="enum", description=(
             "writing queues a segment to (vec_x, vec_y): 0 = jump (laser off, then jump_delay), "
             "1 = mark (laser on, points every pitch); refused if the queue is full"))
+    if pixel_lines and vector_delays:
+        every["vec_op"] = replace(every["vec_op"], high=511, width=9, description=(
+            every["vec_op"].description.replace("; refused if", "; bit 8 (pixels): a mark with "
+                                                "it is a pixel line, each point lit only if "
+                                                "its bit in the pixel words queued after it is "
+                                                "1; a jump with it is a pixel word, 32 bits in "
+                                                "vec_x (pixels 0-15, bit 0 first) and vec_y "
+                                                "(16-31), which moves nothing; refused if")))
     by_name = {name: r for name, r in every.items() if name not in leave_out}
     for name, value in (resets or {}).items():
         if name not in every or every[name].access != "rw":
@@ -194,7 +206,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     return RegisterMap(by_name.values(), choices={"mode": [mode.value for mode in modes]},
                        table_points=table_points, correction_nodes=correction_nodes,
                        modes=modes, laser=bool(laser), wobble=bool(wobble),
-                       vector_delays=bool(vector_delays) and Mode.VECTOR in modes)
+                       vector_delays=bool(vector_delays) and Mode.VECTOR in modes,
+                       pixel_lines=bool(pixel_lines and vector_delays) and Mode.VECTOR in modes)
 
 
 def _host_map():
@@ -204,7 +217,8 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, vector_delays=True, player=True, resets={name: default[name].reset
+                        wobble=True, vector_delays=True, pixel_lines=True, player=True,
+                        resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
 

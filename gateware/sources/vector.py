@@ -38,7 +38,8 @@ from .dda import DIRECTION_BITS, Direction, LineDDA
 
 
 __all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand",
-           "DelayedVectorCommand", "VecOpWord", "OP_JUMP", "OP_MARK"]
+           "DelayedVectorCommand", "VecOpWord", "PixelVecOpWord", "PixelVectorCommand",
+           "PIXELS_PER_WORD", "command_layout", "OP_JUMP", "OP_MARK"]
 
 
 #: ``op`` of a jump (move with the laser off) and of a mark (step a line with the laser on).
@@ -51,7 +52,26 @@ VectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16})
 DelayedVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7})
 #: The ``vec_op`` register's word: the op, and (builds with the RTC delays) the corner hold.
 VecOpWord = data.StructLayout({"op": VectorOp, "corner_frames": 7})
+#: The same in a build with pixel lines (bit 8, ``pixels``): a mark with it is a **pixel
+#: line**, whose points are marked or not by the pixel bits that follow it in the queue; a
+#: jump with it is a **pixel word**, 32 of those bits (``x`` the first 16, bit 0 first, ``y``
+#: the next), which moves nothing.
+PixelVecOpWord = data.StructLayout({"op": VectorOp, "corner_frames": 7, "pixels": 1})
+#: A queued command of a build with pixel lines (which has the RTC delays).
+PixelVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7,
+                                        "pixels": 1})
+#: Pixels one pixel word carries.
+PIXELS_PER_WORD = 32
 
+
+
+def command_layout(*, delays, pixel_lines=False):
+    """The layout of a queued command in a build with (or without) the delays and pixel
+    lines (which need the delays)."""
+    if pixel_lines and not delays:
+        raise ValueError("pixel lines come with vector mode's delays")
+    return PixelVectorCommand if pixel_lines else DelayedVectorCommand if delays else \
+        VectorCommand
 
 
 class VectorSequencer(wiring.Component):
@@ -99,13 +119,24 @@ class VectorSequencer(wiring.Component):
         µs a frame lasts (10 at XY2-100).
     delays : bool
         Build the mark and polygon delays.
+    pixel_lines : bool
+        Build pixel lines (needs ``delays``): a mark queued with ``pixels`` set is stepped as
+        any mark, at the pitch, each point held for ``pulses_per_point`` pulses, but each
+        point's laser is the next bit of the pixel words queued after it (bit 0 of the first
+        word for its first point), so the mirrors sweep the line at one speed and every dark
+        pixel gets the same pulses. A bit can only keep the laser off: a point is lit only if
+        its line would light it without the bits. Where the words run out (the queue's next
+        command is no pixel word) the rest of the line is stepped dark; where the queue is
+        empty the line waits for them (a stall). A pixel word anywhere else is dropped.
     """
 
-    def __init__(self, *, frame_us=10, delays=False):
+    def __init__(self, *, frame_us=10, delays=False, pixel_lines=False):
         self.frame_us = frame_us
         self.delays = delays
+        self.pixel_lines = pixel_lines
         members = {
-            "commands": In(stream.Signature(DelayedVectorCommand if delays else VectorCommand)),
+            "commands": In(stream.Signature(command_layout(delays=delays,
+                                                           pixel_lines=pixel_lines))),
             "frame_strobe": In(1), "pulse_ahead": In(1), "run": In(1),
             "pitch": In(16), "pulses_per_point": In(8), "jump_delay": In(16),
             "points": Out(stream.Signature(OffsetPoint)),
@@ -117,24 +148,38 @@ class VectorSequencer(wiring.Component):
         if self.with_direction:
             members["direction"] = Out(Direction, init={"ux": 1 << DIRECTION_BITS})
         super().__init__(members)
+        # State the pixel-line proof's helper invariants name (galvoscan.formal.vector).
+        self._slot_valid = Signal()         # a point waits in the slot
+        self._slot_mark = Signal()          # it is a marked point (of a mark or a line)
+        self._slot_gate = Signal(init=1)    # its pixel bit (1 off a pixel line)
+        self._holding_mark = Signal()       # the point held is a marked one, its pulses to come
+        self._held_gate = Signal()          # the point held is lit (its bit; 1 off a line)
+        self._pixel_line = Signal()         # the segment being stepped is a pixel line
+        self._pixel_bits = Signal(PIXELS_PER_WORD)
+        self._stepping = Signal()           # a mark or line is being stepped (not fetching)
+
+    def _line_dda(self):
+        """The line interpolator (the pixel-line proof puts a free one in its place)."""
+        return LineDDA(direction=self.with_direction)
 
     #: Hand each point's line direction on (:class:`DirectedVectorSequencer`).
     with_direction = False
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.dda = dda = LineDDA(direction=self.with_direction)
+        m.submodules.dda = dda = self._line_dda()
         m.d.comb += dda.pitch.eq(self.pitch)
 
         # --- point generator ----------------------------------------------------------------
         cur_x = Signal(16, init=FIELD_CENTRE)      # where the last command ended
         cur_y = Signal(16, init=FIELD_CENTRE)
         pen_down = Signal()                        # the last point handed on was marked
-        slot_valid = Signal()
+        slot_valid = self._slot_valid
         slot_x = Signal(16)
         slot_y = Signal(16)
-        slot_mark = Signal()
+        slot_mark = self._slot_mark
         slot_end = Signal()                        # the slot's point ends a mark segment
+        slot_gate = self._slot_gate                # the slot's pixel bit (1 off a pixel line)
         corner_frames = Signal(7)                         # the corner hold (frames) of the last mark
         taken = Signal()                           # the pacer takes the slot this clock
 
@@ -155,10 +200,36 @@ class VectorSequencer(wiring.Component):
         slot_free = ~slot_valid
         command = self.commands.payload
         fetching = Signal()
+
+        # Pixel lines: the bits of the line being stepped, and whether a point may be made.
+        pixel_line = self._pixel_line
+        start_pending = Signal()    # its first point (the pen was up) is still to be made
+        pixel_bits = self._pixel_bits
+        bits_left = Signal(range(PIXELS_PER_WORD + 1))
+        is_word = Signal()          # the queue's next command is a pixel word
+        bit_ready = Signal(init=1)  # a point may be made: off a pixel line, or its bit known
+        gate_bit = Signal(init=1)   # the bit of the next point made
+        take_bit = Signal()         # a point is made this clock: its bit is used
+        if self.pixel_lines:
+            m.d.comb += [
+                is_word.eq(self.commands.valid & command.pixels & (command.op == OP_JUMP)),
+                # A bit in hand; or none will come (the next command is no pixel word: the
+                # rest of the line is dark). With the queue empty the point waits.
+                bit_ready.eq(~pixel_line | (bits_left != 0) |
+                             (self.commands.valid & ~is_word)),
+                gate_bit.eq(~pixel_line | ((bits_left != 0) & pixel_bits[0])),
+            ]
+            with m.If(take_bit & pixel_line & (bits_left != 0)):
+                m.d.sync += [pixel_bits.eq(pixel_bits >> 1), bits_left.eq(bits_left - 1)]
+
         with m.FSM():
             with m.State("FETCH"):
                 m.d.comb += fetching.eq(~segment_valid & ~dda.busy)
-                with m.If(self.commands.valid & slot_free & ~segment_valid & ~dda.busy):
+                take = self.commands.valid & slot_free & ~segment_valid & ~dda.busy
+                with m.If(take & is_word):
+                    # A word past the end of its line (or of none): dropped.
+                    m.d.comb += self.commands.ready.eq(1)
+                with m.Elif(take):
                     with m.If(command.op == OP_JUMP):
                         m.d.comb += self.commands.ready.eq(1)
                         m.d.sync += [
@@ -166,6 +237,8 @@ class VectorSequencer(wiring.Component):
                             slot_mark.eq(0),
                             pen_down.eq(0), cur_x.eq(command.x), cur_y.eq(command.y),
                         ]
+                        if self.pixel_lines:
+                            m.d.sync += [slot_gate.eq(1), pixel_line.eq(0)]
                     with m.Else():
                         m.d.comb += self.commands.ready.eq(1)
                         if self.delays:
@@ -178,23 +251,56 @@ class VectorSequencer(wiring.Component):
                             cur_x.eq(command.x), cur_y.eq(command.y),
                             pen_down.eq(1),
                         ]
-                        with m.If(~pen_down):
-                            m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x), slot_y.eq(cur_y),
-                                         slot_mark.eq(1), slot_end.eq(0)]
+                        if self.pixel_lines:
+                            # A pixel line's first point waits for its bit, in STEP.
+                            m.d.sync += [pixel_line.eq(command.pixels), bits_left.eq(0)]
+                            with m.If(~pen_down & command.pixels):
+                                m.d.sync += start_pending.eq(1)
+                            with m.Elif(~pen_down):
+                                m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x),
+                                             slot_y.eq(cur_y), slot_mark.eq(1), slot_end.eq(0),
+                                             slot_gate.eq(1)]
+                        else:
+                            with m.If(~pen_down):
+                                m.d.sync += [slot_valid.eq(1), slot_x.eq(cur_x),
+                                             slot_y.eq(cur_y), slot_mark.eq(1), slot_end.eq(0)]
                         m.next = "STEP"
             with m.State("STEP"):
-                m.d.comb += dda.points.ready.eq(slot_free)
-                with m.If(dda.points.valid & slot_free):
-                    m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
-                                 slot_y.eq(dda.points.payload.y), slot_mark.eq(1),
-                                 slot_end.eq(dda.last)]
-                with m.Elif(~segment_valid & ~dda.busy):
-                    m.next = "FETCH"
+                m.d.comb += self._stepping.eq(1)
+                if self.pixel_lines:
+                    # The line's next pixel word, when its last bit has been used.
+                    with m.If(pixel_line & (bits_left == 0) & is_word):
+                        m.d.comb += self.commands.ready.eq(1)
+                        m.d.sync += [pixel_bits.eq(Cat(command.x, command.y)),
+                                     bits_left.eq(PIXELS_PER_WORD)]
+                    m.d.comb += dda.points.ready.eq(slot_free & ~start_pending & bit_ready)
+                    with m.If(start_pending & slot_free & bit_ready):
+                        m.d.comb += take_bit.eq(1)
+                        m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.segment.payload.x0),
+                                     slot_y.eq(dda.segment.payload.y0), slot_mark.eq(1),
+                                     slot_end.eq(0), slot_gate.eq(gate_bit),
+                                     start_pending.eq(0)]
+                    with m.Elif(dda.points.valid & slot_free & ~start_pending & bit_ready):
+                        m.d.comb += take_bit.eq(1)
+                        m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
+                                     slot_y.eq(dda.points.payload.y), slot_mark.eq(1),
+                                     slot_end.eq(dda.last), slot_gate.eq(gate_bit)]
+                    with m.Elif(~segment_valid & ~dda.busy & ~start_pending):
+                        m.next = "FETCH"
+                else:
+                    m.d.comb += dda.points.ready.eq(slot_free)
+                    with m.If(dda.points.valid & slot_free):
+                        m.d.sync += [slot_valid.eq(1), slot_x.eq(dda.points.payload.x),
+                                     slot_y.eq(dda.points.payload.y), slot_mark.eq(1),
+                                     slot_end.eq(dda.last)]
+                    with m.Elif(~segment_valid & ~dda.busy):
+                        m.next = "FETCH"
 
         # --- pacer --------------------------------------------------------------------------
-        holding_mark = Signal()     # a marked point waits for its pulses
+        holding_mark = self._holding_mark
         waiting = Signal()          # a point is held for a time: a jump's, or a mark's end
         held_end = Signal()         # the marked point held ends a mark segment
+        held_gate = self._held_gate
         pulses = Signal(8)          # early PRR edges since the held point was handed on
         waited = Signal(17)         # µs of whole frames the wait has lasted by the next strobe
         pulses_now = Signal(8)
@@ -265,8 +371,10 @@ class VectorSequencer(wiring.Component):
             with m.Elif(done & (to_polygon | to_mark_delay)):
                 # The mirrors catch up with the end point: the laser stays on into a corner,
                 # goes off before a jump.
+                # (A pixel line's dark end point keeps it off into the corner too.)
                 m.d.sync += [waiting.eq(1), holding_mark.eq(0), waited.eq(self.frame_us),
-                             self.laser.eq(to_polygon)]
+                             self.laser.eq(to_polygon & held_gate if self.pixel_lines
+                                           else to_polygon)]
                 if self.delays:
                     m.d.sync += wait_kind.eq(Mux(to_polygon, WAIT_POLYGON, WAIT_MARK))
             with m.Elif(done & slot_valid):
@@ -276,7 +384,8 @@ class VectorSequencer(wiring.Component):
                     # Offset binary to an offset from the centre: flip the top bit.
                     self.points.payload.x.eq(Cat(slot_x[:15], ~slot_x[15])),
                     self.points.payload.y.eq(Cat(slot_y[:15], ~slot_y[15])),
-                    self.laser.eq(slot_mark),
+                    # A pixel bit can only keep a marked point dark.
+                    self.laser.eq(slot_mark & slot_gate if self.pixel_lines else slot_mark),
                     holding_mark.eq(slot_mark),
                     held_end.eq(slot_end),
                     waiting.eq(~slot_mark),
@@ -287,9 +396,13 @@ class VectorSequencer(wiring.Component):
                 ]
                 if self.delays:
                     m.d.sync += wait_kind.eq(WAIT_JUMP)
+                if self.pixel_lines:
+                    m.d.sync += held_gate.eq(slot_gate)
             with m.Elif(done):
                 # Nothing to go on with: hold here with the laser off.
-                queue_empty = fetching & ~self.commands.valid
+                # (A pixel line waiting for its next word is waiting on the queue too.)
+                queue_empty = (fetching | (~bit_ready if self.pixel_lines else 0)) & \
+                    ~self.commands.valid
                 m.d.comb += [self.underrun.eq(holding_mark & queue_empty),
                              self.stall.eq(holding_mark & ~queue_empty)]
                 m.d.sync += [self.laser.eq(0), holding_mark.eq(0), waiting.eq(0)]

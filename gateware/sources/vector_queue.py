@@ -12,7 +12,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
-from .vector import DelayedVectorCommand, VecOpWord, VectorCommand
+from .vector import PixelVecOpWord, VecOpWord, command_layout
 
 
 __all__ = ["VectorQueue"]
@@ -31,10 +31,13 @@ class VectorQueue(wiring.Component):
         The build has vector mode's RTC delays: ``vec_op`` is a :data:`VecOpWord` (op and
         corner hold) and the commands :data:`DelayedVectorCommand`; else ``vec_op`` is the op
         alone and the commands :data:`VectorCommand`.
+    pixel_lines : bool
+        The build has pixel lines (and the delays): ``vec_op`` is a :data:`PixelVecOpWord`,
+        the commands :data:`PixelVectorCommand`.
 
     Interface attributes
     --------------------
-    vec_op : ``In(VecOpWord)`` with delays, else ``In(1)``
+    vec_op : ``In(PixelVecOpWord)`` with pixel lines, ``In(VecOpWord)`` with delays, else ``In(1)``
         The ``vec_op`` register, the value being pushed while :attr:`push` is high.
     push : ``In(1)``
         A write of ``vec_op`` the register file took (only while :attr:`ready`).
@@ -52,14 +55,16 @@ class VectorQueue(wiring.Component):
         The queued commands, to the vector sequencer.
     """
 
-    def __init__(self, *, depth, delays=False):
+    def __init__(self, *, depth, delays=False, pixel_lines=False):
         if not isinstance(depth, int) or isinstance(depth, bool) or not 2 <= depth < 1 << 16:
             raise ValueError(f"depth must be a whole number from 2 to 65535, not {depth!r}")
         self.depth = depth
         self.delays = bool(delays)
-        self.layout = DelayedVectorCommand if self.delays else VectorCommand
+        self.pixel_lines = bool(pixel_lines)
+        self.layout = command_layout(delays=self.delays, pixel_lines=self.pixel_lines)
+        word = PixelVecOpWord if self.pixel_lines else VecOpWord if self.delays else 1
         super().__init__({
-            "vec_op": In(VecOpWord if self.delays else 1),
+            "vec_op": In(word),
             "push": In(1),
             "segment": In(1), "segment_x": In(16), "segment_y": In(16),
             "vec_x": In(16), "vec_y": In(16),
@@ -74,6 +79,8 @@ class VectorQueue(wiring.Component):
         if self.delays:
             m.d.comb += command.corner_frames.eq(self.vec_op.corner_frames)
             op = self.vec_op.op
+        if self.pixel_lines:
+            m.d.comb += command.pixels.eq(self.vec_op.pixels)
         else:
             op = self.vec_op
         m.d.comb += [

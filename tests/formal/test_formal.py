@@ -10,8 +10,8 @@ import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
                                     correction_link_proof, correction_proof,
-                                    laser_safety_proof, player_proof, spi_frame_proof,
-                                    xy2_phy_proof)
+                                    laser_safety_proof, pixel_line_proof, player_proof,
+                                    spi_frame_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
@@ -21,6 +21,7 @@ from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValue
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
 from broken_phys import FAULTS, TamperedPHY
+from broken_vector import VECTOR_FAULTS, TamperedSequencer
 
 
 pytestmark = [pytest.mark.slow, pytest.mark.toolchain]
@@ -181,3 +182,13 @@ def test_broken_player_fails_the_proof(fault, tmp_path):
     assert bmc.status == "FAIL"
     assert failed_properties(bmc) == {
         "no register written before a whole image passed the check"}, (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(VECTOR_FAULTS))
+def test_broken_pixel_lines_fail_the_proof(fault, tmp_path):
+    _, harness, property = VECTOR_FAULTS[fault]
+    proof = pixel_line_proof(harness, make_sequencer=partial(TamperedSequencer, fault),
+                             helpers=False, name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert property in failed_properties(bmc), (fault, bmc.failed)

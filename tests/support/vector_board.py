@@ -6,7 +6,7 @@ import bisect
 
 from galvoscan.gateware.fields import pack
 from galvoscan.gateware.host.regmap import VectorOp
-from galvoscan.gateware.sources.vector import VecOpWord
+from galvoscan.gateware.sources.vector import PixelVecOpWord
 from galvoscan.gateware.top import VECTOR_QUEUE_DEPTH, ScanSettings
 from galvoscan.link.client import HostClient
 
@@ -14,16 +14,18 @@ from sim_board import VECTOR_ONLY, SimBoard, SimSPITransport, SimUARTTransport
 from vector_model import merge
 
 
-def jobs_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, **settings):
+def jobs_board(clk_freq=4e6, *, vector_queue_depth=VECTOR_QUEUE_DEPTH, backend="compiled",
+               **settings):
     """The jobs' build, fresh from power-up: vector mode alone (half the design of the default
-    build's to simulate), with the wobble stage and the RTC delays, so that the vector, wobble
-    and delay tests share one compiled model; jobs without them write :data:`NO_DELAYS` and
-    leave the wobble off, as at power-up."""
+    build's to simulate), with the wobble stage, the RTC delays and pixel lines, so that the
+    vector, wobble, delay and pixel-line tests share one compiled model; jobs without them
+    write :data:`NO_DELAYS` and leave the wobble off, as at power-up."""
     # (The UART at 8 clocks a bit, the fastest it takes: the job link's.)
-    return SimBoard.powered_up(backend="compiled", clk_freq=clk_freq,
+    return SimBoard.powered_up(backend=backend, clk_freq=clk_freq,
                                baud=round(clk_freq / 8), record_laser=True,
                                mo_lead=0.2e-3, vector_queue_depth=vector_queue_depth,
-                               wobble=True, vector_delays=True, **VECTOR_ONLY,
+                               wobble=True, vector_delays=True, pixel_lines=True,
+                               **VECTOR_ONLY,
                                settings=ScanSettings(mode="vector", run=False, **settings))
 
 
@@ -36,12 +38,15 @@ def start_board(clk_freq=4e6, **kwargs):
 
 def queue(client, job, *, factors=None):
     """The job's segments, a checked frame each, back to back; ``factors``: each mark's
-    polygon_scaled factor (vec_op bits 1 up; RTC delay builds)."""
+    polygon_scaled factor (vec_op bits 1 up; RTC delay builds). A ``"line"`` is a mark with
+    ``pixels`` set, a ``"pixels"`` word a jump with it (bit 8, pixel-line builds)."""
     words = []
+    ops = {"jump": VectorOp.JUMP, "mark": VectorOp.MARK, "line": VectorOp.MARK,
+           "pixels": VectorOp.JUMP}
     for index, (op, x_to, y_to) in enumerate(job):
         factor = 0 if factors is None else factors[index]
-        words.append((pack(VecOpWord, op=VectorOp[op.upper()],
-                           corner_frames=0 if op == "jump" else factor), x_to, y_to))
+        words.append((pack(PixelVecOpWord, op=ops[op], pixels=int(op in ("line", "pixels")),
+                           corner_frames=factor if op in ("mark", "line") else 0), x_to, y_to))
     if words:
         client.queue_segments(words)
 

@@ -42,19 +42,40 @@ def _dda(x0, y0, x1, y1, dx, dy, pitch):
     return points + [(x1, y1)]
 
 
+def pixel_bits(words):
+    """The bits of pixel words, in the order the points take them: each word's x then y,
+    bit 0 first (the register map's words)."""
+    return [(value >> k) & 1 for x, y in words for value in (x | y << 16,) for k in range(32)]
+
+
 def job_model(job, pitch, pulses):
     """(position, pulses) runs for a job from the park position: a jump's point gets none; a
-    mark first marks where it starts if the laser was off, then every DDA point."""
+    mark first marks where it starts if the laser was off, then every DDA point. A pixel line
+    (``"line"``) steps the same points, each lit only if its bit (of the ``"pixels"`` words
+    right after the line, in order) is 1; the points past the last bit are dark. A pixel word
+    anywhere else moves nothing."""
     position, pen_down, out = PARK, False, []
-    for op, x, y in job:
+    for index, (op, x, y) in enumerate(job):
+        if op == "pixels":
+            continue
         if op == "jump":
             out.append(((x, y), 0))
             pen_down = False
         else:
-            if not pen_down:
-                out.append((position, pulses))
-                pen_down = True
-            out += [(p, pulses) for p in dda(position, (x, y), pitch)]
+            points = [] if pen_down else [position]
+            pen_down = True
+            points += dda(position, (x, y), pitch)
+            if op == "line":
+                words = []
+                for later in job[index + 1:]:
+                    if later[0] != "pixels":
+                        break
+                    words.append(later[1:])
+                bits = pixel_bits(words)
+                out += [(p, pulses if k < len(bits) and bits[k] else 0)
+                        for k, p in enumerate(points)]
+            else:
+                out += [(p, pulses) for p in points]
         position = (x, y)
     return merge(out)
 
