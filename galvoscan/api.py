@@ -39,6 +39,7 @@ from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers
 from .inputs.photo import Dither, PhotoSpec
 from .plan.objects import photo_object
+from .plan.pixel_lines import PHOTO_LINES, cell_units
 from .geometry.field import Placement, PlanError, from_galvo
 from .profile.machine import default_profile, load_profile
 from .outputs.stream import JobAborted, JobStreamer, StreamReport
@@ -116,14 +117,23 @@ class Code:
 @dataclass(frozen=True)
 class Photo:
     """A PNG or JPEG engraved ``width_mm`` wide, centred at ``at_mm``, as dithered scan lines
-    ``line_spacing_mm`` apart (None: the profile's spot)."""
+    ``line_spacing_mm`` apart (None: the profile's spot), each line one pixel line
+    (``lines="pixels"``: swept at one speed, each cell lit by its own bit; its cells then the
+    whole galvo units nearest that spacing) or a mark for each run of dark cells
+    (``"runs"``)."""
     path: str
     width_mm: float
     at_mm: tuple = (0.0, 0.0)
     dither: str = Dither.FLOYD.value
     line_spacing_mm: float = None
     one_way: bool = False
+    lines: str = PHOTO_LINES[0]
     layer: str = None
+
+    def __post_init__(self):
+        if self.lines not in PHOTO_LINES:
+            raise PlanError(f"a photo's lines are {' or '.join(PHOTO_LINES)}, not "
+                            f"{self.lines!r}")
 
 
 @dataclass(frozen=True)
@@ -235,10 +245,16 @@ def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.
         made = code_object(spec, settings, centre_mm=tuple(item.at_mm),
                            spot_mm=profile.laser.spot_mm)
     elif isinstance(item, Photo):
-        spec = PhotoSpec(item.path, item.width_mm,
-                         item.line_spacing_mm or profile.laser.spot_mm,
-                         dither=Dither(item.dither), bidirectional=not item.one_way)
-        made = photo_object(spec, settings, centre_mm=tuple(item.at_mm or (0.0, 0.0)))
+        spacing = item.line_spacing_mm or profile.laser.spot_mm
+        pixels = None
+        if item.lines == "pixels":
+            # The cells a pitch of whole galvo units: a pixel line steps its points at it.
+            pixels = cell_units(spacing, profile.units_per_mm)
+            spacing = pixels / profile.units_per_mm
+        spec = PhotoSpec(item.path, item.width_mm, spacing, dither=Dither(item.dither),
+                         bidirectional=not item.one_way)
+        made = photo_object(spec, settings, centre_mm=tuple(item.at_mm or (0.0, 0.0)),
+                            pixel_units=pixels)
     else:
         raise TypeError(f"not a drawing, text, code or photo: {item!r}")
     return replace(made, layer=item.layer) if item.layer else made

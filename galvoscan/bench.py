@@ -194,6 +194,11 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
         # compiled board's) on the full bench; the quick one streams a strip of it.
         with tempfile.TemporaryDirectory() as folder:
             result["link"]["photo"] = photo_figures(folder, rows=300 if replay else 16)
+        step("the photo as pixel lines")
+        # The same photo, each row one sweep: on the engraver's bitstream at 1 Mbaud.
+        with tempfile.TemporaryDirectory() as folder:
+            result["link"]["photo_pixels"] = photo_figures(folder, rows=300 if replay else 16,
+                                                           lines="pixels")
         step("simulator backends")
         # The quick bench: the tests' 8 MHz board, whose compiled model they share.
         result["backends"] = backend_figures(python_s=5e-3, compiled_s=0.5) if replay else \
@@ -262,6 +267,15 @@ def table(result):
                      f"{photo['underruns']} underruns ({foretold['3']} foretold; at 1 Mbaud "
                      f"{foretold['1']:,} foretold), {photo['board_s']:.1f} s of the board's "
                      f"time in {photo['wall_s']:.0f} s"))
+    if "photo_pixels" in link:  # (records from before pixel lines have none)
+        pixels = link["photo_pixels"]
+        rows.append((f"the same photo as {pixels['pixel_lines']:,} pixel lines "
+                     f"({pixels['segments']:,} segments) at {pixels['speed_mm_s']:g} mm/s, "
+                     f"through the engraver bitstream's UART ({pixels['baud']:,} baud), "
+                     f"compiled backend",
+                     f"{pixels['underruns']} underruns, {pixels['pulses']:,} pulses "
+                     f"({pixels['pulses_per_point']} a dark cell), {pixels['board_s']:.1f} s "
+                     f"of the board's time in {pixels['wall_s']:.0f} s"))
     if "backends" in result:
         backends = result["backends"]
         mhz = backends.get("clock_mhz", 12)

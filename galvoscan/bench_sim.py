@@ -213,33 +213,39 @@ def photo_profile():
     return replace(profile, galvo=replace(profile.galvo, **PHOTO_GALVO))
 
 
-def photo_figures(folder, *, rows=300, width_mm=24, speed_mm_s=1000):
+def photo_figures(folder, *, rows=300, width_mm=24, speed_mm_s=1000, lines="runs"):
     """A photo through the link: :func:`shaded_picture` ``width_mm`` wide at ``speed_mm_s``,
     planned for a machine with :data:`PHOTO_GALVO`'s quick mirrors, the underruns foretold at
     1 and 3 Mbaud (:func:`~galvoscan.outputs.link_budget.expected_underruns`), and streamed whole
-    through the ULX3S bitstream's UART at 3 Mbaud on the compiled board: its marks, segments,
-    underruns and the board's and the wall's seconds."""
+    on the compiled board: its marks, segments, underruns and the board's and the wall's
+    seconds. ``lines``: ``"runs"`` (a mark a run of dark cells) through the ULX3S bitstream's
+    UART at 3 Mbaud, or ``"pixels"`` (pixel lines) through the engraver's at 1 Mbaud."""
     from .api import Job, Photo, plan, run
-    from .build import board_config, starting_table
+    from .build import board_config, simulated_bitstream, starting_table
     from .outputs.link_budget import expected_underruns
     from .sim.board import SimulatedBoard
     profile = photo_profile()
     picture = shaded_picture(Path(folder) / "photo.png", rows=rows)
-    planned = plan(Job(photos=[Photo(str(picture), width_mm=width_mm)], speed_mm_s=speed_mm_s),
-                   profile)
+    planned = plan(Job(photos=[Photo(str(picture), width_mm=width_mm, lines=lines)],
+                       speed_mm_s=speed_mm_s), profile)
     job = planned.vector_job
     foretold = {f"{baud / 1e6:g}": sum(count for _, count in expected_underruns(job, baud))
                 for baud in (1_000_000, 3_000_000)}
-    board = SimulatedBoard(config=board_config("ulx3s"), backend="compiled",
-                           correction=starting_table("ulx3s"))
+    if lines == "pixels":
+        config, contents = simulated_bitstream("icebreaker", preset="engraver")
+        board = SimulatedBoard(config=config, backend="compiled", **contents)
+    else:
+        board = SimulatedBoard(config=board_config("ulx3s"), backend="compiled",
+                               correction=starting_table("ulx3s"))
     started = time.perf_counter()
     report = run(planned, board)
     wall = time.perf_counter() - started
     board_s = board.now
     board.close()
-    return {"width_mm": width_mm, "speed_mm_s": speed_mm_s, **PHOTO_GALVO,
-            "marks": sum(1 for a, b in zip(job.segments, job.segments[1:])
-                         if a[0] == "jump" and b[0] == "mark"),
+    return {"width_mm": width_mm, "speed_mm_s": speed_mm_s, **PHOTO_GALVO, "lines": lines,
+            "marks": len(job.paths_mm),
+            "pixel_lines": sum(1 for op, *_ in job.segments if op == "line"),
+            "pulses": report.pulses, "pulses_per_point": job.registers["pulses_per_point"],
             "segments": report.segments, "estimate_s": job.estimate_s,
             "foretold_underruns": foretold, "underruns": report.counters["vec_underruns"],
             "rejected": report.counters["vec_rejected"], "errors": report.counters["errors"],

@@ -87,6 +87,9 @@ PRESETS = {
     # player (stand-alone from the flash, started by a foot switch), on the PLL's 24 MHz.
     "marker": board_config("icebreaker", modes=("vector",), delays=True, player=True,
                            clock=24e6),
+    # An engraver of photos and dense fills: vector mode with its delays and pixel lines (a
+    # line swept at one speed, each point lit by a bit), the correction stage, on the crystal.
+    "engraver": board_config("icebreaker", modes=("vector",), delays=True, pixel_lines=True),
     # A cleaning head: the spiral with its interpolator, the raster fill and the correction
     # stage, on the crystal.
     "cleaner": board_config("icebreaker", modes=("spiral", "raster"), interpolation=True),
@@ -112,6 +115,9 @@ def simulated_bitstream(board="icebreaker", *, preset="default", baud=None):
         if preset not in PRESETS:
             raise ValueError(f"--preset must be one of {', '.join(PRESETS)}, not {preset!r}")
         config, contents = PRESETS[preset], {}
+        settings = preset_settings(config)
+        if settings is not None:        # (a build without the spiral starts in its own mode)
+            contents["settings"] = settings
     if baud is not None:
         config = replace(config, baud=baud)
     return config, contents
@@ -210,7 +216,7 @@ def build_bitstream(board="icebreaker", *, config=None, build_dir="build", table
     ``config`` is the build's :class:`~galvoscan.gateware.build_config.BuildConfig` (one of
     :data:`PRESETS`, or :func:`board_config`'s); None: :func:`board_config` of ``options``
     (``modes``, ``clock``, ``bit_rate``, ``baud``, ``wobble``, ``interpolation``, ``delays``,
-    ``player``), checked against the board before anything is built. ``correction`` is the
+    ``pixel_lines``, ``player``), checked against the board before anything is built. ``correction`` is the
     correction table the RAM starts with (``None``: no correction stage), ``table`` and
     ``settings`` the spiral table and the scan settings; nextpnr runs with a fixed ``seed``
     so builds are repeatable (and with the next ones where it misses the clock:

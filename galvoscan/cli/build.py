@@ -68,7 +68,7 @@ def _apply_preset(args):
     args.modes = preset.modes
     for name, built in (("delays", preset.vector_delays),
                         ("interpolation", preset.spiral_interpolation),
-                        ("wobble", preset.wobble)):
+                        ("wobble", preset.wobble), ("pixel_lines", preset.pixel_lines)):
         setattr(args, name, getattr(args, name) or built)
     args.player = preset.player
     if args.clock is None:
@@ -91,11 +91,13 @@ def _cmd_build(args):
         # Every feature is built: the options that add one to an iCE40 build add nothing.
         features = {}
         args.wobble = args.interpolation = args.delays = args.player = True
+        args.pixel_lines = True
     else:
         if args.device:
             fail(f"--device is the ULX3S's (its ECP5), not the {args.board}'s")
         features = dict(wobble=args.wobble, interpolation=args.interpolation,
-                        delays=args.delays, player=args.player)
+                        delays=args.delays, player=args.player,
+                        **({"pixel_lines": True} if args.pixel_lines else {}))
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
                                  settings=settings, modes=args.modes, correction=correction,
@@ -172,11 +174,13 @@ def add_parsers(commands):
                        help="the ULX3S's ECP5 (default: 25F)")
     build.add_argument("--build-dir", type=output_dir, default="build", metavar="DIR",
                        help="where the bitstream and logs go (default: %(default)s)")
-    build.add_argument("--preset", choices=["marker", "cleaner"], default=None,
+    build.add_argument("--preset", choices=["marker", "engraver", "cleaner"], default=None,
                        help="one bitstream for the kind of machine: marker (vector mode "
                             "with the RTC delays, correction, and the job player for "
-                            "stand-alone marking from the flash, 24 MHz on the PLL) or "
-                            "cleaner (spiral with interpolation, raster, correction)")
+                            "stand-alone marking from the flash, 24 MHz on the PLL), "
+                            "engraver (vector mode with the RTC delays and pixel lines for "
+                            "photos, correction) or cleaner (spiral with interpolation, "
+                            "raster, correction)")
     build.add_argument("--wobble", action="store_true",
                        help="add the wobble stage to vector mode (galvoscan mark --wobble); "
                             "with every mode it does not fit the UP5K: drop one with --modes "
@@ -185,6 +189,10 @@ def add_parsers(commands):
                        help="add the spiral's interpolator (the spiral_interp register: the "
                             "mirror moves every frame instead of holding each point); with "
                             "every mode it does not fit the UP5K: drop one with --modes")
+    build.add_argument("--pixel-lines", action="store_true",
+                       help="add vector mode's pixel lines (mark --image's: each row one "
+                            "sweep, each pixel lit by its own bit); needs --delays and "
+                            "--modes vector on the UP5K")
     build.add_argument("--delays", action="store_true",
                        help="add vector mode's RTC laser and scanner delays (laser on/off, "
                             "mark, polygon); with every mode they do not fit the UP5K: drop "

@@ -8,6 +8,7 @@ from ..geometry.drawing import DrawingError
 from ..inputs.photo import Dither
 from ..geometry.field import PlanError
 from ..inputs.serial import load_counter, uses_serial
+from ..plan.pixel_lines import PHOTO_LINES
 
 
 __all__ = ["check_content_options", "content_objects", "content_item",
@@ -17,7 +18,7 @@ __all__ = ["check_content_options", "content_objects", "content_item",
 #: The options of each kind of content, past the one that asks for it.
 _OPTIONS = {"text": ("font", "height"),
             "code": ("data", "size", "code_ec", "code_quiet", "code_height"),
-            "image": ("width", "dither", "line_spacing", "image_at")}
+            "image": ("width", "dither", "line_spacing", "image_at", "image_lines")}
 
 
 def has_content(args):
@@ -52,7 +53,7 @@ def content_item(kind, one):
         return Photo(one["image"], one["width"], at_mm=tuple(one.get("image_at") or (0, 0)),
                      dither=one.get("dither") or Dither.FLOYD.value,
                      line_spacing_mm=one.get("line_spacing"), one_way=bool(one.get("one_way")),
-                     layer=layer)
+                     lines=one.get("image_lines") or PHOTO_LINES[0], layer=layer)
     if one.get("data") is None or one.get("size") is None:
         raise PlanError("--code needs --data TEXT and --size MM")
     if one.get("code_height") is not None and CodeKind(one["code"]) is not CodeKind.CODE128:

@@ -16,6 +16,7 @@ from ..inputs.drawings import SCALES, UNITS
 from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
+from ..plan.pixel_lines import PHOTO_LINES
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ)
 from .args import int_in, number_in, setting_keywords
@@ -177,6 +178,13 @@ OPTIONS = (
     Option("--one-way", "image", dict(
         action="store_true", help="every scan line left to right (default: each the other "
                                   "way from the last)"), section="image"),
+    Option("--image-lines", "image", dict(
+        choices=list(PHOTO_LINES), default=None,
+        help="how the picture is marked: pixels (the default: each row one sweep at one "
+             "speed, each pixel lit by its own bit, the same pulses for every dark pixel; "
+             "needs a bitstream with pixel lines: build --preset engraver, or the ULX3S's) or "
+             "runs (a mark for each run of dark cells and a jump for each gap: any "
+             "bitstream)"), section="image", key="lines"),
     # the job's laser and speed
     *(_setting(setting, "laser", "job") for setting in (SPEED, POWER, PRR)),
     _setting(PASSES, "passes", "job"),

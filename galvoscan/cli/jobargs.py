@@ -69,7 +69,7 @@ def add_job_link_options(parser):
     link.add_argument("--board", choices=SIMULATED_BOARDS, default=None,
                       help="with --sim: whose bitstream the simulated board runs: the "
                            "iCEBreaker's default build (default; with the wobble stage for a "
-                           f"wobbled job) or the ULX3S's, every feature at {ULX3S_CLOCK_HZ / 1e6:g} MHz "
+                           "wobbled job, the engraver's for a photo's pixel lines) or the ULX3S's, every feature at {ULX3S_CLOCK_HZ / 1e6:g} MHz "
                            f"and {ULX3S_BAUD / 1e6:g} Mbaud")
     add_backend_option(link, default=None)
 
@@ -87,15 +87,20 @@ def has_link(args, profile):
 
 
 @contextlib.contextmanager
-def board_link(args, profile, *, wobble=False):
+def board_link(args, profile, *, wobble=False, pixel_lines=False):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
-    (``wobble``: a simulated board is built with the wobble stage)."""
+    (``wobble``: a simulated board is built with the wobble stage; ``pixel_lines``: a
+    simulated iCEBreaker runs the engraver's bitstream, which has them)."""
     if args.sim:
         # (The ULX3S's bitstream at its own rate unless told another: the profile's baud is
         # the real machine's link.)
         baud_rate = link_baud(args, profile)
         if args.board == "ulx3s":
             config, contents = simulated_bitstream("ulx3s", baud=baud_rate)
+            board = simulated_board(args, config=config, **contents)
+        elif pixel_lines and not wobble:
+            config, contents = simulated_bitstream("icebreaker", preset="engraver",
+                                                   baud=baud_rate)
             board = simulated_board(args, config=config, **contents)
         else:
             board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))

@@ -18,6 +18,7 @@ from ..inputs.job_file import JobError, parse_job
 from ..geometry.drawing import DrawingError
 from ..geometry.fill import LineOrder
 from ..geometry.field import PlanError
+from ..geometry.segments import LINE
 from ..geometry.speed import path_length_mm
 from ..outputs.link_budget import expected_underruns, link_segments_per_s
 from ..outputs.stream import JobStreamer, StreamReport
@@ -137,8 +138,11 @@ def _draw_preview(args, job, drawing, profile):
         groups = [(f"{lj.label}: {path_length_mm(lj.job.paths_mm):.1f} mm"
                    f"{f' × {lj.settings.passes} passes' if lj.settings.passes > 1 else ''}",
                    lj.colour, lj.job.paths_mm) for lj in job.layers]
+    # (Pixel lines sweep their rows with the laser gated, not jumping between the runs: the
+    # gaps are no jumps, and are not drawn as jumps.)
     preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
-            spot_mm=profile.laser.spot_mm, title=title, groups=groups)
+            spot_mm=profile.laser.spot_mm, title=title, groups=groups,
+            jumps=not any(op == LINE for op, *_ in job.segments))
 
 
 def _cmd_mark(args):
@@ -196,7 +200,8 @@ def _cmd_mark(args):
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     reports = []
-    with board_link(args, profile, wobble=wobbles) as (client, board):
+    pixel_lines = any(op == LINE for part, *_ in parts for op, *_ in part.segments)
+    with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines) as (client, board):
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]
             bar = progress_bar(None if args.frame else len(part.segments), "seg")

@@ -11,10 +11,15 @@ import math
 import numpy as np
 
 from .field import CENTRE, PlanError
+from .segments import MARK, PIXELS, STEPPED
 
 
-__all__ = ["Pitch", "choose_pitch", "estimate_seconds", "segment_seconds", "jump_mark_lengths",
+__all__ = ["POINTS_PER_S_MAX", "Pitch", "choose_pitch", "estimate_seconds", "segment_seconds", "jump_mark_lengths",
            "path_length_mm", "settled_jumps"]
+
+
+#: The most points a second vector mode makes: one an XY2-100 frame.
+POINTS_PER_S_MAX = 100e3
 
 
 def path_length_mm(paths_mm):
@@ -45,7 +50,7 @@ class Pitch:
 
 
 def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
-                 max_prr_per_point_hz=100e3, strict=True, pulses_per_point=None):
+                 max_prr_per_point_hz=POINTS_PER_S_MAX, strict=True, pulses_per_point=None):
     """The pitch and pulses per point closest to a marking speed.
 
     ``v = pitch_units / units_per_mm * prr_hz / N`` mm/s, with N (pulses per point) in
@@ -107,10 +112,14 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
 
 
 def _walk(segments):
-    """Lengths (galvo units) and ops of the segments, from the field centre."""
+    """Lengths (galvo units) and ops of the segments, from the field centre (a pixel word,
+    which moves nothing, 0)."""
 
     here, out = (CENTRE, CENTRE), []
     for op, x, y in segments:
+        if op == PIXELS:
+            out.append((op, 0.0))
+            continue
         out.append((op, math.hypot(x - here[0], y - here[1])))
         here = (x, y)
     return out
@@ -120,8 +129,8 @@ def estimate_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_de
                      frame_s=10e-6):
     """An estimate of the time the board takes for the segments.
 
-    ``segments`` are ``(op, x, y)`` in galvo units, op ``"jump"`` or ``"mark"``, from the field
-    centre. A mark of ``L`` units is ``ceil(L / pitch_units)`` points, each held
+    ``segments`` are ``(op, x, y)`` in galvo units (:mod:`.segments`), from the field
+    centre. A mark or pixel line of ``L`` units is ``ceil(L / pitch_units)`` points, each held
     ``pulses_per_point / prr_hz`` s; a jump is one frame and ``jump_delay_us`` rounded up to
     whole frames (at least one). Mark and polygon delays, the host link and anything the board
     adds are not counted.
@@ -137,15 +146,19 @@ def segment_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_del
     board takes at least to run it, so what the link must bring it in."""
     dwell_s = pulses_per_point / prr_hz
     jump_s = _jump_s(jump_delay_us, frame_s)
-    return [math.ceil(length / pitch_units - 1e-12) * dwell_s if op == "mark" else jump_s
-            for op, length in _walk(segments)]
+    return [math.ceil(length / pitch_units - 1e-12) * dwell_s if op in STEPPED else
+            0.0 if op == PIXELS else jump_s for op, length in _walk(segments)]
 
 
-def jump_mark_lengths(segments, units_per_mm):
-    """``(mark_mm, jump_mm)``: the lengths marked and jumped, from the field centre."""
-    mark = sum(length for op, length in _walk(segments) if op == "mark")
-    jump = sum(length for op, length in _walk(segments) if op != "mark")
-    return mark / units_per_mm, jump / units_per_mm
+def jump_mark_lengths(segments, units_per_mm, *, pitch_units=None):
+    """``(mark_mm, jump_mm)``: the lengths marked and jumped, from the field centre. A pixel
+    line is marked where its bits are 1, a pitch (``pitch_units``) a lit point; the rest of
+    its sweep is neither."""
+    walked = _walk(segments)
+    mark = sum(length for op, length in walked if op == MARK)
+    jump = sum(length for op, length in walked if op not in STEPPED)
+    lit = sum(bin(x | y << 16).count("1") for op, x, y in segments if op == PIXELS)
+    return (mark + lit * (pitch_units or 0)) / units_per_mm, jump / units_per_mm
 
 
 def _jump_s(delay_us, frame_s=10e-6):

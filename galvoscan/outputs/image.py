@@ -165,5 +165,7 @@ def read_image(data, *, regmap=None):
         x, y, op_word = (_checked(regmap[name], word, f"segment {i // SEGMENT_WORDS + 1}'s")
                          for name, word in zip(("vec_x", "vec_y", "vec_op"),
                                                rest[i:i + SEGMENT_WORDS]))
-        segments.append(("mark" if op_word & 1 else "jump", x, y, op_word >> 1))
+        pixels = op_word >> 8 & 1
+        op = ("line" if pixels else "mark") if op_word & 1 else ("pixels" if pixels else "jump")
+        segments.append((op, x, y, op_word >> 1 & 0x7F))
     return JobImage(registers=registers, repeats=repeats, segments=segments)

@@ -59,7 +59,7 @@ def expected_underruns(job, baud, *, queue_depth=QUEUE_DEPTH, batch=None):
             came = max(came, room) + period
             if k == 0:
                 done = first * period      # (the first ones come one after the other)
-            elif came > done and segments[k - 1][0] == "mark":
+            elif came > done and segments[k - 1][0] != "jump":
                 underruns += 1
             taken.append(max(done, came))
             done = taken[k] + op_seconds

@@ -28,8 +28,9 @@ from dataclasses import dataclass, field
 from ..gateware.fields import pack
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH, VectorOp)
-from ..gateware.sources.vector import VecOpWord
+from ..gateware.sources.vector import PixelVecOpWord, VecOpWord
 from ..geometry.corners import corner_frames
+from ..geometry.segments import LINE, OPS, PIXELS
 from ..link.client import ClientError, LinkLost, encode_write
 
 
@@ -126,9 +127,11 @@ class StreamReport:
 
 
 def check_segment(op, x, y):
-    """Refuse a segment the board would: ``op`` a jump or a mark, ends within the field."""
-    if op not in ("jump", "mark"):
-        raise ValueError(f"a segment is a jump or a mark, not {op!r}")
+    """Refuse a segment the board would: ``op`` one of :data:`~galvoscan.geometry.segments.OPS`,
+    ends within the field (a pixel word's two halves, 16 bits each)."""
+    if op not in OPS:
+        raise ValueError(f"a segment is a jump, a mark, a pixel line or a pixel word, not "
+                         f"{op!r}")
     for value in (x, y):
         reg = BY_NAME["vec_x"]
         if isinstance(value, bool) or not isinstance(value, int) or \
@@ -138,7 +141,11 @@ def check_segment(op, x, y):
 
 def segment_words(op, x, y, corner_frames=0):
     """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
-    streamer writes and a job image holds."""
+    streamer writes and a job image holds: a pixel line is a mark, and a pixel word a jump,
+    with ``vec_op``'s ``pixels`` bit set."""
+    if op in (LINE, PIXELS):
+        return x, y, pack(PixelVecOpWord, op=VectorOp.MARK if op == LINE else VectorOp.JUMP,
+                          corner_frames=corner_frames if op == LINE else 0, pixels=1)
     return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
 
 
@@ -147,8 +154,10 @@ def job_segments(segments):
     mark ends: no move), since the board counts a mark that finds the queue empty as an
     underrun, and a job's end is none."""
     segments = list(segments)
-    if segments and segments[-1][0] == "mark":
-        segments.append(("jump", *segments[-1][1:]))
+    if segments and segments[-1][0] != "jump":
+        # (After a pixel line's words: to where the line ends.)
+        end = next(s for s in reversed(segments) if s[0] != PIXELS)
+        segments.append(("jump", *end[1:]))
     return segments
 
 
@@ -464,6 +473,11 @@ class JobStreamer:
         off (framing with the guide laser)."""
         segments = job_segments(segments)
         registers = self._without_missing_delays(registers)
+        if any(op in (LINE, PIXELS) for op, *_ in segments) and \
+                not self.capabilities().pixel_lines:
+            raise JobAborted("the board's bitstream has no pixel lines (build --preset "
+                             "engraver has them, and the ULX3S's): mark the photo as runs "
+                             "with --image-lines runs; nothing was sent")
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})

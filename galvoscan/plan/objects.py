@@ -9,6 +9,7 @@ from ..geometry.field import Placement, PlanError
 from ..geometry.fill import Contour, HatchSet, LineOrder
 from ..inputs.codes import CodeFill, CodeKind, code_drawing, data_said
 from ..inputs.photo import photo_drawing
+from .pixel_lines import PixelRaster
 
 
 __all__ = ["JobSettings", "MarkObject", "code_object", "photo_object", "DOT_OVERLAP"]
@@ -43,6 +44,9 @@ class MarkObject:
     keep_order: bool = False
     layer: str = None               # the layer (by name) it takes its settings from
     own_fill: bool = False          # its fill is its own (a code's, a photo's): no layer's
+    #: A photo marked as pixel lines (:class:`~.pixel_lines.PixelRaster`), its drawing's runs
+    #: then only what the preview and the checks see; None: the drawing's paths are marked.
+    pixels: object = None
 
 
 #: How much narrower than the spot a dotted code's module may be (its dot 4/3 of it).
@@ -75,14 +79,17 @@ def code_object(spec, settings, *, centre_mm=(0.0, 0.0), spot_mm):
                       keep_clear_mm=spec.quiet * module, own_fill=True)
 
 
-def photo_object(spec, settings, *, centre_mm=(0.0, 0.0)):
+def photo_object(spec, settings, *, centre_mm=(0.0, 0.0), pixel_units=None):
     """The photo as a :class:`~.objects.MarkObject` at ``settings``' speed and power,
-    centred on ``centre_mm`` (field mm), its lines in scan order."""
+    centred on ``centre_mm`` (field mm), its lines in scan order; ``pixel_units``: marked as
+    pixel lines, its cells (``spec.line_spacing_mm``) that many galvo units."""
     drawing, dark = photo_drawing(spec)
+    raster = None if pixel_units is None else \
+        PixelRaster(dark, pixel_units, bidirectional=spec.bidirectional)
     fill = replace(settings, hatch=(), contour=None, outline=True)
     # Centred by the grid, not by the marks (which need not reach its edges).
     rows, columns = dark.shape
     corner = (centre_mm[0] - columns * spec.line_spacing_mm / 2,
               centre_mm[1] - rows * spec.line_spacing_mm / 2)
     return MarkObject(drawing, Placement(origin="page", offset_mm=corner), fill,
-                      keep_order=True, own_fill=True)
+                      keep_order=True, own_fill=True, pixels=raster)

@@ -4,6 +4,7 @@ and timed; every register value it needs worked out and checked before anything 
 """
 
 from dataclasses import dataclass, field
+import math
 
 import numpy as np
 from shapely.geometry import box, LineString, MultiPoint, Point
@@ -14,8 +15,11 @@ from ..gateware.sources.dda import SETUP_CLOCKS
 from ..geometry.field import PlanError, field_check, from_galvo, place, to_galvo
 from ..geometry.fill import contour_rings, hatch_strokes, oriented
 from ..geometry.order import jump_length, order_paths
-from ..geometry.speed import choose_pitch, estimate_seconds, jump_mark_lengths, settled_jumps
+from ..geometry.segments import LINE, PIXELS
+from ..geometry.speed import (POINTS_PER_S_MAX, Pitch, choose_pitch, estimate_seconds,
+                              jump_mark_lengths, settled_jumps)
 from .objects import MarkObject
+from .pixel_lines import pixel_line_segments
 
 
 __all__ = ["VectorJob", "plan_vector_job", "plan_objects", "check_clear", "segments_from_paths"]
@@ -76,7 +80,7 @@ def _check_corrected(segments, table):
     would clamp it, and mark it out of shape)."""
     if table is None:
         return
-    xy = np.array([(x, y) for _, x, y in segments], dtype=float)
+    xy = np.array([(x, y) for op, x, y in segments if op != PIXELS], dtype=float)
     cx, cy = table.apply(xy[:, 0], xy[:, 1])
     low = min(np.min(cx), np.min(cy))
     high = max(np.max(cx), np.max(cy))
@@ -86,13 +90,18 @@ def _check_corrected(segments, table):
                         f"towards the field centre or make it smaller")
 
 
-def _machine_settings(settings, profile):
-    """``(prr_register, prr_hz, pitch)`` for the job's speed and PRR on this machine."""
+def _machine_settings(settings, profile, *, pitch_units=None):
+    """``(prr_register, prr_hz, pitch)`` for the job's speed and PRR on this machine
+    (``pitch_units``: at that pitch, a photo's pixel lines', only the pulses per point
+    chosen)."""
     prr_register = profile.prr_register(settings.prr_khz)     # refuses a PRR the laser lacks
     prr_hz = prr_register * 100.0
     if settings.speed_mm_s > profile.galvo.max_speed_mm_s:
         raise PlanError(f"{settings.speed_mm_s:g} mm/s is faster than the machine's "
                         f"{profile.galvo.max_speed_mm_s:g} mm/s ([galvo] max_speed_mm_s)")
+    if pitch_units is not None:
+        return prr_register, prr_hz, fixed_pitch(settings, pitch_units, prr_hz,
+                                                 profile.units_per_mm)
     # A pitch of at most half the spot keeps the marked points overlapping.
     pitch = choose_pitch(settings.speed_mm_s, prr_hz, profile.units_per_mm,
                          max_pitch_mm=profile.laser.spot_mm / 2,
@@ -100,10 +109,29 @@ def _machine_settings(settings, profile):
     return prr_register, prr_hz, pitch
 
 
-def _finish(segments, paths_mm, before, after, settings, profile, notes, *, settle=True):
+def fixed_pitch(settings, pitch_units, prr_hz, units_per_mm):
+    """The :class:`~galvoscan.geometry.speed.Pitch` of ``settings``' speed at a pitch of
+    ``pitch_units``: the pulses per point nearest it (the settings' own, if they give one), at
+    most one point a 10 µs frame."""
+    pitch_mm = pitch_units / units_per_mm
+    fewest = max(1, math.ceil(prr_hz / POINTS_PER_S_MAX - 1e-9))
+    pulses = settings.pulses_per_point or max(fewest, round(pitch_mm * prr_hz /
+                                                            settings.speed_mm_s))
+    if not fewest <= pulses <= 255:
+        raise PlanError(f"{settings.speed_mm_s:g} mm/s at the photo's {pitch_mm * 1000:.1f} µm "
+                        f"pixels and {prr_hz / 1e3:g} kHz needs {pulses} pulses a pixel: "
+                        f"{fewest} … 255 (another speed or PRR)")
+    speed = pitch_mm * prr_hz / pulses
+    return Pitch(pitch_units, pulses, speed, pitch_mm,
+                 (speed - settings.speed_mm_s) / settings.speed_mm_s)
+
+
+def _finish(segments, paths_mm, before, after, settings, profile, notes, *, settle=True,
+            pitch_units=None):
     """Registers, timing and bounds of a job's segments (``settle``: each jump held as long
-    as its length needs, :func:`~galvoscan.geometry.speed.settled_jumps`)."""
-    prr_register, prr_hz, pitch = _machine_settings(settings, profile)
+    as its length needs, :func:`~galvoscan.geometry.speed.settled_jumps`; ``pitch_units``:
+    the pitch of its pixel lines)."""
+    prr_register, prr_hz, pitch = _machine_settings(settings, profile, pitch_units=pitch_units)
     units_per_mm = profile.units_per_mm
     table = profile.correction_table()
     _check_corrected(segments, table)
@@ -123,14 +151,23 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
         "laser_prr": prr_register,
         "laser_power": profile.power_register(settings.power_percent),
         **profile.delay_registers(),
-        **dict(settings.delays_us),
     }
+    if any(op == LINE for op, *_ in segments):
+        # A pixel line is timed by its scan offset: the laser follows each point's bit, at
+        # once, and the line's run-out ends it.
+        moved = [name for name in ("laser_on_delay", "laser_off_delay", "mark_delay")
+                 if registers.get(name)]
+        registers.update(laser_on_delay=0, laser_off_delay=0, mark_delay=0)
+        if moved:
+            notes.append(f"pixel lines: {', '.join(moved)} 0 (the scan offset and the run-in "
+                         f"and run-out stand for them)")
+    registers.update(dict(settings.delays_us))
     if table is not None:
         registers["cor_enable"] = 1
     estimate = estimate_seconds(segments, pitch_units=pitch.pitch_units,
                                 pulses_per_point=pitch.pulses_per_point, prr_hz=prr_hz,
                                 jump_delay_us=jump_delay)
-    mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm)
+    mark_mm, jump_mm = jump_mark_lengths(segments, units_per_mm, pitch_units=pitch.pitch_units)
     if abs(pitch.error) > 0.02:
         notes.append(f"{settings.speed_mm_s:g} mm/s falls between the speeds whole galvo "
                      f"units and pulses make at {prr_hz / 1e3:g} kHz: marked at the nearest, "
@@ -182,7 +219,13 @@ def plan_objects(objects, settings, profile):
     """Plan :class:`MarkObject` s, marked one after the other on each pass, for ``profile``'s
     machine at ``settings``' speed, power, PRR and passes."""
     field_mm = profile.field.size_mm
-    _machine_settings(settings, profile)        # the speed and PRR first: the cheap checks
+    cells = {o.pixels.cell_units for o in objects if o.pixels is not None}
+    if len(cells) > 1:
+        raise PlanError("photos of different cell sizes in one layer: their pixel lines need "
+                        "one pitch (one --line-spacing, or a layer each)")
+    pitch_units = cells.pop() if cells else None
+    # The speed and PRR first: the cheap checks.
+    _, _, pitch = _machine_settings(settings, profile, pitch_units=pitch_units)
     for o in objects:
         for hatch_set in o.fill.hatch:
             if hatch_set.spacing_mm < profile.mm_per_unit:
@@ -203,21 +246,31 @@ def plan_objects(objects, settings, profile):
             elif index == 0 and len(objects) > 1:
                 raise PlanError(f"{o.drawing.name}: nothing to mark at its settings (no "
                                 f"outline, and no closed shape to fill)")
-            planned.append((paths, before, after))
-    ordered = [path for paths, _, _ in planned for path in paths]
+            planned.append((paths, before, after, o))
+    ordered = [path for paths, *_ in planned for path in paths]
     if not ordered:
         raise PlanError(f"{' and '.join(o.drawing.name for o in objects)}: nothing to mark "
                         f"(no outline, and no closed shape to fill)")
     field_check(ordered, field_mm)
-    segments = []
-    for paths, _, _ in planned:
-        segments += segments_from_paths([to_galvo(path, field_mm) for path in paths])
+    segments, line_notes = [], []
+    for k, (paths, before, after, o) in enumerate(planned):
+        if o.pixels is not None and paths:
+            lines, line_notes = pixel_line_segments(
+                o.pixels, o.placement.offset_mm, field_mm=field_mm,
+                speed_mm_s=pitch.speed_mm_s, tracking_delay_us=profile.galvo.tracking_delay_us)
+            segments += lines
+            # Its jumps are the lines' (from one line's end to the next's start).
+            jumps = jump_mark_lengths(lines, profile.units_per_mm)[1]
+            planned[k] = (paths, jumps, jumps, o)
+        else:
+            segments += segments_from_paths([to_galvo(path, field_mm) for path in paths])
     if not turning:
         segments *= settings.passes
     one_pass = planned[:len(objects)]
     before, after = sum(p[1] for p in one_pass), sum(p[2] for p in one_pass)
     notes = [note for o in objects for note in (*o.drawing.notes, *o.drawing.skipped)]
-    return _finish(segments, ordered, before, after, settings, profile, notes)
+    return _finish(segments, ordered, before, after, settings, profile, notes + line_notes,
+                   pitch_units=pitch_units)
 
 
 def check_clear(objects):

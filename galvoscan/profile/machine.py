@@ -11,7 +11,7 @@ comment on every key (:func:`galvoscan.profile.template.profile_text`)::
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
     [galvo]     jump_delay_us, min_jump_delay_us, jump_length_limit_mm, max_speed_mm_s,
                 laser_on_delay_us, laser_off_delay_us, mark_delay_us, polygon_delay_us,
-                polygon_scaled
+                polygon_scaled, tracking_delay_us
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
 
@@ -127,6 +127,9 @@ class GalvoSection:
     polygon_delay_us: float = _default("galvo", "polygon_delay_us")
     #: Scale each corner's polygon delay by (1 - cos φ) (RTC's variable polygon delay).
     polygon_scaled: bool = _default("galvo", "polygon_scaled")
+    #: The mirrors' lag behind their set point on a line at constant speed, µs (a critically
+    #: damped servo's 2/ωn: some 80 µs for the JD1403 galvo of Wan et al.).
+    tracking_delay_us: float = _default("galvo", "tracking_delay_us")
 
 
 @dataclass(frozen=True)
@@ -268,7 +271,8 @@ class MachineProfile:
                       "jump_length_limit_mm": self.galvo.jump_length_limit_mm,
                       "max_speed_mm_s": self.galvo.max_speed_mm_s,
                       **{key: getattr(self.galvo, key) for key in DELAY_KEYS},
-                      "polygon_scaled": self.galvo.polygon_scaled},
+                      "polygon_scaled": self.galvo.polygon_scaled,
+                      "tracking_delay_us": self.galvo.tracking_delay_us},
             "defaults": {"speed_mm_s": self.defaults.speed_mm_s,
                          "power_percent": self.defaults.power_percent,
                          "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},

@@ -133,6 +133,12 @@ polygon_delay_us = {n(d.galvo.polygon_delay_us)}
 # variable polygon delay: none straight on, the full delay at a right angle, twice it at a
 # reversal, at most 1270 µs); false: the full delay at every corner.
 polygon_scaled = {"true" if d.galvo.polygon_scaled else "false"}
+# How far in time the mirrors lag their set point on a line at constant speed (their
+# tracking error; a critically damped servo's 2/ωn, some 80 µs on a 10 mm head): a photo's
+# pixel lines are sent this far ahead, so each pixel lands where it belongs in both
+# directions, and run in and out at speed over three times it. Tune it with a test mark
+# of a photo: the two directions' edges then meet. {s("galvo", "tracking_delay_us")}.
+tracking_delay_us = {n(d.galvo.tracking_delay_us)}
 
 [defaults]
 # Job settings used when the command line does not give them.

@@ -22,7 +22,7 @@ from .schema import ProfileKey, Setting
 
 
 __all__ = ["SIZE", "CORRECTION", "PORT", "SPI", "MAX_POWER", "SPOT", "GUIDE", "JUMP_DELAY",
-           "MIN_JUMP_DELAY", "JUMP_LENGTH_LIMIT", "MAX_SPEED", "LASER_ON_DELAY", "LASER_OFF_DELAY", "MARK_DELAY",
+           "MIN_JUMP_DELAY", "JUMP_LENGTH_LIMIT", "MAX_SPEED", "TRACKING_DELAY", "LASER_ON_DELAY", "LASER_OFF_DELAY", "MARK_DELAY",
            "POLYGON_DELAY", "POLYGON_SCALED", "DELAYS", "LASER_DELAYS", "PROFILE"]
 
 
@@ -50,6 +50,11 @@ JUMP_LENGTH_LIMIT = Setting("jump_length_limit_mm", "number", "mm", 0, 3000, def
                                  "jump_delay_us")
 MAX_SPEED = Setting("max_speed_mm_s", "number", "mm/s", 1, 100_000, default=10_000.0,
                     help="fastest marking speed a job may ask for (the scan head's)")
+TRACKING_DELAY = Setting("tracking_delay_us", "number", "µs", 0, 2000, default=80.0,
+                         help="how far in time the mirrors lag their set point on a line at "
+                              "constant speed (their tracking error): a pixel line is sent "
+                              "this far ahead of the pixels, and run in and out over three "
+                              "times it")
 POLYGON_SCALED = Setting("polygon_scaled", "bool", default=True,
                          help="each corner's polygon delay scaled by (1 - cos φ), φ the turn "
                               "at the corner (RTC's variable polygon delay)")
@@ -121,7 +126,8 @@ PROFILE = {
                    ("laser_off_delay_us", LASER_OFF_DELAY, dict(default=50.0, kind="number")),
                    ("mark_delay_us", MARK_DELAY, dict(default=100.0, kind="number")),
                    ("polygon_delay_us", POLYGON_DELAY, dict(default=0.0, kind="number")),
-                   ("polygon_scaled", POLYGON_SCALED, {})),
+                   ("polygon_scaled", POLYGON_SCALED, {}),
+                   ("tracking_delay_us", TRACKING_DELAY, {})),
     "defaults": _keys("defaults", ("speed_mm_s", SPEED, dict(default=1000.0)),
                       ("power_percent", POWER, dict(default=10.0)),
                       ("prr_khz", PRR, dict(default=50.0, help="pulse repetition rate, within "

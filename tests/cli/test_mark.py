@@ -565,7 +565,8 @@ def test_a_photo_streams_with_no_underrun_where_the_link_keeps_up(tmp_path, caps
     machine.write_text(QUICK_MIRRORS)
     strip = shaded_picture(tmp_path / "strip.png", 16)
     argv = ["mark", "--image", str(strip), "--width", "24", "--speed", "1000", "--machine",
-            str(machine), "--sim", "--board", board, *SIM_TIMEOUT, "--json"]
+            str(machine), "--image-lines", "runs", "--sim", "--board", board, *SIM_TIMEOUT,
+            "--json"]
     if board == "ulx3s":
         result = run_json(argv, capsys)
         assert "underruns" not in capsys.readouterr().err
@@ -579,3 +580,63 @@ def test_a_photo_streams_with_no_underrun_where_the_link_keeps_up(tmp_path, caps
     foretold = int(re.search(r"expect about ([\d,]+) underruns", err)[1].replace(",", ""))
     happened = int(re.search(r"underruns (\d+),", err)[1])
     assert 0 < happened <= foretold <= 1.2 * happened, err
+
+
+# --- a photo as pixel lines ---------------------------------------------------------------------
+
+def test_a_photos_pixel_lines_light_its_dithered_cells_on_the_wires(tmp_path, capsys):
+    """A photo marked as pixel lines (the default) on the simulated board (the engraver's
+    bitstream, which has them): the points lit on the wires are exactly the dithered grid's
+    dark cells, each row shifted as one by the scan offset, the other way on the next row;
+    every dark cell gets the same pulses; a tenth of the runs' link words."""
+    from galvoscan.inputs.photo import PhotoSpec, photo_bitmap
+    picture = shaded_picture(tmp_path / "photo.png", 60, 80)
+    argv = ["mark", "--image", str(picture), "--width", "3", "--speed", "800", "--sim",
+            *SIM_TIMEOUT, "--json"]
+    result = run_json(argv, capsys)
+    units_per_mm = 65536 / 110
+    cell = round(0.05 * units_per_mm) / units_per_mm
+    dark = photo_bitmap(PhotoSpec(str(picture), 3, cell))
+    rows, columns = dark.shape
+    lit = [(round(x * units_per_mm + 32768), round(y * units_per_mm + 32768))
+           for x, y in result["marks"]]
+    assert len(lit) == len(set(lit)) == dark.sum()
+    assert result["pulses"] == dark.sum() * result["pulses_per_point"]
+    assert result["underruns"] == result["errors"] == result["rejected"] == 0
+    shifts = []
+    for r in range(rows):
+        y = round((rows * cell / 2 - (r + 0.5) * cell) * units_per_mm + 32768)
+        xs = sorted(x for x, yy in lit if yy == y)
+        centres = [round((-columns * cell / 2 + (c + 0.5) * cell) * units_per_mm + 32768)
+                   for c in np.flatnonzero(dark[r])]
+        assert len(xs) == len(centres), r
+        if centres:
+            row_shift = {x - c for x, c in zip(xs, centres)}
+            assert len(row_shift) == 1, (r, row_shift)
+            shifts.append(row_shift.pop())
+    # The mirrors' 80 µs lag at the line's speed, ahead in each row's own direction.
+    offset = round(result["speed_mm_s"] * 80e-6 * units_per_mm)
+    assert shifts == [offset * (-1) ** n for n in range(len(shifts))]
+    runs = run_json(["mark", "--image", str(picture), "--width", "3", "--speed", "800",
+                     "--image-lines", "runs", "--estimate", "--json"], capsys)
+    assert result["segments"] * 5 < runs["segments"]
+
+
+def test_a_photos_pixel_lines_are_refused_by_a_bitstream_without_them(tmp_path, capsys):
+    """The ULX3S's bitstream has them; a board without them (here the default iCEBreaker's,
+    by its caps) refuses before anything is sent, in one line that says what to do."""
+    from galvoscan.outputs.stream import JobAborted, JobStreamer
+    from galvoscan.api import Job, Photo, plan
+    from galvoscan.gateware.top import ScanSettings
+    from galvoscan.link.client import HostClient
+    from sim_board import SimBoard, SimSPITransport
+    picture = shaded_picture(tmp_path / "photo.png", 20, 20)
+    planned = plan(Job(photos=(Photo(str(picture), 1.0),)))
+    board = SimBoard(settings=ScanSettings(mode="vector", run=False))
+    client = HostClient(SimSPITransport(board, clocks_per_sck=12))
+    streamer = JobStreamer(client)
+    with pytest.raises(JobAborted, match="no pixel lines .* --image-lines runs; nothing was "
+                                         "sent"):
+        streamer.run_vector(planned.segments, planned.vector_job.registers)
+    assert client.read("fifo_free") == client.read("vec_depth")
+    assert client.read("link_seq") == 0
