@@ -49,6 +49,14 @@ def test_bench_quick(capsys):
     assert photo["underruns"] == photo["foretold_underruns"]["3"] == 0 < \
         photo["foretold_underruns"]["1"]
     assert photo["errors"] == photo["rejected"] == 0 and photo["board_s"] > photo["estimate_s"]
+    # The same strip as pixel lines, on the engraver's bitstream at 1 Mbaud: a line a row
+    # with a dark cell, far fewer segments, no underrun, the pulses a whole number of cells'.
+    pixels = link["photo_pixels"]
+    assert pixels["lines"] == "pixels" and pixels["baud"] == 1_000_000
+    assert 0 < pixels["pixel_lines"] <= 16 and pixels["segments"] * 4 < photo["segments"]
+    assert pixels["underruns"] == pixels["errors"] == pixels["rejected"] == 0
+    assert pixels["pulses"] > 0 and pixels["pulses"] % pixels["pulses_per_point"] == 0
+    assert pixels["board_s"] > pixels["estimate_s"]
     # Both boards' default bitstreams on the compiled board, against real time.
     assert set(result["real_time"]) == {"icebreaker", "ulx3s"}
     assert [f["clock_mhz"] for f in result["real_time"].values()] == [12, 24]

@@ -280,7 +280,8 @@ def test_marking_pages_photo_figures_are_the_plans(tmp_path):
     galvo = default_profile().galvo
     assert defaults and tuple(map(float, defaults.groups())) == (
         galvo.min_jump_delay_us, galvo.jump_delay_us, galvo.jump_length_limit_mm)
-    job = api.Job(photos=(api.Photo(str(grey_photo(tmp_path / "grey.png")), 30.0),))
+    job = api.Job(photos=(api.Photo(str(grey_photo(tmp_path / "grey.png")), 30.0,
+                                    lines="runs"),))
     for profile, (seconds, segments) in ((default_profile(), found.group(1, 2)),
                                          (parse_profile("[galvo]\njump_length_limit_mm = 0\n"),
                                           found.group(3, 4))):
@@ -288,6 +289,26 @@ def test_marking_pages_photo_figures_are_the_plans(tmp_path):
         assert (f"{planned.estimate_s:.1f}", f"{len(planned.segments):,}") == (seconds, segments)
     link = re.search(r"the link at 1 Mbaud takes (\d+) µs to bring a jump and its mark", text)
     assert link and int(link[1]) == round(2 * FRAME_LINE_BITS / 1_000_000 * 1e6)
+
+
+def test_marking_pages_pixel_line_figures_are_the_readme_photos_plans():
+    """The marking page's figures for the README's photo, as pixel lines and as runs, are
+    what planning it gives."""
+    from galvoscan import api
+    text = " ".join(page("user/marking.md").split())
+    found = re.search(r"The 30 mm photo of the README plans as ([\d,]+) lines in ([\d,]+) "
+                      r"segments \(link words\), ([\d.]+) s of board time at ([\d,]+) mm/s; as "
+                      r"runs, ([\d,]+) marks and their jumps in ([\d,]+) segments, ([\d.]+) s "
+                      r"at ([\d,]+) mm/s", text)
+    assert found, "the marking page's pixel-line figures"
+    hopper = str(ROOT / "docs" / "marking" / "hopper.jpg")
+    pixels = api.plan(api.Job(photos=(api.Photo(hopper, 30.0),))).vector_job
+    runs = api.plan(api.Job(photos=(api.Photo(hopper, 30.0, lines="runs"),))).vector_job
+    assert found.groups() == (
+        f"{sum(op == 'line' for op, *_ in pixels.segments):,}", f"{len(pixels.segments):,}",
+        f"{pixels.estimate_s:.1f}", f"{pixels.pitch.speed_mm_s:,.0f}",
+        f"{len(runs.paths_mm):,}",
+        f"{len(runs.segments):,}", f"{runs.estimate_s:.1f}", f"{runs.pitch.speed_mm_s:,.0f}")
 
 
 def test_first_jobs_plan_is_what_mark_prints(tmp_path, capsys, monkeypatch):

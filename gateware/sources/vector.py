@@ -149,14 +149,16 @@ class VectorSequencer(wiring.Component):
             members["direction"] = Out(Direction, init={"ux": 1 << DIRECTION_BITS})
         super().__init__(members)
         # State the pixel-line proof's helper invariants name (galvoscan.formal.vector).
-        self._slot_valid = Signal()         # a point waits in the slot
-        self._slot_mark = Signal()          # it is a marked point (of a mark or a line)
-        self._slot_gate = Signal(init=1)    # its pixel bit (1 off a pixel line)
-        self._holding_mark = Signal()       # the point held is a marked one, its pulses to come
-        self._held_gate = Signal()          # the point held is lit (its bit; 1 off a line)
-        self._pixel_line = Signal()         # the segment being stepped is a pixel line
-        self._pixel_bits = Signal(PIXELS_PER_WORD)
-        self._stepping = Signal()           # a mark or line is being stepped (not fetching)
+        # (Named as the locals they stand for: a build without pixel lines is the same
+        # netlist, name for name, as before them.)
+        self._slot_valid = Signal(name="slot_valid")            # a point waits in the slot
+        self._slot_mark = Signal(name="slot_mark")              # a marked point (mark or line)
+        self._slot_gate = Signal(init=1, name="slot_gate")      # its bit (1 off a pixel line)
+        self._holding_mark = Signal(name="holding_mark")        # a marked point is held
+        self._held_gate = Signal(name="held_gate")              # the point held is lit
+        self._pixel_line = Signal(name="pixel_line")            # stepping a pixel line
+        self._pixel_bits = Signal(PIXELS_PER_WORD, name="pixel_bits")
+        self._stepping = Signal(name="stepping")                # stepping a line (pixel builds)
 
     def _line_dda(self):
         """The line interpolator (the pixel-line proof puts a free one in its place)."""
@@ -226,10 +228,14 @@ class VectorSequencer(wiring.Component):
             with m.State("FETCH"):
                 m.d.comb += fetching.eq(~segment_valid & ~dda.busy)
                 take = self.commands.valid & slot_free & ~segment_valid & ~dda.busy
-                with m.If(take & is_word):
-                    # A word past the end of its line (or of none): dropped.
-                    m.d.comb += self.commands.ready.eq(1)
-                with m.Elif(take):
+                if self.pixel_lines:
+                    with m.If(take & is_word):
+                        # A word past the end of its line (or of none): dropped.
+                        m.d.comb += self.commands.ready.eq(1)
+                    taking = m.Elif(take)
+                else:
+                    taking = m.If(take)
+                with taking:
                     with m.If(command.op == OP_JUMP):
                         m.d.comb += self.commands.ready.eq(1)
                         m.d.sync += [
@@ -266,8 +272,8 @@ class VectorSequencer(wiring.Component):
                                              slot_y.eq(cur_y), slot_mark.eq(1), slot_end.eq(0)]
                         m.next = "STEP"
             with m.State("STEP"):
-                m.d.comb += self._stepping.eq(1)
                 if self.pixel_lines:
+                    m.d.comb += self._stepping.eq(1)
                     # The line's next pixel word, when its last bit has been used.
                     with m.If(pixel_line & (bits_left == 0) & is_word):
                         m.d.comb += self.commands.ready.eq(1)
@@ -401,7 +407,7 @@ class VectorSequencer(wiring.Component):
             with m.Elif(done):
                 # Nothing to go on with: hold here with the laser off.
                 # (A pixel line waiting for its next word is waiting on the queue too.)
-                queue_empty = (fetching | (~bit_ready if self.pixel_lines else 0)) & \
+                queue_empty = ((fetching | ~bit_ready) if self.pixel_lines else fetching) & \
                     ~self.commands.valid
                 m.d.comb += [self.underrun.eq(holding_mark & queue_empty),
                              self.stall.eq(holding_mark & ~queue_empty)]

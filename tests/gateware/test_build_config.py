@@ -33,6 +33,7 @@ def test_the_options_are_normalised_once():
     (dict(vector_delays=True, clk_freq=12.5e6, bit_rate=1.25e6),
      "the vector delays count whole µs"),
     (dict(mo_lead=0), "mo_lead must be a positive time"),
+    (dict(pixel_lines=True), "pixel lines come with vector mode's delays"),
 ])
 def test_bad_options_are_refused_at_construction(options, message):
     with pytest.raises(ValueError, match=message):
@@ -42,7 +43,7 @@ def test_bad_options_are_refused_at_construction(options, message):
 def test_the_caps_register_is_what_the_configuration_built():
     # The caps bits in the order the README's register table gives them, bit 0 first.
     order = ("spiral", "raster", "vector", "laser", "correction", "wobble", "delays",
-             "interpolation", "uart", "spi", "player")
+             "interpolation", "uart", "spi", "player", "pixel_lines")
     for name, config in PRESETS.items():
         caps = preset_register_map(name)["caps"].reset
         built = {flag: bool(caps >> bit & 1) for bit, flag in enumerate(order)}
@@ -50,6 +51,8 @@ def test_the_caps_register_is_what_the_configuration_built():
         assert built["player"] == (name == "marker")
         assert built["interpolation"] == (name == "cleaner")
         assert built["spi"] == (name != "marker")       # the player takes the SPI pins
+        assert built["pixel_lines"] == (name == "engraver")
+        assert built["delays"] == (name in ("marker", "engraver"))
         assert built["correction"] and built["laser"] and built["uart"]
 
 

@@ -126,6 +126,7 @@ def test_marked_cells_are_the_dark_cells_off_the_wires(tmp_path, capsys, extra, 
     with quick_sim_board(**VECTOR_BOARD):
         assert main(["mark", "--image", str(tmp_path / "p.png"), "--width", "3",
                      "--line-spacing", "0.1", "--dither", dither, "--image-at=4,-2", *extra,
+                     "--image-lines", "runs",
                      "--speed", "500", "--prr", "50", "--machine", str(machine), "--sim",
                      "--timeout", "600", "--json"]) == 0
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])

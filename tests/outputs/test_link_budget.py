@@ -14,7 +14,7 @@ def test_a_60000_mark_photo_is_foretold_to_stream_at_3_mbaud_not_at_1(tmp_path):
     default, quick = api.default_profile(), photo_profile()
     picture = shaded_picture(tmp_path / "photo.png", 300)
     for profile, at_1_mbaud in ((default, False), (quick, True)):
-        job = api.plan(api.Job(photos=[api.Photo(str(picture), width_mm=24)],
+        job = api.plan(api.Job(photos=[api.Photo(str(picture), width_mm=24, lines="runs")],
                                speed_mm_s=1000), profile).vector_job
         marks = sum(1 for a, b in zip(job.segments, job.segments[1:])
                     if a[0] == "jump" and b[0] == "mark")

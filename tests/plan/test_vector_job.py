@@ -12,7 +12,8 @@ def test_a_photos_estimate_drops_with_the_default_jump_delays(tmp_path):
     """The 30 mm photo: its thousands of short gaps wait 240 µs and a little, not the 500 µs
     of a jump across the field, as they did with one delay for every jump; the holds add few
     segments, and the link at 1 Mbaud still brings them faster than the board takes them."""
-    job = api.Job(photos=(api.Photo(str(grey_photo(tmp_path / "grey.png")), 30.0),))
+    job = api.Job(photos=(api.Photo(str(grey_photo(tmp_path / "grey.png")), 30.0,
+                                    lines="runs"),))
     one_delay = api.plan(job, parse_profile("[galvo]\njump_length_limit_mm = 0\n")).vector_job
     variable = api.plan(job, default_profile()).vector_job
     assert one_delay.registers["jump_delay"] == 500

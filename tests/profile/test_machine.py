@@ -35,6 +35,7 @@ RANGES = {
     ("galvo", "min_jump_delay_us"): (0, 65_535, False),      # the jump_delay register's
     ("galvo", "jump_length_limit_mm"): (0, 3000, False),
     ("galvo", "max_speed_mm_s"): (1, 100_000, False),
+    ("galvo", "tracking_delay_us"): (0, 2000, False),
     ("defaults", "speed_mm_s"): (0.1, 100_000, False),
     ("defaults", "power_percent"): (0, 100, False),
     ("defaults", "prr_khz"): (20, 200, False),               # laser_prr 200 … 2000 × 100 Hz
@@ -450,3 +451,20 @@ def test_correction_folder(tmp_path):
     path.write_text('[field]\ncorrection = "tables"\n')
     with pytest.raises(ProfileError, match=r"\[field\] correction: .* is a folder"):
         load_profile(path)
+
+
+def test_the_tracking_delay_is_the_galvo_models():
+    """The default tracking delay is the lag of the galvo model (Wan et al.'s JD1403, fitted
+    to its step times) behind a set point moving at constant speed: a critically damped
+    servo's 2/ωn, measured here by following a ramp."""
+    import numpy as np
+    from galvoscan.analysis.galvo import GalvoModel
+    galvo = GalvoModel.from_step_times()
+    frames = np.arange(400) * 3.0                 # 3 units a 10 µs frame: a slow ramp
+    path = galvo.follow(frames, frames * 0)
+    t = np.arange(len(path.x)) * path.dt
+    # Late in the ramp the mirror is where the set point was a lag ago.
+    speed = 3.0 / 10e-6
+    lag_s = (frames[-1] - path.x[-1]) / speed
+    assert default_profile().galvo.tracking_delay_us == pytest.approx(lag_s * 1e6, abs=5)
+    assert t[-1] > 10 * lag_s

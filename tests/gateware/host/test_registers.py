@@ -21,7 +21,7 @@ DEFAULT_BUILD = [
     ("link_seq", 0x18, "ro", 0, 0, 0, 8),
     ("keepalive", 0x19, "strobe", 0, 0, 1, 1),
     ("soft_reset", 0x1a, "strobe", 0, 0, 1, 1),
-    ("caps", 0x0e, "ro", 0, 0, 0, 11),
+    ("caps", 0x0e, "ro", 0, 0, 0, 12),
     ("vec_depth", 0x0f, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
@@ -320,8 +320,8 @@ def test_fixed_registers_read_the_builds_values_and_refuse_writes(reads_from_ram
     accesses = [(0x0e, 0, False, True), (0x0f, 0, False, True), (0x0e, 1, True, True),
                 (0x0f, 7, True, True), (0x0e, 0, False, True), (0x0f, 0, False, True)]
     run(RegisterFile(regmap, reads_from_ram=reads_from_ram), model, accesses)
-    with pytest.raises(ValueError, match="does not fit its 11 bits"):
-        register_map(fixed={"caps": 1 << 11})
+    with pytest.raises(ValueError, match="does not fit its 12 bits"):
+        register_map(fixed={"caps": 1 << 12})
     with pytest.raises(ValueError, match="not a register fixed by the build"):
         register_map(fixed={"errors": 1})
 
@@ -438,3 +438,11 @@ def accesses(draw):
 def test_random_accesses_follow_the_model(steps, status, errors):
     run(RegisterFile(register_map(**DELAYS)), RegisterModel(table()), steps,
         inputs={"status": status, "errors": errors, "fifo_free": 512})
+
+
+def test_pixel_lines_take_vec_ops_bit_8():
+    """A build with pixel lines (and the delays) takes vec_op's bit 8, the pixels bit."""
+    vec_op = register_map(vector_delays=True, pixel_lines=True)["vec_op"]
+    assert (vec_op.low, vec_op.high, vec_op.width) == (0, 511, 9)
+    assert "bit 8 (pixels)" in vec_op.description
+    assert register_map(**DELAYS)["vec_op"].high == 255
