@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
 from ..inputs.drawings import SCALES, UNITS
+from ..inputs.gcode import S_MAX, S_MAX_RANGE
 from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
@@ -88,8 +89,8 @@ def _setting(setting, group, section):
 OPTIONS = (
     Option(None, "file", dict(
         metavar="FILE", nargs="?",
-        help="the drawing (.svg, .dxf, or a .job in galvo units) or a job file (.toml, as "
-             "--save writes); none, with --text, --code or --image"),
+        help="the drawing (.svg, .dxf, G-code: .gcode, .nc, …; or a .job in galvo units) or "
+             "a job file (.toml, as --save writes); none, with --text, --code or --image"),
         section="drawing", key="file"),
     # text
     Option("--text", "text", dict(
@@ -208,9 +209,14 @@ OPTIONS = (
     Option("--units", "placement", dict(
         choices=list(UNITS), default=None,
         help="the unit the drawing's numbers are in, in place of the units it declares (an "
-             "SVG's width, height and viewBox; a DXF's $INSUNITS): " +
+             "SVG's width, height and viewBox; a DXF's $INSUNITS; G-code's G20, G21): " +
              ", ".join(f"{unit} ({name})" for unit, (_, name) in UNITS.items()) +
              "; pt and px are 1/72 and 1/96 in"), section="drawing"),
+    Option("--s-max", "drawing", dict(
+        type=number_in("S maximum", *S_MAX_RANGE), default=None, metavar="S",
+        help=f"G-code: the S value of full power, each S marked at that share of the "
+             f"laser's power (default: {S_MAX:g}, GRBL's $30; Inkscape's J Tech extension "
+             f"and Marlin: 255)"), section="drawing"),
     Option("--scale", "placement", dict(
         type=number_in("scale", *SCALES), default=1.0, metavar="K",
         help="size factor, about the drawing's centre (default: 1)"), section="drawing"),
