@@ -268,7 +268,7 @@ class _Reader:
                                  f"G20, G21, G28, G30, G40, G54, G90, G91, G90.1, G91.1, G94)")
         if dwell:
             self.left_out["G4"] += 1
-            if motion is not None:
+            if motion is not None or any(axis in given for axis in _AXES):
                 raise _LineError("a dwell (G4) and a move on one line")
             given.pop("P", None)
         if "P" in given:

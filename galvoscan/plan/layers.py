@@ -137,19 +137,29 @@ def with_file_layers(layers, drawings):
     one stands."""
     layers = list(layers)
     by_name = {layer.match.casefold(): k for k, layer in enumerate(layers)}
+    files = {}                              # name → the file layer first made of it
     for drawing in drawings:
         for own in drawing.layers:
             made = Layer(own.name, speed_mm_s=own.speed_mm_s, power_percent=own.power_percent)
-            k = by_name.get(made.match.casefold())
+            name = made.match.casefold()
+            if name in files:
+                if files[name] != made:
+                    raise PlanError(f"{drawing.name}: its layer {own.name!r} is at "
+                                    f"{own.power_percent:g} %, another drawing's at "
+                                    f"{files[name].power_percent:g} %: give both the same "
+                                    f"S maximum")
+                continue
+            files[name] = made
+            k = by_name.get(name)
             if k is None:
-                by_name[made.match.casefold()] = len(layers)
+                by_name[name] = len(layers)
                 layers.append(made)
                 continue
             given = layers[k]
             if given.is_colour:
                 continue
-            changed = {name: getattr(given, name) for name in Layer.__dataclass_fields__
-                       if name != "match" and getattr(given, name) is not None}
+            changed = {field: getattr(given, field) for field in Layer.__dataclass_fields__
+                       if field != "match" and getattr(given, field) is not None}
             layers[k] = replace(made, match=given.match, **changed)
     return layers
 

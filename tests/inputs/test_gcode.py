@@ -260,7 +260,8 @@ def test_harmless_words_are_read_and_what_is_left_out_is_counted(tmp_path):
     (["G18"], 1, "G18"),
     (["M3 S10 F600", "G2 X10 Y0 R5 I1"], 2, "both R and I/J"),
     (["G1 F0.5 X1 M3 S1"], 1, "mm/s: galvoscan marks at 0.1"),
-    (["G1 X1e3"], 1, "E3: not a word"),           # (GRBL reads no exponent)
+    (["G1 X1e3"], 1, "E3: not a word"),
+    (["M3 S10 F600", "G4 P1 X5"], 2, "a dwell (G4) and a move"),           # (GRBL reads no exponent)
     (["M3 S10 F600", "G1 X" + "9" * 12], 2, "beyond any machine"),
 ])
 def test_a_damaged_line_is_one_line_naming_it(tmp_path, lines, number, words):
@@ -304,6 +305,18 @@ def test_the_plan_has_a_layer_for_each_s_and_f(tmp_path):
     assert [lj.label for lj in layers] == ["s600 f1000", "S300 F1000"]
     assert (layers[0].settings.passes, layers[0].settings.power_percent,
             layers[0].settings.speed_mm_s) == pytest.approx((3, 45, 1000 / 60))
+
+
+def test_two_files_with_one_layer_name_at_two_powers_are_refused(tmp_path):
+    """Two G-code drawings whose S500 F600 are different powers (their S maxima differ):
+    one layer cannot be both."""
+    path = write(tmp_path, "M3 S500 F600\nG1 X1\n")
+    same = api.Job(drawings=[api.Drawing(str(path)), api.Drawing(str(path), offset_mm=(5, 0))])
+    assert [lj.label for lj in api.plan(same).vector_job.layers] == ["S500 F600"]
+    mixed = api.Job(drawings=[api.Drawing(str(path)),
+                              api.Drawing(str(path), offset_mm=(5, 0), s_max=500)])
+    with pytest.raises(ValueError, match="'S500 F600' is at 100 %, another drawing's at 50 %"):
+        api.plan(mixed)
 
 
 # --- anything at all: a Drawing or a DrawingError ---------------------------------------------
