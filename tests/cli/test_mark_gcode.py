@@ -1,8 +1,11 @@
 """`galvoscan mark FILE.gcode`: G-code as a drawing, each distinct S and F a layer at that
 speed and power, planned with ``--estimate`` (no board); a damaged line refused in one line,
-exit status 2; ``--s-max`` through the command line and a job file. The files are
-tests/data/gcode/'s (see its README)."""
+exit status 2; ``--s-max`` through the command line and a job file; a small file marked on
+the simulated board, its points off the wires on its shapes and each layer's speed and power
+measured there. The files are tests/data/gcode/'s (see its README)."""
 
+import json
+import math
 from pathlib import Path
 
 import pytest
@@ -74,3 +77,54 @@ def test_s_max_is_saved_in_a_job_file(tmp_path, capsys):
     capsys.readouterr()
     assert main(["mark", str(job), "--estimate"]) == 0
     assert "(speed 12.5 mm/s, power 100 %)" in capsys.readouterr().out
+
+
+# A 1 mm square at S800 F60000 (1000 mm/s, 80 %) and a circle of 0.4 mm radius about (2.4, 0)
+# at S400 F120000 (2000 mm/s, 40 %): small and fast, so the simulated board marks it in a
+# few milliseconds of its time.
+SIM_GCODE = """G21 G90
+G0 X0 Y0
+M4 S800 F60000
+G1 X1 Y0
+G1 X1 Y1
+G1 X0 Y1
+G1 X0 Y0
+M5
+G0 X2 Y0
+M3 S400 F120000
+G2 X2 Y0 I0.4 J0
+M5
+"""
+# The machine of tests/cli/test_mark.py: a 0.1 mm spot, quick mirrors.
+PROFILE = "[laser]\nspot_mm = 0.1\n[galvo]\njump_delay_us = 100\n"
+#: One galvo unit of a 110 mm field, the pitch at most half the spot, the chord tolerance.
+UNIT_MM, HALF_PITCH_MM, CHORD_MM = 110 / 65536, 0.05, 0.01
+
+
+def test_gcode_layers_marked_off_the_wires(tmp_path, capsys):
+    """On the simulated board: every marked point off the XY2-100 wires lies on the square or
+    the circle (in the file's own mm), and each layer is marked at its F and S, as measured
+    on the wires."""
+    from sim_board import VECTOR_BOARD, quick_sim_board
+    path = tmp_path / "part.gcode"
+    path.write_text(SIM_GCODE)
+    machine = tmp_path / "machine.toml"
+    machine.write_text(PROFILE)
+    with quick_sim_board(**VECTOR_BOARD):
+        assert main(["mark", str(path), "--prr", "50", "--machine", str(machine), "--sim",
+                     "--timeout", "600", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["drawing_frame"].startswith("the drawing's own") and result["underruns"] == 0
+    reach = HALF_PITCH_MM + CHORD_MM + 2 * UNIT_MM
+    for x, y in result["drawing_marks"]:
+        on_square = min(abs(x), abs(x - 1), abs(y), abs(y - 1)) <= reach and \
+            -reach <= x <= 1 + reach and -reach <= y <= 1 + reach
+        on_circle = abs(math.hypot(x - 2.4, y) - 0.4) <= reach
+        assert on_square or on_circle, (x, y)
+    square, circle = result["layers"]
+    assert (square["match"], circle["match"]) == ("S800 F60000", "S400 F120000")
+    assert square["speed_mm_s"] == pytest.approx(1000, rel=0.02)
+    assert circle["speed_mm_s"] == pytest.approx(2000, rel=0.02)
+    assert (square["power_percent"], circle["power_percent"]) == (80, 40)
+    # Every point of both: the square's 4 mm and the circle's 2.5 mm at their pitches.
+    assert square["points"] >= 4 / (1000 / 50e3) and circle["points"] >= 2.5 / (2000 / 50e3)
