@@ -135,7 +135,12 @@ def _code_part(line):
 
 def _words(code):
     """The line's words, ``[(letter, value)]``; a line that is not only words refused."""
-    text = re.sub(r"[ \t\r]", "", code).upper()
+    text = re.sub(r"[ \t\r]", "", code)
+    if not text.isascii():
+        # (Before upper(): "ſ".upper() is "S".)
+        odd = next(char for char in text if not char.isascii())
+        raise _LineError(f"{odd!r} is not a character of G-code's words")
+    text = text.upper()
     if not text or text == "%":
         return []
     words, at = [], 0
@@ -174,9 +179,9 @@ class _Reader:
         self.s = 0.0
         self.f_mm_min = None
         self.at = np.zeros(2)
-        self.path, self.key = None, None    # the polyline being marked and its (S, F)
+        self.path, self.key = None, None    # the polyline being marked and its layer
         self.paths, self.styles = [], []
-        self.layers = {}                    # (S, F mm/min) → FileLayer, in the file's order
+        self.layers = {}                    # name → FileLayer, in the order the file uses them
         self.left_out = Counter()
         self.number = 0                     # the line being read
 
@@ -189,7 +194,7 @@ class _Reader:
     def _end_path(self):
         if self.path is not None and len(self.path) >= 2:
             self.paths.append(np.array(self.path))
-            self.styles.append(PathStyle(layer=self.layers[self.key].name))
+            self.styles.append(PathStyle(layer=self.key))
         self.path, self.key = None, None
 
     def _layer(self):
@@ -199,14 +204,14 @@ class _Reader:
         if self.s > self.s_max:
             raise _LineError(f"S{self.s:g} is more than the S maximum {self.s_max:g} "
                              f"(GRBL's $30; give the file's with --s-max)")
-        key = (self.s, round(self.f_mm_min, 9))
+        # The layer's name is its key: an S and F that print alike (to 6 figures) are one.
+        key = f"S{self.s:g} F{self.f_mm_min:g}"
         if key not in self.layers:
             speed = self.f_mm_min / 60
             if not SPEED.low <= speed <= SPEED.high:
                 raise _LineError(f"F{self.f_mm_min:g} mm/min is {speed:g} mm/s: galvoscan "
                                  f"marks at {SPEED.low:g} to {SPEED.high:g} mm/s")
-            name = f"S{self.s:g} F{self.f_mm_min:.6g}"
-            self.layers[key] = FileLayer(name, speed, 100.0 * self.s / self.s_max)
+            self.layers[key] = FileLayer(key, speed, 100.0 * self.s / self.s_max)
         return key
 
     def _move_to(self, points, marks):
@@ -244,7 +249,7 @@ class _Reader:
             raise _LineError("a G or M code given twice")
         # GRBL's order: feed, spindle speed, spindle (M3/M4/M5), dwell, units, distance mode,
         # the move.
-        motion, dwell = None, False
+        motion, dwell, homing = None, False, False
         for g in gs:
             if g in (0.0, 1.0, 2.0, 3.0):
                 if motion is not None:
@@ -262,7 +267,7 @@ class _Reader:
                 self.ij_absolute = g == 90.1
             elif g in (28.0, 30.0):
                 self.left_out["G28"] += 1
-                return                      # (its X Y are an intermediate point: not ours)
+                homing = True
             elif g not in _HARMLESS_G:
                 raise _LineError(f"G{_code(g)}: not a G code galvoscan reads (G0–G4, G17, "
                                  f"G20, G21, G28, G30, G40, G54, G90, G91, G90.1, G91.1, G94)")
@@ -299,6 +304,10 @@ class _Reader:
             self.left_out["Z"] += 1
         if motion is not None:
             self.motion = motion
+        if homing:
+            if motion is not None:
+                raise _LineError("a homing move (G28, G30) and another move on one line")
+            return                          # (its X Y are a point on the way home: no mark)
         if not any(axis in given for axis in ("X", "Y", "I", "J", "R")):
             if "K" in given:
                 raise _LineError("K: an arc in the XY plane has I and J, not K")

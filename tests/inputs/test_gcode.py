@@ -25,7 +25,7 @@ ATOL = 1e-7
 
 def write(tmp_path, text, name="t.gcode"):
     path = tmp_path / name
-    path.write_text(text)
+    path.write_text(text, encoding="utf-8")
     return path
 
 
@@ -237,11 +237,12 @@ def test_harmless_words_are_read_and_what_is_left_out_is_counted(tmp_path):
     path = write(tmp_path, "\n".join([
         "%", "; a comment", "(another) G17 G40 G54 G94 G21 G90 (and one more)",
         "N1 M3 S500 F600 ; laser on", "N2 G4 P0.5", "M8", body + f"*{checksum}",
-        "G1 Z-1 X20", "M9", "G4 P1", "M2", "%"]) + "\n")
+        "G1 Z-1 X20", "M9", "G4 P1", "G28 X0 Y0", "M2", "%"]) + "\n")
     d = load_drawing(path)
     (p,) = d.paths
     np.testing.assert_allclose(p, [(0, 0), (10, 0), (20, 0)])
-    assert d.skipped == ("2 G4 dwells (a galvo marks no dwell from G-code)",
+    assert d.skipped == ("1 G28/G30 homing move (not a move on a galvo)",
+                         "2 G4 dwells (a galvo marks no dwell from G-code)",
                          "2 M7/M8/M9 air assist commands",
                          "1 Z word (a galvo has no Z)")
     assert any("S1000" in note for note in d.notes)
@@ -261,7 +262,9 @@ def test_harmless_words_are_read_and_what_is_left_out_is_counted(tmp_path):
     (["M3 S10 F600", "G2 X10 Y0 R5 I1"], 2, "both R and I/J"),
     (["G1 F0.5 X1 M3 S1"], 1, "mm/s: galvoscan marks at 0.1"),
     (["G1 X1e3"], 1, "E3: not a word"),
-    (["M3 S10 F600", "G4 P1 X5"], 2, "a dwell (G4) and a move"),           # (GRBL reads no exponent)
+    (["M3 S10 F600", "G4 P1 X5"], 2, "a dwell (G4) and a move"),
+    (["M3 S10 F600", "G1 X1 \u017f500"], 2, "'\u017f' is not a character"),   # a long s
+    (["G28 G1 X5"], 1, "a homing move (G28, G30) and another"),           # (GRBL reads no exponent)
     (["M3 S10 F600", "G1 X" + "9" * 12], 2, "beyond any machine"),
 ])
 def test_a_damaged_line_is_one_line_naming_it(tmp_path, lines, number, words):
