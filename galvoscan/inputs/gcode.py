@@ -80,10 +80,11 @@ _LEFT_OUT = {
     "T": ("tool change word (T, M6)", "tool change words (T, M6)"),
     "Z": ("Z word (a galvo has no Z)", "Z words (a galvo has no Z)"),
 }
-_LEFT_OUT_BY_WORD = {"G4": "G4", "G28": "G28", "G30": "G28", "M0": "M0", "M1": "M0",
-                     "M7": "M7", "M8": "M7", "M9": "M7", "M6": "T"}
-#: The words a line may hold, each once (G and M: once a code).
+#: The M codes left out, and what each is counted as (:data:`_LEFT_OUT`'s key).
+_LEFT_OUT_M = {"M0": "M0", "M1": "M0", "M6": "T", "M7": "M7", "M8": "M7", "M9": "M7"}
+#: The letters of lengths: the axes and an arc's centre and radius.
 _AXES = ("X", "Y", "Z", "I", "J", "K", "R")
+#: The letters a line may hold: each once, but G and M once a code.
 _KNOWN = set("GMNSFPT") | set(_AXES)
 
 
@@ -103,7 +104,8 @@ def _decoded(data):
 
 
 def _code_part(line):
-    """The line with its comments and checksum taken out: ``(code, had a checksum)``."""
+    """The line with its comments taken out, and its checksum, if it has one, checked and
+    taken out."""
     code, _, _ = line.partition(";")
     out, depth = [], 0
     for char in code:
@@ -198,7 +200,8 @@ class _Reader:
         self.path, self.key = None, None
 
     def _layer(self):
-        """The (S, F) key of a mark now, its layer made when it is new."""
+        """The name of the layer a mark now is on (its S and F), the layer made when it is
+        new."""
         if self.f_mm_min is None:
             raise _LineError("a mark with no feed rate (F) given yet")
         if self.s > self.s_max:
@@ -247,8 +250,10 @@ class _Reader:
                 given[letter] = value
         if len(set(gs)) != len(gs) or len(set(ms)) != len(ms):
             raise _LineError("a G or M code given twice")
-        # GRBL's order: feed, spindle speed, spindle (M3/M4/M5), dwell, units, distance mode,
-        # the move.
+        if "K" in given:
+            raise _LineError("K: an arc in the XY plane has I and J, not K")
+        # As GRBL takes a line: its units and modes first (its F and lengths are in the
+        # line's units), then the feed, the power, the laser on or off, and the move last.
         motion, dwell, homing = None, False, False
         for g in gs:
             if g in (0.0, 1.0, 2.0, 3.0):
@@ -293,8 +298,8 @@ class _Reader:
                 self.on = False
             elif m in (2.0, 30.0):          # program end: GRBL's reset of the modes
                 self.on, self.relative, self.motion = False, False, 1
-            elif _code(m) in ("0", "1", "6", "7", "8", "9"):
-                self.left_out[_LEFT_OUT_BY_WORD[f"M{_code(m)}"]] += 1
+            elif f"M{_code(m)}" in _LEFT_OUT_M:
+                self.left_out[_LEFT_OUT_M[f"M{_code(m)}"]] += 1
             else:
                 raise _LineError(f"M{_code(m)}: not an M code galvoscan reads (M2–M5, M30; "
                                  f"M0, M1, M6–M9 left out)")
@@ -309,8 +314,6 @@ class _Reader:
                 raise _LineError("a homing move (G28, G30) and another move on one line")
             return                          # (its X Y are a point on the way home: no mark)
         if not any(axis in given for axis in ("X", "Y", "I", "J", "R")):
-            if "K" in given:
-                raise _LineError("K: an arc in the XY plane has I and J, not K")
             if motion in (2, 3):
                 raise _LineError(f"G{motion} with no end point, centre or radius")
             return
@@ -318,8 +321,6 @@ class _Reader:
 
     def _motion(self, given):
         unit = self.unit_mm
-        if "K" in given:
-            raise _LineError("K: an arc in the XY plane has I and J, not K")
         target = self.at.copy()
         for axis, k in (("X", 0), ("Y", 1)):
             if axis in given:
@@ -366,9 +367,9 @@ class _Reader:
                                  f"I J do not fit its start and end)")
             if radius == 0:
                 raise _LineError("an arc of radius 0 (I and J both 0)")
-        r0, r1 = start - centre, end - centre
         if not flatten:
             return [end]
+        r0, r1 = start - centre, end - centre
         sweep = math.atan2(r0[0] * r1[1] - r0[1] * r1[0], r0 @ r1)
         if clockwise and sweep >= -_ARC_ANGULAR_EPSILON:
             sweep -= 2 * math.pi
