@@ -353,9 +353,38 @@ _CODE = st.sampled_from(["G0", "G1", "G2", "G3", "G4", "G20", "G21", "G90", "G91
                          "M3", "M4", "M5", "M2", "M8", "S0", "S500", "S1000", "F600", "F3000",
                          "(c)", ";c", "%", "*12"])
 _LINE = st.lists(st.one_of(_WORD, _CODE), max_size=6).map(" ".join)
+_LENGTH = st.floats(-50, 50, allow_nan=False).map(lambda v: f"{v:.3f}")
+_OPTIONAL = {"X": _LENGTH, "Y": _LENGTH, "S": st.sampled_from(["0", "300", "1000"]),
+             "F": st.sampled_from(["600", "6000"])}
+
+
+def _words_of(first, needed=(), **parts):
+    """A line as a program writes one: ``first``, the ``needed`` words (letter, value), then
+    each of ``parts`` or not, each word once."""
+    return st.builds(lambda head, *words: " ".join(w for w in (head, *words) if w), first,
+                     *(value.map(f"{letter}{{}}".format) for letter, value in needed),
+                     *(st.one_of(st.just(""), value.map(f"{letter}{{}}".format))
+                       for letter, value in parts.items()))
+
+
+_ARC = st.sampled_from(["G2", "G3"])
+#: Lines as programs write them: most are read, and many mark.
+_PLAUSIBLE = st.one_of(
+    _words_of(st.sampled_from(["", "G0", "G1", "G91", "G90", "G20", "G21", "M5", "M3", "M4"]),
+              **_OPTIONAL),
+    _words_of(_ARC, (("X", _LENGTH), ("Y", _LENGTH), ("I", _LENGTH), ("J", _LENGTH)),
+              S=_OPTIONAL["S"]),
+    _words_of(_ARC, (("X", _LENGTH), ("Y", _LENGTH), ("R", _LENGTH)), F=_OPTIONAL["F"]))
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(lines=st.lists(_LINE, max_size=30))
+@given(lines=st.lists(st.one_of(_LINE, _PLAUSIBLE, _PLAUSIBLE), max_size=30))
 def test_random_word_sequences_give_a_drawing_or_a_drawing_error(tmp_path, lines):
     only_drawing_errors(tmp_path, ("M3 S500 F600\n" + "\n".join(lines)).encode())
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(lines=st.lists(_PLAUSIBLE, max_size=30))
+def test_programs_of_plausible_lines_give_a_drawing_or_a_drawing_error(tmp_path, lines):
+    """Lines as programs write them, most of which mark: the arcs' and units' paths too."""
+    only_drawing_errors(tmp_path, ("G1 M3 S500 F600\n" + "\n".join(lines)).encode())
