@@ -186,7 +186,7 @@ OPTIONS = (
         nargs="+", action=LayerAction, default=[], dest="layers", metavar=("MATCH", "KEY=VALUE"),
         help="settings of their own for the paths of one colour (an SVG stroke, else fill: "
              "\"#ff0000\"; quote it) or one layer (an Inkscape layer's label, a DXF layer's "
-             "name); repeat it for more layers, run in that order, what none matches last; "
+             "name, a G-code file's S and F: \"S500 F6000\"); repeat it for more layers, run in that order, what none matches last; "
              "keys: " + ", ".join(f"{key} ({one.said})" for key, one in
                                   LAYER_KEYS.items()).replace("%", "%%"))),
     *(_setting(setting, "drawing", "job") for setting in (HATCH, HATCH_LINES, CONTOUR)),
