@@ -71,14 +71,14 @@ _ARC_ANGULAR_EPSILON = 5e-7
 _HARMLESS_G = {17.0, 40.0, 54.0, 94.0}
 #: What is counted as left out, by the word: ``(one, many)``.
 _LEFT_OUT = {
-    "G4": ("G4 dwell (a galvo marks no dwell from G-code)",
-           "G4 dwells (a galvo marks no dwell from G-code)"),
-    "G28": ("G28/G30 homing move (not a move on a galvo)",
-            "G28/G30 homing moves (not a move on a galvo)"),
-    "M0": ("M0/M1 pause", "M0/M1 pauses"),
-    "M7": ("M7/M8/M9 air assist command", "M7/M8/M9 air assist commands"),
-    "T": ("tool change word (T, M6)", "tool change words (T, M6)"),
-    "Z": ("Z word (a galvo has no Z)", "Z words (a galvo has no Z)"),
+    "G4": ("G4 dwell left out (a galvo marks no dwell from G-code)",
+           "G4 dwells left out (a galvo marks no dwell from G-code)"),
+    "G28": ("G28/G30 homing move left out (not a move on a galvo)",
+            "G28/G30 homing moves left out (not a move on a galvo)"),
+    "M0": ("M0/M1 pause left out", "M0/M1 pauses left out"),
+    "M7": ("M7/M8/M9 air assist command left out", "M7/M8/M9 air assist commands left out"),
+    "T": ("tool change word (T, M6) left out", "tool change words (T, M6) left out"),
+    "Z": ("Z word left out (a galvo has no Z)", "Z words left out (a galvo has no Z)"),
 }
 #: The M codes left out, and what each is counted as (:data:`_LEFT_OUT`'s key).
 _LEFT_OUT_M = {"M0": "M0", "M1": "M0", "M6": "T", "M7": "M7", "M8": "M7", "M9": "M7"}
