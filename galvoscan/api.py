@@ -36,7 +36,7 @@ from .plan.objects import code_object
 from .inputs.drawings import UNITS, load_drawing
 from .geometry.fill import HatchSet, LineOrder
 from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
-from .plan.layers import Layer, merged, plan_layers
+from .plan.layers import Layer, merged, plan_layers, with_file_layers
 from .inputs.photo import Dither, PhotoSpec
 from .plan.objects import photo_object
 from .plan.pixel_lines import PHOTO_LINES, cell_units
@@ -67,17 +67,20 @@ __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAY
 
 @dataclass(frozen=True)
 class Drawing:
-    """An SVG or DXF drawing, ``origin`` (``centre``, ``lower-left`` or ``page``: the
+    """An SVG, DXF or G-code drawing, ``origin`` (``centre``, ``lower-left`` or ``page``: the
     drawing's own 0,0) placed at ``offset_mm`` from the field's centre, scaled by ``scale``
     about its centre and turned ``rotate_deg`` counter-clockwise; ``units``: the unit its
     numbers are in (``mm``, ``cm``, ``m``, ``in``, ``pt``, ``px``: :data:`UNITS`), in place
-    of those it declares (None: those)."""
+    of those it declares (None: those); ``s_max``: a G-code file's S of full power (None:
+    GRBL's default $30, 1000). Each distinct S and F of a G-code file is a layer of its own,
+    at that speed and power (S as a share of ``s_max``)."""
     path: str
     origin: str = "centre"
     offset_mm: tuple = (0.0, 0.0)
     scale: float = 1.0
     rotate_deg: float = 0.0
     units: str = None
+    s_max: float = None
 
 
 @dataclass(frozen=True)
@@ -225,7 +228,8 @@ def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.
         placement = Placement(origin=item.origin, offset_mm=tuple(item.offset_mm),
                               scale=item.scale, rotate_deg=item.rotate_deg)
         return MarkObject(load_drawing(item.path, tolerance_mm=tolerance_mm, units=item.units,
-                                       scale=item.scale), placement, settings)
+                                       scale=item.scale, s_max=item.s_max), placement,
+                          settings)
     if isinstance(item, Text):
         spec = TextSpec(fields(item.text, serial=serial), item.height_mm, font=item.font,
                         align=item.align, letter_spacing_mm=item.letter_spacing_mm,
@@ -297,11 +301,13 @@ class Plan:
 
 
 def plan_objects(objects, job, settings, profile):
-    """``objects`` planned as ``job``'s (its layers, each a job of its own), checked against
-    ``profile``'s machine: a :class:`Plan`."""
+    """``objects`` planned as ``job``'s (its layers, then those its drawings' files set, as a
+    G-code file's S and F: each a job of its own), checked against ``profile``'s machine: a
+    :class:`Plan`."""
     if not objects:
         raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
-    vector_job = merged(plan_layers(objects, list(job.layers), settings, profile))
+    layers = with_file_layers(job.layers, [o.drawing for o in objects])
+    vector_job = merged(plan_layers(objects, layers, settings, profile))
     return Plan(vector_job, profile, objects[0].placement, objects[0].drawing)
 
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from ..inputs.codes import QR_LEVELS, CodeFill, CodeKind
 from ..inputs.drawings import SCALES, UNITS
+from ..inputs.gcode import S_MAX, S_MAX_RANGE
 from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
@@ -89,8 +90,8 @@ def _setting(setting, group, section):
 OPTIONS = (
     Option(None, "file", dict(
         metavar="FILE", nargs="?",
-        help="the drawing (.svg, .dxf, or a .job in galvo units) or a job file (.toml, as "
-             "--save writes); none, with --text, --code or --image"),
+        help="the drawing (.svg, .dxf, G-code: .gcode, .nc, …; or a .job in galvo units) or "
+             "a job file (.toml, as --save writes); none, with --text, --code or --image"),
         section="drawing", key="file"),
     # text
     Option("--text", "text", dict(
@@ -193,7 +194,7 @@ OPTIONS = (
         nargs="+", action=LayerAction, default=[], dest="layers", metavar=("MATCH", "KEY=VALUE"),
         help="settings of their own for the paths of one colour (an SVG stroke, else fill: "
              "\"#ff0000\"; quote it) or one layer (an Inkscape layer's label, a DXF layer's "
-             "name); repeat it for more layers, run in that order, what none matches last; "
+             "name, a G-code file's S and F: \"S500 F6000\"); repeat it for more layers, run in that order, what none matches last; "
              "keys: " + ", ".join(f"{key} ({one.said})" for key, one in
                                   LAYER_KEYS.items()).replace("%", "%%"))),
     *(_setting(setting, "drawing", "job") for setting in (HATCH, HATCH_LINES, CONTOUR)),
@@ -216,9 +217,14 @@ OPTIONS = (
     Option("--units", "placement", dict(
         choices=list(UNITS), default=None,
         help="the unit the drawing's numbers are in, in place of the units it declares (an "
-             "SVG's width, height and viewBox; a DXF's $INSUNITS): " +
+             "SVG's width, height and viewBox; a DXF's $INSUNITS; G-code's G20, G21): " +
              ", ".join(f"{unit} ({name})" for unit, (_, name) in UNITS.items()) +
              "; pt and px are 1/72 and 1/96 in"), section="drawing"),
+    Option("--s-max", "drawing", dict(
+        type=number_in("S maximum", *S_MAX_RANGE), default=None, metavar="S",
+        help=f"G-code: the S value of full power, each S marked at that share of the "
+             f"laser's power (default: {S_MAX:g}, GRBL's $30; Inkscape's J Tech extension "
+             f"and Marlin: 255)"), section="drawing"),
     Option("--scale", "placement", dict(
         type=number_in("scale", *SCALES), default=1.0, metavar="K",
         help="size factor, about the drawing's centre (default: 1)"), section="drawing"),

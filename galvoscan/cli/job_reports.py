@@ -107,8 +107,8 @@ def mark_estimate_record(job, args, profile, *, parts, total_s):
 #: The frames ``mark --sim --json`` gives the marks in.
 FIELD_FRAME = "field: mm from the field's centre, X right, Y up (as the plan's bounds)"
 SVG_FRAME = "the SVG's own: mm from its top-left corner, X right, Y down"
-DXF_FRAME = ("the drawing's own, in mm, X right, Y up (a DXF's; a code's from its lower-left "
-             "corner)")
+DXF_FRAME = ("the drawing's own, in mm, X right, Y up (a DXF's or G-code's; a code's from its "
+             "lower-left corner)")
 
 
 def _wire_speeds(marked, wire_mm, pitch_mm, unit_mm, clk_freq):

@@ -1,4 +1,5 @@
-"""``galvoscan mark``: a drawing (SVG, DXF or a ``.job``) marked on a board, in millimetres.
+"""``galvoscan mark``: a drawing (SVG, DXF, G-code or a ``.job``) marked on a board, in
+millimetres.
 
 Everything is planned and checked first (the drawing read, placed, hatched, ordered, inside
 the field through the lens correction, every register value in range); only then is the link
@@ -64,14 +65,15 @@ def _plan(args, profile, serial=None):
         if args.file is not None and Path(args.file).suffix.lower() == ".job":
             if objects or args.layers:
                 fail("a .job is in galvo units, already placed, at one setting: mark text, a "
-                     "code or layers with a drawing (.svg, .dxf), or alone")
+                     "code or layers with a drawing (.svg, .dxf, .gcode), or alone")
             segments = parse_job(read_text(args.file, "job file"), name=args.file)
             return plan_job_file(segments, settings, profile), None, None
         drawings = []
         for entry in entries["drawing"]:
             drawing = api.Drawing(entry["file"], origin=entry["origin"],
                                   offset_mm=entry["offset"], scale=entry["scale"],
-                                  rotate_deg=entry["rotate"], units=entry["units"])
+                                  rotate_deg=entry["rotate"], units=entry["units"],
+                                  s_max=entry["s_max"])
             try:
                 drawings.append(api.mark_object(drawing, settings, profile,
                                                 tolerance_mm=args.tolerance))
@@ -294,8 +296,9 @@ def add_plan_outputs(group):
 
 def add_parsers(commands):
     mark = commands.add_parser(
-        "mark", help="mark a drawing (SVG, DXF or .job) in mm",
-        description="Mark a drawing: read it (SVG, DXF, or a .job in galvo units), place it in "
+        "mark", help="mark a drawing (SVG, DXF, G-code or .job) in mm",
+        description="Mark a drawing: read it (SVG, DXF, G-code, or a .job in galvo units), "
+                    "place it in "
                     "the field, hatch closed shapes, order the paths to cut jumps, check it "
                     "against the field, then stream it to a board (--port, --spi or --sim). "
                     "Without a board: plan, --preview and --estimate only.")

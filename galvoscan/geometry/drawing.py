@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 
-__all__ = ["DrawingError", "Drawing", "PathStyle"]
+__all__ = ["DrawingError", "Drawing", "PathStyle", "FileLayer"]
 
 
 class DrawingError(ValueError):
@@ -34,6 +34,9 @@ class Drawing:
     styles : tuple of :class:`PathStyle`
         One per path (or none at all): its colour and layer, what a :class:`~galvoscan.plan.layers.Layer`
         picks it by.
+    layers : tuple of :class:`FileLayer`
+        The layers whose settings the file itself gives (a G-code file's S and F), each
+        holding the paths whose style's layer is its name.
     """
     name: str
     paths: tuple
@@ -41,6 +44,7 @@ class Drawing:
     skipped: tuple = ()
     notes: tuple = ()
     styles: tuple = ()
+    layers: tuple = ()
 
     def bounds(self):
         """``(xmin, ymin, xmax, ymax)`` in mm."""
@@ -56,3 +60,13 @@ class PathStyle:
     None: none)."""
     colour: str = None
     layer: str = None
+
+
+@dataclass(frozen=True)
+class FileLayer:
+    """A layer whose settings the drawing's file gives (a G-code file's S and F): its
+    ``name``, what its paths' :attr:`PathStyle.layer` is, and its speed (mm/s) and power
+    (% of the laser's maximum)."""
+    name: str
+    speed_mm_s: float
+    power_percent: float

@@ -1,5 +1,5 @@
-"""Drawings to mark: SVG (svgelements, :mod:`.svg`) and DXF (ezdxf, :mod:`.dxf`) files as
-polylines in mm, Y up.
+"""Drawings to mark: SVG (svgelements, :mod:`.svg`), DXF (ezdxf, :mod:`.dxf`) and G-code
+(:mod:`.gcode`) files as polylines in mm, Y up.
 
 Curves are flattened into chords within ``tolerance_mm`` of the true curve. Every problem with a
 file is a :class:`~galvoscan.geometry.drawing.DrawingError`, one line that names the file;
@@ -15,6 +15,7 @@ import numpy as np
 
 from ..geometry.drawing import Drawing, DrawingError
 from .dxf import _read_dxf
+from .gcode import GCODE_SUFFIXES, _read_gcode
 from .reading import MAX_CHORDS, UNITS, TooManyChords, _counted, _one_line
 from .svg import _read_svg
 
@@ -30,27 +31,32 @@ SCALES = (1e-3, 1e3)
 SAME_POINT_MM = 1e-9
 
 
-def load_drawing(path, *, tolerance_mm=0.01, units=None, scale=1.0):
-    """Read an SVG or DXF drawing.
+def load_drawing(path, *, tolerance_mm=0.01, units=None, scale=1.0, s_max=None):
+    """Read an SVG, DXF or G-code drawing.
 
     Parameters
     ----------
     path : str or os.PathLike
-        ``.svg`` or ``.dxf`` (by suffix, any case).
+        ``.svg``, ``.dxf`` or G-code (``.gcode``, ``.gco``, ``.gc``, ``.nc``, ``.ngc``), by
+        suffix, any case.
     tolerance_mm : float
         The largest distance allowed between a chord and the curve it stands for, as marked
         (at ``scale``).
     units : str or None
         The unit the drawing's numbers are in (a key of :data:`UNITS`: ``mm``, ``cm``, ``m``,
         ``in``, ``pt``, ``px``), in place of what it declares (an SVG's width, height and
-        viewBox; a DXF's $INSUNITS); None: what it declares.
+        viewBox; a DXF's $INSUNITS; G-code's G20 and G21); None: what it declares.
     scale : float
         The size factor it will be placed at (the drawing returned is not scaled): curves are
         flattened for the size they are marked at, and the size refused beyond is that size.
+    s_max : float or None
+        G-code only: the S value that is full power (None: GRBL's default ``$30``,
+        :data:`~.gcode.S_MAX`).
 
     Returns
     -------
     Drawing
+        A G-code file's with its ``layers``: one for each distinct S and F it marks with.
 
     Raises
     ------
@@ -61,8 +67,12 @@ def load_drawing(path, *, tolerance_mm=0.01, units=None, scale=1.0):
     suffix = path.suffix.lower()
     if suffix == ".job":
         raise DrawingError(f"{path}: a job file is in galvo units, not a drawing to place")
-    if suffix not in (".svg", ".dxf"):
-        raise DrawingError(f"{path}: not a drawing galvoscan reads (.svg, .dxf, .job)")
+    gcode = suffix in GCODE_SUFFIXES
+    if suffix not in (".svg", ".dxf") and not gcode:
+        raise DrawingError(f"{path}: not a drawing galvoscan reads (.svg, .dxf, "
+                           f"{', '.join(GCODE_SUFFIXES)}, .job)")
+    if s_max is not None and not gcode:
+        raise DrawingError(f"{path}: an S maximum is for G-code, not {suffix or 'this file'}")
     if not (tolerance_mm > 0 and math.isfinite(tolerance_mm)):
         raise DrawingError(f"{path}: the flattening tolerance must be > 0 mm, not {tolerance_mm}")
     if units is not None and units not in UNITS:
@@ -82,17 +92,23 @@ def load_drawing(path, *, tolerance_mm=0.01, units=None, scale=1.0):
         raise DrawingError(f"{path}: cannot read ({error.strerror or _one_line(error)})") from None
     if not data.strip():
         raise DrawingError(f"{path}: empty file")
+    layers = ()
     try:
-        reader = _read_svg if suffix == ".svg" else _read_dxf
-        raw, closed, skipped, notes, styles, units_said = reader(data, tolerance, units)
+        if gcode:
+            raw, closed, skipped, notes, styles, units_said, layers = \
+                _read_gcode(data, tolerance, units, s_max)
+        else:
+            reader = _read_svg if suffix == ".svg" else _read_dxf
+            raw, closed, skipped, notes, styles, units_said = reader(data, tolerance, units)
     except TooManyChords as error:
         raise DrawingError(f"{path}: {_chords_said(error, scale, tolerance_mm)}") from None
     except DrawingError as error:
         raise DrawingError(f"{path}: {error}") from None
     except Exception as error:              # the libraries raise many types on bad input
-        kind = suffix[1:].upper()
+        kind = "G-code" if gcode else suffix[1:].upper()
         raise DrawingError(f"{path}: not a readable {kind} file ({_one_line(error)})") from None
-    return _finish(path, raw, closed, skipped, notes, tolerance, styles, units_said, scale)
+    return _finish(path, raw, closed, skipped, notes, tolerance, styles, units_said, scale,
+                   layers)
 
 
 def _pair_said(width_mm, height_mm):
@@ -133,9 +149,11 @@ def _chords_said(error, scale, tolerance_mm):
             f"coordinates far beyond any field: {_ways_out(mm_per_unit, 'a smaller --scale')}")
 
 
-def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units_said, scale):
-    """Clean the polylines up and check them: one rule set for both formats (``tolerance_mm``
-    in the drawing's own mm, ``scale`` the size it is marked at)."""
+def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units_said, scale,
+            layers=()):
+    """Clean the polylines up and check them: one rule set for every format (``tolerance_mm``
+    in the drawing's own mm, ``scale`` the size it is marked at); the file's ``layers`` kept
+    where a path is left on them."""
     paths, closed, kept, degenerate = [], [], [], 0
     for points, is_closed, style in zip(raw, closed_flags, styles):
         points = np.array(points, dtype=float).reshape(-1, 2)
@@ -161,8 +179,9 @@ def _finish(path, raw, closed_flags, skipped, notes, tolerance_mm, styles, units
         # (What was left out may be why: say it, so the reason is not lost.)
         why = f" (left out: {'; '.join(skipped)})" if skipped else ""
         raise DrawingError(f"{path}: no lines or curves to mark{why}")
+    held = {style.layer for style in kept if style is not None}
     drawing = Drawing(path.name, tuple(paths), tuple(closed), tuple(skipped), tuple(notes),
-                      tuple(kept))
+                      tuple(kept), tuple(layer for layer in layers if layer.name in held))
     xmin, ymin, xmax, ymax = drawing.bounds()
     width, height = (xmax - xmin) * scale, (ymax - ymin) * scale
     if max(width, height) > MAX_EXTENT_MM:

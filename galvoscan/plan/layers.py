@@ -25,7 +25,7 @@ from .vector_job import check_clear, plan_objects, VectorJob
 from ..settings.laser import JOB_SETTINGS
 
 
-__all__ = ["Layer", "split_by_layer", "preview_colour"]
+__all__ = ["Layer", "split_by_layer", "preview_colour", "with_file_layers"]
 
 
 #: The unit of each of a layer's settings that is a job's (:mod:`galvoscan.settings.laser`).
@@ -126,6 +126,42 @@ class Layer:
             out.append("outline" if self.outline else "no outline")
         out += [f"{register.replace('_', ' ')} {value} µs" for register, value in self.delays_us]
         return ", ".join(out) or "the job's settings"
+
+
+def with_file_layers(layers, drawings):
+    """``layers`` (a job's, given) and the layers the drawings' files set (a G-code file's S
+    and F, :attr:`~galvoscan.geometry.drawing.Drawing.layers`), each a :class:`Layer` of
+    that speed and power after the given ones, in the order the files first use them. A given
+    layer of the same name is the file's with the given settings in place of the file's
+    (``--layer "S500 F6000" passes=2``: that layer's speed and power, twice), where the given
+    one stands."""
+    layers = list(layers)
+    by_name = {layer.match.casefold(): k for k, layer in enumerate(layers)}
+    files = {}                              # name → the file layer first made of it
+    for drawing in drawings:
+        for own in drawing.layers:
+            made = Layer(own.name, speed_mm_s=own.speed_mm_s, power_percent=own.power_percent)
+            name = made.match.casefold()
+            if name in files:
+                if files[name] != made:
+                    raise PlanError(f"{drawing.name}: its layer {own.name!r} is at "
+                                    f"{own.power_percent:g} %, another drawing's at "
+                                    f"{files[name].power_percent:g} %: give both the same "
+                                    f"S maximum")
+                continue
+            files[name] = made
+            k = by_name.get(name)
+            if k is None:
+                by_name[name] = len(layers)
+                layers.append(made)
+                continue
+            given = layers[k]
+            if given.is_colour:
+                continue
+            changed = {field: getattr(given, field) for field in Layer.__dataclass_fields__
+                       if field != "match" and getattr(given, field) is not None}
+            layers[k] = replace(made, match=given.match, **changed)
+    return layers
 
 
 def split_by_layer(placed, layers):

@@ -176,7 +176,8 @@ def test_bad_paths(tmp_path):
     refused(tmp_path / "blank.dxf", "empty file")
     (tmp_path / "x.png").write_bytes(b"\x89PNG\r\n")
     assert refused(tmp_path / "x.png") == \
-        f"{tmp_path / 'x.png'}: not a drawing galvoscan reads (.svg, .dxf, .job)"
+        f"{tmp_path / 'x.png'}: not a drawing galvoscan reads (.svg, .dxf, .gcode, .gco, " \
+        f".gc, .nc, .ngc, .job)"
     (tmp_path / "garbage.svg").write_bytes(b"garbage\x00\xff")
     refused(tmp_path / "garbage.svg", "not a readable SVG file")
     (tmp_path / "garbage.dxf").write_bytes(b"garbage\x00\xff\n1\n2\n")
