@@ -588,15 +588,19 @@ def test_a_photos_pixel_lines_light_its_dithered_cells_on_the_wires(tmp_path, ca
     """A photo marked as pixel lines (the default) on the simulated board (the engraver's
     bitstream, which has them): the points lit on the wires are exactly the dithered grid's
     dark cells, each row shifted as one by the scan offset, the other way on the next row;
-    every dark cell gets the same pulses; a tenth of the runs' link words."""
+    every dark cell gets the same pulses; far fewer link words than runs. (Amaranth's
+    simulator steps the same pixel words point by point in
+    tests/gateware/sources/test_pixel_lines.py: a photo takes it minutes.)"""
     from galvoscan.inputs.photo import PhotoSpec, photo_bitmap
+    width = 3.0
     picture = shaded_picture(tmp_path / "photo.png", 60, 80)
-    argv = ["mark", "--image", str(picture), "--width", "3", "--speed", "800", "--sim",
+    argv = ["mark", "--image", str(picture), "--width", str(width), "--speed", "800", "--sim",
             *SIM_TIMEOUT, "--json"]
     result = run_json(argv, capsys)
     units_per_mm = 65536 / 110
     cell = round(0.05 * units_per_mm) / units_per_mm
-    dark = photo_bitmap(PhotoSpec(str(picture), 3, cell))
+    dark = photo_bitmap(PhotoSpec(str(picture), width, cell))
+    assert dark.sum() > 5
     rows, columns = dark.shape
     lit = [(round(x * units_per_mm + 32768), round(y * units_per_mm + 32768))
            for x, y in result["marks"]]
@@ -614,10 +618,13 @@ def test_a_photos_pixel_lines_light_its_dithered_cells_on_the_wires(tmp_path, ca
             row_shift = {x - c for x, c in zip(xs, centres)}
             assert len(row_shift) == 1, (r, row_shift)
             shifts.append(row_shift.pop())
-    # The mirrors' 80 µs lag at the line's speed, ahead in each row's own direction.
-    offset = round(result["speed_mm_s"] * 80e-6 * units_per_mm)
+    # The mirrors' 80 µs lag at the line's speed (a cell a PRR period at 50 kHz, over the
+    # pulses a cell), ahead in each row's own direction.
+    speed = cell * 50e3 / result["pulses_per_point"]
+    assert result["speed_mm_s"] == pytest.approx(speed, rel=0.01)
+    offset = round(speed * 80e-6 * units_per_mm)
     assert shifts == [offset * (-1) ** n for n in range(len(shifts))]
-    runs = run_json(["mark", "--image", str(picture), "--width", "3", "--speed", "800",
+    runs = run_json(["mark", "--image", str(picture), "--width", str(width), "--speed", "800",
                      "--image-lines", "runs", "--estimate", "--json"], capsys)
     assert result["segments"] * 5 < runs["segments"]
 
