@@ -1,0 +1,313 @@
+"""The galvoscan device in meerk40t (galvoscan/meerk40t/), headless and in-process as meerk40t's
+own driver tests run (its test/bootstrap.py: a kernel of its core plugins, console commands):
+the plugin found through the ``meerk40t.extension`` entry point, a job made with meerk40t's own
+commands, planned by galvoscan and marked on the simulated board, and the marks read off the
+XY2-100 wires by the tests' own reader (tests/support/wires.py) against the rectangle meerk40t
+was told to make, computed here from the command's numbers."""
+
+import itertools
+import re
+import time
+from importlib.metadata import entry_points
+
+import numpy as np
+import pytest
+
+pytest.importorskip("meerk40t")
+
+from meerk40t.core.cutcode.cubiccut import CubicCut     # noqa: E402
+from meerk40t.core.cutcode.dwellcut import DwellCut     # noqa: E402
+from meerk40t.core.cutcode.linecut import LineCut       # noqa: E402
+from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
+from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
+from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
+from meerk40t.kernel import Kernel                      # noqa: E402
+
+from galvoscan.build import PRESETS                     # noqa: E402
+from galvoscan.geometry.field import PlanError          # noqa: E402
+from galvoscan.link.client import HostClient            # noqa: E402
+from galvoscan.meerk40t.cutcode import job_from_cuts    # noqa: E402
+from galvoscan.profile.machine import default_profile   # noqa: E402
+
+from sim_board import SimBoard                          # noqa: E402
+from vector_board import pulses_per_frame               # noqa: E402
+
+
+PROFILE = default_profile()
+FIELD_MM = PROFILE.field.size_mm
+#: One galvo unit, mm: 65536 of them across the field (XY2-100's 16 bits).
+UNIT_MM = FIELD_MM / 65536
+#: The rectangle: meerk40t's scene has its origin at the field's top left corner, Y down.
+RECT_MM = (50.0, 52.0, 6.0, 4.0)            # x, y, width, height in the scene
+SPEED_MM_S, PRR_KHZ, POWER_PERMILLE = 400.0, 50.0, 600.0
+#: What meerk40t's "rect" command draws, in field mm (centre 0,0, Y up): the scene's corner
+#: (x, y) is field (x - F/2, F/2 - y).
+LEFT, TOP = RECT_MM[0] - FIELD_MM / 2, FIELD_MM / 2 - RECT_MM[1]
+RIGHT, BOTTOM = LEFT + RECT_MM[2], TOP - RECT_MM[3]
+
+
+def _kernel():
+    """meerk40t's kernel as its test/bootstrap.py makes it, with galvoscan's plugin loaded
+    from the entry point pip installed."""
+    kernel = Kernel("MeerK40t", "0.0.0-testing", "MeerK40t_TEST", ansi=False,
+                    ignore_settings=True)
+    from meerk40t.core import core
+    from meerk40t.device import dummydevice
+    from meerk40t.fill import fills
+    from meerk40t.image import imagetools
+    from meerk40t.network import kernelserver
+    for plugin in (kernelserver.plugin, dummydevice.plugin, core.plugin, imagetools.plugin,
+                   fills.plugin):
+        kernel.add_plugin(plugin)
+    found = [ep for ep in entry_points().select(group="meerk40t.extension")
+             if ep.name == "galvoscan"]
+    assert len(found) == 1, "galvoscan's meerk40t.extension entry point is not installed"
+    kernel.add_plugin(found[0].load())
+    kernel(partial=True)
+    kernel.console("service device start -i galvoscan 0\n")
+    return kernel
+
+
+@pytest.fixture(scope="module")
+def meerk40t():
+    """``(kernel, device, board, lines)``: the galvoscan device on a simulated board of the
+    default bitstream (compiled), its wires and laser pins recorded; ``lines``: what the
+    device says on meerk40t's console."""
+    kernel = _kernel()
+    device = kernel.device
+    assert device.name == "galvoscan"
+    config = PRESETS["default"]
+    board = SimBoard(config=config, clk_freq=config.clk_freq, baud=config.baud,
+                     backend="compiled", record_laser=True)
+    device.driver.make_board = lambda: board.board
+    lines = []
+    kernel.channel("console").watch(lambda line: lines.append(str(line)))
+    try:
+        yield kernel, device, board, lines
+    finally:
+        kernel()
+
+
+def _run(kernel, device, command, *, timeout_s=60):
+    """Spool ``command``'s plan and wait until the device has run (or refused) it."""
+    device.driver.last_report = device.driver.last_error = None
+    kernel.elements.clear_all()
+    kernel.console(f"{command} {_plan_name()} copy-selected preprocess validate blob preopt "
+                   f"optimize spool\n")
+    deadline = time.monotonic() + timeout_s
+    while device.driver.last_report is None and device.driver.last_error is None:
+        assert time.monotonic() < deadline, "the device did not finish the job"
+        time.sleep(0.02)
+
+
+_plans = itertools.count(1)
+
+
+def _plan_name():
+    """A plan of its own for each job (meerk40t's plans keep what was copied into them)."""
+    return f"plan{next(_plans)}"
+
+
+def _rect_command(x, y, width, height):
+    return (f"rect {x}mm {y}mm {width}mm {height}mm engrave -s {SPEED_MM_S:g} "
+            f"-p {POWER_PERMILLE:g} frequency {PRR_KHZ:g}")
+
+
+def _marks(board, since):
+    """The positions (field mm) the laser pulsed at, frame ``since`` on, a row each run of
+    frames at one position, and the pulses at each: read off the wires and pins by the tests'
+    readers."""
+    board.run_for(0)
+    runs = []
+    for xy, pulses in pulses_per_frame(board)[since:]:
+        if runs and runs[-1][0] == xy:
+            runs[-1][1] += pulses
+        else:
+            runs.append([xy, pulses])
+    marked = [(xy, n) for xy, n in runs if n]
+    points = (np.array([xy for xy, _ in marked], dtype=float) - 32768) * UNIT_MM
+    return points, np.array([n for _, n in marked])
+
+
+def _distance_to_rect(points):
+    """Each point's distance from the rectangle's outline."""
+    x, y = points[:, 0], points[:, 1]
+    inside_x = np.clip(x, LEFT, RIGHT)
+    inside_y = np.clip(y, BOTTOM, TOP)
+    to_vertical = np.hypot(np.minimum(abs(x - LEFT), abs(x - RIGHT)), y - inside_y)
+    to_horizontal = np.hypot(x - inside_x, np.minimum(abs(y - TOP), abs(y - BOTTOM)))
+    return np.minimum(to_vertical, to_horizontal)
+
+
+def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
+    """meerk40t's rectangle, engraved through the device: every mark off the wires lies on the
+    rectangle within half a pitch (and a galvo unit of rounding), the marks go all round it,
+    and the console said the plan's speed (the nearest the pitch and PRR make)."""
+    kernel, device, board, lines = meerk40t
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    started = time.monotonic()
+    _run(kernel, device, _rect_command(*RECT_MM))
+    took = time.monotonic() - started
+    assert device.driver.last_error is None, device.driver.last_error
+    report = device.driver.last_report
+    assert report.clean
+    marks, pulses = _marks(board, before)
+    assert len(marks) > 100
+    # The pitch and the pulses a point, off the wires: the speed they make is the one the
+    # console said, the nearest to meerk40t's 400 mm/s the galvo units and pulses make.
+    pitch = float(np.median(np.hypot(*np.diff(marks, axis=0).T)))
+    per_point = int(np.median(pulses))
+    speed = pitch * PRR_KHZ * 1e3 / per_point
+    said = "\n".join(lines)
+    reported = re.search(r"marked at ([\d.]+) mm/s \(pitch", said)
+    assert reported, said
+    assert speed == pytest.approx(float(reported[1]), rel=0.01)
+    assert speed == pytest.approx(SPEED_MM_S, rel=0.03)
+    assert f"{SPEED_MM_S:g} mm/s falls between the speeds" in said     # the nearer speed's note
+    assert f"speed {SPEED_MM_S:g} mm/s, power {POWER_PERMILLE / 10:g} %, PRR {PRR_KHZ:g} kHz" \
+        in said
+    # Every mark on meerk40t's rectangle, within half a pitch (and a galvo unit of rounding).
+    assert _distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
+    # All round: every point of the outline within half a pitch of a mark.
+    outline = np.concatenate([
+        np.column_stack([np.linspace(LEFT, RIGHT, 200), np.full(200, TOP)]),
+        np.column_stack([np.linspace(LEFT, RIGHT, 200), np.full(200, BOTTOM)]),
+        np.column_stack([np.full(200, LEFT), np.linspace(BOTTOM, TOP, 200)]),
+        np.column_stack([np.full(200, RIGHT), np.linspace(BOTTOM, TOP, 200)])])
+    nearest = np.min(np.hypot(*(outline[:, None, :] - marks[None, :, :]).transpose(2, 0, 1)),
+                     axis=1)
+    assert nearest.max() <= pitch / 2 + UNIT_MM
+    assert "galvoscan: marked" in said
+    assert took < 60
+
+
+def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
+    """A rectangle reaching past the lens field: one line on the console, and not a byte to
+    the board."""
+    kernel, device, board, lines = meerk40t
+    sent = len(board.board.bytes_in)
+    said = len(lines)
+    _run(kernel, device, _rect_command(FIELD_MM - 5, 20, 10, 10))
+    errors = [line for line in lines[said:] if "galvoscan: error:" in line]
+    assert len(errors) == 1, lines[said:]
+    assert "nothing sent" in errors[0] and "field" in errors[0]
+    assert "\n" not in errors[0]
+    assert not any(line.startswith("galvoscan: marked") for line in lines[said:])
+    assert len(board.board.bytes_in) == sent
+
+
+def test_a_speed_the_laser_cannot_make_is_refused(meerk40t):
+    kernel, device, board, lines = meerk40t
+    sent = len(board.board.bytes_in)
+    _run(kernel, device, "rect 40mm 40mm 5mm 5mm engrave -s 5000 frequency 20")
+    assert "out of reach" in device.driver.last_error
+    assert len(board.board.bytes_in) == sent
+
+
+def test_stop_sends_arm_0_first_and_leaves_the_board_ready(meerk40t, monkeypatch):
+    """A long job stopped from meerk40t mid-way: the first write after the stop is arm = 0,
+    the console says the job stopped, the laser stops pulsing, and the next job runs
+    clean."""
+    kernel, device, board, lines = meerk40t
+    writes, stop_at = [], []
+    original = HostClient.write
+
+    def recording(self, name, value):
+        writes.append((name, value))
+        return original(self, name, value)
+    monkeypatch.setattr(HostClient, "write", recording)
+    device.driver.last_report = device.driver.last_error = None
+    kernel.elements.clear_all()
+    # A slow circle: seconds of the board's time.
+    kernel.console(f"circle 55mm 55mm 20mm engrave -s 20 frequency 20 {_plan_name()} copy-selected "
+                   "preprocess validate blob preopt optimize spool\n")
+    deadline = time.monotonic() + 60
+    pulses_before = len(board.board.pulses)
+    while len(board.board.pulses) < pulses_before + 200:
+        assert time.monotonic() < deadline and device.driver.last_error is None, \
+            device.driver.last_error
+        time.sleep(0.01)
+    stop_at.append(len(writes))
+    kernel.console("estop\n")
+    while device.driver.last_error is None and device.driver.last_report is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    assert device.driver.last_report is None
+    assert "job stopped, laser disarmed" in device.driver.last_error
+    after = writes[stop_at[0]:]
+    assert after and after[0] == ("arm", 0), after[:5]
+    # No pulse once the disarm had landed: the board is given a moment more of its time.
+    pulses = len(board.board.pulses)
+    board.board.run_for(2e-3)
+    assert len(board.board.pulses) == pulses
+    monkeypatch.undo()
+    _run(kernel, device, _rect_command(*RECT_MM))
+    assert device.driver.last_error is None, device.driver.last_error
+    assert device.driver.last_report.clean
+
+
+# --- cutcode into galvoscan's job, without a board -------------------------------------------
+
+def _native(x_mm, y_mm):
+    """Field mm as the device's native units (galvo units, Y up)."""
+    return (x_mm / UNIT_MM + 32768, y_mm / UNIT_MM + 32768)
+
+
+def test_each_cut_kind_becomes_its_operations_layer():
+    """Lines joined into one polyline, a quadratic and a cubic curve flattened within the
+    tolerance, a dwell a dot of its time's pulses, a raster's dark runs lines; each operation
+    a layer of its own with its speed, power and frequency."""
+    line_op = {"speed": 300.0, "power": 250.0, "frequency": 40.0}
+    curve_op = {"speed": 100.0, "power": 1000.0, "frequency": 20.0}
+    dwell_op = {"power": 500.0, "frequency": 30.0}
+    raster_op = {"speed": 200.0, "power": 800.0, "frequency": 25.0}
+    a, b, c = _native(0, 0), _native(10, 0), _native(10, 10)
+    plot = PlotCut(settings=raster_op)
+    for k, on in enumerate([1, 1, 0, 1]):
+        plot.plot_append(int(_native(k, -5)[0]), int(_native(k, -5)[1]), on)
+    plot.plot_append(int(_native(4, -5)[0]), int(_native(4, -5)[1]), 0)
+    cuts = [LineCut(a, b, settings=line_op), LineCut(b, c, settings=line_op),
+            QuadCut(_native(-10, 0), _native(-10, 10), _native(0, 10), settings=curve_op),
+            CubicCut(_native(-10, -10), _native(-10, 0), _native(0, 0), _native(0, -10),
+                     settings=curve_op),
+            DwellCut(_native(5, 5), dwell_time=2.0, settings=dwell_op),
+            plot]
+    job, objects = job_from_cuts(cuts, PROFILE, tolerance_mm=0.01)
+    assert [(layer.speed_mm_s, layer.power_percent, layer.prr_khz, layer.pulses_per_point)
+            for layer in job.layers] == [(300, 25, 40, None), (100, 100, 20, None),
+                                         (None, 50, 30, 60), (200, 80, 25, None)]
+    lines, curves, dwell, raster = (o.drawing for o in objects)
+    assert len(lines.paths) == 1
+    assert lines.paths[0] == pytest.approx(np.array([[0, 0], [10, 0], [10, 10]]),
+                                           abs=UNIT_MM)
+    # The quadratic: B(t) = (1-t)² P0 + 2t(1-t) P1 + t² P2, every chord within 0.01 mm.
+    quad, cubic = curves.paths
+    t = np.linspace(0, 1, 2001)[:, None]
+    p0, p1, p2 = np.array([-10, 0]), np.array([-10, 10]), np.array([0, 10])
+    exact = (1 - t) ** 2 * p0 + 2 * t * (1 - t) * p1 + t ** 2 * p2
+    assert _max_distance(exact, quad) <= 0.01 + UNIT_MM
+    q0, q1, q2, q3 = (np.array(p) for p in ([-10, -10], [-10, 0], [0, 0], [0, -10]))
+    exact = ((1 - t) ** 3 * q0 + 3 * t * (1 - t) ** 2 * q1 + 3 * t ** 2 * (1 - t) * q2
+             + t ** 3 * q3)
+    assert _max_distance(exact, cubic) <= 0.01 + UNIT_MM
+    assert len(dwell.paths) == 1 and not np.ptp(dwell.paths[0], axis=0).any()
+    assert dwell.paths[0][0] == pytest.approx([5, 5], abs=UNIT_MM)
+    # Dark from x = 0 to 2, light from 2 to 3, dark from 3 to 4.
+    assert [p[[0, -1], 0].tolist() for p in raster.paths] == \
+        [pytest.approx([0, 2], abs=UNIT_MM), pytest.approx([3, 4], abs=UNIT_MM)]
+
+
+def _max_distance(curve, polyline):
+    """The largest distance from a point of ``curve`` to the polyline (its segments)."""
+    starts, ends = polyline[:-1], polyline[1:]
+    d = ends - starts
+    rel = curve[:, None, :] - starts[None, :, :]
+    t = np.clip((rel * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-12), 0, 1)
+    nearest = starts[None] + t[..., None] * d[None]
+    return np.min(np.hypot(*(curve[:, None, :] - nearest).transpose(2, 0, 1)), axis=1).max()
+
+
+def test_a_cut_it_cannot_mark_is_refused_in_one_line():
+    with pytest.raises(PlanError, match="WaitCut is not one the galvoscan device marks"):
+        job_from_cuts([WaitCut(5.0)], PROFILE, tolerance_mm=0.01)
