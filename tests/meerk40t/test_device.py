@@ -7,10 +7,14 @@ was told to make, computed here from the command's numbers."""
 
 import gc
 import itertools
+import os
 import re
 import socket
+import subprocess
+import sys
 import time
 from importlib.metadata import entry_points
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -336,6 +340,30 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t):
     assert _distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
     assert _gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
     gc.collect()
+
+
+README = (Path(__file__).parents[2] / "README.md").read_text()
+
+
+def test_the_readmes_first_job_from_meerk40t(tmp_path):
+    """The README's "From meerk40t" first job: its batch file and command line, run as the
+    README gives them (meerk40t's own program, headless, with the plugin found through the
+    entry point), say the plan and the marks the README quotes. meerk40t's settings go to a
+    home of the test's own; the simulated board's compiled model is the shared one."""
+    section = README[README.index("## From meerk40t"):README.index("## The documentation")]
+    batch = re.search(r"\(`first\.txt`\):\n\n```text\n(.+?)```", section, re.S)[1]
+    command = re.search(r"```text\n\.venv/bin/(meerk40t [^\n]+)\n```", section)[1].split()
+    (tmp_path / "first.txt").write_text(batch)
+    cache = os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache")
+    done = subprocess.run([str(Path(sys.executable).parent / command[0]), *command[1:]],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "HOME": str(tmp_path), "XDG_CACHE_HOME": cache})
+    assert done.returncode == 0, done.stderr
+    out = done.stdout
+    quoted = re.findall(r"\(`(layer 1 .+?) …`\)", " ".join(section.split()))
+    assert quoted and quoted[0] in " ".join(out.split()), out
+    marked = re.search(r"\(`(galvoscan: marked \d+ segments, \d+ pulses)`\)", section)[1]
+    assert marked in out, out
 
 
 # --- cutcode into galvoscan's job, without a board -------------------------------------------
