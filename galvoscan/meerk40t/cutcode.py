@@ -9,6 +9,7 @@ own rule; a raster's (PlotCut's) dark runs are lines at the operation's power; a
 whose pulses are the dwell's time at the operation's frequency.
 """
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -122,8 +123,13 @@ def job_from_cuts(cuts, profile, *, tolerance_mm):
         name = f"meerk40t operation {number + 1}"
         layer = operation_layer(name, operation.settings)
         if operation.dwell_ms is not None:
+            if not math.isfinite(operation.dwell_ms) or operation.dwell_ms <= 0:
+                raise PlanError(f"{name}: a dwell of {operation.dwell_ms:g} ms: a dwell is a "
+                                f"time above 0 ms")
             prr_khz = layer.prr_khz if layer.prr_khz is not None else profile.defaults.prr_khz
-            pulses = max(1, round(operation.dwell_ms * prr_khz))
+            # (A PRR that is not a number is refused with the layer's other settings.)
+            pulses = max(1, round(operation.dwell_ms * prr_khz)) if math.isfinite(prr_khz) \
+                else None
             layer = Layer(name, speed_mm_s=layer.speed_mm_s, power_percent=layer.power_percent,
                           prr_khz=layer.prr_khz, pulses_per_point=pulses)
         paths = tuple(np.asarray(from_galvo(np.array(p, dtype=float), field_mm))

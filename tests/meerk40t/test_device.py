@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 
 pytest.importorskip("meerk40t")
 
@@ -29,6 +30,7 @@ from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
 from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
 from meerk40t.kernel import Kernel                      # noqa: E402
 
+from galvoscan import api                               # noqa: E402
 from galvoscan.build import PRESETS                     # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.link.client import HostClient            # noqa: E402
@@ -430,3 +432,43 @@ def _max_distance(curve, polyline):
 def test_a_cut_it_cannot_mark_is_refused_in_one_line():
     with pytest.raises(PlanError, match="WaitCut is not one the galvoscan device marks"):
         job_from_cuts([WaitCut(5.0)], PROFILE, tolerance_mm=0.01)
+
+
+def _numbers(low, high):
+    """A setting meerk40t may send: mostly a plausible one, else anything."""
+    return st.one_of(st.floats(low, high), st.none(), st.integers(-10**6, 10**6),
+                     st.floats(allow_nan=True, allow_infinity=True, width=32))
+
+
+@settings(max_examples=60, deadline=None)
+@given(corner=st.tuples(st.integers(-20_000, 80_000), st.integers(-20_000, 80_000)),
+       size=st.tuples(st.integers(0, 40_000), st.integers(0, 40_000)),
+       speed=_numbers(10, 400), power=_numbers(0, 1000), frequency=_numbers(20, 200),
+       dwell=st.one_of(st.none(), st.floats(0.01, 5), st.floats(-10, 1e6),
+                       st.just(float("nan"))))
+def test_whatever_meerk40t_sends_is_planned_or_refused_in_one_line(corner, size, speed, power,
+                                                                   frequency, dwell):
+    """Cutcode from meerk40t is input from outside: a rectangle anywhere (in the field or past
+    it), at any speed, power and frequency, with or without a dwell, is planned, or refused
+    with one line (a ValueError), and nothing else."""
+    operation = {key: value for key, value in
+                 (("speed", speed), ("power", power), ("frequency", frequency))
+                 if value is not None}
+    (x, y), (w, h) = corner, size
+    points = [(x, y), (x + w, y), (x + w, y + h), (x, y + h), (x, y)]
+    cuts = [LineCut(a, b, settings=operation) for a, b in zip(points, points[1:])]
+    if dwell is not None:
+        cuts.append(DwellCut((x, y), dwell_time=dwell, settings=operation))
+    try:
+        job, objects = job_from_cuts(cuts, PROFILE, tolerance_mm=0.01)
+        plan = api.plan_made(objects, job, PROFILE)
+    except ValueError as error:
+        said = str(error)
+        # One line, naming the operation it is about.
+        assert "\n" not in said and "meerk40t operation" in said, said
+        return
+    # Planned: every point in the field, every speed one the machine makes.
+    half = FIELD_MM / 2
+    bounds = plan.vector_job.bounds_mm
+    assert -half <= min(bounds) and max(bounds) <= half
+    assert plan.segments
