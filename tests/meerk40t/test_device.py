@@ -202,6 +202,29 @@ def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     assert took < 60
 
 
+def test_a_circle_from_meerk40t_is_marked_round(meerk40t):
+    """meerk40t's circle (its cutcode is cubic curves, flattened by the device): every mark off
+    the wires within the chord tolerance and half a pitch of the circle, all round it."""
+    kernel, device, board, lines = meerk40t
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    centre, radius = (52.0, 57.0), 3.0
+    _run(kernel, device, f"circle {centre[0]:g}mm {centre[1]:g}mm {radius:g}mm engrave "
+                         f"-s {SPEED_MM_S:g} -p {POWER_PERMILLE:g} frequency {PRR_KHZ:g}")
+    assert device.driver.last_error is None, device.driver.last_error
+    assert device.driver.last_report.clean
+    marks, _ = _marks(board, before)
+    pitch = _pitch(marks)
+    cx, cy = centre[0] - FIELD_MM / 2, FIELD_MM / 2 - centre[1]
+    off = abs(np.hypot(marks[:, 0] - cx, marks[:, 1] - cy) - radius)
+    assert off.max() <= device.tolerance_mm + pitch / 2 + UNIT_MM
+    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    ring = np.column_stack([cx + radius * np.cos(angles), cy + radius * np.sin(angles)])
+    nearest = np.min(np.hypot(*(ring[:, None, :] - marks[None, :, :]).transpose(2, 0, 1)),
+                     axis=1)
+    assert nearest.max() <= device.tolerance_mm + pitch / 2 + UNIT_MM
+
+
 def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
     """A rectangle reaching past the lens field: one line on the console, and not a byte to
     the board."""
@@ -341,6 +364,50 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t):
     pitch = _pitch(marks)
     assert _distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
     assert _gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
+    gc.collect()
+
+
+# (The socket meerk40t's server leaves: as above.)
+@pytest.mark.filterwarnings(
+    r"ignore:Exception ignored in. <socket\.socket.*:pytest.PytestUnraisableExceptionWarning")
+def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t):
+    """GRBL's soft reset (0x18) during a slow square reaches the board: the job stops with the
+    laser disarmed, the pulses stop, and the sender's next square is marked clean."""
+    kernel, device, board, lines = meerk40t
+    device.driver.last_report = device.driver.last_error = None
+    port = _free_port()
+    kernel.console(f"grblcontrol -p {port}\n")
+    slow = ["G21", "G90", "G0 X50 Y50", "M4 S500", "G1 X70 Y50 F60", "G1 X70 Y70", "M5"]
+    sender = _Sender(port)
+    try:
+        for line in slow[:-1]:
+            assert sender.send(line) == "ok"
+        pulses = len(board.board.pulses)
+        sender.socket.sendall(b"M5\n")                # the slow square starts
+        deadline = time.monotonic() + 60
+        while len(board.board.pulses) < pulses + 200:
+            assert time.monotonic() < deadline and device.driver.last_error is None
+            time.sleep(0.01)
+        sender.socket.sendall(b"\x18")
+        while device.driver.last_error is None:
+            assert time.monotonic() < deadline and device.driver.last_report is None
+            time.sleep(0.02)
+        assert "job stopped, laser disarmed" in device.driver.last_error
+        stopped = len(board.board.pulses)
+        board.board.run_for(2e-3)
+        assert len(board.board.pulses) == stopped
+        # GRBL's greeting again after its reset, and the M5 line's answer once its job ended.
+        heard = set()
+        while not {"Grbl", "[MSG", "ok"} <= heard:
+            heard.add(sender.line()[:4])
+        device.driver.last_error = None
+        for line in ["G0 X50 Y50", "M4 S500", "G1 X52 Y50 F6000", "M5"]:
+            assert sender.send(line) == "ok"
+    finally:
+        sender.socket.close()
+        kernel.console("grblcontrol quit\n")
+    assert device.driver.last_error is None, device.driver.last_error
+    assert device.driver.last_report.clean
     gc.collect()
 
 
