@@ -41,6 +41,9 @@ from sim_board import SimBoard                          # noqa: E402
 from vector_board import pulses_per_frame               # noqa: E402
 
 
+#: One worker for the module: its kernel and simulated board are built once.
+pytestmark = pytest.mark.xdist_group("meerk40t")
+
 PROFILE = default_profile()
 FIELD_MM = PROFILE.field.size_mm
 #: One galvo unit, mm: 65536 of them across the field (XY2-100's 16 bits).
@@ -294,18 +297,19 @@ def test_stop_sends_arm_0_first_and_leaves_the_board_ready(meerk40t, monkeypatch
 GRBL_CORNER, GRBL_SIDE = (50.0, 50.0), 6.0
 
 
-def _free_port():
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
 class _Sender:
     """A G-code sender on the loopback port: a line at a time, each waiting for its answer
     (as GRBL's simple send-response streaming does)."""
 
     def __init__(self, port):
-        self.socket = socket.create_connection(("127.0.0.1", port), timeout=30)
+        deadline = time.monotonic() + 10
+        while True:             # (the server's thread may not be listening yet)
+            try:
+                self.socket = socket.create_connection(("127.0.0.1", port), timeout=30)
+                break
+            except ConnectionRefusedError:
+                assert time.monotonic() < deadline, f"no GRBL server on port {port}"
+                time.sleep(0.05)
         self.pending = b""
         # The greeting: GRBL's banner and its message line.
         assert self.line().startswith("Grbl ")
@@ -323,20 +327,40 @@ class _Sender:
         self.socket.sendall(text.encode() + b"\n")
         return self.line()
 
+    def close(self):
+        self.socket.close()
 
-# meerk40t's TCP server leaves a connection the sender closed to the garbage collector (its
-# handler breaks out of its loop on an empty read without closing the socket): collected in
-# this test, below, and that warning alone ignored.
-@pytest.mark.filterwarnings(
-    r"ignore:Exception ignored in. <socket\.socket.*:pytest.PytestUnraisableExceptionWarning")
-def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t):
+
+@pytest.fixture
+def grbl_port(meerk40t, monkeypatch):
+    """A loopback port for meerk40t's GRBL server, and the server's end of each connection
+    closed after the test: meerk40t's TCP server leaves a connection the sender closed to the
+    garbage collector (its handler leaves its loop on an empty read without closing the
+    socket), which -W error would fail whichever test it is collected in."""
+    accepted = []
+    accept = socket.socket.accept
+
+    def recording(self):
+        connection, address = accept(self)
+        accepted.append(connection)
+        return connection, address
+    monkeypatch.setattr(socket.socket, "accept", recording)
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    yield port
+    for connection in accepted:
+        connection.close()
+
+
+def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     """meerk40t's GRBL server (``grblcontrol``) with the galvoscan device active: a sender's
     square at M4 S500 F6000 has every line answered ok and is marked, the marks off the wires
     on the square (its G-code coordinates are meerk40t's scene's, through the device's view),
     at 100 mm/s and 50 %; ``?`` is answered with a status report."""
     kernel, device, board, lines = meerk40t
     device.driver.last_report = device.driver.last_error = None
-    port = _free_port()
+    port = grbl_port
     kernel.console(f"grblcontrol -p {port}\n")
     board.run_for(0)
     before = len(board.xy2_frames())
@@ -350,7 +374,7 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t):
         sender.socket.sendall(b"?")
         status = sender.line()
     finally:
-        sender.socket.close()
+        sender.close()
         kernel.console("grblcontrol quit\n")
     assert answers == ["ok"] * len(program)
     assert re.fullmatch(r"<(Idle|Run)\|MPos:[-\d.]+,[-\d.]+,[-\d.]+\|FS:.*>", status), status
@@ -364,18 +388,14 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t):
     pitch = _pitch(marks)
     assert _distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
     assert _gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
-    gc.collect()
 
 
-# (The socket meerk40t's server leaves: as above.)
-@pytest.mark.filterwarnings(
-    r"ignore:Exception ignored in. <socket\.socket.*:pytest.PytestUnraisableExceptionWarning")
-def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t):
+def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t, grbl_port):
     """GRBL's soft reset (0x18) during a slow square reaches the board: the job stops with the
     laser disarmed, the pulses stop, and the sender's next square is marked clean."""
     kernel, device, board, lines = meerk40t
     device.driver.last_report = device.driver.last_error = None
-    port = _free_port()
+    port = grbl_port
     kernel.console(f"grblcontrol -p {port}\n")
     slow = ["G21", "G90", "G0 X50 Y50", "M4 S500", "G1 X70 Y50 F60", "G1 X70 Y70", "M5"]
     sender = _Sender(port)
@@ -404,11 +424,10 @@ def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t):
         for line in ["G0 X50 Y50", "M4 S500", "G1 X52 Y50 F6000", "M5"]:
             assert sender.send(line) == "ok"
     finally:
-        sender.socket.close()
+        sender.close()
         kernel.console("grblcontrol quit\n")
     assert device.driver.last_error is None, device.driver.last_error
     assert device.driver.last_report.clean
-    gc.collect()
 
 
 README = (Path(__file__).parents[2] / "README.md").read_text()
