@@ -20,6 +20,7 @@ from meerk40t.kernel import Service, signal_listener
 
 from .. import api
 from ..geometry.field import UNITS
+from ..link.client import ClientError
 from ..settings.laser import TOLERANCE
 from .driver import SIM, GalvoscanDriver
 
@@ -131,6 +132,13 @@ class GalvoscanDevice(Service, Status):
             self.spooler.clear_queue()
             self.driver.reset()
             channel("galvoscan: stopped, arm = 0 sent")
+
+        @self.console_command("board_status", help=_("The galvoscan board's state"))
+        def board_status(command, channel, _, **kwargs):
+            try:
+                channel(f"galvoscan: board: {self.driver.board_status()}")
+            except (ClientError, OSError, ValueError) as error:
+                channel(f"galvoscan: error: the board's state cannot be read: {error}")
 
         @self.console_command("pause", help=_("Hold the spooler's next job"))
         def pause(command, channel, _, **kwargs):

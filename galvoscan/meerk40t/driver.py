@@ -13,6 +13,7 @@ import threading
 
 from .. import api
 from ..build import simulated_bitstream
+from ..gateware.fields import Status
 from ..cli.job_reports import describe_job
 from ..cli.layers import describe_layers
 from ..link.client import ClientError, HostClient, SerialTransport
@@ -167,6 +168,7 @@ class GalvoscanDriver:
     def _run(self, plan):
         with self._lock:
             self.state = "busy"
+            self.service.laser_status = "active"
             try:
                 client, close = self._open()
             except (OSError, ValueError) as error:
@@ -196,6 +198,7 @@ class GalvoscanDriver:
             finally:
                 self._client = None
                 self.state = "idle"
+                self.service.laser_status = "idle"
                 close()
         self.last_report = report
         counters = report.counters
@@ -274,6 +277,30 @@ class GalvoscanDriver:
                 JobStreamer(client).disarm()
             finally:
                 close()
+
+    def board_status(self):
+        """The board's state in one line: marking (a job of this device's is running), else
+        read off the board: busy or ready, armed, the interlock, an alarm and the latched
+        faults."""
+        if self._client is not None:
+            return "marking a job"
+        if self.service.link == SIM and self.board is None:
+            return "no simulated board yet (the first job makes it)"
+        with self._lock:
+            client, close = self._open()
+            try:
+                flags = Status.from_bits(client.read("status"))
+            finally:
+                close()
+        latched = [name for name in ("interlock", "watchdog", "alarm", "link")
+                   if getattr(flags, f"fault_{name}")]
+        return ", ".join([
+            "busy (segments queued)" if flags.vector_busy else "ready",
+            "armed" if flags.armed else "disarmed",
+            "interlock open" if flags.interlock_open else "interlock closed",
+            *(["laser alarm"] if flags.alarm else []),
+            (f"latched fault: {', '.join(latched)} (`galvoscan send fault_clear=1` clears it)"
+             if latched else "no fault latched")])
 
     # --- the console ---------------------------------------------------------------------------
 

@@ -41,9 +41,6 @@ from sim_board import SimBoard                          # noqa: E402
 from vector_board import pulses_per_frame               # noqa: E402
 
 
-#: One worker for the module: its kernel and simulated board are built once.
-pytestmark = pytest.mark.xdist_group("meerk40t")
-
 PROFILE = default_profile()
 FIELD_MM = PROFILE.field.size_mm
 #: One galvo unit, mm: 65536 of them across the field (XY2-100's 16 bits).
@@ -428,6 +425,28 @@ def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t, grbl_port):
         kernel.console("grblcontrol quit\n")
     assert device.driver.last_error is None, device.driver.last_error
     assert device.driver.last_report.clean
+
+
+def test_the_boards_state_in_meerk40ts_console(meerk40t):
+    """``board_status``: the board read and said in one line: ready with the interlock closed,
+    then the interlock opened on the simulated machine, and closed again."""
+    kernel, device, board, lines = meerk40t
+    _run(kernel, device, _rect_command(*RECT_MM))         # (the board exists, and is idle)
+
+    def said():
+        start = len(lines)
+        kernel.console("board_status\n")
+        found = [line for line in lines[start:] if "galvoscan: board:" in line]
+        assert len(found) == 1, lines[start:]
+        return found[0]
+    assert "ready, disarmed, interlock closed, no fault latched" in said()
+    board.board.interlock_closed = False
+    try:
+        assert "interlock open" in said()
+    finally:
+        board.board.interlock_closed = True
+    assert "interlock closed" in said()
+    assert device.laser_status == "idle"
 
 
 README = (Path(__file__).parents[2] / "README.md").read_text()
