@@ -5,8 +5,10 @@ operation (its speed, power and frequency), its cuts as the polylines of one
 The cuts' coordinates are the device's native units, which the device's view makes galvoscan's
 galvo units (0 … 65535 across the lens field, Y up): :func:`~galvoscan.geometry.field.from_galvo`
 turns them into field mm. Curves are flattened to the job's chord tolerance by the SVG reader's
-own rule; a raster's (PlotCut's) dark runs are lines at the operation's power; a dwell is a dot
-whose pulses are the dwell's time at the operation's frequency.
+own rule; a PlotCut's (a plotted path: what meerk40t's G-code reader makes) steps at half the
+operation's power or more are lines at its power; a dwell is a dot whose pulses are the dwell's
+time at the operation's frequency. Other cuts (meerk40t's RasterCut of raster and image
+operations, waits, I/O) are refused in one line.
 """
 
 import math
@@ -31,8 +33,8 @@ __all__ = ["POWER_FULL", "DARK", "job_from_cuts", "operation_layer"]
 
 #: meerk40t's power setting at full power (its galvo devices show it as 100 %).
 POWER_FULL = 1000.0
-#: A PlotCut step at this share of the operation's power or more is a dark pixel, marked;
-#: below it, a light one, jumped (the board holds one power a layer: no grey levels).
+#: A PlotCut step at this share of the operation's power or more is marked; below it, jumped
+#: (the board holds one power a layer: no grey levels).
 DARK = 0.5
 
 
@@ -55,11 +57,9 @@ class _Operation:
             self.paths.append(list(points))
 
 
-def operation_layer(name, settings, *, dwell_ms=None):
+def operation_layer(name, settings):
     """The :class:`~galvoscan.plan.layers.Layer` of a meerk40t operation's ``settings`` (its
-    ``speed`` mm/s, ``power`` per mille, ``frequency`` kHz; what it lacks is the job's); a
-    dwell's (``dwell_ms``) pulses per point are its time at that frequency, or at the job's
-    (``prr_khz`` added later by the caller: see :func:`job_from_cuts`)."""
+    ``speed`` mm/s, ``power`` per mille, ``frequency`` kHz; what it lacks is the job's)."""
     speed = settings.get("speed")
     power = settings.get("power")
     frequency = settings.get("frequency")
@@ -94,7 +94,7 @@ def _cut_points(cut, tolerance_units):
             last = (x1, y1)
         return runs
     raise PlanError(f"meerk40t's {type(cut).__name__} is not one the galvoscan device marks "
-                    f"(lines, curves, dwells and rasters' PlotCuts are)")
+                    f"(lines, curves, dwells and PlotCuts are)")
 
 
 def job_from_cuts(cuts, profile, *, tolerance_mm):
