@@ -7,8 +7,9 @@ galvo units (0 … 65535 across the lens field, Y up): :func:`~galvoscan.geometr
 turns them into field mm. Curves are flattened to the job's chord tolerance by the SVG reader's
 own rule; a PlotCut's (a plotted path: what meerk40t's G-code reader makes) steps at half the
 operation's power or more are lines at its power; a dwell is a dot whose pulses are the dwell's
-time at the operation's frequency. Other cuts (meerk40t's RasterCut of raster and image
-operations, waits, I/O) are refused in one line.
+time at the operation's frequency; a RasterCut's (a raster or image operation's) runs of dark
+pixels are lines, walked as meerk40t's own galvo driver walks them. Other cuts (waits, I/O)
+are refused in one line.
 """
 
 import math
@@ -20,6 +21,9 @@ from meerk40t.core.cutcode.dwellcut import DwellCut
 from meerk40t.core.cutcode.linecut import LineCut
 from meerk40t.core.cutcode.plotcut import PlotCut
 from meerk40t.core.cutcode.quadcut import QuadCut
+from meerk40t.core.cutcode.rastercut import RasterCut
+from meerk40t.core.plotplanner import PlotPlanner
+from meerk40t.device.basedevice import PLOT_FINISH, PLOT_JOG, PLOT_RAPID
 from svgelements import CubicBezier, QuadraticBezier
 
 from ..api import Job, Layer, job_settings
@@ -93,8 +97,34 @@ def _cut_points(cut, tolerance_units):
                 runs.append([(x0, y0), (x1, y1)])
             last = (x1, y1)
         return runs
+    if isinstance(cut, RasterCut):
+        return _raster_runs(cut)
     raise PlanError(f"meerk40t's {type(cut).__name__} is not one the galvoscan device marks "
-                    f"(lines, curves, dwells and PlotCuts are)")
+                    f"(lines, curves, dwells, PlotCuts and RasterCuts are)")
+
+
+def _raster_runs(cut):
+    """A RasterCut's (a raster or image operation's) dark runs, as meerk40t's own galvo driver
+    walks it: its plot planner's moves, a step at half the power or more marked."""
+    planner = PlotPlanner(dict(), single=True, ppi=False, shift=False, group=True,
+                          require_uniform_movement=False)
+    planner.settings_then_jog = True
+    planner.push(cut)
+    runs, last = [], None
+    for x, y, on in planner.gen():
+        if on > 1:                      # the planner's own commands: a move, or the end
+            if on & PLOT_FINISH:
+                break
+            if on & (PLOT_RAPID | PLOT_JOG):
+                last = (x, y)
+            continue
+        if on >= DARK and last is not None:
+            if runs and runs[-1][-1] == last:
+                runs[-1].append((x, y))
+            else:
+                runs.append([last, (x, y)])
+        last = (x, y)
+    return runs
 
 
 def job_from_cuts(cuts, profile, *, tolerance_mm):

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 from hypothesis import given, settings, strategies as st
 
 pytest.importorskip("meerk40t")
@@ -27,6 +28,7 @@ from meerk40t.core.cutcode.dwellcut import DwellCut     # noqa: E402
 from meerk40t.core.cutcode.linecut import LineCut       # noqa: E402
 from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
 from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
+from meerk40t.core.cutcode.rastercut import RasterCut   # noqa: E402
 from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
 from meerk40t.kernel import Kernel                      # noqa: E402
 
@@ -532,6 +534,38 @@ def _max_distance(curve, polyline):
     t = np.clip((rel * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-12), 0, 1)
     nearest = starts[None] + t[..., None] * d[None]
     return np.min(np.hypot(*(curve[:, None, :] - nearest).transpose(2, 0, 1)), axis=1).max()
+
+
+def test_an_images_dark_runs_are_its_lines():
+    """A RasterCut of a small image (meerk40t's image operation): a line each run of dark
+    pixels, as long as the run and on its row, none anywhere else (each starting half a pixel
+    before its first pixel's edge, where meerk40t's plot planner, which its galvo driver
+    follows too, puts it)."""
+    rows = [".##.#...##",
+            "...#......",
+            "##########"]
+    image = Image.new("L", (len(rows[0]), len(rows)), 255)
+    for y, row in enumerate(rows):
+        for x, pixel in enumerate(row):
+            if pixel == "#":
+                image.putpixel((x, y), 0)
+    step = 20                                   # galvo units a pixel
+    corner = _native(-2, 2)
+    cut = RasterCut(image, int(corner[0]), int(corner[1]), step, step,
+                    settings={"speed": 200.0, "power": 500.0, "frequency": 50.0})
+    job, objects = job_from_cuts([cut], PROFILE, tolerance_mm=0.01)
+    (raster,) = (o.drawing for o in objects)
+    # Each run from the image, as (row, first pixel, pixels).
+    wanted = sorted((y, m.start(), len(m[0])) for y, row in enumerate(rows)
+                    for m in re.finditer("#+", row))
+    found = []
+    for path in raster.paths:
+        units = (path - 0) / UNIT_MM + 32768       # back to galvo units
+        assert np.ptp(units[:, 1]) < 1              # along one row
+        row = round((units[0, 1] - int(corner[1])) / step)
+        first = (units[:, 0].min() - int(corner[0])) / step
+        found.append((row, round(first + 0.5), round(np.ptp(units[:, 0]) / step)))
+    assert sorted(found) == wanted
 
 
 def test_a_cut_it_cannot_mark_is_refused_in_one_line():
