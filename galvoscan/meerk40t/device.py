@@ -133,6 +133,17 @@ class GalvoscanDevice(Service, Status):
             self.driver.reset()
             channel("galvoscan: stopped, arm = 0 sent")
 
+        @self.console_argument("times", type=int, help=_("How many times (1 … 100)"))
+        @self.console_command("guide_frame", help=_("Trace the last job's outline with the "
+                                                     "guide laser, the laser off"))
+        def guide_frame(command, channel, _, times=None, **kwargs):
+            times = 1 if times is None else times
+            if not 1 <= times <= 100:
+                channel(f"galvoscan: error: guide_frame: times must be from 1 to 100, not "
+                        f"{times}")
+                return
+            self.spooler.command("frame", times)
+
         @self.console_command("board_status", help=_("The galvoscan board's state"))
         def board_status(command, channel, _, **kwargs):
             try:

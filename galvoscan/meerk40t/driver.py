@@ -14,10 +14,12 @@ import threading
 from .. import api
 from ..build import simulated_bitstream
 from ..gateware.fields import Status
+from ..cli.jobargs import frame_job
 from ..cli.job_reports import describe_job
 from ..cli.layers import describe_layers
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
+from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
 from .cutcode import job_from_cuts
 
@@ -84,6 +86,7 @@ class GalvoscanDriver:
         self.make_board = self._default_board
         self.last_report = None
         self.last_error = None
+        self.last_plan = None
         self._client = None
         self._lock = threading.Lock()
         self.state = "idle"
@@ -158,6 +161,7 @@ class GalvoscanDriver:
         except ValueError as error:
             self._refuse(f"job refused, nothing sent: {error}")
             return
+        self.last_plan = plan
         vector_job = plan.vector_job
         for line in describe_job(vector_job, profile, ""):
             self._say(f"galvoscan: {line}")
@@ -206,6 +210,47 @@ class GalvoscanDriver:
                   f"{'' if report.clean else ' (NOT as planned)'}; underruns "
                   f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
                   f"{counters['vec_rejected']}, errors {counters['errors']}")
+
+    def frame(self, times):
+        """Trace the last planned job's outline (its convex hull) ``times`` times with the
+        guide laser on and the laser never armed, as ``mark --frame`` does."""
+        plan = self.last_plan
+        self.last_report = self.last_error = None
+        if plan is None:
+            self._refuse("nothing to frame: no job has been planned yet")
+            return
+        profile = self.service.profile
+        if not profile.laser.guide:
+            self._refuse("nothing framed: the machine profile says there is no guide laser "
+                         "([laser] guide)")
+            return
+        vector_job = plan.vector_job
+        with self._lock:
+            self.state = "busy"
+            try:
+                client, close = self._open()
+            except (OSError, ValueError) as error:
+                self.state = "idle"
+                self._refuse(f"the board cannot be opened, nothing sent: {error}")
+                return
+            self._client = _StoppableClient(client)
+            try:
+                api.load_lens_table(self._client, profile, self._say)
+                frame_job(JobStreamer(self._client), profile,
+                          hull_outline(vector_job.paths_mm), times, vector_job.registers,
+                          timeout_s=max(60.0, 10 * times * plan.estimate_s),
+                          say=lambda line: self._say(f"galvoscan: {line}"), what="job")
+            except (JobAborted, JobInterrupted) as error:
+                self._refuse(f"framing stopped, guide laser off: {error}")
+                return
+            except (ClientError, OSError) as error:
+                self._refuse(f"framing stopped: the link failed: {error}")
+                return
+            finally:
+                self._client = None
+                self.state = "idle"
+                close()
+        self.last_report = "framed"
 
     def move_abs(self, x, y):
         self.native_x, self.native_y = x, y

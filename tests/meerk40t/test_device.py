@@ -451,6 +451,44 @@ def test_the_boards_state_in_meerk40ts_console(meerk40t):
     assert device.laser_status == "idle"
 
 
+def test_frame_traces_the_last_job_with_the_guide_laser(meerk40t, monkeypatch):
+    """``guide_frame 2`` after meerk40t's rectangle: its outline traced twice off the wires, the
+    laser never armed and not a pulse fired; the console says so."""
+    kernel, device, board, lines = meerk40t
+    _run(kernel, device, _rect_command(*RECT_MM))
+    writes = []
+    original = HostClient.write
+
+    def recording(self, name, value):
+        writes.append((name, value))
+        return original(self, name, value)
+    monkeypatch.setattr(HostClient, "write", recording)
+    board.run_for(0)
+    before, pulses = len(board.xy2_frames()), len(board.board.pulses)
+    clocks = len(board.laser_pins)
+    device.driver.last_report = device.driver.last_error = None
+    kernel.console("guide_frame 2\n")
+    deadline = time.monotonic() + 60
+    while device.driver.last_report is None and device.driver.last_error is None:
+        assert time.monotonic() < deadline, lines[-15:]
+        time.sleep(0.02)
+    assert device.driver.last_error is None, device.driver.last_error
+    assert any("framed the job's outline 2 time(s) with the guide laser" in line
+               for line in lines)
+    assert ("arm", 1) not in writes
+    assert len(board.board.pulses) == pulses
+    guide = SimBoard.LASER_PIN_NAMES.index("laser_guide")
+    assert any(pins[guide] for pins in board.laser_pins[clocks:])
+    board.run_for(0)
+    traced = (np.array([xy for _, xy in board.xy2_frames()[before:]], dtype=float)
+              - 32768) * UNIT_MM
+    # Where the mirrors dwelt: on the rectangle (the hull of a rectangle is itself), all round.
+    away = _distance_to_rect(traced)
+    on = traced[away <= 0.05]
+    assert len(on) > 100
+    assert _gaps(on, LEFT, TOP, RIGHT, BOTTOM) <= 0.05
+
+
 README = (Path(__file__).parents[2] / "README.md").read_text()
 
 
