@@ -59,7 +59,12 @@ class GalvoscanDevice(Service, Status):
              "tip": _("How far a flattened curve may stray from meerk40t's curve."),
              "section": "_00_General"},
         ])
-        self.profile = self._load_profile()
+        try:
+            self.profile = self._load_profile()
+        except ValueError as error:             # (a profile file gone or broken since)
+            self.channel("console")(f"galvoscan: error: {error}: galvoscan's default profile "
+                                    f"is used")
+            self.profile = api.default_profile()
         prr_low, prr_high = self.profile.laser.prr_khz
         self.register("frequency", (prr_low, prr_high))
         for kind in ("cut", "engrave", "hatch", "raster", "image"):
@@ -93,7 +98,8 @@ class GalvoscanDevice(Service, Status):
             try:
                 self.profile = self._load_profile()
             except ValueError as error:
-                self.channel("console")(f"galvoscan: error: {error}")
+                self.channel("console")(f"galvoscan: error: {error}: the profile in use is "
+                                        f"kept")
                 return
         size = f"{self.profile.field.size_mm:g}mm"
         scale = float(Length(size)) / UNITS

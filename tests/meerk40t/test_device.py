@@ -489,6 +489,34 @@ def test_frame_traces_the_last_job_with_the_guide_laser(meerk40t, monkeypatch):
     assert _gaps(on, LEFT, TOP, RIGHT, BOTTOM) <= 0.05
 
 
+def test_a_profile_that_cannot_be_read_is_one_line_and_the_field_kept(meerk40t, tmp_path):
+    """The device's machine profile setting: a file that is not there, or not a profile, is
+    one line on the console and the profile in use is kept; a good one gives the view its
+    field."""
+    kernel, device, board, lines = meerk40t
+    try:
+        for path, words in ((tmp_path / "none.toml", "no such file"),
+                            (tmp_path / "bad.toml", "bad.toml")):
+            if path.name == "bad.toml":
+                path.write_text("[field]\nsize_mm = -3\n")
+            start = len(lines)
+            device.profile_path = str(path)
+            device.realize(device.path)
+            errors = [line for line in lines[start:] if "galvoscan: error:" in line]
+            assert len(errors) == 1 and words in errors[0], lines[start:]
+            assert device.profile.field.size_mm == FIELD_MM
+        good = tmp_path / "lens.toml"
+        good.write_text("[field]\nsize_mm = 70\n")
+        device.profile_path = str(good)
+        device.realize(device.path)
+        assert device.profile.field.size_mm == 70
+        assert device.view.width == "70mm"
+    finally:
+        device.profile_path = ""
+        device.realize(device.path)
+    assert device.profile.field.size_mm == FIELD_MM
+
+
 README = (Path(__file__).parents[2] / "README.md").read_text()
 
 
