@@ -37,6 +37,8 @@ from galvoscan.build import PRESETS                     # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.link.client import HostClient            # noqa: E402
 from galvoscan.meerk40t.cutcode import job_from_cuts    # noqa: E402
+from galvoscan.meerk40t.driver import SIM               # noqa: E402
+from galvoscan.sim.board import PTYServer               # noqa: E402
 from galvoscan.profile.machine import default_profile   # noqa: E402
 
 from sim_board import SimBoard                          # noqa: E402
@@ -225,6 +227,29 @@ def test_a_circle_from_meerk40t_is_marked_round(meerk40t):
     nearest = np.min(np.hypot(*(ring[:, None, :] - marks[None, :, :]).transpose(2, 0, 1)),
                      axis=1)
     assert nearest.max() <= device.tolerance_mm + pitch / 2 + UNIT_MM
+
+
+def test_a_rectangle_over_a_serial_link_to_board_sim(meerk40t):
+    """The device's link set to a serial port: the pseudo-terminal ``galvoscan board --sim``
+    serves (its PTYServer, here in this process), the same board: the rectangle off the wires
+    as through the in-process link."""
+    kernel, device, board, lines = meerk40t
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    server = PTYServer(board.board).start()
+    try:
+        device.link = server.port
+        _run(kernel, device, _rect_command(*RECT_MM))
+    finally:
+        device.link = SIM
+        server.stop()
+    assert server.error is None
+    assert device.driver.last_error is None, device.driver.last_error
+    assert device.driver.last_report.clean
+    marks, _ = _marks(board, before)
+    pitch = _pitch(marks)
+    assert _distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
+    assert _gaps(marks, LEFT, TOP, RIGHT, BOTTOM) <= pitch / 2 + UNIT_MM
 
 
 def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
