@@ -99,8 +99,7 @@ class GalvoscanDriver:
     def _default_board(self):
         """The simulated board of the default bitstream at the profile's baud, as ``mark
         --sim`` runs it (compiled where it can be)."""
-        config, contents = simulated_bitstream("icebreaker",
-                                                   baud=self.service.profile.link.baud)
+        config, contents = simulated_bitstream("icebreaker", baud=self.service.profile.link.baud)
         return api.SimulatedBoard(config=config, backend="auto", **contents)
 
     def _open(self):
@@ -153,6 +152,8 @@ class GalvoscanDriver:
         """Plan and check the gathered cuts, then run them on the board; nothing is sent if
         the plan is refused."""
         cuts, self.queue = self.queue, []
+        if not cuts:            # (meerk40t's G-code reader ends every M5 so, moves or not)
+            return
         self.last_report = self.last_error = None
         profile = self.service.profile
         try:
@@ -175,8 +176,9 @@ class GalvoscanDriver:
             self.service.laser_status = "active"
             try:
                 client, close = self._open()
-            except (OSError, ValueError) as error:
+            except (ClientError, OSError, ValueError) as error:
                 self.state = "idle"
+                self.service.laser_status = "idle"
                 self._refuse(f"the board cannot be opened, nothing sent: {error}")
                 return
             self._client = _StoppableClient(client)
@@ -229,7 +231,7 @@ class GalvoscanDriver:
             self.state = "busy"
             try:
                 client, close = self._open()
-            except (OSError, ValueError) as error:
+            except (ClientError, OSError, ValueError) as error:
                 self.state = "idle"
                 self._refuse(f"the board cannot be opened, nothing sent: {error}")
                 return

@@ -267,6 +267,20 @@ def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
     assert len(board.board.bytes_in) == sent
 
 
+def test_a_port_that_cannot_be_opened_is_one_line(meerk40t, tmp_path):
+    kernel, device, board, lines = meerk40t
+    start = len(lines)
+    device.link = str(tmp_path / "ttyNONE")
+    try:
+        _run(kernel, device, _rect_command(*RECT_MM))
+    finally:
+        device.link = SIM
+    errors = [line for line in lines[start:] if "galvoscan: error:" in line]
+    assert len(errors) == 1 and "the board cannot be opened, nothing sent" in errors[0], \
+        lines[start:]
+    assert device.laser_status == "idle"
+
+
 def test_a_speed_the_laser_cannot_make_is_refused(meerk40t):
     kernel, device, board, lines = meerk40t
     sent = len(board.board.bytes_in)
