@@ -191,9 +191,12 @@ def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     per_point = int(np.median(pulses))
     speed = pitch * PRR_KHZ * 1e3 / per_point
     said = "\n".join(lines)
-    reported = re.search(r"marked at ([\d.]+) mm/s \(pitch", said)
+    reported = re.search(r"marked at ([\d.]+) mm/s \(pitch ([\d.]+) µm × (\d+) pulses?\)",
+                         said)
     assert reported, said
     assert speed == pytest.approx(float(reported[1]), rel=0.01)
+    assert pitch * 1000 == pytest.approx(float(reported[2]), abs=0.1)
+    assert per_point == int(reported[3])
     assert speed == pytest.approx(SPEED_MM_S, rel=0.03)
     assert f"{SPEED_MM_S:g} mm/s falls between the speeds" in said     # the nearer speed's note
     assert f"speed {SPEED_MM_S:g} mm/s, power {POWER_PERMILLE / 10:g} %, PRR {PRR_KHZ:g} kHz" \
