@@ -423,10 +423,13 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     assert device.driver.last_report.clean
     said = "\n".join(lines)
     assert "(speed 100 mm/s, power 50 %)" in said          # F6000 mm/min, S500 of 1000
-    marks, _ = _marks(board, before)
+    marks, pulses = _marks(board, before)
     left, top = x0 - FIELD_MM / 2, FIELD_MM / 2 - y0      # the scene's Y is down
     right, bottom = left + GRBL_SIDE, top - GRBL_SIDE
     pitch = _pitch(marks)
+    # GRBL gives no PRR: the profile's. The speed off the wires is F6000's 100 mm/s.
+    speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))
+    assert speed == pytest.approx(6000 / 60, rel=0.03)
     assert _distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
     assert _gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
 
