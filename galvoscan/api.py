@@ -55,7 +55,7 @@ from .build import PRESETS
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
            "HatchSet", "LineOrder", "Job",
-           "Plan", "Report", "plan", "run", "mark_objects", "mark_object", "fields",
+           "Plan", "Report", "plan", "plan_made", "run", "mark_objects", "mark_object", "fields",
            "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
            "load_profile",
            "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
@@ -319,12 +319,19 @@ def plan(job, profile=None, *, serial=None):
     profile = profile or default_profile()
     if not (job.drawings or job.texts or job.codes or job.photos):
         raise PlanError("a job needs something to mark: a drawing, a text, a code or a photo")
+    settings = job_settings(job, profile)
+    return plan_made(mark_objects(job, settings, profile, serial=serial), job, profile)
+
+
+def plan_made(objects, job, profile):
+    """``objects`` (:class:`~galvoscan.plan.objects.MarkObject` s a program made itself: a
+    meerk40t device's from its cutcode) planned and checked as :func:`plan` plans a job's:
+    ``job``'s layers held to the layer keys, its settings, its wobble. A :class:`Plan`; a
+    :class:`ValueError` (one line) for anything that cannot be marked."""
     for number, layer in enumerate(job.layers, 1):
         # A program's Layer, held to the declarations a job file's [[layer]] is read by.
         check_layer(layer, f"layer {number} ({getattr(layer, 'match', layer)!r})")
-    settings = job_settings(job, profile)
-    planned = plan_objects(mark_objects(job, settings, profile, serial=serial), job, settings,
-                           profile)
+    planned = plan_objects(objects, job, job_settings(job, profile), profile)
     planned.wobbles = apply_wobble(planned.vector_job, job_wobble(
         job.wobble_um, job.wobble_along_um, job.wobble_hz, profile), profile)
     return planned

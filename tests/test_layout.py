@@ -1,6 +1,6 @@
 """The host's package layout: no import cycle among galvoscan's modules, and no package importing
 one above it in the data flow (settings → link, profile and flashing → geometry → inputs →
-plan → outputs → sim → the API → the CLI).
+plan → outputs → sim → the API → the CLI → the meerk40t device).
 
 The graph is grimp's, of every import in the source (those inside functions too), built from a
 copy of the four source folders in their installed layout: the editable install maps
@@ -24,6 +24,9 @@ FOLDERS = {"galvoscan": "", "gateware": "gateware", "platforms": "platforms", "f
 #: The host's layers, highest first: a package may import those below it, never one above.
 #: Packages on one row are independent of each other (neither imports the other).
 LAYERS = (
+    # (meerk40t's device: galvoscan as a plugin of another program, on top of the API and the
+    # CLI's reports.)
+    "galvoscan.meerk40t",
     "galvoscan.cli",
     "galvoscan.api",
     "galvoscan.sim",

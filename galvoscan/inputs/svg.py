@@ -49,7 +49,7 @@ def _arc_points(arc, tolerance_px):
     return list(points)
 
 
-def _bezier_points(segment, tolerance_px):
+def bezier_points(segment, tolerance_px):
     """A Bézier curve in ``n`` equal parameter steps: linear interpolation over a step ``h``
     is within ``h² / 8 · max |B''|``, and ``|B''|`` is bounded by the control polygon."""
     p = np.array([np.array(q, dtype=float) for q in segment])
@@ -75,7 +75,7 @@ def _svg_subpaths(path, tolerance_px):
         if isinstance(segment, svg.Arc):
             points += _arc_points(segment, tolerance_px)
         elif isinstance(segment, (svg.CubicBezier, svg.QuadraticBezier)):
-            points += _bezier_points(segment, tolerance_px)
+            points += bezier_points(segment, tolerance_px)
         else:                               # Line, svg.Close
             points.append(np.array(segment.end, dtype=float))
             closed = isinstance(segment, svg.Close)

@@ -1,0 +1,175 @@
+"""meerk40t's planned cutcode as galvoscan's job: one :class:`~galvoscan.plan.layers.Layer` an
+operation (its speed, power and frequency), its cuts as the polylines of one
+:class:`~galvoscan.plan.objects.MarkObject` in field mm, in meerk40t's order.
+
+The cuts' coordinates are the device's native units, which the device's view makes galvoscan's
+galvo units (0 … 65535 across the lens field, Y up): :func:`~galvoscan.geometry.field.from_galvo`
+turns them into field mm. Curves are flattened to the job's chord tolerance by the SVG reader's
+own rule; a PlotCut's (a plotted path: what meerk40t's G-code reader makes) steps at half the
+operation's power or more are lines at its power; a dwell is a dot whose pulses are the dwell's
+time at the operation's frequency; a RasterCut's (a raster or image operation's) runs of dark
+pixels are lines, walked as meerk40t's own galvo driver walks them. Other cuts (waits, I/O)
+are refused in one line.
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from meerk40t.core.cutcode.cubiccut import CubicCut
+from meerk40t.core.cutcode.dwellcut import DwellCut
+from meerk40t.core.cutcode.linecut import LineCut
+from meerk40t.core.cutcode.plotcut import PlotCut
+from meerk40t.core.cutcode.quadcut import QuadCut
+from meerk40t.core.cutcode.rastercut import RasterCut
+from meerk40t.core.plotplanner import PlotPlanner
+from meerk40t.device.basedevice import PLOT_FINISH, PLOT_JOG, PLOT_RAPID
+from svgelements import CubicBezier, QuadraticBezier
+
+from ..api import Job, Layer, job_settings
+from ..geometry.drawing import Drawing
+from ..geometry.field import Placement, PlanError, from_galvo
+from ..inputs.svg import bezier_points
+from ..plan.objects import MarkObject
+
+
+__all__ = ["POWER_FULL", "DARK", "job_from_cuts", "operation_layer"]
+
+#: meerk40t's power setting at full power (its galvo devices show it as 100 %).
+POWER_FULL = 1000.0
+#: A PlotCut step at this share of the operation's power or more is marked; below it, jumped
+#: (the board holds one power a layer: no grey levels).
+DARK = 0.5
+
+
+@dataclass
+class _Operation:
+    """The cuts of one meerk40t operation: its settings and the polylines (galvo units)."""
+    settings: dict
+    dwell_ms: float = None
+    paths: list = None
+
+    def __post_init__(self):
+        self.paths = []
+
+    def add(self, points):
+        """Continue the last polyline when ``points`` starts where it ends, else begin one."""
+        if self.paths and tuple(self.paths[-1][-1]) == tuple(points[0]) and \
+                self.dwell_ms is None:
+            self.paths[-1].extend(points[1:])
+        else:
+            self.paths.append(list(points))
+
+
+def operation_layer(name, settings):
+    """The :class:`~galvoscan.plan.layers.Layer` of a meerk40t operation's ``settings`` (its
+    ``speed`` mm/s, ``power`` per mille, ``frequency`` kHz; what it lacks is the job's)."""
+    speed = settings.get("speed")
+    power = settings.get("power")
+    frequency = settings.get("frequency")
+    return Layer(name,
+                 speed_mm_s=float(speed) if speed is not None else None,
+                 power_percent=float(power) * 100 / POWER_FULL if power is not None else None,
+                 prr_khz=float(frequency) if frequency is not None else None)
+
+
+def _cut_points(cut, tolerance_units):
+    """The polylines (galvo units) that mark ``cut``: a list of point lists."""
+    if isinstance(cut, LineCut):
+        return [[cut.start, cut.end]]
+    if isinstance(cut, QuadCut):
+        curve = QuadraticBezier(cut.start, cut.c(), cut.end)
+        return [[cut.start, *bezier_points(curve, tolerance_units)]]
+    if isinstance(cut, CubicCut):
+        curve = CubicBezier(cut.start, cut.c1(), cut.c2(), cut.end)
+        return [[cut.start, *bezier_points(curve, tolerance_units)]]
+    if isinstance(cut, DwellCut):
+        return [[cut.start, cut.start]]
+    if isinstance(cut, PlotCut):
+        runs, last = [], None
+        for x0, y0, on, x1, y1 in cut.plot:
+            if on < DARK:
+                last = None
+                continue
+            if last is not None and last == (x0, y0):
+                runs[-1].append((x1, y1))
+            else:
+                runs.append([(x0, y0), (x1, y1)])
+            last = (x1, y1)
+        return runs
+    if isinstance(cut, RasterCut):
+        return _raster_runs(cut)
+    raise PlanError(f"meerk40t's {type(cut).__name__} is not one the galvoscan device marks "
+                    f"(lines, curves, dwells, PlotCuts and RasterCuts are)")
+
+
+def _raster_runs(cut):
+    """A RasterCut's (a raster or image operation's) dark runs, as meerk40t's own galvo driver
+    walks it: its plot planner's moves, a step at half the power or more marked."""
+    planner = PlotPlanner(dict(), single=True, ppi=False, shift=False, group=True,
+                          require_uniform_movement=False)
+    planner.settings_then_jog = True
+    planner.push(cut)
+    runs, last = [], None
+    for x, y, on in planner.gen():
+        if on > 1:                      # the planner's own commands: a move, or the end
+            if on & PLOT_FINISH:
+                break
+            if on & (PLOT_RAPID | PLOT_JOG):
+                last = (x, y)
+            continue
+        if on >= DARK and last is not None:
+            if runs and runs[-1][-1] == last:
+                runs[-1].append((x, y))
+            else:
+                runs.append([last, (x, y)])
+        last = (x, y)
+    return runs
+
+
+def job_from_cuts(cuts, profile, *, tolerance_mm):
+    """``cuts`` (meerk40t's planned cutcode, in the device's native units: galvo units) as
+    ``(job, objects)``: a :class:`~galvoscan.api.Job` of a layer an operation and the
+    :class:`~galvoscan.plan.objects.MarkObject` s that :func:`galvoscan.api.plan_made` plans.
+    A :class:`~galvoscan.geometry.field.PlanError` (one line) for a cut it cannot mark."""
+    field_mm = profile.field.size_mm
+    tolerance_units = tolerance_mm * profile.units_per_mm
+    operations = {}
+    for cut in cuts:
+        settings = cut.settings if cut.settings is not None else {}
+        dwell = float(cut.dwell_time) if isinstance(cut, DwellCut) else None
+        key = (id(settings), dwell)
+        operation = operations.get(key)
+        if operation is None:
+            operation = operations[key] = _Operation(settings, dwell)
+        for points in _cut_points(cut, tolerance_units):
+            operation.add([tuple(float(v) for v in p) for p in points])
+    # Marked as meerk40t ordered and filled them: no hatch, no re-ordering; the settings are
+    # each operation's layer's, the rest the profile's.
+    fill = replace(job_settings(Job(tolerance_mm=tolerance_mm), profile), hatch=(),
+                   contour=None, outline=True)
+    layers, objects = [], []
+    for number, operation in enumerate(op for op in operations.values() if op.paths):
+        name = f"meerk40t operation {number + 1}"
+        layer = operation_layer(name, operation.settings)
+        if operation.dwell_ms is not None:
+            if not math.isfinite(operation.dwell_ms) or operation.dwell_ms <= 0:
+                raise PlanError(f"{name}: a dwell of {operation.dwell_ms:g} ms: a dwell is a "
+                                f"time above 0 ms")
+            prr_khz = layer.prr_khz if layer.prr_khz is not None else profile.defaults.prr_khz
+            # (A PRR that is not a number is refused with the layer's other settings.)
+            pulses = max(1, round(operation.dwell_ms * prr_khz)) if math.isfinite(prr_khz) \
+                else None
+            layer = Layer(name, speed_mm_s=layer.speed_mm_s, power_percent=layer.power_percent,
+                          prr_khz=layer.prr_khz, pulses_per_point=pulses)
+        paths = tuple(np.asarray(from_galvo(np.array(p, dtype=float), field_mm))
+                      for p in operation.paths)
+        drawing = Drawing(name=name, paths=paths,
+                          closed=tuple(bool(len(p) > 2 and (p[0] == p[-1]).all())
+                                       for p in paths))
+        objects.append(MarkObject(drawing, Placement(origin="page"), fill, keep_order=True,
+                                  layer=name, own_fill=True))
+        layers.append(layer)
+    if not objects:
+        raise PlanError("the meerk40t job has nothing to mark")
+    return Job(layers=tuple(layers), tolerance_mm=tolerance_mm), objects

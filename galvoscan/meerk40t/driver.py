@@ -1,0 +1,359 @@
+"""The galvoscan device's driver: what meerk40t's spooler calls (``LaserJob.execute_item`` calls
+it by name). Cuts are gathered by :meth:`GalvoscanDriver.plot`; :meth:`~GalvoscanDriver.plot_start`
+turns them into galvoscan's job (:mod:`.cutcode`), plans and checks it with galvoscan's planner
+(:func:`galvoscan.api.plan_made`) before a byte is sent, and runs it on the board
+(:func:`galvoscan.api.run`). A refusal, or a job the board stopped, is one line in meerk40t's
+console.
+
+Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
+after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`).
+"""
+
+import threading
+
+from .. import api
+from ..build import simulated_bitstream
+from ..gateware.fields import Status
+from ..cli.jobargs import frame_job
+from ..cli.job_reports import describe_job
+from ..cli.layers import describe_layers
+from ..link.client import ClientError, HostClient, SerialTransport
+from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
+from ..plan.vector_job import hull_outline
+from ..sim.board import SimTransport
+from .cutcode import job_from_cuts
+
+
+__all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
+
+#: The link setting that runs jobs on a simulated board in meerk40t's own process.
+SIM = "sim"
+
+
+class StopRequested(KeyboardInterrupt):
+    """meerk40t's stop, raised into the streamer at its next link exchange (as Ctrl-C is:
+    the streamer disarms, then says how far the job got)."""
+
+
+class _StoppableClient:
+    """A :class:`~galvoscan.link.client.HostClient` whose next exchange after :meth:`stop`
+    raises :class:`StopRequested`, once; the disarming writes (``arm``, ``run`` or ``guide``
+    to 0) always go through."""
+
+    _DISARM = ("arm", "run", "guide")
+
+    def __init__(self, client):
+        self._client = client
+        self.stopping = threading.Event()
+
+    def __getattr__(self, name):
+        return getattr(self._client, name)
+
+    def _check(self):
+        if self.stopping.is_set():
+            self.stopping.clear()
+            raise StopRequested("stopped from meerk40t")
+
+    def read(self, name):
+        self._check()
+        return self._client.read(name)
+
+    def write(self, name, value):
+        if not (name in self._DISARM and value == 0):
+            self._check()
+        return self._client.write(name, value)
+
+    def queue_segments(self, segments):
+        self._check()
+        return self._client.queue_segments(segments)
+
+    def sleep(self, seconds):
+        self._check()
+        return self._client.sleep(seconds)
+
+
+class GalvoscanDriver:
+    """meerk40t's driver for a galvoscan board. ``make_board``: the simulated board the
+    ``sim`` link runs (made at the first job, kept for the device's life)."""
+
+    def __init__(self, service):
+        self.service = service
+        self.name = str(service)
+        self.native_x = self.native_y = 0x8000
+        self.paused = False
+        self.queue = []
+        self.board = None
+        self.make_board = self._default_board
+        self.last_report = None
+        self.last_error = None
+        self.last_plan = None
+        self._client = None
+        self._lock = threading.Lock()
+        self.state = "idle"
+
+    def __repr__(self):
+        return f"GalvoscanDriver({self.name})"
+
+    # --- the link ------------------------------------------------------------------------------
+
+    def _default_board(self):
+        """The simulated board of the default bitstream at the profile's baud, as ``mark
+        --sim`` runs it (compiled where it can be)."""
+        config, contents = simulated_bitstream("icebreaker", baud=self.service.profile.link.baud)
+        return api.SimulatedBoard(config=config, backend="auto", **contents)
+
+    def _open(self):
+        """A :class:`~galvoscan.link.client.HostClient` to the device's board, and what
+        closes it."""
+        link = self.service.link
+        if link == SIM:
+            if self.board is None:
+                self.board = self.make_board()
+            return HostClient(SimTransport(self.board)), lambda: None
+        profile = self.service.profile
+        transport = SerialTransport(link, baud=profile.link.baud, timeout=profile.link.timeout_s)
+        transport.__enter__()
+        return HostClient(transport), lambda: transport.__exit__(None, None, None)
+
+    # --- what the spooler calls ----------------------------------------------------------------
+
+    def hold_work(self, priority):
+        return priority <= 0 and self.paused
+
+    def job_start(self, job):
+        pass
+
+    def job_finish(self, job):
+        pass
+
+    def get(self, key, default=None):
+        return default
+
+    def set(self, key, value):
+        pass
+
+    def status(self):
+        return (self.native_x, self.native_y), self.state, "galvoscan"
+
+    def laser_off(self, *values):
+        pass
+
+    def laser_on(self, *values):
+        pass
+
+    def geometry(self, geom):
+        self._say("galvoscan: error: meerk40t's geometry jobs are not marked by the galvoscan "
+                  "device (its cutcode is): nothing sent")
+
+    def plot(self, plot):
+        self.queue.append(plot)
+
+    def plot_start(self):
+        """Plan and check the gathered cuts, then run them on the board; nothing is sent if
+        the plan is refused."""
+        cuts, self.queue = self.queue, []
+        if not cuts:            # (meerk40t's G-code reader ends every M5 so, moves or not)
+            return
+        self.last_report = self.last_error = None
+        profile = self.service.profile
+        try:
+            job, objects = job_from_cuts(cuts, profile, tolerance_mm=self.service.tolerance_mm)
+            plan = api.plan_made(objects, job, profile)
+        except ValueError as error:
+            self._refuse(f"job refused, nothing sent: {error}")
+            return
+        self.last_plan = plan
+        vector_job = plan.vector_job
+        for line in describe_job(vector_job, profile, ""):
+            self._say(f"galvoscan: {line}")
+        for line in describe_layers(vector_job, profile):
+            self._say(f"galvoscan: {line}")
+        self._run(plan)
+
+    def _run(self, plan):
+        with self._lock:
+            self.state = "busy"
+            self.service.laser_status = "active"
+            try:
+                client, close = self._open()
+            except (ClientError, OSError, ValueError) as error:
+                self.state = "idle"
+                self.service.laser_status = "idle"
+                self._refuse(f"the board cannot be opened, nothing sent: {error}")
+                return
+            self._client = _StoppableClient(client)
+            try:
+                report = api.run(plan, self._client, say=self._say)
+            except JobInterrupted as error:
+                # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
+                # emptied so that the next job is not refused (a board without vec_flush says
+                # so: `galvoscan send soft_reset=1` empties it).
+                more = ""
+                try:
+                    client.write("vec_flush", 1)
+                except (ClientError, ValueError, KeyError) as flush:
+                    more = f"; its queue could not be emptied ({flush})"
+                self._refuse(f"job stopped, laser disarmed: {error}{more}")
+                return
+            except JobAborted as error:
+                self._refuse(f"job stopped, laser disarmed: {error}")
+                return
+            except (ClientError, OSError) as error:
+                self._refuse(f"job stopped, laser disarm sent: the link failed: {error}")
+                return
+            finally:
+                self._client = None
+                self.state = "idle"
+                self.service.laser_status = "idle"
+                close()
+        self.last_report = report
+        counters = report.counters
+        self._say(f"galvoscan: marked {report.segments} segments, {report.pulses} pulses"
+                  f"{'' if report.clean else ' (NOT as planned)'}; underruns "
+                  f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
+                  f"{counters['vec_rejected']}, errors {counters['errors']}")
+
+    def frame(self, times):
+        """Trace the last planned job's outline (its convex hull) ``times`` times with the
+        guide laser on and the laser never armed, as ``mark --frame`` does."""
+        plan = self.last_plan
+        self.last_report = self.last_error = None
+        if plan is None:
+            self._refuse("nothing to frame: no job has been planned yet")
+            return
+        profile = self.service.profile
+        if not profile.laser.guide:
+            self._refuse("nothing framed: the machine profile says there is no guide laser "
+                         "([laser] guide)")
+            return
+        vector_job = plan.vector_job
+        with self._lock:
+            self.state = "busy"
+            try:
+                client, close = self._open()
+            except (ClientError, OSError, ValueError) as error:
+                self.state = "idle"
+                self._refuse(f"the board cannot be opened, nothing sent: {error}")
+                return
+            self._client = _StoppableClient(client)
+            try:
+                api.load_lens_table(self._client, profile, self._say)
+                frame_job(JobStreamer(self._client), profile,
+                          hull_outline(vector_job.paths_mm), times, vector_job.registers,
+                          timeout_s=max(60.0, 10 * times * plan.estimate_s),
+                          say=lambda line: self._say(f"galvoscan: {line}"), what="job")
+            except (JobAborted, JobInterrupted) as error:
+                self._refuse(f"framing stopped, guide laser off: {error}")
+                return
+            except (ClientError, OSError) as error:
+                self._refuse(f"framing stopped: the link failed: {error}")
+                return
+            finally:
+                self._client = None
+                self.state = "idle"
+                close()
+        self.last_report = "framed"
+
+    def move_abs(self, x, y):
+        self.native_x, self.native_y = x, y
+
+    def move_rel(self, dx, dy, confined=False):
+        self.native_x += dx
+        self.native_y += dy
+
+    def home(self):
+        self.native_x = self.native_y = 0x8000
+
+    def physical_home(self):
+        self.home()
+
+    def rapid_mode(self):
+        pass
+
+    def program_mode(self):
+        pass
+
+    def raster_mode(self, *args):
+        pass
+
+    def wait_finished(self):
+        pass
+
+    def wait(self, time_in_ms):
+        pass
+
+    def dwell(self, time_in_ms, settings=None):
+        self._say("galvoscan: error: a dwell outside a job is not marked by the galvoscan "
+                  "device (a dots operation's is)")
+
+    def function(self, function):
+        function()
+
+    def console(self, value):
+        self.service(value)
+
+    def beep(self):
+        pass
+
+    def signal(self, signal, *args):
+        self.service.signal(signal, *args)
+
+    def pause(self):
+        """Hold the spooler's next job (a job already on the board runs to its end)."""
+        self.paused = True
+
+    def resume(self):
+        self.paused = False
+
+    def reset(self):
+        """Stop: the running job's next link exchange raises, and the streamer sends
+        ``arm = 0`` first; with no job running, ``arm = 0`` is sent now."""
+        self.paused = False
+        client = self._client
+        if client is not None:
+            client.stopping.set()
+            return
+        if self.service.link == SIM and self.board is None:
+            return                          # (no board yet: nothing armed)
+        with self._lock:
+            try:
+                client, close = self._open()
+            except (OSError, ValueError):
+                return
+            try:
+                JobStreamer(client).disarm()
+            finally:
+                close()
+
+    def board_status(self):
+        """The board's state in one line: marking (a job of this device's is running), else
+        read off the board: busy or ready, armed, the interlock, an alarm and the latched
+        faults."""
+        if self._client is not None:
+            return "marking a job"
+        if self.service.link == SIM and self.board is None:
+            return "no simulated board yet (the first job makes it)"
+        with self._lock:
+            client, close = self._open()
+            try:
+                flags = Status.from_bits(client.read("status"))
+            finally:
+                close()
+        latched = [name for name in ("interlock", "watchdog", "alarm", "link")
+                   if getattr(flags, f"fault_{name}")]
+        return ", ".join([
+            "busy (segments queued)" if flags.vector_busy else "ready",
+            "armed" if flags.armed else "disarmed",
+            "interlock open" if flags.interlock_open else "interlock closed",
+            *(["laser alarm"] if flags.alarm else []),
+            (f"latched fault: {', '.join(latched)} (`galvoscan send fault_clear=1` clears it)"
+             if latched else "no fault latched")])
+
+    # --- the console ---------------------------------------------------------------------------
+
+    def _say(self, line):
+        self.service.channel("console")(line)
+
+    def _refuse(self, line):
+        self.last_error = line
+        self._say(f"galvoscan: error: {line}")
