@@ -48,8 +48,10 @@ BUILDS = {
     # The whole default system on the PLL's 24 MHz, for XY2-200.
     "icebreaker_xy2_200": ("icebreaker", {"clock": 24e6, "bit_rate": 4e6}),
     "icestick": ("icestick", {}),
-    # The presets (`build --preset`): a marking station's and a cleaning head's bitstream.
+    # The presets (`build --preset`): a marking station's, a photo engraver's and a cleaning
+    # head's bitstream.
     "marker": ("icebreaker", {"preset": "marker"}),
+    "engraver": ("icebreaker", {"preset": "engraver"}),
     "cleaner": ("icebreaker", {"preset": "cleaner"}),
     # Every feature in one bitstream on the ECP5 (25F), from three seeds: its Fmax is to stay
     # at twice its 24 MHz on each.
@@ -81,6 +83,7 @@ def _build(label):
                    "bit_rate_mhz": report.bit_rate_mhz, "build_s": report.seconds,
                    "placer": report.placer,
                    "options": [name for name, built in (("delays", config.vector_delays),
+                                                        ("pixel lines", config.pixel_lines),
                                                         ("wobble", config.wobble),
                                                         ("interpolation",
                                                          config.spiral_interpolation),
