@@ -103,6 +103,7 @@ class PixelLineSpec(Elaboratable):
         m.domains.sync = ClockDomain()
         m.d.comb += ResetSignal("sync").eq(AnySeq(1))
         m.submodules.dut = dut = self.dut
+        inner = getattr(dut, "inner", dut)      # (the sequencer, inside a broken one)
         command = dut.commands.payload
         m.d.comb += [
             dut.commands.valid.eq(AnySeq(1)),
@@ -126,7 +127,6 @@ class PixelLineSpec(Elaboratable):
         m.d.comb += Assert(~dut.laser, "the laser stays off")
 
         if self.helpers:
-            inner = getattr(dut, "inner", dut)
             slot_lit = inner._slot_valid & inner._slot_mark & inner._slot_gate
             if self.harness == "words":
                 m.d.comb += [
@@ -151,7 +151,6 @@ class PixelLineSpec(Elaboratable):
         if self.harness == "words":
             m.d.comb += Cover(taken)
         else:
-            inner = getattr(dut, "inner", dut)
             m.d.comb += Cover(taken & inner._holding_mark & inner._pixel_line &
                               inner._stepping)
         return m

@@ -19,7 +19,7 @@ from ..inputs.job_file import JobError, parse_job
 from ..geometry.drawing import DrawingError
 from ..geometry.fill import LineOrder
 from ..geometry.field import PlanError
-from ..geometry.segments import LINE
+from ..geometry.segments import has_pixel_lines
 from ..geometry.speed import path_length_mm
 from ..outputs.link_budget import expected_underruns, link_segments_per_s
 from ..outputs.stream import JobStreamer, StreamReport
@@ -144,7 +144,7 @@ def _draw_preview(args, job, drawing, profile):
     # gaps are no jumps, and are not drawn as jumps.)
     preview(args.preview, job.paths_mm, field_mm=profile.field.size_mm,
             spot_mm=profile.laser.spot_mm, title=title, groups=groups,
-            jumps=not any(op == LINE for op, *_ in job.segments))
+            jumps=not has_pixel_lines(job.segments))
 
 
 def _cmd_mark(args):
@@ -202,7 +202,7 @@ def _cmd_mark(args):
         say(warning)
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     reports = []
-    pixel_lines = any(op == LINE for part, *_ in parts for op, *_ in part.segments)
+    pixel_lines = any(has_pixel_lines(part.segments) for part, *_ in parts)
     with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines) as (client, board):
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]

@@ -32,7 +32,7 @@ def _player_map():
 
 def _cmd_store(args):
     from ..outputs.image import ImageError, job_image, read_image
-    from ..outputs.stream import job_segments
+    from ..outputs.queue_words import job_segments
     from .jobfile import use_job_file
     use_job_file(args)
     if not args.output and not args.estimate:

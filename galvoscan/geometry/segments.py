@@ -12,7 +12,7 @@ point the pitch steps (a line of length ``(n - 1) × pitch``).
 """
 
 __all__ = ["JUMP", "MARK", "LINE", "PIXELS", "OPS", "STEPPED", "PIXELS_PER_WORD",
-           "pixel_words", "word_bits"]
+           "pixel_words", "has_pixel_lines"]
 
 
 JUMP, MARK, LINE, PIXELS = "jump", "mark", "line", "pixels"
@@ -36,7 +36,6 @@ def pixel_words(bits):
     return words
 
 
-def word_bits(x, y):
-    """The 32 bits of the pixel word ``(x, y)``, in the order its points take them."""
-    value = x | y << 16
-    return [(value >> k) & 1 for k in range(PIXELS_PER_WORD)]
+def has_pixel_lines(segments):
+    """Whether ``segments`` hold a pixel line (and so need a bitstream with them)."""
+    return any(op == LINE for op, *_ in segments)

@@ -14,8 +14,8 @@ from .field import CENTRE, PlanError
 from .segments import MARK, PIXELS, STEPPED
 
 
-__all__ = ["POINTS_PER_S_MAX", "Pitch", "choose_pitch", "estimate_seconds", "segment_seconds", "jump_mark_lengths",
-           "path_length_mm", "settled_jumps"]
+__all__ = ["POINTS_PER_S_MAX", "Pitch", "choose_pitch", "fixed_pitch", "estimate_seconds",
+           "segment_seconds", "jump_mark_lengths", "path_length_mm", "settled_jumps"]
 
 
 #: The most points a second vector mode makes: one an XY2-100 frame.
@@ -109,6 +109,21 @@ def choose_pitch(speed_mm_s, prr_hz, units_per_mm, *, max_pitch_mm,
                         f"{low_n}{'' if low_n == high_n else f' … {high_n}'} "
                         f"pulse{'' if low_n == high_n == 1 else 's'} per point)")
     return Pitch(pitch, pulses, speed, pitch / units_per_mm, (speed - speed_mm_s) / speed_mm_s)
+
+
+def fixed_pitch(speed_mm_s, prr_hz, units_per_mm, pitch_units, *, pulses_per_point=None):
+    """The :class:`Pitch` of ``speed_mm_s`` at a pitch of ``pitch_units`` (a photo's pixel
+    lines'): the pulses per point nearest it (``pulses_per_point``, if given), at most one
+    point a 10 µs frame."""
+    pitch_mm = pitch_units / units_per_mm
+    fewest = max(1, math.ceil(prr_hz / POINTS_PER_S_MAX - 1e-9))
+    pulses = pulses_per_point or max(fewest, round(pitch_mm * prr_hz / speed_mm_s))
+    if not fewest <= pulses <= 255:
+        raise PlanError(f"{speed_mm_s:g} mm/s at the photo's {pitch_mm * 1000:.1f} µm "
+                        f"pixels and {prr_hz / 1e3:g} kHz needs {pulses} pulses a pixel: "
+                        f"{fewest} … 255 (another speed or PRR)")
+    speed = pitch_mm * prr_hz / pulses
+    return Pitch(pitch_units, pulses, speed, pitch_mm, (speed - speed_mm_s) / speed_mm_s)
 
 
 def _walk(segments):

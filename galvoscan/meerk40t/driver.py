@@ -9,6 +9,7 @@ Stop (the device's ``estop``) acts at the next exchange on the link: the streame
 after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`).
 """
 
+import contextlib
 import threading
 
 from .. import api
@@ -170,18 +171,37 @@ class GalvoscanDriver:
             self._say(f"galvoscan: {line}")
         self._run(plan)
 
-    def _run(self, plan):
+    @contextlib.contextmanager
+    def _on_the_board(self, *, marking):
+        """The board's client, opened for one job under the lock (the job talks through
+        ``self._client``, which meerk40t's stop can interrupt), the device busy (``marking``:
+        its laser status active) until the job ends, however it ends, and the link closed;
+        None (one line said, nothing sent) when it cannot be opened."""
         with self._lock:
             self.state = "busy"
-            self.service.laser_status = "active"
+            if marking:
+                self.service.laser_status = "active"
             try:
                 client, close = self._open()
             except (ClientError, OSError, ValueError) as error:
-                self.state = "idle"
-                self.service.laser_status = "idle"
+                client = close = None
                 self._refuse(f"the board cannot be opened, nothing sent: {error}")
+            else:
+                self._client = _StoppableClient(client)
+            try:
+                yield client
+            finally:
+                self._client = None
+                self.state = "idle"
+                if marking:
+                    self.service.laser_status = "idle"
+                if close is not None:
+                    close()
+
+    def _run(self, plan):
+        with self._on_the_board(marking=True) as client:
+            if client is None:
                 return
-            self._client = _StoppableClient(client)
             try:
                 report = api.run(plan, self._client, say=self._say)
             except JobInterrupted as error:
@@ -201,11 +221,6 @@ class GalvoscanDriver:
             except (ClientError, OSError) as error:
                 self._refuse(f"job stopped, laser disarm sent: the link failed: {error}")
                 return
-            finally:
-                self._client = None
-                self.state = "idle"
-                self.service.laser_status = "idle"
-                close()
         self.last_report = report
         counters = report.counters
         self._say(f"galvoscan: marked {report.segments} segments, {report.pulses} pulses"
@@ -227,15 +242,9 @@ class GalvoscanDriver:
                          "([laser] guide)")
             return
         vector_job = plan.vector_job
-        with self._lock:
-            self.state = "busy"
-            try:
-                client, close = self._open()
-            except (ClientError, OSError, ValueError) as error:
-                self.state = "idle"
-                self._refuse(f"the board cannot be opened, nothing sent: {error}")
+        with self._on_the_board(marking=False) as client:
+            if client is None:
                 return
-            self._client = _StoppableClient(client)
             try:
                 api.load_lens_table(self._client, profile, self._say)
                 frame_job(JobStreamer(self._client), profile,
@@ -248,10 +257,6 @@ class GalvoscanDriver:
             except (ClientError, OSError) as error:
                 self._refuse(f"framing stopped: the link failed: {error}")
                 return
-            finally:
-                self._client = None
-                self.state = "idle"
-                close()
         self.last_report = "framed"
 
     def move_abs(self, x, y):

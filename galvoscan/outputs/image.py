@@ -2,7 +2,7 @@
 (``galvoscan store`` writes one, ``galvoscan flash --job`` puts it at its offset).
 
 The format is declared once, in :mod:`galvoscan.gateware.player.image_format`; the segments
-are the words the streamer writes (:func:`~.stream.segment_words`), planned as ``mark`` plans
+are the words the streamer writes (:func:`~.queue_words.segment_words`), planned as ``mark`` plans
 them, so the same drawing gives the same wires streamed or played.
 """
 
@@ -14,7 +14,7 @@ from ..gateware.player.image_format import (CRC_BYTES, FORMAT_VERSION, HEADER_BY
                                             JOB_OFFSET, MAGIC, MAX_IMAGE_BYTES, MAX_SETTINGS,
                                             PLAYER_OWNED, SEGMENT_WORDS, Word)
 from ..geometry.corners import corner_frames
-from .stream import check_segment, job_segments, segment_words
+from .queue_words import check_segment, job_segments, segment_of_words, segment_words
 
 
 __all__ = ["ImageError", "JobImage", "job_image", "read_image", "image_in_flash", "JOB_OFFSET",
@@ -165,7 +165,5 @@ def read_image(data, *, regmap=None):
         x, y, op_word = (_checked(regmap[name], word, f"segment {i // SEGMENT_WORDS + 1}'s")
                          for name, word in zip(("vec_x", "vec_y", "vec_op"),
                                                rest[i:i + SEGMENT_WORDS]))
-        pixels = op_word >> 8 & 1
-        op = ("line" if pixels else "mark") if op_word & 1 else ("pixels" if pixels else "jump")
-        segments.append((op, x, y, op_word >> 1 & 0x7F))
+        segments.append(segment_of_words(x, y, op_word))
     return JobImage(registers=registers, repeats=repeats, segments=segments)

@@ -7,7 +7,8 @@ simulated board's counters.
 
 from ..geometry.speed import segment_seconds
 from ..link.client import frame_seconds
-from .stream import DEFAULT_BATCH, QUEUE_DEPTH, job_segments
+from .queue_words import job_segments
+from .stream import DEFAULT_BATCH, QUEUE_DEPTH
 
 
 __all__ = ["link_segments_per_s", "expected_underruns"]

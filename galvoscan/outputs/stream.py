@@ -25,17 +25,16 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ..gateware.fields import pack
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
-                                    VECTOR_QUEUE_DEPTH, VectorOp)
-from ..gateware.sources.vector import PixelVecOpWord, VecOpWord
+                                    VECTOR_QUEUE_DEPTH)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import LINE, OPS, PIXELS
+from ..geometry.segments import has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
+from .queue_words import check_segment, job_segments, segment_words
 
 
 __all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
-           "COUNTERS", "DEFAULT_BATCH", "check_segment", "segment_words", "job_segments"]
+           "COUNTERS", "DEFAULT_BATCH"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
@@ -124,41 +123,6 @@ class StreamReport:
         counted in ``errors``, and were sent again: every write of a job that ends with a
         report landed, acknowledged.)"""
         return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
-
-
-def check_segment(op, x, y):
-    """Refuse a segment the board would: ``op`` one of :data:`~galvoscan.geometry.segments.OPS`,
-    ends within the field (a pixel word's two halves, 16 bits each)."""
-    if op not in OPS:
-        raise ValueError(f"a segment is a jump, a mark, a pixel line or a pixel word, not "
-                         f"{op!r}")
-    for value in (x, y):
-        reg = BY_NAME["vec_x"]
-        if isinstance(value, bool) or not isinstance(value, int) or \
-                not reg.low <= value <= reg.high:
-            raise ValueError(f"segment end {value!r} is outside {reg.low} … {reg.high}")
-
-
-def segment_words(op, x, y, corner_frames=0):
-    """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
-    streamer writes and a job image holds: a pixel line is a mark, and a pixel word a jump,
-    with ``vec_op``'s ``pixels`` bit set."""
-    if op in (LINE, PIXELS):
-        return x, y, pack(PixelVecOpWord, op=VectorOp.MARK if op == LINE else VectorOp.JUMP,
-                          corner_frames=corner_frames if op == LINE else 0, pixels=1)
-    return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
-
-
-def job_segments(segments):
-    """A vector job's segments as the board is sent them: ending on a jump (to where the last
-    mark ends: no move), since the board counts a mark that finds the queue empty as an
-    underrun, and a job's end is none."""
-    segments = list(segments)
-    if segments and segments[-1][0] != "jump":
-        # (After a pixel line's words: to where the line ends.)
-        end = next(s for s in reversed(segments) if s[0] != PIXELS)
-        segments.append(("jump", *end[1:]))
-    return segments
 
 
 class JobStreamer:
@@ -473,8 +437,7 @@ class JobStreamer:
         off (framing with the guide laser)."""
         segments = job_segments(segments)
         registers = self._without_missing_delays(registers)
-        if any(op in (LINE, PIXELS) for op, *_ in segments) and \
-                not self.capabilities().pixel_lines:
+        if has_pixel_lines(segments) and not self.capabilities().pixel_lines:
             raise JobAborted("the board's bitstream has no pixel lines (build --preset "
                              "engraver has them, and the ULX3S's): mark the photo as runs "
                              "with --image-lines runs; nothing was sent")

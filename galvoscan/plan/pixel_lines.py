@@ -21,9 +21,8 @@ import math
 
 import numpy as np
 
-from ..geometry.field import PlanError
+from ..geometry.field import CENTRE, UNITS, PlanError
 from ..geometry.segments import JUMP, LINE, pixel_words
-from ..gateware.points import FIELD_MAX
 
 
 __all__ = ["PixelRaster", "PHOTO_LINES", "cell_units", "pixel_line_segments",
@@ -70,15 +69,15 @@ def pixel_line_segments(raster, corner_mm, *, field_mm, speed_mm_s, tracking_del
     that lag ``tracking_delay_us``. Rows with no dark pixel are left out. A
     :class:`~galvoscan.geometry.field.PlanError` when a run-in reaches past the field."""
     dark = np.asarray(raster.dark, dtype=bool)
-    rows, columns = dark.shape
-    units_per_mm = 65536 / field_mm
+    rows = dark.shape[0]
+    units_per_mm = UNITS / field_mm
     pitch = raster.cell_units
     lag_s = tracking_delay_us * 1e-6
     run = max(1, math.ceil(RUN_IN_TRACKING_DELAYS * speed_mm_s * lag_s * units_per_mm / pitch))
     offset = round(speed_mm_s * lag_s * units_per_mm)
-    # Cell (r, c)'s centre, galvo units (the drawing's runs: photo_drawing's cells).
-    x_of = lambda c: (corner_mm[0] + (c + 0.5) * pitch / units_per_mm) * units_per_mm + 32768   # noqa: E731
-    y_of = lambda r: (corner_mm[1] + (rows - r - 0.5) * pitch / units_per_mm) * units_per_mm + 32768  # noqa: E731
+    # The grid's corner, galvo units: cell (r, c)'s centre is (c + ½, rows - r - ½) pitches
+    # from it (photo_drawing's cells).
+    corner_x, corner_y = (v * units_per_mm + CENTRE for v in corner_mm)
     segments, lines = [], 0
     for r in range(rows):
         cols = np.flatnonzero(dark[r])
@@ -86,14 +85,15 @@ def pixel_line_segments(raster, corner_mm, *, field_mm, speed_mm_s, tracking_del
             continue
         first, last = int(cols[0]), int(cols[-1])
         bits = [0] * run + [int(b) for b in dark[r, first:last + 1]] + [0] * run
-        x_first = round(x_of(first - run))          # the run-in's first point, left end
+        # The run-in's first point, at the left end.
+        x_first = round(corner_x + (first - run + 0.5) * pitch)
         x_last = x_first + (len(bits) - 1) * pitch
-        y = round(y_of(r))
+        y = round(corner_y + (rows - r - 0.5) * pitch)
         forward = not (raster.bidirectional and lines % 2)
         start, end = (x_first + offset, x_last + offset) if forward else \
             (x_last - offset, x_first - offset)
         for value in (start, end, y):
-            if not 0 <= value <= FIELD_MAX:
+            if not 0 <= value < UNITS:
                 raise PlanError(f"the photo's pixel lines run in and out "
                                 f"{run * pitch / units_per_mm:.2f} mm past its sides at "
                                 f"{speed_mm_s:g} mm/s, beyond the field's edge: move it "

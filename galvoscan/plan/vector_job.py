@@ -4,7 +4,6 @@ and timed; every register value it needs worked out and checked before anything 
 """
 
 from dataclasses import dataclass, field
-import math
 
 import numpy as np
 from shapely.geometry import box, LineString, MultiPoint, Point
@@ -15,9 +14,9 @@ from ..gateware.sources.dda import SETUP_CLOCKS
 from ..geometry.field import PlanError, field_check, from_galvo, place, to_galvo
 from ..geometry.fill import contour_rings, hatch_strokes, oriented
 from ..geometry.order import jump_length, order_paths
-from ..geometry.segments import LINE, PIXELS
-from ..geometry.speed import (POINTS_PER_S_MAX, Pitch, choose_pitch, estimate_seconds,
-                              jump_mark_lengths, settled_jumps)
+from ..geometry.segments import PIXELS, has_pixel_lines
+from ..geometry.speed import (choose_pitch, estimate_seconds, fixed_pitch, jump_mark_lengths,
+                              settled_jumps)
 from .objects import MarkObject
 from .pixel_lines import pixel_line_segments
 
@@ -100,30 +99,14 @@ def _machine_settings(settings, profile, *, pitch_units=None):
         raise PlanError(f"{settings.speed_mm_s:g} mm/s is faster than the machine's "
                         f"{profile.galvo.max_speed_mm_s:g} mm/s ([galvo] max_speed_mm_s)")
     if pitch_units is not None:
-        return prr_register, prr_hz, fixed_pitch(settings, pitch_units, prr_hz,
-                                                 profile.units_per_mm)
+        return prr_register, prr_hz, fixed_pitch(
+            settings.speed_mm_s, prr_hz, profile.units_per_mm, pitch_units,
+            pulses_per_point=settings.pulses_per_point)
     # A pitch of at most half the spot keeps the marked points overlapping.
     pitch = choose_pitch(settings.speed_mm_s, prr_hz, profile.units_per_mm,
                          max_pitch_mm=profile.laser.spot_mm / 2,
                          pulses_per_point=settings.pulses_per_point, strict="range")
     return prr_register, prr_hz, pitch
-
-
-def fixed_pitch(settings, pitch_units, prr_hz, units_per_mm):
-    """The :class:`~galvoscan.geometry.speed.Pitch` of ``settings``' speed at a pitch of
-    ``pitch_units``: the pulses per point nearest it (the settings' own, if they give one), at
-    most one point a 10 µs frame."""
-    pitch_mm = pitch_units / units_per_mm
-    fewest = max(1, math.ceil(prr_hz / POINTS_PER_S_MAX - 1e-9))
-    pulses = settings.pulses_per_point or max(fewest, round(pitch_mm * prr_hz /
-                                                            settings.speed_mm_s))
-    if not fewest <= pulses <= 255:
-        raise PlanError(f"{settings.speed_mm_s:g} mm/s at the photo's {pitch_mm * 1000:.1f} µm "
-                        f"pixels and {prr_hz / 1e3:g} kHz needs {pulses} pulses a pixel: "
-                        f"{fewest} … 255 (another speed or PRR)")
-    speed = pitch_mm * prr_hz / pulses
-    return Pitch(pitch_units, pulses, speed, pitch_mm,
-                 (speed - settings.speed_mm_s) / settings.speed_mm_s)
 
 
 def _finish(segments, paths_mm, before, after, settings, profile, notes, *, settle=True,
@@ -152,7 +135,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
         "laser_power": profile.power_register(settings.power_percent),
         **profile.delay_registers(),
     }
-    if any(op == LINE for op, *_ in segments):
+    if has_pixel_lines(segments):
         # A pixel line is timed by its scan offset: the laser follows each point's bit, at
         # once, and the line's run-out ends it.
         moved = [name for name in ("laser_on_delay", "laser_off_delay", "mark_delay")

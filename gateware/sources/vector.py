@@ -204,15 +204,15 @@ class VectorSequencer(wiring.Component):
         fetching = Signal()
 
         # Pixel lines: the bits of the line being stepped, and whether a point may be made.
-        pixel_line = self._pixel_line
-        start_pending = Signal()    # its first point (the pen was up) is still to be made
-        pixel_bits = self._pixel_bits
-        bits_left = Signal(range(PIXELS_PER_WORD + 1))
-        is_word = Signal()          # the queue's next command is a pixel word
-        bit_ready = Signal(init=1)  # a point may be made: off a pixel line, or its bit known
-        gate_bit = Signal(init=1)   # the bit of the next point made
-        take_bit = Signal()         # a point is made this clock: its bit is used
         if self.pixel_lines:
+            pixel_line = self._pixel_line
+            start_pending = Signal()    # its first point (the pen was up) is still to be made
+            pixel_bits = self._pixel_bits
+            bits_left = Signal(range(PIXELS_PER_WORD + 1))
+            is_word = Signal()          # the queue's next command is a pixel word
+            bit_ready = Signal()        # a point may be made: off a line, or its bit known
+            gate_bit = Signal()         # the bit of the next point made
+            take_bit = Signal()         # a point is made this clock: its bit is used
             m.d.comb += [
                 is_word.eq(self.commands.valid & command.pixels & (command.op == OP_JUMP)),
                 # A bit in hand; or none will come (the next command is no pixel word: the

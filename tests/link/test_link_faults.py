@@ -21,7 +21,8 @@ from hypothesis import HealthCheck, example, given, settings, strategies as st
 import pytest
 
 from galvoscan.link.client import ClientError, HostClient
-from galvoscan.outputs.stream import JobAborted, JobStreamer, job_segments
+from galvoscan.outputs.queue_words import job_segments
+from galvoscan.outputs.stream import JobAborted, JobStreamer
 
 from link_codec import command, parse_answer
 from sim_board import VECTOR_BOARD, SimBoard, SimSPITransport, SimUARTTransport

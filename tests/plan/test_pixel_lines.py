@@ -130,7 +130,7 @@ def test_an_unknown_way_of_marking_a_photo_is_one_line():
 
 
 def test_a_pixel_line_job_ends_on_a_jump_to_where_its_last_line_ends(photo):
-    from galvoscan.outputs.stream import job_segments
+    from galvoscan.outputs.queue_words import job_segments
     planned = plan(Job(photos=(Photo(str(photo), 3.0),)))
     sent = job_segments(planned.segments)
     last_line = next(s for s in reversed(planned.segments) if s[0] == "line")
