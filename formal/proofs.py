@@ -13,11 +13,13 @@ from ..gateware.laser.controller import LaserController, clocks_at_least
 from .xy2_100 import XY2TransmitterSpec
 from .player import PlayerSpec
 from .vector import FreeDDASequencer, PixelLineSpec
+from .encoder import QuadratureSpec
+from ..gateware.fly.encoder import QuadratureDecoder
 from ..gateware.player.player import JobPlayer
 
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
-           "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof",
+           "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof", "encoder_proof",
            "LASER_PROOF_PARAMETERS"]
 
 
@@ -304,6 +306,20 @@ def pixel_line_proof(harness, *, make_sequencer=None, helpers=True, name=None):
         depth=4, cover_depth=14, bmc_depth=16)
 
 
+def encoder_proof(*, make_decoder=None, name="encoder_count"):
+    """A quadrature decoder's count and illegal count against the spec's own (any lines, any
+    clears, any reset): the spec's registers equal the decoder's, so the induction is one
+    clock deep whatever the counts hold."""
+    make_decoder = make_decoder or QuadratureDecoder
+    return Proof(
+        name=name,
+        description="encoder: the count moves one edge a clock at most, the way the lines "
+                    "went, never wraps; two-edge steps are counted as illegal and move "
+                    "nothing; clear and reset zero both",
+        harness=lambda: QuadratureSpec(make_decoder()),
+        depth=2, cover_depth=12)
+
+
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
@@ -322,4 +338,5 @@ PROOFS = [
     player_proof(),
     pixel_line_proof("words"),
     pixel_line_proof("dark_lines"),
+    encoder_proof(),
 ]

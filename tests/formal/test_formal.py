@@ -9,7 +9,7 @@ import re
 import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
-                                    correction_link_proof, correction_proof,
+                                    correction_link_proof, correction_proof, encoder_proof,
                                     laser_safety_proof, pixel_line_proof, player_proof,
                                     spi_frame_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
@@ -17,6 +17,7 @@ from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
 from galvoscan.formal.runner import run_sby
 
 from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS, SPI_TARGET_SOLVERS
+from broken_encoder import ENCODER_FAULTS, BrokenDecoder
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
@@ -189,6 +190,15 @@ def test_broken_pixel_lines_fail_the_proof(fault, tmp_path):
     _, harness, property = VECTOR_FAULTS[fault]
     proof = pixel_line_proof(harness, make_sequencer=partial(TamperedSequencer, fault),
                              helpers=False, name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert property in failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(ENCODER_FAULTS))
+def test_broken_encoders_fail_the_proof(fault, tmp_path):
+    _, property = ENCODER_FAULTS[fault]
+    proof = encoder_proof(make_decoder=partial(BrokenDecoder, fault), name=f"broken_{fault}")
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
