@@ -14,12 +14,15 @@ from .xy2_100 import XY2TransmitterSpec
 from .player import PlayerSpec
 from .vector import FreeDDASequencer, PixelLineSpec
 from .encoder import QuadratureSpec
+from .xy2_status import XY2StatusSpec
+from ..gateware.phy.xy2_status import XY2StatusReceiver
 from ..gateware.fly.encoder import QuadratureDecoder
 from ..gateware.player.player import JobPlayer
 
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
            "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof", "encoder_proof",
+           "head_status_proof",
            "LASER_PROOF_PARAMETERS"]
 
 
@@ -320,6 +323,22 @@ def encoder_proof(*, make_decoder=None, name="encoder_count"):
         depth=2, cover_depth=12)
 
 
+def head_status_proof(*, make_receiver=None, helpers=True, name="head_status"):
+    """The status receiver at 4 clocks a bit (its fewest): frames taken and refused as the
+    spec samples them, the status word only from a good frame, a lost head read as 0. Helper
+    invariants tie the receiver's bit and tick counters and bits to the spec's one counter, so
+    the induction is a few clocks deep, not a frame (80 clocks)."""
+    make_receiver = make_receiver or (lambda: XY2StatusReceiver(clocks_per_bit=4))
+    return Proof(
+        name=name,
+        description="head status: a frame is taken only with code 001 and even parity, and "
+                    "gives its data bits; every other is refused; the status changes on "
+                    "nothing else; 8 refused frames in a row make the head missing, read as 0",
+        harness=lambda: XY2StatusSpec(make_receiver(), helpers=helpers),
+        # (A broken receiver's bounded check sees a whole frame: 80 clocks after its strobe.)
+        depth=4, cover_depth=90, bmc_depth=90)
+
+
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
@@ -339,4 +358,5 @@ PROOFS = [
     pixel_line_proof("words"),
     pixel_line_proof("dark_lines"),
     encoder_proof(),
+    head_status_proof(),
 ]

@@ -10,6 +10,7 @@ import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
                                     correction_link_proof, correction_proof, encoder_proof,
+                                    head_status_proof,
                                     laser_safety_proof, pixel_line_proof, player_proof,
                                     spi_frame_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
@@ -18,6 +19,7 @@ from galvoscan.formal.runner import run_sby
 
 from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS, SPI_TARGET_SOLVERS
 from broken_encoder import ENCODER_FAULTS, BrokenDecoder
+from broken_status import STATUS_FAULTS, BrokenReceiver
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
@@ -199,6 +201,16 @@ def test_broken_pixel_lines_fail_the_proof(fault, tmp_path):
 def test_broken_encoders_fail_the_proof(fault, tmp_path):
     _, property = ENCODER_FAULTS[fault]
     proof = encoder_proof(make_decoder=partial(BrokenDecoder, fault), name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert property in failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(STATUS_FAULTS))
+def test_broken_status_receivers_fail_the_proof(fault, tmp_path):
+    _, property = STATUS_FAULTS[fault]
+    proof = head_status_proof(make_receiver=partial(BrokenReceiver, fault), helpers=False,
+                              name=f"broken_{fault}")
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
