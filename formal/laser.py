@@ -24,6 +24,8 @@ class LaserSafetySpec(Elaboratable):
     * **interlock, alarms**: while the interlock is seen open or an alarm is seen, every laser
       output is low; and if armed, the fault is latched on the next clock (so whatever cut the
       outputs also needs a clear and a re-arm);
+    * **head**: while the head's fault is high (``head``), every laser output is low on that
+      very clock; if armed, the ``head`` fault is latched on the next clock;
     * **link**: a frame the host link refused while armed latches the link fault on the next
       clock (and with it, below, every laser output off);
     * **watchdog**: armed with no sign of progress (``alive``: a segment queued, a keepalive,
@@ -47,17 +49,21 @@ class LaserSafetySpec(Elaboratable):
         Clocks per millisecond of the watchdog.
     alarms : int
         Alarm inputs the controller has.
+    head : bool
+        The controller takes the scan head's fault (``head_fault``), which it must obey as it
+        does the interlock, from the clock it rises (it is in the controller's clock domain).
     helpers : bool
         State the helper invariants (on the controller's counters). The broken controllers'
         checks leave them out, so that their counterexamples break the properties themselves.
     """
 
-    def __init__(self, controller, *, lead_clocks, ms_clocks, alarms, helpers=True):
+    def __init__(self, controller, *, lead_clocks, ms_clocks, alarms, head=False, helpers=True):
         self.helpers = helpers
         self.controller = controller
         self.lead_clocks = lead_clocks
         self.ms_clocks = ms_clocks
         self.alarms = alarms
+        self.head = head
 
     def elaborate(self, platform):
         m = Module()
@@ -65,7 +71,7 @@ class LaserSafetySpec(Elaboratable):
         m.submodules.dut = dut = self.controller
         m.d.comb += ResetSignal("sync").eq(AnySeq(1))
         inputs = ["arm", "power", "prr", "watchdog_ms", "alive", "link_fault", "fault_clear",
-                  "marking", "interlock_open", "guide"] + (["alarm"] if self.alarms else [])
+                  "marking", "interlock_open", "guide"] + (["alarm"] if self.alarms else []) + (["head_fault"] if self.head else [])
         for name in inputs:
             port = getattr(dut, name)
             m.d.comb += port.eq(AnySeq(len(port)))
@@ -81,11 +87,14 @@ class LaserSafetySpec(Elaboratable):
             return second.any()
         interlock_seen = seen(dut.interlock_open)
         alarm_seen = seen(dut.alarm) if self.alarms else Const(0, 1)
+        # The head's fault comes from the status receiver, in the design's clock domain: the
+        # outputs must obey it on the clock it rises, with no synchroniser's delay.
+        head_seen = dut.head_fault if self.head else Const(0, 1)
 
         # --- enable -------------------------------------------------------------------------
         m.d.comb += [
             Assert(~enable | (dut.arm & ~dut.faults.as_value().any() & ~interlock_seen &
-                              ~alarm_seen),
+                              ~alarm_seen & ~head_seen),
                    "laser_enable only while armed, no fault, interlock closed, no alarm"),
             Assert(enable | quiet, "laser_enable low: every laser output low"),
             # The pointer frames jobs with the marking laser off, never while it may fire.
@@ -95,6 +104,12 @@ class LaserSafetySpec(Elaboratable):
         # --- interlock and alarms -----------------------------------------------------------
         m.d.comb += Assert(~(interlock_seen | alarm_seen) | quiet,
                            "interlock open or alarm: every laser output low")
+        if self.head:
+            m.d.comb += Assert(~head_seen | quiet, "a head fault: every laser output low")
+            head_due = Signal()
+            m.d.sync += head_due.eq(head_seen & dut.arm)
+            m.d.comb += Assert(~head_due | dut.faults.head,
+                               "a head fault while armed latches a fault")
         interlock_due, alarm_due = Signal(), Signal()
         m.d.sync += [interlock_due.eq(interlock_seen & dut.arm),
                      alarm_due.eq(alarm_seen & dut.arm)]
@@ -108,7 +123,7 @@ class LaserSafetySpec(Elaboratable):
         faults_q = Signal(Faults)
         cleared_q = Signal()
         m.d.sync += [faults_q.eq(dut.faults),
-                     cleared_q.eq(dut.fault_clear & ~interlock_seen & ~alarm_seen)]
+                     cleared_q.eq(dut.fault_clear & ~interlock_seen & ~alarm_seen & ~head_seen)]
         for cause, _ in Faults:
             m.d.comb += Assert(~faults_q[cause] | dut.faults[cause] | cleared_q,
                                "a fault stays latched until cleared")
@@ -195,4 +210,7 @@ class LaserSafetySpec(Elaboratable):
                               "an alarm after emission")
         m.d.comb += Cover(emitted & dut.faults.link & ~faults_q.link,
                           "a refused frame after emission")
+        if self.head:
+            m.d.comb += Cover(emitted & dut.faults.head & ~faults_q.head,
+                              "a head fault after emission")
         return m

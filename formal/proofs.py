@@ -184,7 +184,7 @@ def command_path_proof(*, make_decoder=None, make_feed=None, name="command_path"
 #: clocks and the latch timings one clock each, and the cover of real emission is a few dozen
 #: clocks deep. The logic is the same at any size; the 5 ms lead at 12 MHz is simulated.
 LASER_PROOF_PARAMETERS = dict(clk_freq=4000, mo_lead=1.5e-3, latch_setup=0.25e-3,
-                              latch_pulse=0.25e-3, alarms=2)
+                              latch_pulse=0.25e-3, alarms=2, head=True)
 
 
 def laser_safety_proof(*, make_controller=None, lead_clocks=None, helpers=True,
@@ -208,6 +208,7 @@ def laser_safety_proof(*, make_controller=None, lead_clocks=None, helpers=True,
         harness=lambda: LaserSafetySpec(make_controller(), lead_clocks=lead_clocks,
                                         ms_clocks=round(clk_freq / 1000),
                                         alarms=LASER_PROOF_PARAMETERS["alarms"],
+                                        head=LASER_PROOF_PARAMETERS["head"],
                                         helpers=helpers),
         depth=10, cover_depth=30)
 

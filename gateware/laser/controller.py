@@ -19,6 +19,7 @@ Faults = data.StructLayout({
     "watchdog": 1,      # no accepted command frame for the watchdog time while armed
     "alarm": 1,         # a laser alarm input was active while armed
     "link": 1,          # the host link refused a frame while armed (a damaged or lost frame)
+    "head": 1,          # the scan head reported a fault (or none) while armed, with the check on
 })
 
 #: Most laser alarm inputs a controller takes (IPG's type-D interface has four alarm pins).
@@ -78,6 +79,10 @@ class LaserController(wiring.Component):
         Clocks by which :attr:`pulse_ahead` leads the PRR clock's rising edges.
     alarms : int
         Laser alarm inputs, 0 … :data:`MAX_ALARMS`.
+    head : bool
+        Take the scan head's fault (:attr:`head_fault`): it gates the outputs and latches the
+        ``head`` fault as the interlock does, from the clock it rises (it comes from the
+        status receiver, in this clock domain: no synchroniser).
 
     Interface attributes
     --------------------
@@ -101,6 +106,9 @@ class LaserController(wiring.Component):
     alarm : ``In(alarms)``, when ``alarms`` > 0
         The laser's alarm outputs, asynchronous; 1 = alarm. They reset to 1 (and the board
         pulls them up), so an unconnected input reads as an alarm.
+    head_fault : ``In(1, init=1)``, with ``head``
+        The scan head is not fit to mark: with the head check on, its Temp OK or Power OK is
+        low, or it is missing (the top's :class:`~..phy.xy2_status.XY2StatusReceiver`).
     laser_power : ``Out(8)``, laser_latch, laser_mo, laser_am, laser_prr : ``Out(1)``
         The DB25 signals (pins 1-8, 9, 18, 19, 20), for 5 V TTL buffers.
     laser_enable : ``Out(1)``
@@ -126,7 +134,7 @@ class LaserController(wiring.Component):
     """
 
     def __init__(self, *, clk_freq, mo_lead=5e-3, latch_setup=1e-6, latch_pulse=1e-6,
-                 lookahead=0, alarms=0):
+                 lookahead=0, alarms=0, head=False):
         for name, value in (("mo_lead", mo_lead), ("latch_setup", latch_setup),
                             ("latch_pulse", latch_pulse)):
             if not value > 0:
@@ -138,6 +146,7 @@ class LaserController(wiring.Component):
             raise ValueError(f"alarms must be a whole number from 0 to {MAX_ALARMS}, not "
                              f"{alarms!r}")
         self.alarms = alarms
+        self.head = bool(head)
         self.clk_freq = clk_freq
         self.lookahead = lookahead
         #: Clocks MO leads modulation (at least ``mo_lead``).
@@ -159,6 +168,8 @@ class LaserController(wiring.Component):
         }
         if alarms:
             members["alarm"] = In(alarms, init=2 ** alarms - 1)
+        if self.head:
+            members["head_fault"] = In(1, init=1)
         members.update({
             "laser_power": Out(8),
             "laser_latch": Out(1),
@@ -201,12 +212,17 @@ class LaserController(wiring.Component):
             alarm_active = alarm_now.any()
         else:
             alarm_active = Const(0, 1)
+        # The head's fault is the status receiver's, already in this clock domain: it acts as
+        # the interlock does, with no synchroniser's delay.
+        head_fault = self.head_fault if self.head else Const(0, 1)
+        # Whatever gates the outputs now; each also latches its fault while armed.
+        unsafe_now = interlock_open | alarm_active | head_fault
 
         # --- faults -------------------------------------------------------------------------
         watchdog_fired = Signal()
         faults = self.faults
         any_fault = faults.as_value().any()
-        with m.If(self.fault_clear & ~interlock_open & ~alarm_active):
+        with m.If(self.fault_clear & ~unsafe_now):
             m.d.sync += faults.eq(0)
         # Opening the interlock while disarmed (to load a part) is no fault: nothing can emit
         # then, and arming needs it closed. Likewise an alarm while disarmed.
@@ -221,17 +237,19 @@ class LaserController(wiring.Component):
         if self.alarms:
             with m.If(alarm_active & self.arm):
                 m.d.sync += faults.alarm.eq(1)
+        if self.head:
+            with m.If(head_fault & self.arm):
+                m.d.sync += faults.head.eq(1)
 
         # After a fault, arm must be seen low before the laser may start again.
         rearm_needed = self._rearm_needed
-        with m.If(any_fault | interlock_open | alarm_active):
+        with m.If(any_fault | unsafe_now):
             m.d.sync += rearm_needed.eq(1)
         with m.Elif(~self.arm):
             m.d.sync += rearm_needed.eq(0)
 
         enabled = Signal()
-        m.d.comb += enabled.eq(self.arm & ~any_fault & ~interlock_open & ~alarm_active &
-                               ~rearm_needed)
+        m.d.comb += enabled.eq(self.arm & ~any_fault & ~unsafe_now & ~rearm_needed)
 
         # --- watchdog -----------------------------------------------------------------------
         tick_ms, ms_left = self._tick_ms, self._ms_left

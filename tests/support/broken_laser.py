@@ -7,7 +7,7 @@ from galvoscan.gateware.laser.controller import LaserController
 
 
 INPUTS = ("arm", "power", "prr", "watchdog_ms", "alive", "link_fault", "fault_clear",
-          "marking", "interlock_open", "alarm", "guide")
+          "marking", "interlock_open", "alarm", "guide", "head_fault")
 OUTPUTS = ("laser_power", "laser_latch", "laser_mo", "laser_am", "laser_prr", "laser_enable",
            "faults", "mo_ready", "pulse", "laser_guide")
 
@@ -44,6 +44,15 @@ class TamperedLaser(wiring.Component):
         elif self.kind == "alarms_ignored":
             # The alarm inputs are not wired to the controller.
             inputs["alarm"] = 0
+        elif self.kind == "head_ignored":
+            # The head's fault is not wired to the controller.
+            inputs["head_fault"] = 0
+        elif self.kind == "head_fault_late":
+            # The head's fault through a flip-flop, as if it were a pin: the outputs go off a
+            # clock after it rises, not on the clock it does.
+            late = Signal(init=1)
+            m.d.sync += late.eq(self.head_fault)
+            inputs["head_fault"] = late
         elif self.kind == "enable_ignores_faults":
             # The buffers' enable follows arm alone.
             outputs["laser_enable"] = self.arm
@@ -84,6 +93,14 @@ LASER_FAULTS = {
                        "laser_enable only while armed, no fault, interlock closed, no alarm",
                        "an alarm while armed latches a fault",
                        "a fault stays latched until cleared"),
+    # An unwired head: a fault gates nothing and latches nothing.
+    "head_ignored": ("a head fault: every laser output low",
+                     "laser_enable only while armed, no fault, interlock closed, no alarm",
+                     "a head fault while armed latches a fault"),
+    # A clock late: the outputs stay on, and the fault latches, a clock after the head's.
+    "head_fault_late": ("a head fault: every laser output low",
+                        "laser_enable only while armed, no fault, interlock closed, no alarm",
+                        "a head fault while armed latches a fault"),
     "enable_ignores_faults": "laser_enable only while armed, no fault, interlock closed, no "
                              "alarm",
     "guide_while_armed": "guide laser off while armed",
