@@ -101,6 +101,13 @@ class BuildConfig:
         How long a change of ``start_n`` must last, ms.
     mo_lead : float
         Seconds the laser's master oscillator leads emission (5 ms, as the paper).
+    head_status : bool
+        Build the receiver of the scan head's STATUS line (``xy2_status``) and its ``head``,
+        ``head_state``, ``head_check`` and ``head_bad`` registers.
+    head_check : bool
+        What ``head_check`` resets to: 1 = the laser obeys the head from power-up (a head
+        that reports Temp OK or Power OK low, or none, keeps the laser off). Needs the
+        receiver and the laser. Off by default: a head without a STATUS line reads as missing.
     """
 
     modes: tuple = MODES
@@ -121,6 +128,8 @@ class BuildConfig:
     player: bool = False
     start_debounce_ms: int = DEFAULT_DEBOUNCE_MS
     mo_lead: float = 5e-3
+    head_status: bool = False
+    head_check: bool = False
 
     def __post_init__(self):
         def put(name, value):       # (frozen: the normalised values are set once, here)
@@ -149,6 +158,15 @@ class BuildConfig:
         if not self.laser and "vector" in modes:
             raise ValueError("vector mode times its points by the laser's pulses: it needs the "
                              "laser controller")
+        put("head_status", bool(self.head_status))
+        put("head_check", bool(self.head_check))
+        if self.head_check and not (self.head_status and self.laser):
+            raise ValueError("head_check makes the laser obey the head's status: it needs "
+                             "head_status=True and the laser controller")
+        if self.head_status and self.clocking.clocks_per_bit < 4:
+            raise ValueError(f"the head status receiver samples a bit 2 clocks after its "
+                             f"middle: it needs 4 clocks a bit or more, not "
+                             f"{self.clocking.clocks_per_bit}")
         if not self.mo_lead > 0:
             raise ValueError(f"mo_lead must be a positive time in seconds, not {self.mo_lead!r}")
         if not _whole(self.laser_alarms) or not 0 <= self.laser_alarms <= MAX_ALARMS:
@@ -207,7 +225,8 @@ class BuildConfig:
                 "correction": self.correction, "wobble": self.wobble,
                 "delays": self.vector_delays, "interpolation": self.spiral_interpolation,
                 "uart": "uart" in self.links, "spi": "spi" in self.links,
-                "player": self.player, "pixel_lines": self.pixel_lines}
+                "player": self.player, "pixel_lines": self.pixel_lines,
+                "head": self.head_status}
 
     def register_map(self, *, table_points=DEFAULT_TABLE_POINTS,
                      correction_nodes=DEFAULT_CORRECTION_NODES, resets=None):
@@ -221,7 +240,8 @@ class BuildConfig:
             table_points=table_points, correction_nodes=correction_nodes,
             modes=self.modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            pixel_lines=self.pixel_lines, player=self.player, resets=resets,
+            pixel_lines=self.pixel_lines, player=self.player, head=self.head_status,
+            resets={**(resets or {}), **({"head_check": 1} if self.head_check else {})},
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
                    "vec_depth": self.vector_queue_depth if "vector" in self.modes else 0,
@@ -233,7 +253,8 @@ class BuildConfig:
                                        ("interpolation", self.spiral_interpolation),
                                        ("delays", self.vector_delays),
                                        ("pixel lines", self.pixel_lines), ("wobble", self.wobble),
-                                       ("player", self.player), ("laser", self.laser)) if on]
+                                       ("player", self.player), ("head status", self.head_status),
+                                       ("laser", self.laser)) if on]
         return (f"{self.clk_freq / 1e6:g} MHz, XY2 {self.bit_rate / 1e6:g} Mbit/s, "
                 f"{self.baud:,} baud; modes {','.join(self.modes)}; links "
                 f"{','.join(self.links)}; with {', '.join(built) if built else 'nothing else'}")

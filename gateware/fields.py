@@ -11,6 +11,7 @@ from amaranth.lib import data, enum
 
 
 __all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities",
+           "HeadStatus", "HeadState",
            "PlayerState", "PlayerResult", "PlayerStatus", "pack"]
 
 
@@ -97,6 +98,29 @@ Capabilities = data.StructLayout({
     "spi": 1,               # the SPI link
     "player": 1,            # the job player, its flash reader and start input
     "pixel_lines": 1,       # vector mode's pixel lines (vec_op bit 8)
+    "head": 1,              # the head status receiver (the head, head_state, head_check registers)
+})
+
+
+#: The status word of the scan head (the ``head`` register), as RTC5/RTC6's
+#: ``get_head_status`` has it, bit 0 first; a missing head reads 0.
+HeadStatus = data.StructLayout({
+    "one": 1,               # always 1 in a frame taken: tells a head that answers from none
+    "zero": 1,              # always 0
+    "_2": 1,
+    "pos_ack_x": 1,         # the X mirror is within the PosAck window of its set position
+    "pos_ack_y": 1,         # likewise Y
+    "_5": 1,
+    "temp_ok": 1,           # the head's temperature is in range
+    "power_ok": 1,          # the head's supply is in range
+    "_8": 8,
+})
+
+#: Bits of the ``head_state`` register, bit 0 first: what the receiver and the laser made of
+#: the head's words.
+HeadState = data.StructLayout({
+    "missing": 1,           # no good status frame in the last 8 (80 µs): no head answers
+    "fault": 1,             # latched: with head_check on, Temp OK or Power OK low (or no head) while armed
 })
 
 

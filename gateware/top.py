@@ -9,7 +9,7 @@ the guide laser's ``laser_guide``,
 and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``);
 with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``flash_copi``,
 ``flash_cipo``, the start inputs ``start_n[1:0]`` and the outputs ``busy``, ``ready`` and
-``player_led``.
+``player_led``; with the head status receiver, the head's ``xy2_status``.
 """
 
 from amaranth.hdl import Cat, Module, Mux, ResetInserter, Signal
@@ -26,14 +26,15 @@ from .host.command import CommandDecoder
 from .host.frames import PAYLOAD_BITS
 from .host.progress import ProgressFeed
 from .host.registers import RegisterFile
-from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, Mode, PlayerResult,
-                          PlayerState, PlayerStatus)
+from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, HeadStatus, Mode,
+                          PlayerResult, PlayerState, PlayerStatus)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
 from .host.uart_port import UARTCommandPort
 from .laser.controller import LaserController
 from .laser.marking_select import MarkingSelect
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
+from .phy.xy2_status import XY2StatusReceiver
 from .player.player import JobPlayer
 from .player.start_input import StartInput
 from .settings import ScanSettings
@@ -121,6 +122,9 @@ class GalvoScanTop(wiring.Component):
         host's job too).
     player_led : ``Out(1)``, with the player
         On while the player is busy; blinking while the last start's image was refused.
+    xy2_status : ``In(1)``, with the head status receiver
+        The scan head's STATUS line (through an RS-422 receiver; low with no head, which then
+        reads as missing).
 
     Attributes
     ----------
@@ -179,6 +183,8 @@ class GalvoScanTop(wiring.Component):
                             "flash_copi": Out(1), "flash_cipo": In(1, init=1),
                             "start_n": In(2, init=0b11), "busy": Out(1), "ready": Out(1),
                             "player_led": Out(1)})
+        if self.config.head_status:
+            members["xy2_status"] = In(1)
         super().__init__(members)
 
     def elaborate(self, platform):
@@ -228,8 +234,8 @@ class GalvoScanTop(wiring.Component):
         # Counters the host reads: those of the vector queue stop at their top, the laser's
         # pulses wrap (the host counts by differences).
         status = StatusBlock(
-            saturating=[name for name in ("vec_rejected", "vec_underruns", "vec_stalls")
-                        if name in self.regmap],
+            saturating=[name for name in ("vec_rejected", "vec_underruns", "vec_stalls",
+                                          "head_bad") if name in self.regmap],
             wrapping=[name for name in ("pulses", "vec_taken") if name in self.regmap])
         m.submodules.status = ResetInserter(regs.soft_reset)(status)
         m.d.comb += [
@@ -341,6 +347,18 @@ class GalvoScanTop(wiring.Component):
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
 
+        # --- scan head status ---------------------------------------------------------------
+        self._head = None
+        if self.config.head_status:
+            m.submodules.head = head = self._head = XY2StatusReceiver(
+                clocks_per_bit=self.config.clocking.clocks_per_bit)
+            m.d.comb += [
+                head.status_line.eq(self.xy2_status),
+                head.frame_strobe.eq(phy.frame_strobe),
+                regs.head.eq(head.status),
+                status.events.head_bad.eq(head.bad),
+            ]
+
         # --- laser --------------------------------------------------------------------------
         # A build without the laser controller (the smallest boards) leaves the laser pins
         # low: nothing can switch a laser on.
@@ -440,7 +458,17 @@ class GalvoScanTop(wiring.Component):
         m.submodules.laser = laser = LaserController(clk_freq=self.config.clk_freq,
                                                      mo_lead=self.config.mo_lead,
                                                      lookahead=lookahead,
-                                                     alarms=self.config.laser_alarms)
+                                                     alarms=self.config.laser_alarms,
+                                                     head=self.config.head_status)
+        if self.config.head_status:
+            # With the check on, a head that says it is too hot or without power, or says
+            # nothing, is as an open interlock: the laser off, and latched while armed.
+            word = HeadStatus(self._head.status)
+            m.d.comb += [
+                laser.head_fault.eq(regs.head_check &
+                                    (self._head.missing | ~word.temp_ok | ~word.power_ok)),
+                regs.head_state.eq(Cat(self._head.missing, laser.faults.head)),
+            ]
         # The watchdog is fed by progress only: a segment the host queued, its keepalive, the
         # player's next word; reading registers is no sign that a job goes on. It hears a
         # clock later: that takes the register file's checks off the path into the laser's

@@ -63,7 +63,8 @@ PMOD  FPGA pin  signal
 1     43        start_n (foot switch or PLC to GND; pulled up); the board's button starts too
 2     38        busy (a job is being checked or played)
 3     34        ready (armed and past the MO lead: marking emits)
-4     31        (free)
+4     31        xy2_status (the head's STATUS line through an RS-422 receiver), with
+                ``--head-status`` (which does not fit beside the correction stage)
 ====  ========  ===========
 
 The green LED lights while the player is busy and blinks after it refused an image.
@@ -89,7 +90,7 @@ CRYSTAL_HZ = 12_000_000
 
 __all__ = ["CRYSTAL_HZ", "ICEBreakerScanner", "system_clock", "icebreaker_platform", "XY2_PMOD_PINS", "SPI_PMOD_PINS",
            "LASER_PMOD_PINS", "INTERLOCK_PMOD_PIN", "ALARM_PMOD_PINS",
-           "MACHINE_PMOD_PINS"]
+           "MACHINE_PMOD_PINS", "HEAD_STATUS_PMOD_PIN"]
 
 
 #: PMOD1A pin of each XY2-100 signal (the README's table is checked against these).
@@ -115,6 +116,9 @@ MACHINE_PMOD_PINS = {"start_n": (1, "i"), "busy": (2, "o"), "ready": (3, "o")}
 INTERLOCK_PMOD_PIN = (1, "7")
 #: The laser alarm inputs: (PMOD number, PMOD pins); as many alarms as pins.
 ALARM_PMOD_PINS = (1, "9")
+#: The scan head's STATUS line (an RS-422 receiver's output): (PMOD number, PMOD pin), the SPI
+#: link's SCK, free in the job player's build (its machine lines take the other three).
+HEAD_STATUS_PMOD_PIN = (1, "4")
 
 
 def icebreaker_platform():
@@ -144,6 +148,9 @@ def icebreaker_platform():
                    for name, (pin, direction) in MACHINE_PMOD_PINS.items()),
                  Attrs(IO_STANDARD="SB_LVCMOS")),
         # Pulled up: an unconnected alarm input reads as an alarm, and the laser stays off.
+        Resource("head_status", 0,
+                 Pins(HEAD_STATUS_PMOD_PIN[1], dir="i", conn=("pmod", HEAD_STATUS_PMOD_PIN[0])),
+                 Attrs(IO_STANDARD="SB_LVCMOS")),
         Resource("laser_alarm", 0,
                  Pins(ALARM_PMOD_PINS[1], dir="i", conn=("pmod", ALARM_PMOD_PINS[0])),
                  Attrs(IO_STANDARD="SB_LVCMOS", PULLUP=1)),
@@ -188,7 +195,7 @@ class ICEBreakerScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=2_000_000,
                baud=DEFAULT_BAUD, wobble=False, interpolation=False, delays=False,
-               pixel_lines=False, player=False):
+               pixel_lines=False, player=False, head_status=False):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of an iCEBreaker
         bitstream with these options; ``ValueError`` for one the UP5K cannot hold (checked
         before anything is built).
@@ -227,13 +234,21 @@ class ICEBreakerScanner(Elaboratable):
             raise ValueError("pixel lines do not fit the UP5K beside the job player")
         if player and "vector" not in modes:
             raise ValueError("the job player plays vector jobs: build it with the vector mode")
+        if head_status and not player:
+            raise ValueError("the head's STATUS line takes PMOD1B pin 4, the SPI link's SCK: "
+                             "build it with the job player (--preset marker), whose machine "
+                             "lines leave that pin free")
+        if head_status and correction is not None:
+            raise ValueError("the head status receiver does not fit the UP5K beside the "
+                             "marker's correction stage (5,274 of 5,280 logic cells): build it "
+                             "with --no-correction")
         return BuildConfig(
             modes=modes, clk_freq=clk_freq, bit_rate=bit_rate, baud=baud,
             correction=correction is not None, laser_alarms=len(ALARM_PMOD_PINS[1].split()),
             wobble=wobble, spiral_interpolation=interpolation, vector_delays=delays,
             pixel_lines=pixel_lines,
             # The SPI link's pins are the player's machine lines.
-            player=player, links=("uart",) if player else LINKS)
+            player=player, links=("uart",) if player else LINKS, head_status=head_status)
 
     def elaborate(self, platform):
         m = Module()
@@ -263,6 +278,8 @@ class ICEBreakerScanner(Elaboratable):
                         machine=platform.request("machine", 0, dir="-"),
                         button=platform.request("button", 0, dir="-"),
                         led=platform.request("led_g", 0, dir="-"))
+            if self.config.head_status:
+                inputs["xy2_status"] = platform.request("head_status", 0, dir="-")
         else:
             spi = platform.request("host_spi", 0, dir="-")
             inputs.update({"spi_sck": spi.sck, "spi_cs_n": spi.cs_n, "spi_copi": spi.copi})

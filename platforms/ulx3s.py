@@ -75,7 +75,7 @@ ULX3S_PINS = {
     "xy2_x": ("GP1", "o", "RS-422 driver → head CHAN1± (X)"),
     "xy2_y": ("GN1", "o", "RS-422 driver → head CHAN2± (Y)"),
     "xy2_z": ("GP2", "spare", "RS-422 driver → head CHAN3± (Z)"),
-    "xy2_status": ("GN2", "spare", "RS-422 receiver ← head STATUS±"),
+    "xy2_status": ("GN2", "i", "RS-422 receiver ← head STATUS± (fail-safe: no head reads as missing)"),
     "laser_power[0]": ("GP3", "o", "5 V buffer → DB25 1"),
     "laser_power[1]": ("GN3", "o", "5 V buffer → DB25 2"),
     "laser_power[2]": ("GP4", "o", "5 V buffer → DB25 3"),
@@ -161,6 +161,9 @@ def ulx3s_platform(device="25F"):
                  Attrs(**lvcmos, PULLMODE="UP")),
         Resource("laser_alarm", 0, _pins(*alarms, direction="i"),
                  Attrs(**lvcmos, PULLMODE="UP")),
+        # Pulled down: with nothing on it the line is low, and the head reads as missing.
+        Resource("head_status", 0, _pins("xy2_status", direction="i"),
+                 Attrs(**lvcmos, PULLMODE="DOWN")),
         Resource("machine", 0,
                  Subsignal("start_n", _pins("start_n", direction="i"), Attrs(PULLMODE="UP")),
                  Subsignal("busy", _pins("busy", direction="o")),
@@ -196,10 +199,10 @@ class ULX3SScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
                baud=None, wobble=True, interpolation=True, delays=True, pixel_lines=True,
-               player=True):
+               player=True, head_status=True):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
-        RTC delays, pixel lines, wobble, the job player, both links). ``clock`` in Hz (None: 24 MHz) must
+        RTC delays, pixel lines, wobble, the job player, the head's status, both links). ``clock`` in Hz (None: 24 MHz) must
         be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
         where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
@@ -215,7 +218,7 @@ class ULX3SScanner(Elaboratable):
             wobble=wobble and "vector" in modes,
             spiral_interpolation=interpolation, vector_delays=delays,
             pixel_lines=pixel_lines and delays and "vector" in modes,
-            player=player and "vector" in modes, links=LINKS)
+            player=player and "vector" in modes, links=LINKS, head_status=head_status)
 
     def elaborate(self, platform):
         m = Module()
@@ -240,7 +243,9 @@ class ULX3SScanner(Elaboratable):
         plain_inputs(m, scanner, {
             "uart_rx": uart.rx, "spi_sck": spi.sck, "spi_cs_n": spi.cs_n, "spi_copi": spi.copi,
             "interlock_open": platform.request("interlock", 0, dir="-"),
-            "laser_alarm": platform.request("laser_alarm", 0, dir="-")})
+            "laser_alarm": platform.request("laser_alarm", 0, dir="-"),
+            **({"xy2_status": platform.request("head_status", 0, dir="-")}
+               if self.config.head_status else {})})
         plain_outputs(m, scanner, {"uart_tx": uart.tx, "spi_cipo": spi.cipo})
         running_led(m, scanner, platform.request("led", 0, dir="-"))
         if self.config.player:

@@ -68,7 +68,8 @@ def _apply_preset(args):
     args.modes = preset.modes
     for name, built in (("delays", preset.vector_delays),
                         ("interpolation", preset.spiral_interpolation),
-                        ("wobble", preset.wobble), ("pixel_lines", preset.pixel_lines)):
+                        ("wobble", preset.wobble), ("pixel_lines", preset.pixel_lines),
+                        ("head_status", preset.head_status)):
         setattr(args, name, getattr(args, name) or built)
     args.player = preset.player
     if args.clock is None:
@@ -91,12 +92,16 @@ def _cmd_build(args):
         # Every feature is built: the options that add one to an iCE40 build add nothing.
         features = {}
         args.wobble = args.interpolation = args.delays = args.player = True
-        args.pixel_lines = True
+        args.pixel_lines = args.head_status = True
     else:
         if args.device:
             fail(f"--device is the ULX3S's (its ECP5), not the {args.board}'s")
+        if args.head_status and args.board == "icestick":
+            fail("the iCEstick's bitstream is the spiral alone: it has no head status "
+                 "receiver")
         features = dict(wobble=args.wobble, interpolation=args.interpolation,
                         delays=args.delays, player=args.player,
+                        **({"head_status": True} if args.head_status else {}),
                         **({"pixel_lines": True} if args.pixel_lines else {}))
     try:
         report = build_bitstream(args.board, build_dir=args.build_dir, table=table,
@@ -124,7 +129,8 @@ def _cmd_build(args):
           f"{f'{nodes} x {nodes} nodes' if nodes else 'none'}")
     built = [what for what, on in (("RTC delays", args.delays), ("wobble", args.wobble),
                                    ("spiral interpolation", args.interpolation),
-                                   ("job player", args.player)) if on]
+                                   ("job player", args.player),
+                                   ("head status", args.head_status)) if on]
     print(f"  with         {', '.join(built) if built else 'no build options'}")
     print(f"  {report.logic_name:<12} {report.luts:5d} / {report.luts_available}")
     print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
@@ -193,6 +199,11 @@ def add_parsers(commands):
                        help="add vector mode's pixel lines (mark --image's: each row one "
                             "sweep, each pixel lit by its own bit); needs --delays and "
                             "--modes vector on the UP5K")
+    build.add_argument("--head-status", action="store_true",
+                       help="add the receiver of the scan head's STATUS line (galvoscan status "
+                            "shows its bits; [galvo] head_check makes the laser obey it); on "
+                            "the iCEBreaker with --preset marker, whose machine lines leave "
+                            "its pin free, and --no-correction, for room")
     build.add_argument("--delays", action="store_true",
                        help="add vector mode's RTC laser and scanner delays (laser on/off, "
                             "mark, polygon); with every mode they do not fit the UP5K: drop "

@@ -70,7 +70,7 @@ def _cmd_clean(args):
                 "seconds": round(job.seconds, 6),
                 "dose_j_cm2": job.dose_j_cm2, "notes": list(job.notes)}))
         return 0
-    registers = dict(job.registers)
+    registers = {**job.registers, **profile.head_registers()}
     if profile.correction_table() is not None:
         registers["cor_enable"] = 1
     pulses = max(1, math.ceil(job.seconds * registers["laser_prr"] * 100))

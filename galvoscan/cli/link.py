@@ -114,6 +114,21 @@ def _cmd_read(args):
     return 0
 
 
+def _cmd_status(args):
+    from ..link.client import ClientError, HostClient
+    from ..outputs.board_state import read_board_state
+    with open_link(args) as link:
+        try:
+            state = read_board_state(HostClient(link))
+        except ClientError as error:           # the board or the link, once opened
+            failed(error)
+    if args.json:
+        print(json.dumps(state.as_dict()))
+    else:
+        print("\n".join(state.lines()))
+    return 0
+
+
 def _cmd_reset(args):
     from ..link.client import ClientError, HostClient
     from ..gateware.fields import Capabilities, Status
@@ -199,3 +214,15 @@ def add_parsers(commands):
     read.add_argument("--json", action="store_true", help="print {name: value}")
     add_link_options(read)
     read.set_defaults(run=_cmd_read)
+
+    status = commands.add_parser(
+        "status", help="say the board's state and its scan head's",
+        description="The board's state in words: busy or ready, armed, the interlock, an "
+                    "alarm and the latched faults; with a bitstream that reads the scan "
+                    "head's STATUS line, the head's bits (Power OK, Temp OK, PosAck X and Y, "
+                    "as RTC's get_head_status), whether the laser obeys them (head_check), the "
+                    "latched head fault and the status frames refused.")
+    status.add_argument("--json", action="store_true",
+                        help="print {flags, latched, head} instead")
+    add_link_options(status)
+    status.set_defaults(run=_cmd_status)

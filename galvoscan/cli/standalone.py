@@ -58,8 +58,14 @@ def _cmd_store(args):
     if serial is not None:
         say(f"the image marks serial {serial} at every start (the player does not count; the "
             f"counter beside the profile is left as it is)")
+    registers = dict(job.registers)
+    if "head_check" not in _player_map() and registers.pop("head_check", 0):
+        # (Off, it is simply not written: the marker has no head to obey.)
+        fail("the profile's [galvo] head_check makes the laser obey the scan head, but the "
+             "stand-alone bitstream (build --preset marker) does not read the head's STATUS "
+             "line: set head_check = false to store the job")
     try:
-        image = job_image(job.segments, job.registers, repeats=args.repeats)
+        image = job_image(job.segments, registers, repeats=args.repeats)
         read_image(image, regmap=_player_map())     # what the marker's register file takes
     except ImageError as error:
         fail(error)

@@ -14,11 +14,11 @@ import threading
 
 from .. import api
 from ..build import simulated_bitstream
-from ..gateware.fields import Status
 from ..cli.jobargs import frame_job
 from ..cli.job_reports import describe_job
 from ..cli.layers import describe_layers
 from ..link.client import ClientError, HostClient, SerialTransport
+from ..outputs.board_state import read_board_state
 from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
@@ -341,18 +341,11 @@ class GalvoscanDriver:
         with self._lock:
             client, close = self._open()
             try:
-                flags = Status.from_bits(client.read("status"))
+                state = read_board_state(client)
             finally:
                 close()
-        latched = [name for name in ("interlock", "watchdog", "alarm", "link")
-                   if getattr(flags, f"fault_{name}")]
-        return ", ".join([
-            "busy (segments queued)" if flags.vector_busy else "ready",
-            "armed" if flags.armed else "disarmed",
-            "interlock open" if flags.interlock_open else "interlock closed",
-            *(["laser alarm"] if flags.alarm else []),
-            (f"latched fault: {', '.join(latched)} (`galvoscan send fault_clear=1` clears it)"
-             if latched else "no fault latched")])
+        return state.summary() + ("" if state.head is None else
+                                  f"; head: {state.head.describe()}")
 
     # --- the console ---------------------------------------------------------------------------
 

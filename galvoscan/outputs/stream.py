@@ -25,11 +25,12 @@ import sys
 import time
 from dataclasses import dataclass, field
 
-from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
-                                    VECTOR_QUEUE_DEPTH)
+from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, HeadState, Mode,
+                                    Status, VECTOR_QUEUE_DEPTH)
 from ..geometry.corners import corner_frames
 from ..geometry.segments import has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
+from .board_state import read_head
 from .queue_words import check_segment, job_segments, segment_words
 
 
@@ -180,6 +181,14 @@ class JobStreamer:
         if flags.fault_link:
             raise JobAborted("the board refused a frame while armed (damaged or lost on the "
                              "line): it switched the laser off at once")
+        caps = self.capabilities()
+        if caps.head and caps.laser and \
+                HeadState.from_bits(self.board.read("head_state")).fault:
+            head = read_head(self.board, caps)
+            raise JobAborted(f"the scan head reported a fault "
+                             f"({head.problem() or 'well again now'}): the laser is off "
+                             f"(`galvoscan status` says the head's bits; `galvoscan send "
+                             f"fault_clear=1` once it is well)")
         return flags
 
     def _count_pulses(self):
@@ -214,6 +223,11 @@ class JobStreamer:
         if flags.armed:
             raise JobAborted("the board is armed already: another job may be running "
                              "(`galvoscan send arm=0` stops it)")
+        head = read_head(self.board, self.capabilities())
+        if head is not None and not head.missing and head.problem():
+            # (A missing head matters only to a job that makes the laser obey it: verify.)
+            raise JobAborted(f"the scan head reports {head.problem()}: not starting "
+                             f"(`galvoscan status` says its bits)")
         free = self.board.read("fifo_free")
         # Not busy: the queue is empty and nothing is in the sequencer's hand, so every place
         # is free and `free` is the queue's depth.
@@ -248,24 +262,42 @@ class JobStreamer:
             if not getattr(caps, mode.label):
                 raise JobAborted(f"the board has no {mode.label} mode: its bitstream was "
                                  f"built without it (galvoscan build --modes)")
+        if registers.get("head_check") and not caps.head:
+            raise JobAborted("head_check asks the laser to obey the scan head, but the board's "
+                             "bitstream does not read the head's STATUS line (galvoscan build "
+                             "--head-status)")
         if registers.get("wob_shape") and not caps.wobble:
             raise JobAborted("the board has no wobble stage: its bitstream was built "
                              "without it (galvoscan build --wobble)")
         self.board.write_many([(name, value) for name, value in registers.items()
-                               if not (name == "wob_shape" and not caps.wobble)])
-        # (wob_shape off, on a board that has no wobble to turn off, is not written.)
+                               if not self._not_built(name, caps)])
+        # (wob_shape off, on a board that has no wobble to turn off, is not written; nor
+        # head_check off on a board that cannot read the head.)
         return registers
 
     def verify(self, registers):
         """Read back every setting of ``registers``: a difference refuses to arm."""
         caps = self.capabilities()
         for name, value in registers.items():
-            if BY_NAME[name].access != "rw" or (name == "wob_shape" and not caps.wobble):
+            if BY_NAME[name].access != "rw" or self._not_built(name, caps):
                 continue
             got = self.board.read(name)
             if got != value:
                 raise JobAborted(f"the board holds {name} = {got} where the job wrote {value}: "
                                  f"not arming")
+        if registers.get("head_check"):
+            head = read_head(self.board, caps)
+            if head.problem():
+                raise JobAborted(f"the scan head has {head.problem()}, and head_check makes "
+                                 f"the laser obey it: not arming (`galvoscan status` says its "
+                                 f"bits)" if head.missing else
+                                 f"the scan head reports {head.problem()}: not arming")
+
+    @staticmethod
+    def _not_built(name, caps):
+        """A setting off that the board's bitstream has no register for."""
+        return (name == "wob_shape" and not caps.wobble) or \
+            (name == "head_check" and not caps.head)
 
     def wait_ready(self, timeout_s):
         """Wait until the laser has led with MO for the MO lead (status ``laser_ready``)."""

@@ -134,6 +134,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
         "laser_prr": prr_register,
         "laser_power": profile.power_register(settings.power_percent),
         **profile.delay_registers(),
+        **profile.head_registers(),
     }
     if has_pixel_lines(segments):
         # A pixel line is timed by its scan offset: the laser follows each point's bit, at

@@ -11,7 +11,7 @@ comment on every key (:func:`galvoscan.profile.template.profile_text`)::
     [laser]     max_power_w, prr_khz = [min, max], spot_mm, guide
     [galvo]     jump_delay_us, min_jump_delay_us, jump_length_limit_mm, max_speed_mm_s,
                 laser_on_delay_us, laser_off_delay_us, mark_delay_us, polygon_delay_us,
-                polygon_scaled, tracking_delay_us
+                polygon_scaled, tracking_delay_us, head_check
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
 
@@ -130,6 +130,8 @@ class GalvoSection:
     #: The mirrors' lag behind their set point on a line at constant speed, µs (a critically
     #: damped servo's 2/ωn: some 80 µs for the JD1403 galvo of Wan et al.).
     tracking_delay_us: float = _default("galvo", "tracking_delay_us")
+    #: The head answers on its STATUS line and the laser obeys it (``head_check``).
+    head_check: bool = _default("galvo", "head_check")
 
 
 @dataclass(frozen=True)
@@ -215,6 +217,11 @@ class MachineProfile:
         registers["polygon_scaled"] = int(self.galvo.polygon_scaled)
         return registers
 
+    def head_registers(self):
+        """``head_check``, as a job writes it before it arms (a board that cannot read the
+        head takes a job only with it 0)."""
+        return {"head_check": int(self.galvo.head_check)}
+
     def power_register(self, percent):
         """``laser_power`` for ``percent`` of full power (0 … 100 → 0 … 255, to the nearest
         step, half up)."""
@@ -272,7 +279,8 @@ class MachineProfile:
                       "max_speed_mm_s": self.galvo.max_speed_mm_s,
                       **{key: getattr(self.galvo, key) for key in DELAY_KEYS},
                       "polygon_scaled": self.galvo.polygon_scaled,
-                      "tracking_delay_us": self.galvo.tracking_delay_us},
+                      "tracking_delay_us": self.galvo.tracking_delay_us,
+                      "head_check": self.galvo.head_check},
             "defaults": {"speed_mm_s": self.defaults.speed_mm_s,
                          "power_percent": self.defaults.power_percent,
                          "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},

@@ -139,6 +139,11 @@ polygon_scaled = {"true" if d.galvo.polygon_scaled else "false"}
 # directions, and run in and out at speed over three times it. Tune it with a test mark
 # of a photo: the two directions' edges then meet. {s("galvo", "tracking_delay_us")}.
 tracking_delay_us = {n(d.galvo.tracking_delay_us)}
+# true: the scan head answers on its XY2-100 STATUS line and the laser obeys it: Temp OK or
+# Power OK low, or no answer, keeps the laser off, stops a job and latches the head fault
+# (a bitstream built with --head-status; `galvoscan status` shows the head's bits).
+# false: for a head without the line, which would read as missing.
+head_check = {"true" if d.galvo.head_check else "false"}
 
 [defaults]
 # Job settings used when the command line does not give them.

@@ -55,6 +55,11 @@ TRACKING_DELAY = Setting("tracking_delay_us", "number", "µs", 0, 2000, default=
                               "constant speed (their tracking error): a pixel line is sent "
                               "this far ahead of the pixels, and run in and out over three "
                               "times it")
+HEAD_CHECK = Setting("head_check", "bool", default=False,
+                     help="the scan head answers on its XY2-100 STATUS line and the laser "
+                          "obeys it: Temp OK or Power OK low, or no answer, keeps the laser "
+                          "off and stops a job (a bitstream built with --head-status); off "
+                          "for a head without the line, which would read as missing")
 POLYGON_SCALED = Setting("polygon_scaled", "bool", default=True,
                          help="each corner's polygon delay scaled by (1 - cos φ), φ the turn "
                               "at the corner (RTC's variable polygon delay)")
@@ -127,7 +132,8 @@ PROFILE = {
                    ("mark_delay_us", MARK_DELAY, dict(default=100.0, kind="number")),
                    ("polygon_delay_us", POLYGON_DELAY, dict(default=0.0, kind="number")),
                    ("polygon_scaled", POLYGON_SCALED, {}),
-                   ("tracking_delay_us", TRACKING_DELAY, {})),
+                   ("tracking_delay_us", TRACKING_DELAY, {}),
+                   ("head_check", HEAD_CHECK, {})),
     "defaults": _keys("defaults", ("speed_mm_s", SPEED, dict(default=1000.0)),
                       ("power_percent", POWER, dict(default=10.0)),
                       ("prr_khz", PRR, dict(default=50.0, help="pulse repetition rate, within "

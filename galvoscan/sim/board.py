@@ -34,6 +34,7 @@ from .board_engine import PythonEngine
 from .compiled import CompiledEngine, CompileError, compiled_model
 from .compiled.netlist import build_record, netlist_design
 from .contract import BACKENDS, LASER_PINS, MACHINE_PERIOD_S, PIN_FIELDS
+from .head import HEALTHY_HEAD
 from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
@@ -75,6 +76,10 @@ class SimulatedBoard:
         :attr:`alarms_clear` (10 µs).
     interlock_closed, alarms_clear : bool
         The machine's inputs at power-up (and after :meth:`reset`).
+    head_word : int or None
+        The status word the scan head answers each frame with on its STATUS line, at power-up
+        (and after :meth:`reset`), on a build with the head status receiver
+        (:data:`~.head.HEALTHY_HEAD`, a head with nothing to report); None: no head answers.
     flash : bytes or :class:`~.spi_flash.SPIFlashModel`, optional
         The configuration flash of a build with the job player (``player=True``): a job
         image (put at its offset, the rest erased) or a flash model. None: an erased flash.
@@ -112,6 +117,9 @@ class SimulatedBoard:
         ``("bad_stop", byte)`` (appended to only).
     start_pressed : bool
         The foot switch on ``start_n``, pressed (set by the host; the machine's period).
+    head_word : int or None
+        The head's status word now (set by a test: a head that grows hot), sent from the
+        next frame on; None: no head answers.
     spi_queue : deque
         SPI transfers to clock in: ``(bits, results, half_period_s, phase_s)``; ``results``
         gets CIPO's bit as SCK rises for each bit, then ``"done"`` (appended to only).
@@ -120,8 +128,8 @@ class SimulatedBoard:
     def __init__(self, *, config=None, clk_freq=12e6, baud=DEFAULT_BAUD, backend="python",
                  say=None,
                  record_samples=False, record_pins=False, machine_period_s=MACHINE_PERIOD_S,
-                 interlock_closed=True, alarms_clear=True, flash=None, vcd=None, netlist=None,
-                 **top_kwargs):
+                 interlock_closed=True, alarms_clear=True, head_word=HEALTHY_HEAD, flash=None,
+                 vcd=None, netlist=None, **top_kwargs):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
         if netlist is not None:
@@ -139,6 +147,7 @@ class SimulatedBoard:
         self.baud = self.config.baud
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = (interlock_closed, alarms_clear)
+        self._head_at_power_up = self._checked_head(head_word)
         self._power_up_records()
         if vcd and backend == "compiled":
             raise ValueError("a waveform (vcd) needs the Python backend")
@@ -147,6 +156,13 @@ class SimulatedBoard:
                        self._engine(backend, say or (lambda line: None), **records))
         self.backend = self.engine.name
         self.run_for(1 / self.clk_freq)     # start the processes in this thread
+
+    @staticmethod
+    def _checked_head(word):
+        if word is not None and (isinstance(word, bool) or not isinstance(word, int) or
+                                 not 0 <= word <= 0xFFFF):
+            raise ValueError(f"head_word must be a 16-bit status word or None, not {word!r}")
+        return word
 
     def _netlist_board(self, netlist, backend, say, *, machine_period_s, machine, extra,
                        **records):
@@ -158,6 +174,7 @@ class SimulatedBoard:
         self.top = self.config = None
         self.machine_period_s = machine_period_s
         self._machine_at_power_up = machine
+        self._head_at_power_up = None
         self._power_up_records()
         model = compiled_model(netlist_design(netlist), say=say)
         self.engine = CompiledEngine(self, model=model, **records)
@@ -185,6 +202,7 @@ class SimulatedBoard:
         self.pin_changes = []
         self.pins_every_clock = []
         self.interlock_closed, self.alarms_clear = self._machine_at_power_up
+        self.head_word = self._head_at_power_up
         self.start_pressed = False
         self.flash = None
         if self.config is not None and self.config.player:

@@ -13,6 +13,7 @@ from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
 from .contract import LASER_PINS, PIN_FIELDS, SPI_IDLE_S, pack_pins
+from .head import status_frame_bits
 from .xy2_receiver import XY2Receiver
 
 
@@ -65,6 +66,8 @@ class PythonEngine:
             self.sim.add_testbench(process, background=True)
         if self.board.flash is not None:
             self.sim.add_testbench(self._flash, background=True)
+        if hasattr(self.board.top, "xy2_status"):
+            self.sim.add_testbench(self._head_status, background=True)
         # A process, not a testbench: the pins are logic, and may change more than once
         # while the design settles after a clock edge; a process sees every change.
         self.sim.add_process(self._laser_pins)
@@ -198,6 +201,26 @@ class PythonEngine:
             frame = self._receiver.sample(sync, x, y)
             if frame is not None:
                 board.frames.append((cycles, frame.x, frame.y))
+
+    async def _head_status(self, ctx):
+        # The head's STATUS line (:mod:`.head`): a bit on each rising CLOCK edge, from the one
+        # on which SYNC is first high; low with no head (``head_word`` None).
+        board, top = self.board, self.board.top
+        bit, last_sync, word = None, True, None
+        async for _, sync in ctx.posedge(top.xy2_clk).sample(top.xy2_sync):
+            bit = 0 if sync and not last_sync else (None if bit is None else bit + 1)
+            last_sync = sync
+            if bit == 0:            # (a head takes its word for a whole frame)
+                word = board.head_word
+            level = 0
+            if word is not None and bit is not None and bit < len(self._head_bits(word)):
+                level = self._head_bits(word)[bit]
+            ctx.set(top.xy2_status, level)
+
+    def _head_bits(self, word):
+        if word != getattr(self, "_head_word", None):
+            self._head_word, self._head_frame = word, status_frame_bits(word)
+        return self._head_frame
 
     async def _sync_edges(self, ctx):
         async for _, cycles in ctx.posedge(self.board.top.xy2_sync).sample(

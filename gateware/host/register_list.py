@@ -11,12 +11,12 @@ from ..field.scale import AMP_ONE
 from ..points import FIELD_CENTRE, FIELD_MAX
 from ..limits import (LASER_DELAY_MAX_US, LASER_ON_LEAD_US, SCANNER_DELAY_MAX_US,
                       WOBBLE_MAX_AMPLITUDE, WOBBLE_MAX_HZ, WORD_MAX)
-from ..fields import Capabilities, Mode, PlayerStatus, Status, WobbleShape
+from ..fields import Capabilities, HeadState, HeadStatus, Mode, PlayerStatus, Status, WobbleShape
 
 
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
            "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_REGISTERS",
-           "CORRECTION_REGISTERS", "PLAYER_REGISTERS"]
+           "CORRECTION_REGISTERS", "PLAYER_REGISTERS", "HEAD_REGISTERS"]
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class Register:
     fixed: bool = False
     #: The build options it comes with (all of them): scan modes (``"spiral"``, ``"raster"``,
     #: ``"vector"``) and stages (``"interpolation"``, ``"delays"``, ``"wobble"``,
-    #: ``"correction"``, ``"laser"``, ``"player"``); a build without one answers its address
+    #: ``"correction"``, ``"laser"``, ``"player"``, ``"head"``); a build without one answers its address
     #: as unknown.
     needs: tuple = ()
 
@@ -336,6 +336,26 @@ def all_registers(table_points, correction_nodes):
                       "255)")
                      for name, field in PlayerStatus), width=PlayerStatus.size,
                  needs=('player',)),
+        # --- scan head status -------------------------------------------------------------------
+        Register("head", 0x1C, "ro", 0, 0, 0, "flags",
+                 "the scan head's status word off its STATUS line, as RTC5/RTC6's "
+                 "get_head_status reads it: " + ", ".join(
+                     f"bit {field.offset} {name}" for name, field in HeadStatus
+                     if not name.startswith("_")) + "; 0 while no head answers",
+                 needs=('head',)),
+        Register("head_state", 0x1D, "ro", 0, 0, 0, "flags",
+                 "bit 0 missing (no good status frame in the last 8), bit 1 head fault "
+                 "(latched: with head_check on, Temp OK or Power OK low, or no head, while "
+                 "armed; it disarms as the interlock does, and fault_clear clears it once the "
+                 "head is fit)", width=HeadState.size, needs=('head', 'laser')),
+        Register("head_check", 0x1E, "rw", 0, 0, 1, "bool",
+                 "1 = the laser obeys the head: Temp OK or Power OK low, or no head, keeps "
+                 "every laser output off and, while armed, latches the head fault; 0 (for a "
+                 "head without a STATUS line) = the head's word is only reported",
+                 width=1, needs=('head', 'laser')),
+        Register("head_bad", 0x1F, "ro", 0, 0, 0, "frames",
+                 "status frames refused (a code other than 001, odd parity, or no head) since "
+                 "reset; stops at 65535", needs=('head',)),
     ]
 
 
@@ -366,3 +386,6 @@ CORRECTION_REGISTERS = _needing("correction")
 
 #: Registers only a build with the job player has.
 PLAYER_REGISTERS = _needing("player")
+
+#: Registers only a build with the head status receiver has.
+HEAD_REGISTERS = _needing("head")

@@ -34,6 +34,11 @@ def test_the_options_are_normalised_once():
      "the vector delays count whole µs"),
     (dict(mo_lead=0), "mo_lead must be a positive time"),
     (dict(pixel_lines=True), "pixel lines come with vector mode's delays"),
+    (dict(head_check=True), "head_check makes the laser obey the head's status"),
+    (dict(head_status=True, laser=False, modes=("spiral",), head_check=True),
+     "head_check makes the laser obey"),
+    (dict(head_status=True, clk_freq=4e6, baud=500_000),
+     "the head status receiver samples a bit 2 clocks after its middle"),
 ])
 def test_bad_options_are_refused_at_construction(options, message):
     with pytest.raises(ValueError, match=message):
@@ -43,7 +48,7 @@ def test_bad_options_are_refused_at_construction(options, message):
 def test_the_caps_register_is_what_the_configuration_built():
     # The caps bits in the order the README's register table gives them, bit 0 first.
     order = ("spiral", "raster", "vector", "laser", "correction", "wobble", "delays",
-             "interpolation", "uart", "spi", "player", "pixel_lines")
+             "interpolation", "uart", "spi", "player", "pixel_lines", "head")
     for name, config in PRESETS.items():
         caps = preset_register_map(name)["caps"].reset
         built = {flag: bool(caps >> bit & 1) for bit, flag in enumerate(order)}

@@ -52,6 +52,7 @@ OTHER_KEYS = {
     ("laser", "prr_khz"): "[20, 200]",
     ("laser", "guide"): "false",
     ("galvo", "polygon_scaled"): "false",
+    ("galvo", "head_check"): "true",
 }
 # Other keys a value at an edge needs, so that only the key under test can be refused.
 COMPANIONS = {

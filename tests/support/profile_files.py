@@ -8,7 +8,8 @@ DEFAULTS = {
     "galvo": {"jump_delay_us": 500.0, "min_jump_delay_us": 240.0, "jump_length_limit_mm": 5.0,
               "max_speed_mm_s": 10_000.0,
               "laser_on_delay_us": 100.0, "laser_off_delay_us": 50.0, "mark_delay_us": 100.0,
-              "polygon_delay_us": 0.0, "polygon_scaled": True, "tracking_delay_us": 80.0},
+              "polygon_delay_us": 0.0, "polygon_scaled": True, "tracking_delay_us": 80.0,
+              "head_check": False},
     "defaults": {"speed_mm_s": 1000.0, "power_percent": 10.0, "prr_khz": 50.0, "passes": 1},
     "wobble": {"across_um": 0.0, "along_um": 0.0, "freq_hz": 1000.0},
 }

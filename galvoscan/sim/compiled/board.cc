@@ -280,6 +280,11 @@ struct Board {
 
     // Pins as last seen, for their edges.
     bool last_tx = true, last_xy2_clk = false, last_sync = false, last_prr = false;
+    // The head on the STATUS line (galvoscan/sim/head.py): its word (-1: no head), and the
+    // bit of its frame it sends (-1: none until SYNC is first seen high at a rising CLOCK).
+    int32_t head_word = -1, head_sending = -1;
+    int head_bit = -1;
+    bool head_last_sync = true;
     uint32_t last_laser = 0;
     int64_t last_pins = -1;
 
@@ -386,6 +391,25 @@ struct Board {
                 records[FRAMES].push_back(frame_y);
             }
         }
+#if GS_HEAD
+        if (!last_xy2_clk && xy2_clk) {
+            head_bit = (sync && !head_last_sync) ? 0 : (head_bit < 0 ? -1 : head_bit + 1);
+            head_last_sync = sync;
+            if (head_bit == 0)          // (a head takes its word for a whole frame)
+                head_sending = head_word;
+            bool level = false;
+            if (head_sending >= 0 && head_bit >= 0 && head_bit < 20) {
+                // C2 C1 C0 = 001, D15 … D0, even parity over all 20.
+                uint32_t frame = (1u << 16 | uint32_t(head_sending)) << 1;
+                frame |= uint32_t(__builtin_popcount(frame) & 1);
+                level = (frame >> (19 - head_bit)) & 1;
+            }
+            if (level != top.GS_PORT_xy2_status.get<bool>()) {
+                top.GS_PORT_xy2_status.set<bool>(level);
+                inputs_changed = true;
+            }
+        }
+#endif
         last_xy2_clk = xy2_clk;
         if (sync && !last_sync)
             records[SYNC_RISES].push_back(cycles);
@@ -705,6 +729,9 @@ void gs_board_machine(void *handle, int interlock_closed, int alarms_clear) {
     board->interlock_closed = interlock_closed;
     board->alarms_clear = alarms_clear;
 }
+
+// The head's status word on its STATUS line (-1: no head; a build with the receiver).
+void gs_board_head(void *handle, int word) { static_cast<Board *>(handle)->head_word = word; }
 
 // The foot switch on start_n (a build with the job player).
 void gs_board_start(void *handle, int pressed) {

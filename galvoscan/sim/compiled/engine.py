@@ -63,6 +63,7 @@ class CompiledEngine:
                 raise ValueError("the compiled model has no flash: it was built without "
                                  "the job player")
         self._machine_sent = None   # the machine's inputs as last handed to the model
+        self._head_sent = ()        # the head's word likewise (none yet: the model's is -1)
         self._status = (ctypes.c_int64 * 4)()
         self._counted = (0, 0)      # UART items and SPI transfers started, as last counted
         self._given = 0          # items of board.to_board already handed to the model
@@ -97,6 +98,9 @@ class CompiledEngine:
             lib.gs_board_machine(handle, int(machine[0]), int(machine[1]))
             lib.gs_board_start(handle, int(machine[2]))
             self._machine_sent = machine
+        if board.head_word != self._head_sent:
+            lib.gs_board_head(handle, -1 if board.head_word is None else board.head_word)
+            self._head_sent = board.head_word
         status, (started, transfers) = self._status, self._counted
         outcome = lib.gs_board_run_until(handle, int(seconds * 1e15))
         lib.gs_board_status(handle, status)

@@ -101,6 +101,8 @@ class Design:
     player : bool
         The design has the job player's pins (:data:`PLAYER_ROLES`): the board gives it a
         flash and a foot switch.
+    head : bool
+        The design has the head's STATUS line (``xy2_status``): the board's head answers on it.
     settle_falling : bool
         Evaluate the design at the clock's falling edge too, and at each edge until it settles
         (a netlist, whose clock reaches its flip-flops through its input cell).
@@ -116,6 +118,7 @@ class Design:
     ports: dict
     alarm_bits: int = 0
     player: bool = False
+    head: bool = False
     settle_falling: bool = False
     optimise: bool = True
     description: str = field(default="this design", compare=False)
@@ -126,6 +129,7 @@ class Design:
         lines += [f"#define GS_PREV_CLK prev_{cxxrtl_name(self.ports['clk'])}",
                   f"#define GS_ALARM_BITS {self.alarm_bits}",
                   f"#define GS_PLAYER {int(self.player)}",
+                  f"#define GS_HEAD {int(self.head)}",
                   f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
@@ -153,8 +157,11 @@ def top_design(top):
     player = "flash_cs_n" in members
     if player:
         ports.update({role: role for role in PLAYER_ROLES})
+    head = "xy2_status" in members
+    if head:
+        ports["xy2_status"] = "xy2_status"
     return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
-                  alarm_bits=alarm_bits, player=player)
+                  alarm_bits=alarm_bits, player=player, head=head)
 
 
 def _board_source():
@@ -187,6 +194,7 @@ class CompiledModel:
             "gs_board_crash": (None, [p]),
             "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
             "gs_board_start": (None, [p, ctypes.c_int]),
+            "gs_board_head": (None, [p, ctypes.c_int]),
             "gs_board_flash": (ctypes.c_int, [p, i64, ctypes.c_char_p, i64, ctypes.c_int]),
             "gs_board_run_until": (ctypes.c_int, [p, i64]),
             "gs_board_message": (ctypes.c_char_p, [p]),
