@@ -15,6 +15,12 @@ Before it arms, the streamer reads back every setting the job wrote and refuses 
 difference. Every ending says how far the job got: the board counts the segments its
 sequencer took (``vec_taken``), and a fault stops the sequencer where it is.
 
+A :class:`Pause` (set from another thread: a meerk40t device's pause button, GRBL's ``!``) holds
+a vector job on the board between segments: the feed stops after the next jump (no line is
+broken, so no point is marked twice), the queue runs empty, the laser is disarmed
+(``arm = 0``); resumed, it is armed again, the MO lead waited out, and the feed goes on from the
+next segment. The queue runs empty after a jump, which the board does not count as an underrun.
+
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
 first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
 caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
@@ -22,19 +28,20 @@ caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected`
 """
 
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import has_pixel_lines
+from ..geometry.segments import JUMP, has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
 from .queue_words import check_segment, job_segments, segment_words
 
 
-__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
-           "COUNTERS", "DEFAULT_BATCH"]
+__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "Pause",
+           "QUEUE_DEPTH", "COUNTERS", "DEFAULT_BATCH"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
@@ -125,6 +132,57 @@ class StreamReport:
         return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
 
 
+class Pause:
+    """A pause for a running vector job, set and cleared from any thread; the
+    :class:`JobStreamer` given it looks at it between batches of segments.
+
+    Paused, the streamer sends on up to the next jump of the job (the end of the line being
+    queued: a line broken off would have its last point marked again when it went on), then
+    sends nothing more, lets the board mark what its queue holds, and disarms (``arm = 0``:
+    every laser output off); it then waits, reading the board's status (a fault or the
+    interlock still ends the job), until resumed: it arms again, waits out the MO lead and
+    feeds the next segment. Nothing is sent twice and nothing is left out. A pause before the
+    laser was armed (the queue still filling) only stops the feed.
+
+    Attributes
+    ----------
+    holding : :class:`threading.Event`
+        Set while the board holds the job: its queue empty and the laser disarmed.
+    holds : int
+        How many times a job was held.
+    """
+
+    def __init__(self):
+        self._wanted = threading.Event()
+        self.holding = threading.Event()
+        self.holds = 0
+
+    def pause(self):
+        """Hold the job at the next jump (from any thread)."""
+        self._wanted.set()
+
+    def resume(self):
+        """Let the job go on (from any thread)."""
+        self._wanted.clear()
+
+    @property
+    def paused(self):
+        """A pause is asked for (the board may still be marking up to it: see
+        :attr:`holding`)."""
+        return self._wanted.is_set()
+
+
+def _hold_point(segments, sent):
+    """Where the feed of ``segments`` may stop, ``sent`` of them sent: before the first, or
+    after a jump (at the job's end if no jump comes before it)."""
+    if sent == 0:
+        return 0
+    for index in range(sent, len(segments)):
+        if segments[index - 1][0] == JUMP:
+            return index
+    return len(segments)
+
+
 class JobStreamer:
     """Runs jobs on a board through a :class:`~galvoscan.link.client.HostClient`.
 
@@ -141,9 +199,12 @@ class JobStreamer:
         Host seconds between status reads while waiting on the board.
     progress : callable, optional
         Called with the number of segments taken, as they are.
+    pause : :class:`Pause`, optional
+        Holds a vector job on the board while it is paused.
     """
 
-    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None):
+    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None,
+                 pause=None):
         if not 1 <= batch <= QUEUE_DEPTH:
             raise ValueError(f"batch must be from 1 to {QUEUE_DEPTH}, not {batch!r}")
         self.board = board
@@ -155,6 +216,9 @@ class JobStreamer:
         self.batch = batch
         self.poll_s = poll_s
         self.progress = progress
+        self.pause = pause
+        self._armed = False
+        self._ready_timeout_s = 5.0
         self._pulses_seen = None
         self._capabilities = None
         self.pulses = 0
@@ -306,8 +370,21 @@ class JobStreamer:
             self.board.read("fifo_free")
         sent = 0
         started = False
+        hold_at = None          # where a pause stops the feed
         deadline = self._now() + timeout_s
         while sent < len(segments):
+            if self.pause is not None and self.pause.paused:
+                if hold_at is None:
+                    hold_at = _hold_point(segments, sent)
+                if sent == hold_at:
+                    self._hold(started, timeout_s)
+                    hold_at = None
+                    free = self.board.read("fifo_free")
+                    deadline = self._now() + timeout_s
+                    continue
+            else:
+                hold_at = None
+            end = len(segments) if hold_at is None else hold_at
             if free == 0:
                 self.status()
                 if started:
@@ -319,7 +396,7 @@ class JobStreamer:
                     self._sleep(self.poll_s)
                     continue
                 deadline = self._now() + timeout_s
-            count = min(free, self.batch, len(segments) - sent)
+            count = min(free, self.batch, end - sent)
             words = [segment_words(op, x, y, hold)
                      for (op, x, y), hold in zip(segments[sent:sent + count],
                                                  corners[sent:sent + count])]
@@ -336,8 +413,32 @@ class JobStreamer:
             start()
         return sent
 
+    def _hold(self, started, timeout_s):
+        """A pause, the feed stopped where it may: the queue marked out and the laser
+        disarmed (``started``: the job runs), then, once resumed, armed again past the MO
+        lead."""
+        pause = self.pause
+        rearm = started and self._armed
+        if started:
+            self.wait_idle(timeout_s)
+        if rearm:
+            self.board.write("arm", 0)
+        pause.holds += 1
+        pause.holding.set()
+        try:
+            while pause.paused:
+                self.status()
+                self._sleep(self.poll_s)
+        finally:
+            pause.holding.clear()
+        if rearm:
+            self.board.write("arm", 1)
+            self.wait_ready(self._ready_timeout_s)
+
     def _start(self, *, armed, ready_timeout_s):
         """Arm (unless ``armed`` is false), wait out the MO lead, run."""
+        self._armed = armed
+        self._ready_timeout_s = ready_timeout_s
         if armed:
             self.board.write("arm", 1)
             self.wait_ready(ready_timeout_s)
