@@ -16,10 +16,11 @@ difference. Every ending says how far the job got: the board counts the segments
 sequencer took (``vec_taken``), and a fault stops the sequencer where it is.
 
 A :class:`Pause` (set from another thread: a meerk40t device's pause button, GRBL's ``!``) holds
-a vector job on the board between segments: the feed stops after the next jump (no line is
-broken, so no point is marked twice), the queue runs empty, the laser is disarmed
-(``arm = 0``); resumed, it is armed again, the MO lead waited out, and the feed goes on from the
-next segment. The queue runs empty after a jump, which the board does not count as an underrun.
+a vector job on the board between segments: the feed stops, the queue is marked out, the laser
+is disarmed (``arm = 0``); resumed, it is armed again, the MO lead waited out, and the feed goes
+on from the next segment. The pen stays down across the hold, so a line held mid-way goes on
+from its last point without marking it again. The one underrun the board counts as its queue
+runs dry at the hold is the pause's, not a fault: the report leaves it out.
 
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
 first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
@@ -35,7 +36,7 @@ from dataclasses import dataclass, field
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, Mode, Status,
                                     VECTOR_QUEUE_DEPTH)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import JUMP, has_pixel_lines
+from ..geometry.segments import LINE, PIXELS, has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
 from .queue_words import check_segment, job_segments, segment_words
 
@@ -104,12 +105,17 @@ class StreamReport:
         Frames the host sent again because the board refused them as damaged or out of step,
         or their answers were lost: every one then landed (a job with a frame that did not
         land stops; it does not end with a report).
+    holds : int
+        Times a :class:`Pause` held the job. The underrun the board counts as its queue runs
+        dry at a hold (one a hold at most: the feed had stopped on purpose) is not in
+        ``counters``.
     """
     segments: int = 0
     counters: dict = field(default_factory=dict)
     pulses: int = 0
     seconds: float = 0.0
     resent: int = 0
+    holds: int = 0
 
     @classmethod
     def total(cls, reports):
@@ -122,7 +128,7 @@ class StreamReport:
                 counters[name] = counters.get(name, 0) + value
         return cls(segments=sum(r.segments for r in reports), counters=counters,
                    pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports),
-                   resent=sum(r.resent for r in reports))
+                   resent=sum(r.resent for r in reports), holds=sum(r.holds for r in reports))
 
     @property
     def clean(self):
@@ -136,12 +142,12 @@ class Pause:
     """A pause for a running vector job, set and cleared from any thread; the
     :class:`JobStreamer` given it looks at it between batches of segments.
 
-    Paused, the streamer sends on up to the next jump of the job (the end of the line being
-    queued: a line broken off would have its last point marked again when it went on), then
-    sends nothing more, lets the board mark what its queue holds, and disarms (``arm = 0``:
-    every laser output off); it then waits, reading the board's status (a fault or the
-    interlock still ends the job), until resumed: it arms again, waits out the MO lead and
-    feeds the next segment. Nothing is sent twice and nothing is left out. A pause before the
+    Paused, the streamer sends nothing more (a pixel line's pixel words still follow their
+    line), lets the board mark what its queue holds, and disarms (``arm = 0``: every laser
+    output off); it then waits, reading the board's status (a fault or the interlock still
+    ends the job), until resumed: it arms again, waits out the MO lead and feeds the next
+    segment. Nothing is sent twice and nothing is left out; the pen stays down, so a line
+    held mid-way goes on from its last point without marking it again. A pause before the
     laser was armed (the queue still filling) only stops the feed.
 
     Attributes
@@ -158,7 +164,7 @@ class Pause:
         self.holds = 0
 
     def pause(self):
-        """Hold the job at the next jump (from any thread)."""
+        """Hold the job (from any thread)."""
         self._wanted.set()
 
     def resume(self):
@@ -167,20 +173,20 @@ class Pause:
 
     @property
     def paused(self):
-        """A pause is asked for (the board may still be marking up to it: see
+        """A pause is asked for (the board may still be marking its queue: see
         :attr:`holding`)."""
         return self._wanted.is_set()
 
 
 def _hold_point(segments, sent):
-    """Where the feed of ``segments`` may stop, ``sent`` of them sent: before the first, or
-    after a jump (at the job's end if no jump comes before it)."""
-    if sent == 0:
-        return 0
-    for index in range(sent, len(segments)):
-        if segments[index - 1][0] == JUMP:
-            return index
-    return len(segments)
+    """Where the feed of ``segments`` stops for a pause, ``sent`` of them sent: there, unless
+    that would part a pixel line from its pixel words (the line sweeps at one speed: it must
+    not wait for them), then after them."""
+    index = sent
+    while index < len(segments) and (segments[index][0] == PIXELS or
+                                     (index > 0 and segments[index - 1][0] == LINE)):
+        index += 1
+    return index
 
 
 class JobStreamer:
@@ -219,6 +225,7 @@ class JobStreamer:
         self.pause = pause
         self._armed = False
         self._ready_timeout_s = 5.0
+        self._holds = self._held_underruns = 0
         self._pulses_seen = None
         self._capabilities = None
         self.pulses = 0
@@ -414,16 +421,20 @@ class JobStreamer:
         return sent
 
     def _hold(self, started, timeout_s):
-        """A pause, the feed stopped where it may: the queue marked out and the laser
-        disarmed (``started``: the job runs), then, once resumed, armed again past the MO
-        lead."""
+        """A pause, the feed stopped: the queue marked out and the laser disarmed
+        (``started``: the job runs), then, once resumed, armed again past the MO lead. The
+        underrun of the queue running dry is counted as the hold's."""
         pause = self.pause
         rearm = started and self._armed
         if started:
+            # No segment comes now: the queue runs dry once, at its end, and no sooner.
+            before = self.board.read("vec_underruns")
             self.wait_idle(timeout_s)
+            self._held_underruns += (self.board.read("vec_underruns") - before) & _COUNTER_TOP
         if rearm:
             self.board.write("arm", 0)
         pause.holds += 1
+        self._holds += 1
         pause.holding.set()
         try:
             while pause.paused:
@@ -464,6 +475,7 @@ class JobStreamer:
         first = self.pulses
         taken_before = self._taken() if total is not None else None
         self.sent = 0
+        self._holds = self._held_underruns = 0
         retries = getattr(self.board, "retries", 0)
         try:
             sent = body()
@@ -488,10 +500,12 @@ class JobStreamer:
             raise JobAborted(f"every segment ({total}) was marked: the part is done, but the "
                              f"link failed before its counters were read ({error})",
                              taken=total, total=total, complete=True) from error
+        counters = {name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS}
+        counters["vec_underruns"] -= min(self._held_underruns, counters["vec_underruns"])
         return StreamReport(
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
-            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS},
-            resent=getattr(self.board, "retries", 0) - retries)
+            counters=counters, resent=getattr(self.board, "retries", 0) - retries,
+            holds=self._holds)
 
     def _ending(self, error, taken_before, total):
         """``error`` as a :class:`JobAborted` that says how far the job got."""
