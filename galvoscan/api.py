@@ -55,7 +55,8 @@ from .build import PRESETS
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
            "HatchSet", "LineOrder", "Job",
-           "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object", "fields",
+           "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
+           "fields",
            "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
            "load_profile",
            "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
@@ -464,7 +465,7 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     (:class:`~galvoscan.outputs.stream.JobAborted`). ``timeout_s``: the longest the job may take
     (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments
     go; ``pause``: a :class:`Pause` that another thread may set to hold the job on the board
-    (the feed stopped at the next jump, the queue marked out, the laser disarmed) and clear
+    (the feed stopped, the queue marked out, the laser disarmed) and clear
     to let it go on. Returns a :class:`Report`."""
     simulated = isinstance(board, SimulatedBoard)
     client = HostClient(SimTransport(board)) if simulated else board

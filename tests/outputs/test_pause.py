@@ -120,7 +120,7 @@ def test_a_job_held_mid_way_marks_every_point_once(held_job):
     board, client, pause, report, before, underruns = held_job
     assert pause.holds == 1 and client.seen is not None
     marked = Counter()
-    for xy, pulses in pulses_per_frame(board)[before:]:
+    for xy, pulses in pulses_per_frame(board, before):
         if pulses:
             marked[tuple(xy)] += pulses
     assert marked == _expected_marks()
