@@ -42,7 +42,7 @@ from .plan.objects import photo_object
 from .plan.pixel_lines import PHOTO_LINES, cell_units
 from .geometry.field import Placement, PlanError, from_galvo
 from .profile.machine import default_profile, load_profile
-from .outputs.stream import JobAborted, JobStreamer, StreamReport
+from .outputs.stream import JobAborted, JobStreamer, Pause, StreamReport
 from .inputs.text import TextSpec, text_drawing
 from .plan.objects import JobSettings, MarkObject
 from .plan.wobble import WobbleSettings, wobble_registers
@@ -55,7 +55,8 @@ from .build import PRESETS
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
            "HatchSet", "LineOrder", "Job",
-           "Plan", "Report", "plan", "plan_made", "run", "mark_objects", "mark_object", "fields",
+           "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
+           "fields",
            "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
            "load_profile",
            "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
@@ -455,7 +456,7 @@ class Report:
         return self.stream.clean
 
 
-def run(plan, board, *, timeout_s=None, progress=None, say=None):
+def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     """Mark ``plan`` on ``board``: a :class:`~galvoscan.sim.board.SimulatedBoard` (run in
     this process; ``SimulatedBoard(wobble=True)`` for a plan that ``wobbles``), or a
     :class:`~galvoscan.link.client.HostClient` of a real board's link
@@ -463,13 +464,15 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None):
     profile's lens table is loaded first; the laser is disarmed at the end and on any fault
     (:class:`~galvoscan.outputs.stream.JobAborted`). ``timeout_s``: the longest the job may take
     (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments
-    go. Returns a :class:`Report`."""
+    go; ``pause``: a :class:`Pause` that another thread may set to hold the job on the board
+    (the feed stopped, the queue marked out, the laser disarmed) and clear
+    to let it go on. Returns a :class:`Report`."""
     simulated = isinstance(board, SimulatedBoard)
     client = HostClient(SimTransport(board)) if simulated else board
     if timeout_s is None:
         timeout_s = 1e4 if simulated else max(60.0, 10 * plan.estimate_s)
     load_lens_table(client, plan.profile, say)
-    streamer = JobStreamer(client, progress=progress)
+    streamer = JobStreamer(client, progress=progress, pause=pause)
     report, _ = stream_layers(streamer, plan.vector_job, board if simulated else None,
                               timeout_s)
     marks = None

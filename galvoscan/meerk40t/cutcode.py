@@ -33,7 +33,7 @@ from ..inputs.svg import bezier_points
 from ..plan.objects import MarkObject
 
 
-__all__ = ["POWER_FULL", "DARK", "job_from_cuts", "operation_layer"]
+__all__ = ["POWER_FULL", "DARK", "job_from_cuts", "operation_layer", "outline_cuts"]
 
 #: meerk40t's power setting at full power (its galvo devices show it as 100 %).
 POWER_FULL = 1000.0
@@ -173,3 +173,12 @@ def job_from_cuts(cuts, profile, *, tolerance_mm):
     if not objects:
         raise PlanError("the meerk40t job has nothing to mark")
     return Job(layers=tuple(layers), tolerance_mm=tolerance_mm), objects
+
+
+def outline_cuts(points):
+    """A closed outline (native units: galvo units), as meerk40t's trace goes round it, as
+    the line cuts of one operation with no settings of its own (the profile's defaults): for
+    :func:`job_from_cuts` to check it lies in the field and give the settings to walk it
+    at."""
+    settings = {}
+    return [LineCut(a, b, settings=settings) for a, b in zip(points, points[1:])]

@@ -1,11 +1,15 @@
 """The galvoscan device: a meerk40t :class:`~meerk40t.kernel.Service` with a view of the lens
 field, a spooler and :class:`~.driver.GalvoscanDriver`.
 
-Its settings are few and its own: the machine profile it reads (a TOML file; empty: galvoscan's
-default profile), the link (``sim``: a simulated board in meerk40t's process; else a serial
-port: a board's, or the pseudo-terminal ``galvoscan board --sim`` serves) and the chord
-tolerance curves are flattened to. The field, the laser's PRR range and the operations'
-defaults come from the profile; nothing is written back to it.
+Its own settings are few: the machine profile it reads (a TOML file; empty: galvoscan's default
+profile), the link (``sim``: a simulated board in meerk40t's process; else a serial port: a
+board's, or the pseudo-terminal ``galvoscan board --sim`` serves) and the chord tolerance
+curves are flattened to. The rest are the profile's keys, every one a setting of the device
+(:mod:`.settings`, from galvoscan's one declaration of them): the field, the link's baud, the
+laser's power and PRR range, the delays, the operations' defaults. A key changed in meerk40t
+(its settings, or ``galvoscan_profile set KEY VALUE``) is checked by galvoscan's profile
+reader and used at once; it is written back to the file, comments kept, only by
+``galvoscan_profile save [PATH]``.
 
 The view makes the device's native units galvoscan's galvo units: 65536 across the lens field
 (``[field] size_mm``), Y up (meerk40t's scene has Y down: the view flips it), so that a cut's
@@ -18,11 +22,12 @@ from meerk40t.core.view import View
 from meerk40t.device.mixins import Status
 from meerk40t.kernel import Service, signal_listener
 
-from .. import api
 from ..geometry.field import UNITS
 from ..link.client import ClientError
+from ..profile.writer import ProfileDocument
 from ..settings.laser import TOLERANCE
 from .driver import SIM, GalvoscanDriver
+from .settings import ATTRIBUTES, ProfileSettings, key_line, profile_choices
 
 
 __all__ = ["GalvoscanDevice"]
@@ -60,13 +65,13 @@ class GalvoscanDevice(Service, Status):
              "section": "_00_General"},
         ])
         try:
-            self.profile = self._load_profile()
+            self.profile_document = self._load_profile()
         except ValueError as error:             # (a profile file gone or broken since)
             self.channel("console")(f"galvoscan: error: {error}: galvoscan's default profile "
                                     f"is used")
-            self.profile = api.default_profile()
-        prr_low, prr_high = self.profile.laser.prr_khz
-        self.register("frequency", (prr_low, prr_high))
+            self.profile_document = ProfileDocument.default()
+        self.profile_settings = ProfileSettings(self)
+        self.register_choices("galvoscan", profile_choices(self.profile_settings, _))
         for kind in ("cut", "engrave", "hatch", "raster", "image"):
             self.register(f"format/op {kind}",
                           "{danger}{defop}{enabled}{pass}{element_type} {speed}mm/s @{power} "
@@ -86,21 +91,47 @@ class GalvoscanDevice(Service, Status):
         self._commands()
 
     def _load_profile(self):
-        return api.load_profile(self.profile_path) if self.profile_path else \
-            api.default_profile()
+        """The profile file's document (the setting empty: galvoscan's default profile)."""
+        return ProfileDocument.load(self.profile_path) if self.profile_path else \
+            ProfileDocument.default()
+
+    @property
+    def profile(self):
+        """The machine profile in use (:class:`~galvoscan.profile.machine.MachineProfile`)."""
+        return self.profile_document.profile
+
+    def set_profile_key(self, name, value, *, typed=False):
+        """Set the profile's key ``name`` (``section.key``) to ``value`` (text as typed, or
+        ``typed``: a value of the key's type, as meerk40t's settings give it), checked by
+        galvoscan's profile reader; the profile in use changes, the file does not. Returns
+        whether it was set (if not, one line says why)."""
+        try:
+            if typed:
+                self.profile_document.set(name, value)
+            else:
+                self.profile_document.set_text(name, value)
+        except ValueError as error:
+            self.channel("console")(f"galvoscan: error: {error}: the profile in use is kept")
+            return False
+        self.realize()
+        self.channel("console")(f"galvoscan: {key_line(self.profile_document, name)} "
+                                f"(not saved: `galvoscan_profile save` writes it)")
+        return True
 
     @signal_listener("profile_path")
     def realize(self, origin=None, *args):
-        """The view of the profile's lens field, read again when the profile changes."""
+        """The view of the profile's lens field and its PRR range, read again when the
+        profile changes."""
         if origin is not None and origin != self.path:
             return
         if origin is not None:
             try:
-                self.profile = self._load_profile()
+                self.profile_document = self._load_profile()
             except ValueError as error:
                 self.channel("console")(f"galvoscan: error: {error}: the profile in use is "
                                         f"kept")
                 return
+        self.register("frequency", tuple(self.profile.laser.prr_khz))
         size = f"{self.profile.field.size_mm:g}mm"
         scale = float(Length(size)) / UNITS
         self.view.set_dims(size, size)
@@ -122,6 +153,15 @@ class GalvoscanDevice(Service, Status):
 
     def location(self):
         return self.link
+
+    def pre_outline(self):
+        """What meerk40t's trace (its Outline button) runs before its moves round the
+        outline: the driver gathers them."""
+        yield ("outline_start",)
+
+    def post_outline(self):
+        """… and after them: the driver walks the outline with the guide laser."""
+        yield ("outline_end",)
 
     def get_operation_defaults(self, op_type):
         """An operation's defaults: the profile's speed, power (per mille, meerk40t's) and
@@ -150,6 +190,28 @@ class GalvoscanDevice(Service, Status):
                 return
             self.spooler.command("frame", times)
 
+        @self.console_command("galvoscan_profile",
+                              help=_("The machine profile's keys: list; set KEY VALUE (checked, "
+                                     "used at once); save [PATH] (written, comments kept)"))
+        def galvoscan_profile(command, channel, _, remainder=None, **kwargs):
+            words = (remainder or "").split(maxsplit=2)
+            action = words[0] if words else "list"
+            document = self.profile_document
+            if action == "list" and len(words) == 1 or not words:
+                where = f"{document.path}" if self.profile_path else \
+                    "galvoscan's default profile"
+                channel(f"galvoscan: machine profile: {where}"
+                        f"{' (changed, not saved)' if document.changed else ''}")
+                for name in ATTRIBUTES.values():
+                    channel(f"galvoscan: {key_line(document, name)}")
+            elif action == "set" and len(words) == 3:
+                self.set_profile_key(words[1], words[2])
+            elif action == "save" and len(words) <= 2:
+                self._save_profile(words[1] if len(words) == 2 else None, channel)
+            else:
+                channel("galvoscan: error: galvoscan_profile takes list, set KEY VALUE (KEY as "
+                        "laser.prr_khz) or save [PATH]")
+
         @self.console_command("board_status", help=_("The galvoscan board's state"))
         def board_status(command, channel, _, **kwargs):
             try:
@@ -157,12 +219,37 @@ class GalvoscanDevice(Service, Status):
             except (ClientError, OSError, ValueError) as error:
                 channel(f"galvoscan: error: the board's state cannot be read: {error}")
 
-        @self.console_command("pause", help=_("Hold the spooler's next job"))
+        @self.console_command("pause", help=_("Hold the job on the board, the laser "
+                                               "disarmed (again: let it go on)"))
         def pause(command, channel, _, **kwargs):
+            if self.driver.paused:
+                self.driver.resume()
+                channel("galvoscan: resumed (a held job goes on, the laser armed again)")
+                return
             self.driver.pause()
-            channel("galvoscan: the next job is held (a job on the board runs to its end)")
+            channel("galvoscan: paused: the board marks what it holds queued, then holds the "
+                    "job with the laser disarmed (`pause` or `resume` lets it go on)")
 
-        @self.console_command("resume", help=_("Release held jobs"))
+        @self.console_command("resume", help=_("Let a held job go on"))
         def resume(command, channel, _, **kwargs):
             self.driver.resume()
-            channel("galvoscan: jobs released")
+            channel("galvoscan: resumed (a held job goes on, the laser armed again)")
+
+    def _save_profile(self, path, channel):
+        """Write the profile in use to ``path`` (None: the file it was read from), its comments
+        kept; a profile read from no file needs a path, and the device then reads that
+        file."""
+        if path is None and not self.profile_path:
+            channel("galvoscan: error: galvoscan_profile save: the device uses galvoscan's "
+                    "default profile, not a file: give a PATH to write it to; nothing written")
+            return
+        try:
+            self.profile_document.save(path)
+        except ValueError as error:
+            channel(f"galvoscan: error: {error}: nothing written")
+            return
+        saved = str(self.profile_document.path)
+        channel(f"galvoscan: machine profile written to {saved}")
+        if saved != self.profile_path:
+            self.profile_path = saved
+            channel(f"galvoscan: the device reads its profile from {saved} now")

@@ -6,11 +6,22 @@ turns them into galvoscan's job (:mod:`.cutcode`), plans and checks it with galv
 console.
 
 Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
-after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`).
+after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`). Pause holds the
+job on the board (:class:`galvoscan.api.Pause`: the feed stopped, the queue marked out,
+``arm = 0``) and the spooler's next job; resume arms again and goes on. GRBL's
+``!`` and ``~`` (meerk40t's ``grblcontrol``) call the same, and its ``?`` says ``Hold``
+meanwhile.
+
+meerk40t's trace (its Outline button: ``element* trace hull``) moves the head round the
+elements' outline between the device's ``pre_outline`` and ``post_outline``: the driver gathers
+those moves and walks the outline with the guide laser, the laser never armed, as ``mark
+--frame`` does, after galvoscan's planner has checked it lies in the field.
 """
 
 import contextlib
 import threading
+
+import numpy as np
 
 from .. import api
 from ..build import simulated_bitstream
@@ -20,9 +31,10 @@ from ..cli.layers import describe_layers
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.board_state import read_board_state
 from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
+from ..geometry.field import from_galvo
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
-from .cutcode import job_from_cuts
+from .cutcode import job_from_cuts, outline_cuts
 
 
 __all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
@@ -82,7 +94,13 @@ class GalvoscanDriver:
         self.name = str(service)
         self.native_x = self.native_y = 0x8000
         self.paused = False
+        #: Holds the job on the board while paused (:class:`galvoscan.api.Pause`).
+        self.hold = api.Pause()
+        #: The operation being marked: its speed (mm/s) and power (‰), meerk40t's units (GRBL's
+        #: ``?`` reports them).
+        self.speed = self.power = 0
         self.queue = []
+        self._outline = None
         self.board = None
         self.make_board = self._default_board
         self.last_report = None
@@ -134,7 +152,9 @@ class GalvoscanDriver:
         pass
 
     def status(self):
-        return (self.native_x, self.native_y), self.state, "galvoscan"
+        """Where the head is, and ``hold`` (paused), ``busy`` or ``idle``."""
+        return (self.native_x, self.native_y), "hold" if self.paused else self.state, \
+            "galvoscan"
 
     def laser_off(self, *values):
         pass
@@ -155,6 +175,8 @@ class GalvoscanDriver:
         cuts, self.queue = self.queue, []
         if not cuts:            # (meerk40t's G-code reader ends every M5 so, moves or not)
             return
+        first = cuts[0].settings or {}
+        self.speed, self.power = first.get("speed", 0), first.get("power", 0)
         self.last_report = self.last_error = None
         profile = self.service.profile
         try:
@@ -203,7 +225,7 @@ class GalvoscanDriver:
             if client is None:
                 return
             try:
-                report = api.run(plan, self._client, say=self._say)
+                report = api.run(plan, self._client, say=self._say, pause=self.hold)
             except JobInterrupted as error:
                 # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
                 # emptied so that the next job is not refused (a board without vec_flush says
@@ -223,10 +245,12 @@ class GalvoscanDriver:
                 return
         self.last_report = report
         counters = report.counters
+        holds = report.stream.holds
         self._say(f"galvoscan: marked {report.segments} segments, {report.pulses} pulses"
                   f"{'' if report.clean else ' (NOT as planned)'}; underruns "
                   f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
-                  f"{counters['vec_rejected']}, errors {counters['errors']}")
+                  f"{counters['vec_rejected']}, errors {counters['errors']}"
+                  f"{f'; held {holds} time(s)' if holds else ''}")
 
     def frame(self, times):
         """Trace the last planned job's outline (its convex hull) ``times`` times with the
@@ -236,21 +260,51 @@ class GalvoscanDriver:
         if plan is None:
             self._refuse("nothing to frame: no job has been planned yet")
             return
+        self._guide_trace(hull_outline(plan.vector_job.paths_mm), times, plan, "job")
+
+    def outline_start(self):
+        """meerk40t's trace begins (the device's ``pre_outline``): its moves are gathered."""
+        self._outline = []
+
+    def outline_end(self):
+        """meerk40t's trace ends (``post_outline``): the outline its moves went round,
+        checked by galvoscan's planner (in the field) and walked once with the guide laser,
+        the laser never armed."""
+        points, self._outline = self._outline, None
+        self.last_report = self.last_error = None
+        if not points:
+            self._refuse("nothing to trace: meerk40t's trace gave no outline")
+            return
+        if points[-1] != points[0]:
+            points.append(points[0])
+        profile = self.service.profile
+        try:
+            job, objects = job_from_cuts(outline_cuts(points), profile,
+                                         tolerance_mm=self.service.tolerance_mm)
+            plan = api.plan_made(objects, job, profile)
+        except ValueError as error:
+            self._refuse(f"outline refused, nothing sent: {error}")
+            return
+        outline = from_galvo(np.array(points, dtype=float), profile.field.size_mm)
+        self._guide_trace(outline, 1, plan, "selection")
+
+    def _guide_trace(self, outline_mm, times, plan, what):
+        """Walk ``outline_mm`` ``times`` times at ``plan``'s settings with the guide laser on
+        and the laser never armed; ``what`` it is, for the console."""
         profile = self.service.profile
         if not profile.laser.guide:
             self._refuse("nothing framed: the machine profile says there is no guide laser "
                          "([laser] guide)")
             return
-        vector_job = plan.vector_job
         with self._on_the_board(marking=False) as client:
             if client is None:
                 return
             try:
                 api.load_lens_table(self._client, profile, self._say)
-                frame_job(JobStreamer(self._client), profile,
-                          hull_outline(vector_job.paths_mm), times, vector_job.registers,
+                frame_job(JobStreamer(self._client, pause=self.hold), profile, outline_mm,
+                          times, plan.vector_job.registers,
                           timeout_s=max(60.0, 10 * times * plan.estimate_s),
-                          say=lambda line: self._say(f"galvoscan: {line}"), what="job")
+                          say=lambda line: self._say(f"galvoscan: {line}"), what=what)
             except (JobAborted, JobInterrupted) as error:
                 self._refuse(f"framing stopped, guide laser off: {error}")
                 return
@@ -260,11 +314,18 @@ class GalvoscanDriver:
         self.last_report = "framed"
 
     def move_abs(self, x, y):
-        self.native_x, self.native_y = x, y
+        """To ``x``, ``y`` (meerk40t's lengths: ``"12.5mm"``, or its scene units), through the
+        device's view; gathered while meerk40t traces an outline."""
+        x, y = self.service.view.position(x, y)
+        if self._outline is not None:
+            self._outline.append((float(x), float(y)))
+        self.native_x = min(max(round(x), 0), 0xFFFF)
+        self.native_y = min(max(round(y), 0), 0xFFFF)
 
     def move_rel(self, dx, dy, confined=False):
-        self.native_x += dx
-        self.native_y += dy
+        dx, dy = self.service.view.position(dx, dy, vector=True)
+        self.native_x = min(max(round(self.native_x + dx), 0), 0xFFFF)
+        self.native_y = min(max(round(self.native_y + dy), 0), 0xFFFF)
 
     def home(self):
         self.native_x = self.native_y = 0x8000
@@ -304,20 +365,31 @@ class GalvoscanDriver:
         self.service.signal(signal, *args)
 
     def pause(self):
-        """Hold the spooler's next job (a job already on the board runs to its end)."""
+        """Hold the job on the board (the feed stopped, the queue marked out, the laser
+        disarmed) and the spooler's next job."""
         self.paused = True
+        self.hold.pause()
+        self.service.signal("pause")
 
     def resume(self):
+        """Let a held job go on (the laser armed again), and the spooler's next."""
         self.paused = False
+        self.hold.resume()
+        self.service.signal("pause")
 
     def reset(self):
         """Stop: the running job's next link exchange raises, and the streamer sends
-        ``arm = 0`` first; with no job running, ``arm = 0`` is sent now."""
-        self.paused = False
+        ``arm = 0`` first; with no job running, ``arm = 0`` is sent now. A held job is
+        stopped, not let go on."""
         client = self._client
         if client is not None:
+            # (Stopping first: a held job let go on meets the stop at its first write.)
             client.stopping.set()
+            self.paused = False
+            self.hold.resume()
             return
+        self.paused = False
+        self.hold.resume()
         if self.service.link == SIM and self.board is None:
             return                          # (no board yet: nothing armed)
         with self._lock:
@@ -335,7 +407,8 @@ class GalvoscanDriver:
         read off the board: busy or ready, armed, the interlock, an alarm and the latched
         faults."""
         if self._client is not None:
-            return "marking a job"
+            return "a job held (paused), the laser disarmed" if self.hold.holding.is_set() \
+                else "marking a job"
         if self.service.link == SIM and self.board is None:
             return "no simulated board yet (the first job makes it)"
         with self._lock:

@@ -15,6 +15,13 @@ Before it arms, the streamer reads back every setting the job wrote and refuses 
 difference. Every ending says how far the job got: the board counts the segments its
 sequencer took (``vec_taken``), and a fault stops the sequencer where it is.
 
+A :class:`Pause` (set from another thread: a meerk40t device's pause button, GRBL's ``!``) holds
+a vector job on the board between segments: the feed stops, the queue is marked out, the laser
+is disarmed (``arm = 0``); resumed, it is armed again, the MO lead waited out, and the feed goes
+on from the next segment. The pen stays down across the hold, so a line held mid-way goes on
+from its last point without marking it again. The one underrun the board counts as its queue
+runs dry at the hold is the pause's, not a fault: the report leaves it out.
+
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
 first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
 caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
@@ -22,20 +29,21 @@ caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected`
 """
 
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, HeadState, Mode,
                                     Status, VECTOR_QUEUE_DEPTH)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import has_pixel_lines
+from ..geometry.segments import LINE, PIXELS, has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
 from .board_state import read_head
 from .queue_words import check_segment, job_segments, segment_words
 
 
-__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "QUEUE_DEPTH",
-           "COUNTERS", "DEFAULT_BATCH"]
+__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "Pause",
+           "QUEUE_DEPTH", "COUNTERS", "DEFAULT_BATCH"]
 
 
 #: Segments the bitstream's vector queue holds (the streamer reads a board's own depth).
@@ -98,12 +106,17 @@ class StreamReport:
         Frames the host sent again because the board refused them as damaged or out of step,
         or their answers were lost: every one then landed (a job with a frame that did not
         land stops; it does not end with a report).
+    holds : int
+        Times a :class:`Pause` held the job. The underrun the board counts as its queue runs
+        dry at a hold (one a hold at most: the feed had stopped on purpose) is not in
+        ``counters``.
     """
     segments: int = 0
     counters: dict = field(default_factory=dict)
     pulses: int = 0
     seconds: float = 0.0
     resent: int = 0
+    holds: int = 0
 
     @classmethod
     def total(cls, reports):
@@ -116,7 +129,7 @@ class StreamReport:
                 counters[name] = counters.get(name, 0) + value
         return cls(segments=sum(r.segments for r in reports), counters=counters,
                    pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports),
-                   resent=sum(r.resent for r in reports))
+                   resent=sum(r.resent for r in reports), holds=sum(r.holds for r in reports))
 
     @property
     def clean(self):
@@ -124,6 +137,57 @@ class StreamReport:
         counted in ``errors``, and were sent again: every write of a job that ends with a
         report landed, acknowledged.)"""
         return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
+
+
+class Pause:
+    """A pause for a running vector job, set and cleared from any thread; the
+    :class:`JobStreamer` given it looks at it between batches of segments.
+
+    Paused, the streamer sends nothing more (a pixel line's pixel words still follow their
+    line), lets the board mark what its queue holds, and disarms (``arm = 0``: every laser
+    output off); it then waits, reading the board's status (a fault or the interlock still
+    ends the job), until resumed: it arms again, waits out the MO lead and feeds the next
+    segment. Nothing is sent twice and nothing is left out; the pen stays down, so a line
+    held mid-way goes on from its last point without marking it again. A pause before the
+    laser was armed (the queue still filling) only stops the feed.
+
+    Attributes
+    ----------
+    holding : :class:`threading.Event`
+        Set while the board holds the job: its queue empty and the laser disarmed.
+    holds : int
+        How many times a job was held.
+    """
+
+    def __init__(self):
+        self._wanted = threading.Event()
+        self.holding = threading.Event()
+        self.holds = 0
+
+    def pause(self):
+        """Hold the job (from any thread)."""
+        self._wanted.set()
+
+    def resume(self):
+        """Let the job go on (from any thread)."""
+        self._wanted.clear()
+
+    @property
+    def paused(self):
+        """A pause is asked for (the board may still be marking its queue: see
+        :attr:`holding`)."""
+        return self._wanted.is_set()
+
+
+def _hold_point(segments, sent):
+    """Where the feed of ``segments`` stops for a pause, ``sent`` of them sent: there, unless
+    that would part a pixel line from its pixel words (the line sweeps at one speed: it must
+    not wait for them), then after them."""
+    index = sent
+    while index < len(segments) and (segments[index][0] == PIXELS or
+                                     (index > 0 and segments[index - 1][0] == LINE)):
+        index += 1
+    return index
 
 
 class JobStreamer:
@@ -142,9 +206,12 @@ class JobStreamer:
         Host seconds between status reads while waiting on the board.
     progress : callable, optional
         Called with the number of segments taken, as they are.
+    pause : :class:`Pause`, optional
+        Holds a vector job on the board while it is paused.
     """
 
-    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None):
+    def __init__(self, board, *, batch=DEFAULT_BATCH, poll_s=0.02, progress=None,
+                 pause=None):
         if not 1 <= batch <= QUEUE_DEPTH:
             raise ValueError(f"batch must be from 1 to {QUEUE_DEPTH}, not {batch!r}")
         self.board = board
@@ -156,6 +223,10 @@ class JobStreamer:
         self.batch = batch
         self.poll_s = poll_s
         self.progress = progress
+        self.pause = pause
+        self._armed = False
+        self._ready_timeout_s = 5.0
+        self._holds = self._held_underruns = 0
         self._pulses_seen = None
         self._capabilities = None
         self.pulses = 0
@@ -338,8 +409,21 @@ class JobStreamer:
             self.board.read("fifo_free")
         sent = 0
         started = False
+        hold_at = None          # where a pause stops the feed
         deadline = self._now() + timeout_s
         while sent < len(segments):
+            if self.pause is not None and self.pause.paused:
+                if hold_at is None:
+                    hold_at = _hold_point(segments, sent)
+                if sent == hold_at:
+                    self._hold(started, timeout_s)
+                    hold_at = None
+                    free = self.board.read("fifo_free")
+                    deadline = self._now() + timeout_s
+                    continue
+            else:
+                hold_at = None
+            end = len(segments) if hold_at is None else hold_at
             if free == 0:
                 self.status()
                 if started:
@@ -351,7 +435,7 @@ class JobStreamer:
                     self._sleep(self.poll_s)
                     continue
                 deadline = self._now() + timeout_s
-            count = min(free, self.batch, len(segments) - sent)
+            count = min(free, self.batch, end - sent)
             words = [segment_words(op, x, y, hold)
                      for (op, x, y), hold in zip(segments[sent:sent + count],
                                                  corners[sent:sent + count])]
@@ -368,8 +452,36 @@ class JobStreamer:
             start()
         return sent
 
+    def _hold(self, started, timeout_s):
+        """A pause, the feed stopped: the queue marked out and the laser disarmed
+        (``started``: the job runs), then, once resumed, armed again past the MO lead. The
+        underrun of the queue running dry is counted as the hold's."""
+        pause = self.pause
+        rearm = started and self._armed
+        if started:
+            # No segment comes now: the queue runs dry once, at its end, and no sooner.
+            before = self.board.read("vec_underruns")
+            self.wait_idle(timeout_s)
+            self._held_underruns += (self.board.read("vec_underruns") - before) & _COUNTER_TOP
+        if rearm:
+            self.board.write("arm", 0)
+        pause.holds += 1
+        self._holds += 1
+        pause.holding.set()
+        try:
+            while pause.paused:
+                self.status()
+                self._sleep(self.poll_s)
+        finally:
+            pause.holding.clear()
+        if rearm:
+            self.board.write("arm", 1)
+            self.wait_ready(self._ready_timeout_s)
+
     def _start(self, *, armed, ready_timeout_s):
         """Arm (unless ``armed`` is false), wait out the MO lead, run."""
+        self._armed = armed
+        self._ready_timeout_s = ready_timeout_s
         if armed:
             self.board.write("arm", 1)
             self.wait_ready(ready_timeout_s)
@@ -395,6 +507,7 @@ class JobStreamer:
         first = self.pulses
         taken_before = self._taken() if total is not None else None
         self.sent = 0
+        self._holds = self._held_underruns = 0
         retries = getattr(self.board, "retries", 0)
         try:
             sent = body()
@@ -419,10 +532,12 @@ class JobStreamer:
             raise JobAborted(f"every segment ({total}) was marked: the part is done, but the "
                              f"link failed before its counters were read ({error})",
                              taken=total, total=total, complete=True) from error
+        counters = {name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS}
+        counters["vec_underruns"] -= min(self._held_underruns, counters["vec_underruns"])
         return StreamReport(
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
-            counters={name: (after[name] - before[name]) & _COUNTER_TOP for name in COUNTERS},
-            resent=getattr(self.board, "retries", 0) - retries)
+            counters=counters, resent=getattr(self.board, "retries", 0) - retries,
+            holds=self._holds)
 
     def _ending(self, error, taken_before, total):
         """``error`` as a :class:`JobAborted` that says how far the job got."""

@@ -55,7 +55,8 @@ from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
-           "GalvoSection", "JobDefaults", "WobbleSection", "load_profile", "parse_profile", "default_profile",
+           "GalvoSection", "JobDefaults", "WobbleSection", "load_profile", "parse_profile",
+           "read_profile_text", "default_profile",
            "DEFAULT_PROFILE_NAME", "SECTIONS", "FULL_RANGE", "FRAME_US",
            "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX"]
 
@@ -400,9 +401,9 @@ def parse_profile(text, *, path=DEFAULT_PROFILE_NAME):
     return MachineProfile(**built, source=path, _table=table)
 
 
-def load_profile(path):
-    """The profile in the TOML file ``path``; :class:`ProfileError` (one line) if it cannot be
-    read or is not a valid profile."""
+def read_profile_text(path):
+    """The text of the profile file ``path``; :class:`ProfileError` (one line) if it cannot be
+    read."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -416,8 +417,13 @@ def load_profile(path):
             raise ProfileError(f"{path}: is a folder, not a profile file") from None
         raise ProfileError(f"{path}: cannot read it: {error.strerror or error}") from None
     try:
-        text = data.decode("utf-8-sig")      # a byte-order mark, as Windows editors write
+        return data.decode("utf-8-sig")      # a byte-order mark, as Windows editors write
     except UnicodeDecodeError as error:
         line = data[:error.start].count(b"\n") + 1
         raise ProfileError(f"{path}, line {line}: not UTF-8 text (save it as UTF-8)") from None
-    return parse_profile(text, path=path)
+
+
+def load_profile(path):
+    """The profile in the TOML file ``path``; :class:`ProfileError` (one line) if it cannot be
+    read or is not a valid profile."""
+    return parse_profile(read_profile_text(path), path=Path(path))

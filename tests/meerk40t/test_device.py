@@ -1,19 +1,16 @@
 """The galvoscan device in meerk40t (galvoscan/meerk40t/), headless and in-process as meerk40t's
-own driver tests run (its test/bootstrap.py: a kernel of its core plugins, console commands):
-the plugin found through the ``meerk40t.extension`` entry point, a job made with meerk40t's own
-commands, planned by galvoscan and marked on the simulated board, and the marks read off the
-XY2-100 wires by the tests' own reader (tests/support/wires.py) against the rectangle meerk40t
-was told to make, computed here from the command's numbers."""
+own driver tests run (its test/bootstrap.py: a kernel of its core plugins, console commands;
+tests/support/meerk40t_session.py): the plugin found through the ``meerk40t.extension`` entry
+point, a job made with meerk40t's own commands, planned by galvoscan and marked on the
+simulated board, and the marks read off the XY2-100 wires by the tests' own reader
+(tests/support/wires.py) against the rectangle meerk40t was told to make, computed here from
+the command's numbers."""
 
-import gc
-import itertools
 import os
 import re
-import socket
 import subprocess
 import sys
 import time
-from importlib.metadata import entry_points
 from pathlib import Path
 
 import numpy as np
@@ -30,145 +27,22 @@ from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
 from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
 from meerk40t.core.cutcode.rastercut import RasterCut   # noqa: E402
 from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
-from meerk40t.kernel import Kernel                      # noqa: E402
 
 from galvoscan import api                               # noqa: E402
-from galvoscan.build import PRESETS                     # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.link.client import HostClient            # noqa: E402
 from galvoscan.meerk40t.cutcode import job_from_cuts    # noqa: E402
 from galvoscan.meerk40t.driver import SIM               # noqa: E402
+from galvoscan.profile.keys import SECTIONS             # noqa: E402
+from galvoscan.profile.machine import default_profile, load_profile  # noqa: E402
+from galvoscan.profile.template import profile_text     # noqa: E402
 from galvoscan.sim.board import PTYServer               # noqa: E402
-from galvoscan.profile.machine import default_profile   # noqa: E402
 
+from meerk40t_session import (BOTTOM, FIELD_MM, LEFT, POWER_PERMILLE, PRR_KHZ,  # noqa: E402
+                              PROFILE, RECT_MM, RIGHT, SPEED_MM_S, TOP, UNIT_MM, GrblSender,
+                              distance_to_rect, marks_off_the_wires, median_pitch,
+                              outline_gaps, plan_name, rect_command, spool_and_wait)
 from sim_board import SimBoard                          # noqa: E402
-from vector_board import pulses_per_frame               # noqa: E402
-
-
-PROFILE = default_profile()
-FIELD_MM = PROFILE.field.size_mm
-#: One galvo unit, mm: 65536 of them across the field (XY2-100's 16 bits).
-UNIT_MM = FIELD_MM / 65536
-#: The rectangle: meerk40t's scene has its origin at the field's top left corner, Y down.
-RECT_MM = (50.0, 52.0, 6.0, 4.0)            # x, y, width, height in the scene
-SPEED_MM_S, PRR_KHZ, POWER_PERMILLE = 400.0, 50.0, 600.0
-#: What meerk40t's "rect" command draws, in field mm (centre 0,0, Y up): the scene's corner
-#: (x, y) is field (x - F/2, F/2 - y).
-LEFT, TOP = RECT_MM[0] - FIELD_MM / 2, FIELD_MM / 2 - RECT_MM[1]
-RIGHT, BOTTOM = LEFT + RECT_MM[2], TOP - RECT_MM[3]
-
-
-def _kernel():
-    """meerk40t's kernel as its test/bootstrap.py makes it, with galvoscan's plugin loaded
-    from the entry point pip installed."""
-    kernel = Kernel("MeerK40t", "0.0.0-testing", "MeerK40t_TEST", ansi=False,
-                    ignore_settings=True)
-    from meerk40t.core import core
-    from meerk40t.device import dummydevice
-    from meerk40t.fill import fills
-    from meerk40t.grbl import plugin as grbl
-    from meerk40t.image import imagetools
-    from meerk40t.network import kernelserver
-    for plugin in (kernelserver.plugin, dummydevice.plugin, core.plugin, imagetools.plugin,
-                   fills.plugin, grbl.plugin):
-        kernel.add_plugin(plugin)
-    found = [ep for ep in entry_points().select(group="meerk40t.extension")
-             if ep.name == "galvoscan"]
-    assert len(found) == 1, "galvoscan's meerk40t.extension entry point is not installed"
-    kernel.add_plugin(found[0].load())
-    kernel(partial=True)
-    kernel.console("service device start -i galvoscan 0\n")
-    return kernel
-
-
-@pytest.fixture(scope="module")
-def meerk40t():
-    """``(kernel, device, board, lines)``: the galvoscan device on a simulated board of the
-    default bitstream (compiled), its wires and laser pins recorded; ``lines``: what the
-    device says on meerk40t's console."""
-    kernel = _kernel()
-    device = kernel.device
-    assert device.name == "galvoscan"
-    config = PRESETS["default"]
-    board = SimBoard(config=config, clk_freq=config.clk_freq, baud=config.baud,
-                     backend="compiled", record_laser=True)
-    device.driver.make_board = lambda: board.board
-    lines = []
-    kernel.channel("console").watch(lambda line: lines.append(str(line)))
-    try:
-        yield kernel, device, board, lines
-    finally:
-        kernel()
-
-
-def _run(kernel, device, command, *, timeout_s=60):
-    """Spool ``command``'s plan and wait until the device has run (or refused) it."""
-    device.driver.last_report = device.driver.last_error = None
-    kernel.elements.clear_all()
-    kernel.console(f"{command} {_plan_name()} copy-selected preprocess validate blob preopt "
-                   f"optimize spool\n")
-    deadline = time.monotonic() + timeout_s
-    while device.driver.last_report is None and device.driver.last_error is None:
-        assert time.monotonic() < deadline, "the device did not finish the job"
-        time.sleep(0.02)
-
-
-_plans = itertools.count(1)
-
-
-def _plan_name():
-    """A plan of its own for each job (meerk40t's plans keep what was copied into them)."""
-    return f"plan{next(_plans)}"
-
-
-def _rect_command(x, y, width, height):
-    return (f"rect {x}mm {y}mm {width}mm {height}mm engrave -s {SPEED_MM_S:g} "
-            f"-p {POWER_PERMILLE:g} frequency {PRR_KHZ:g}")
-
-
-def _marks(board, since):
-    """The positions (field mm) the laser pulsed at, frame ``since`` on, a row each run of
-    frames at one position, and the pulses at each: read off the wires and pins by the tests'
-    readers."""
-    board.run_for(0)
-    runs = []
-    for xy, pulses in pulses_per_frame(board)[since:]:
-        if runs and runs[-1][0] == xy:
-            runs[-1][1] += pulses
-        else:
-            runs.append([xy, pulses])
-    marked = [(xy, n) for xy, n in runs if n]
-    points = (np.array([xy for xy, _ in marked], dtype=float) - 32768) * UNIT_MM
-    return points, np.array([n for _, n in marked])
-
-
-def _distance_to_rect(points, left=None, top=None, right=None, bottom=None):
-    """Each point's distance from a rectangle's outline (field mm; None: :data:`RECT_MM`'s)."""
-    left, top = (LEFT, TOP) if left is None else (left, top)
-    right, bottom = (RIGHT, BOTTOM) if right is None else (right, bottom)
-    x, y = points[:, 0], points[:, 1]
-    inside_x = np.clip(x, left, right)
-    inside_y = np.clip(y, bottom, top)
-    to_vertical = np.hypot(np.minimum(abs(x - left), abs(x - right)), y - inside_y)
-    to_horizontal = np.hypot(x - inside_x, np.minimum(abs(y - top), abs(y - bottom)))
-    return np.minimum(to_vertical, to_horizontal)
-
-
-def _gaps(marks, left, top, right, bottom):
-    """The largest distance from a point of the rectangle's outline to the nearest mark."""
-    outline = np.concatenate([
-        np.column_stack([np.linspace(left, right, 200), np.full(200, top)]),
-        np.column_stack([np.linspace(left, right, 200), np.full(200, bottom)]),
-        np.column_stack([np.full(200, left), np.linspace(bottom, top, 200)]),
-        np.column_stack([np.full(200, right), np.linspace(bottom, top, 200)])])
-    return np.min(np.hypot(*(outline[:, None, :] - marks[None, :, :]).transpose(2, 0, 1)),
-                  axis=1).max()
-
-
-def _pitch(marks):
-    """The distance from one marked point to the next, off the wires (their median)."""
-    return float(np.median(np.hypot(*np.diff(marks, axis=0).T)))
-
 
 def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     """meerk40t's rectangle, engraved through the device: every mark off the wires lies on the
@@ -178,16 +52,16 @@ def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     board.run_for(0)
     before = len(board.xy2_frames())
     started = time.monotonic()
-    _run(kernel, device, _rect_command(*RECT_MM))
+    spool_and_wait(kernel, device, rect_command(*RECT_MM))
     took = time.monotonic() - started
     assert device.driver.last_error is None, device.driver.last_error
     report = device.driver.last_report
     assert report.clean
-    marks, pulses = _marks(board, before)
+    marks, pulses = marks_off_the_wires(board, before)
     assert len(marks) > 100
     # The pitch and the pulses a point, off the wires: the speed they make is the one the
     # console said, the nearest to meerk40t's 400 mm/s the galvo units and pulses make.
-    pitch = _pitch(marks)
+    pitch = median_pitch(marks)
     per_point = int(np.median(pulses))
     speed = pitch * PRR_KHZ * 1e3 / per_point
     said = "\n".join(lines)
@@ -202,9 +76,9 @@ def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     assert f"speed {SPEED_MM_S:g} mm/s, power {POWER_PERMILLE / 10:g} %, PRR {PRR_KHZ:g} kHz" \
         in said
     # Every mark on meerk40t's rectangle, within half a pitch (and a galvo unit of rounding).
-    assert _distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
+    assert distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
     # All round: every point of the outline within half a pitch of a mark.
-    assert _gaps(marks, LEFT, TOP, RIGHT, BOTTOM) <= pitch / 2 + UNIT_MM
+    assert outline_gaps(marks, LEFT, TOP, RIGHT, BOTTOM) <= pitch / 2 + UNIT_MM
     assert "galvoscan: marked" in said
     assert took < 60
 
@@ -216,12 +90,12 @@ def test_a_circle_from_meerk40t_is_marked_round(meerk40t):
     board.run_for(0)
     before = len(board.xy2_frames())
     centre, radius = (52.0, 57.0), 3.0
-    _run(kernel, device, f"circle {centre[0]:g}mm {centre[1]:g}mm {radius:g}mm engrave "
+    spool_and_wait(kernel, device, f"circle {centre[0]:g}mm {centre[1]:g}mm {radius:g}mm engrave "
                          f"-s {SPEED_MM_S:g} -p {POWER_PERMILLE:g} frequency {PRR_KHZ:g}")
     assert device.driver.last_error is None, device.driver.last_error
     assert device.driver.last_report.clean
-    marks, _ = _marks(board, before)
-    pitch = _pitch(marks)
+    marks, _ = marks_off_the_wires(board, before)
+    pitch = median_pitch(marks)
     cx, cy = centre[0] - FIELD_MM / 2, FIELD_MM / 2 - centre[1]
     off = abs(np.hypot(marks[:, 0] - cx, marks[:, 1] - cy) - radius)
     assert off.max() <= device.tolerance_mm + pitch / 2 + UNIT_MM
@@ -242,17 +116,17 @@ def test_a_rectangle_over_a_serial_link_to_board_sim(meerk40t):
     server = PTYServer(board.board).start()
     try:
         device.link = server.port
-        _run(kernel, device, _rect_command(*RECT_MM))
+        spool_and_wait(kernel, device, rect_command(*RECT_MM))
     finally:
         device.link = SIM
         server.stop()
     assert server.error is None
     assert device.driver.last_error is None, device.driver.last_error
     assert device.driver.last_report.clean
-    marks, _ = _marks(board, before)
-    pitch = _pitch(marks)
-    assert _distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
-    assert _gaps(marks, LEFT, TOP, RIGHT, BOTTOM) <= pitch / 2 + UNIT_MM
+    marks, _ = marks_off_the_wires(board, before)
+    pitch = median_pitch(marks)
+    assert distance_to_rect(marks).max() <= pitch / 2 + UNIT_MM
+    assert outline_gaps(marks, LEFT, TOP, RIGHT, BOTTOM) <= pitch / 2 + UNIT_MM
 
 
 def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
@@ -261,7 +135,7 @@ def test_a_job_over_the_field_is_one_line_and_nothing_sent(meerk40t):
     kernel, device, board, lines = meerk40t
     sent = len(board.board.bytes_in)
     said = len(lines)
-    _run(kernel, device, _rect_command(FIELD_MM - 5, 20, 10, 10))
+    spool_and_wait(kernel, device, rect_command(FIELD_MM - 5, 20, 10, 10))
     errors = [line for line in lines[said:] if "galvoscan: error:" in line]
     assert len(errors) == 1, lines[said:]
     assert "nothing sent" in errors[0] and "field" in errors[0]
@@ -275,7 +149,7 @@ def test_a_port_that_cannot_be_opened_is_one_line(meerk40t, tmp_path):
     start = len(lines)
     device.link = str(tmp_path / "ttyNONE")
     try:
-        _run(kernel, device, _rect_command(*RECT_MM))
+        spool_and_wait(kernel, device, rect_command(*RECT_MM))
     finally:
         device.link = SIM
     errors = [line for line in lines[start:] if "galvoscan: error:" in line]
@@ -287,7 +161,7 @@ def test_a_port_that_cannot_be_opened_is_one_line(meerk40t, tmp_path):
 def test_a_speed_the_laser_cannot_make_is_refused(meerk40t):
     kernel, device, board, lines = meerk40t
     sent = len(board.board.bytes_in)
-    _run(kernel, device, "rect 40mm 40mm 5mm 5mm engrave -s 5000 frequency 20")
+    spool_and_wait(kernel, device, "rect 40mm 40mm 5mm 5mm engrave -s 5000 frequency 20")
     assert "out of reach" in device.driver.last_error
     assert len(board.board.bytes_in) == sent
 
@@ -307,7 +181,7 @@ def test_stop_sends_arm_0_first_and_leaves_the_board_ready(meerk40t, monkeypatch
     device.driver.last_report = device.driver.last_error = None
     kernel.elements.clear_all()
     # A slow circle: seconds of the board's time.
-    kernel.console(f"circle 55mm 55mm 20mm engrave -s 20 frequency 20 {_plan_name()} copy-selected "
+    kernel.console(f"circle 55mm 55mm 20mm engrave -s 20 frequency 20 {plan_name()} copy-selected "
                    "preprocess validate blob preopt optimize spool\n")
     deadline = time.monotonic() + 60
     pulses_before = len(board.board.pulses)
@@ -329,69 +203,13 @@ def test_stop_sends_arm_0_first_and_leaves_the_board_ready(meerk40t, monkeypatch
     board.board.run_for(2e-3)
     assert len(board.board.pulses) == pulses
     monkeypatch.undo()
-    _run(kernel, device, _rect_command(*RECT_MM))
+    spool_and_wait(kernel, device, rect_command(*RECT_MM))
     assert device.driver.last_error is None, device.driver.last_error
     assert device.driver.last_report.clean
 
 
 #: The G-code sender's square: its corner and side (mm), at M4 S500 F6000 (mm/min).
 GRBL_CORNER, GRBL_SIDE = (50.0, 50.0), 6.0
-
-
-class _Sender:
-    """A G-code sender on the loopback port: a line at a time, each waiting for its answer
-    (as GRBL's simple send-response streaming does)."""
-
-    def __init__(self, port):
-        deadline = time.monotonic() + 10
-        while True:             # (the server's thread may not be listening yet)
-            try:
-                self.socket = socket.create_connection(("127.0.0.1", port), timeout=30)
-                break
-            except ConnectionRefusedError:
-                assert time.monotonic() < deadline, f"no GRBL server on port {port}"
-                time.sleep(0.05)
-        self.pending = b""
-        # The greeting: GRBL's banner and its message line.
-        assert self.line().startswith("Grbl ")
-        assert self.line().startswith("[MSG:")
-
-    def line(self):
-        while b"\n" not in self.pending:
-            got = self.socket.recv(4096)
-            assert got, "the GRBL server closed the connection"
-            self.pending += got
-        line, self.pending = self.pending.split(b"\n", 1)
-        return line.strip().decode()
-
-    def send(self, text):
-        self.socket.sendall(text.encode() + b"\n")
-        return self.line()
-
-    def close(self):
-        self.socket.close()
-
-
-@pytest.fixture
-def grbl_port(meerk40t, monkeypatch):
-    """A loopback port for meerk40t's GRBL server, and the server's end of each connection
-    closed after the test: meerk40t's TCP server leaves a connection the sender closed to the
-    garbage collector (its handler leaves its loop on an empty read without closing the
-    socket), which -W error would fail whichever test it is collected in."""
-    accepted = []
-    accept = socket.socket.accept
-
-    def recording(self):
-        connection, address = accept(self)
-        accepted.append(connection)
-        return connection, address
-    monkeypatch.setattr(socket.socket, "accept", recording)
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    yield port
-    for connection in accepted:
-        connection.close()
 
 
 def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
@@ -409,7 +227,7 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     x1, y1 = x0 + GRBL_SIDE, y0 + GRBL_SIDE
     program = ["G21", "G90", f"G0 X{x0:g} Y{y0:g}", "M4 S500", f"G1 X{x1:g} Y{y0:g} F6000",
                f"G1 X{x1:g} Y{y1:g}", f"G1 X{x0:g} Y{y1:g}", f"G1 X{x0:g} Y{y0:g}", "M5"]
-    sender = _Sender(port)
+    sender = GrblSender(port)
     try:
         answers = [sender.send(line) for line in program]
         sender.socket.sendall(b"?")
@@ -423,15 +241,15 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     assert device.driver.last_report.clean
     said = "\n".join(lines)
     assert "(speed 100 mm/s, power 50 %)" in said          # F6000 mm/min, S500 of 1000
-    marks, pulses = _marks(board, before)
+    marks, pulses = marks_off_the_wires(board, before)
     left, top = x0 - FIELD_MM / 2, FIELD_MM / 2 - y0      # the scene's Y is down
     right, bottom = left + GRBL_SIDE, top - GRBL_SIDE
-    pitch = _pitch(marks)
+    pitch = median_pitch(marks)
     # GRBL gives no PRR: the profile's. The speed off the wires is F6000's 100 mm/s.
     speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))
     assert speed == pytest.approx(6000 / 60, rel=0.03)
-    assert _distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
-    assert _gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
+    assert distance_to_rect(marks, left, top, right, bottom).max() <= pitch / 2 + UNIT_MM
+    assert outline_gaps(marks, left, top, right, bottom) <= pitch / 2 + UNIT_MM
 
 
 def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t, grbl_port):
@@ -442,7 +260,7 @@ def test_ctrl_x_from_a_grbl_sender_stops_the_job(meerk40t, grbl_port):
     port = grbl_port
     kernel.console(f"grblcontrol -p {port}\n")
     slow = ["G21", "G90", "G0 X50 Y50", "M4 S500", "G1 X70 Y50 F60", "G1 X70 Y70", "M5"]
-    sender = _Sender(port)
+    sender = GrblSender(port)
     try:
         for line in slow[:-1]:
             assert sender.send(line) == "ok"
@@ -478,7 +296,7 @@ def test_the_boards_state_in_meerk40ts_console(meerk40t):
     """``board_status``: the board read and said in one line: ready with the interlock closed,
     then the interlock opened on the simulated machine, and closed again."""
     kernel, device, board, lines = meerk40t
-    _run(kernel, device, _rect_command(*RECT_MM))         # (the board exists, and is idle)
+    spool_and_wait(kernel, device, rect_command(*RECT_MM))         # (the board exists, and is idle)
 
     def said():
         start = len(lines)
@@ -500,7 +318,7 @@ def test_frame_traces_the_last_job_with_the_guide_laser(meerk40t, monkeypatch):
     """``guide_frame 2`` after meerk40t's rectangle: its outline traced twice off the wires, the
     laser never armed and not a pulse fired; the console says so."""
     kernel, device, board, lines = meerk40t
-    _run(kernel, device, _rect_command(*RECT_MM))
+    spool_and_wait(kernel, device, rect_command(*RECT_MM))
     writes = []
     original = HostClient.write
 
@@ -528,10 +346,10 @@ def test_frame_traces_the_last_job_with_the_guide_laser(meerk40t, monkeypatch):
     traced = (np.array([xy for _, xy in board.xy2_frames()[before:]], dtype=float)
               - 32768) * UNIT_MM
     # Where the mirrors dwelt: on the rectangle (the hull of a rectangle is itself), all round.
-    away = _distance_to_rect(traced)
+    away = distance_to_rect(traced)
     on = traced[away <= 0.05]
     assert len(on) > 100
-    assert _gaps(on, LEFT, TOP, RIGHT, BOTTOM) <= 0.05
+    assert outline_gaps(on, LEFT, TOP, RIGHT, BOTTOM) <= 0.05
 
 
 def test_a_profile_that_cannot_be_read_is_one_line_and_the_field_kept(meerk40t, tmp_path):
@@ -560,6 +378,103 @@ def test_a_profile_that_cannot_be_read_is_one_line_and_the_field_kept(meerk40t, 
         device.profile_path = ""
         device.realize(device.path)
     assert device.profile.field.size_mm == FIELD_MM
+
+
+@pytest.fixture
+def default_profile_again(meerk40t):
+    """The device back on galvoscan's default profile after the test, whatever it set."""
+    kernel, device, board, lines = meerk40t
+    yield
+    device.profile_path = ""
+    device.realize(device.path)
+    assert device.profile == default_profile()
+
+
+#: What meerk40t shows a key of each kind as (a pair as text, "20, 200").
+SHOWN_AS = {"number": float, "integer": int, "bool": bool, "text": str, "path": str,
+            "pair": str}
+
+
+def test_every_profile_key_is_a_device_setting(meerk40t, default_profile_again):
+    """galvoscan's declaration of the profile's keys, each a setting of the device in meerk40t
+    (``choices/galvoscan``, what its property panels show), its value the profile's; set as
+    meerk40t's panels set a value, the profile in use changes (the view takes the new field)
+    and the file does not; a bad value is one line and changes nothing."""
+    kernel, device, board, lines = meerk40t
+    choices = {c["attr"]: c for c in device.lookup("choices/galvoscan")}
+    profile = device.profile
+    for section, keys in SECTIONS.items():
+        for key in keys:
+            choice = choices.pop(f"{section}_{key.name}")
+            assert choice["type"] is SHOWN_AS[key.kind]
+            assert key.help in choice["tip"]
+            value = getattr(getattr(profile, section), key.name)
+            shown = getattr(choice["object"], choice["attr"])
+            if key.kind == "pair":
+                assert shown == ", ".join(f"{v:g}" for v in value)
+            else:
+                assert shown == ("" if value is None else value)
+    # What is left: the device's own settings.
+    assert set(choices) == {"label", "profile_path", "link", "tolerance_mm"}
+    settings = device.profile_settings
+    settings.field_size_mm = 70.0                   # as meerk40t's panel sets it
+    settings.laser_prr_khz = "30, 80"
+    assert device.profile.field.size_mm == 70 and device.view.width == "70mm"
+    assert device.profile.laser.prr_khz == (30, 80)
+    assert device.lookup("frequency") == (30, 80)
+    said = len(lines)
+    settings.defaults_speed_mm_s = 2e6
+    errors = [line for line in lines[said:] if "galvoscan: error:" in line]
+    assert len(errors) == 1 and "[defaults] speed_mm_s" in errors[0], lines[said:]
+    assert device.profile.defaults.speed_mm_s == default_profile().defaults.speed_mm_s
+    assert device.profile.field.size_mm == 70
+
+
+def test_galvoscan_profile_lists_sets_and_saves(meerk40t, default_profile_again, tmp_path):
+    """``galvoscan_profile``: ``list`` says every key; ``set`` changes the profile in use,
+    checked (a bad value one line, nothing changed), the file untouched until ``save``, which
+    writes it with every comment kept and only the changed lines different, and it reads back
+    through galvoscan's profile reader as set; a profile read from no file is saved only where
+    a PATH says."""
+    kernel, device, board, lines = meerk40t
+
+    def said(command):
+        start = len(lines)
+        kernel.console(command + "\n")
+        # (Each line from "galvoscan:" on: the console puts the time before it.)
+        return [line[line.index("galvoscan:"):] for line in lines[start:]
+                if "galvoscan:" in line]
+    listed = said("galvoscan_profile list")
+    assert len(listed) == 1 + sum(len(keys) for keys in SECTIONS.values())
+    assert "galvoscan: [field] size_mm = 110 (1 … 2000 mm)" in listed
+    assert "galvoscan: [laser] prr_khz = [20, 200] (20 … 200 kHz)" in listed
+    refused = said("galvoscan_profile save")
+    assert len(refused) == 1 and "give a PATH" in refused[0]
+    path = tmp_path / "machine.toml"
+    path.write_text(profile_text())
+    device.profile_path = str(path)
+    device.realize(device.path)
+    assert said("galvoscan_profile set field.size_mm 70")[0].startswith(
+        "galvoscan: [field] size_mm = 70")
+    assert said("galvoscan_profile set galvo.mark_delay_us 120")
+    for bad in ("galvoscan_profile set field.size_mm -3", "galvoscan_profile set field.sze 3",
+                "galvoscan_profile set defaults.prr_khz 500", "galvoscan_profile frob"):
+        errors = said(bad)
+        assert len(errors) == 1 and "galvoscan: error:" in errors[0], (bad, errors)
+    assert device.profile.field.size_mm == 70 and device.view.width == "70mm"
+    assert device.profile.galvo.mark_delay_us == 120
+    assert path.read_text() == profile_text()               # not written until saved
+    assert "(changed, not saved)" in said("galvoscan_profile list")[0]
+    assert said("galvoscan_profile save") == [f"galvoscan: machine profile written to {path}"]
+    written = path.read_text().splitlines()
+    template = profile_text().splitlines()
+    assert [(a, b) for a, b in zip(template, written) if a != b] == \
+        [("size_mm = 110", "size_mm = 70"), ("mark_delay_us = 100", "mark_delay_us = 120")]
+    assert len(written) == len(template)
+    assert load_profile(path) == device.profile
+    elsewhere = tmp_path / "copy.toml"
+    said(f"galvoscan_profile save {elsewhere}")
+    assert load_profile(elsewhere) == device.profile and device.profile_path == str(elsewhere)
 
 
 README = (Path(__file__).parents[2] / "README.md").read_text()

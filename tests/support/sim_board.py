@@ -63,6 +63,7 @@ class SimBoard:
         """What the host and the recorders know at power-up, then the first clock."""
         self.xy2_samples = []           # (sync, x, y) at each falling xy2_clk edge
         self.parity_times = []          # when each frame's last bit was sampled
+        self._frames = []               # the frames decoded so far (xy2_frames)
         self._samples_seen = 0
         self._by_clock = ([], [])
         self._changes_seen = 0
@@ -206,10 +207,13 @@ class SimBoard:
         return self.laser_pins[-1][self.LASER_PIN_NAMES.index(name)]
 
     def xy2_frames(self):
-        """All XY2-100 frames so far, decoded by the tests' reader, with the time each ended."""
+        """All XY2-100 frames so far, decoded by the tests' reader, with the time each ended.
+        (A frame is 20 samples from the first on, so those decoded before are kept and only
+        the new ones decoded: a long board's frames are not decoded again at every look.)"""
+        done = len(self._frames) * 20
         complete = len(self.parity_times) * 20
-        frames = frames_from_samples(self.xy2_samples[:complete])
-        return list(zip(self.parity_times, frames))
+        self._frames += frames_from_samples(self.xy2_samples[done:complete])
+        return list(zip(self.parity_times, self._frames))
 
     def frames_after(self, t):
         return [frame for end, frame in self.xy2_frames() if end > t]

@@ -51,21 +51,24 @@ def queue(client, job, *, factors=None):
         client.queue_segments(words)
 
 
-def pulses_per_frame(board):
-    """(position, pulses) per frame read off the pins: frames from the tests' XY2 reader, each
-    in force from the end of its frame (the rising SYNC edge that starts the next one); pulses
-    are rising PRR edges while modulation is on, given to the frame in force before them."""
+def pulses_per_frame(board, since=0):
+    """(position, pulses) per frame read off the pins, frame ``since`` on: frames from the
+    tests' XY2 reader, each in force from the end of its frame (the rising SYNC edge that
+    starts the next one); pulses are rising PRR edges while modulation is on, given to the
+    frame in force before them."""
     frames = [f for _, f in board.xy2_frames()]
     sync = board.sync_pins
     starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
     pins = board.laser_pins
     counts = [0] * len(frames)
-    for clock in range(1, len(pins)):
+    # A pulse goes to frame `since` or later only from the edge that ends the frame after it.
+    first = starts[since] if 0 < since < len(starts) else 1
+    for clock in range(max(1, first), len(pins)):
         if pins[clock][2] and not pins[clock - 1][2] and pins[clock][1]:
             frame = bisect.bisect_left(starts, clock) - 2
             assert frame >= 0, "a pulse before any frame was sent"
             counts[frame] += 1
-    return list(zip(frames, counts))
+    return list(zip(frames, counts))[since:]
 
 
 def runs_on_the_wires(board):
