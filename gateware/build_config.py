@@ -108,6 +108,10 @@ class BuildConfig:
         What ``head_check`` resets to: 1 = the laser obeys the head from power-up (a head
         that reports Temp OK or Power OK low, or none, keeps the laser off). Needs the
         receiver and the laser. Off by default: a head without a STATUS line reads as missing.
+    fly : bool
+        Build marking on the fly: two quadrature encoder inputs (``encoder_x_a`` …), a
+        simulated encoder, the fly offset before the correction, and the ``fly_*`` and
+        ``enc_*`` registers.
     """
 
     modes: tuple = MODES
@@ -130,6 +134,7 @@ class BuildConfig:
     mo_lead: float = 5e-3
     head_status: bool = False
     head_check: bool = False
+    fly: bool = False
 
     def __post_init__(self):
         def put(name, value):       # (frozen: the normalised values are set once, here)
@@ -158,6 +163,7 @@ class BuildConfig:
         if not self.laser and "vector" in modes:
             raise ValueError("vector mode times its points by the laser's pulses: it needs the "
                              "laser controller")
+        put("fly", bool(self.fly))
         put("head_status", bool(self.head_status))
         put("head_check", bool(self.head_check))
         if self.head_check and not (self.head_status and self.laser):
@@ -226,7 +232,7 @@ class BuildConfig:
                 "delays": self.vector_delays, "interpolation": self.spiral_interpolation,
                 "uart": "uart" in self.links, "spi": "spi" in self.links,
                 "player": self.player, "pixel_lines": self.pixel_lines,
-                "head": self.head_status}
+                "head": self.head_status, "fly": self.fly}
 
     def register_map(self, *, table_points=DEFAULT_TABLE_POINTS,
                      correction_nodes=DEFAULT_CORRECTION_NODES, resets=None):
@@ -240,7 +246,7 @@ class BuildConfig:
             table_points=table_points, correction_nodes=correction_nodes,
             modes=self.modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
-            pixel_lines=self.pixel_lines, player=self.player, head=self.head_status,
+            pixel_lines=self.pixel_lines, player=self.player, head=self.head_status, fly=self.fly,
             resets={**(resets or {}), **({"head_check": 1} if self.head_check else {})},
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
@@ -254,6 +260,7 @@ class BuildConfig:
                                        ("delays", self.vector_delays),
                                        ("pixel lines", self.pixel_lines), ("wobble", self.wobble),
                                        ("player", self.player), ("head status", self.head_status),
+                                       ("marking on the fly", self.fly),
                                        ("laser", self.laser)) if on]
         return (f"{self.clk_freq / 1e6:g} MHz, XY2 {self.bit_rate / 1e6:g} Mbit/s, "
                 f"{self.baud:,} baud; modes {','.join(self.modes)}; links "

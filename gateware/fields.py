@@ -11,7 +11,7 @@ from amaranth.lib import data, enum
 
 
 __all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities",
-           "HeadStatus", "HeadState",
+           "HeadStatus", "HeadState", "FlyControl",
            "PlayerState", "PlayerResult", "PlayerStatus", "pack"]
 
 
@@ -99,6 +99,16 @@ Capabilities = data.StructLayout({
     "player": 1,            # the job player, its flash reader and start input
     "pixel_lines": 1,       # vector mode's pixel lines (vec_op bit 8)
     "head": 1,              # the head status receiver (the head, head_state, head_check registers)
+    "fly": 1,               # marking on the fly: two encoder inputs, the fly offset
+})
+
+
+#: Bits of the ``fly_ctrl`` register, bit 0 first.
+FlyControl = data.StructLayout({
+    "on": 1,                # the fly offset applied (0: RTC's fly_return)
+    "x_simulated": 1,       # the X count from the simulated encoder
+    "y_simulated": 1,       # the Y count from the simulated encoder
+    "reverse": 1,           # the simulated encoder counts down
 })
 
 

@@ -9,10 +9,11 @@ the guide laser's ``laser_guide``,
 and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_alarms``);
 with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``flash_copi``,
 ``flash_cipo``, the start inputs ``start_n[1:0]`` and the outputs ``busy``, ``ready`` and
-``player_led``; with the head status receiver, the head's ``xy2_status``.
+``player_led``; with the head status receiver, the head's ``xy2_status``; with marking on the
+fly, the encoders' ``encoder_x_a``, ``encoder_x_b``, ``encoder_y_a``, ``encoder_y_b``.
 """
 
-from amaranth.hdl import Cat, Module, Mux, ResetInserter, Signal
+from amaranth.hdl import Cat, Const, Module, Mux, ResetInserter, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out, connect
 
@@ -26,7 +27,8 @@ from .host.command import CommandDecoder
 from .host.frames import PAYLOAD_BITS
 from .host.progress import ProgressFeed
 from .host.registers import RegisterFile
-from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, HeadStatus, Mode,
+from .host.regmap import (DEFAULT_CORRECTION_NODES, VECTOR_QUEUE_DEPTH, FlyControl, HeadStatus,
+                          Mode,
                           PlayerResult, PlayerState, PlayerStatus)
 from .host.spi_target import SPITarget
 from .host.status import StatusBlock
@@ -35,6 +37,9 @@ from .laser.controller import LaserController
 from .laser.marking_select import MarkingSelect
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .phy.xy2_status import XY2StatusReceiver
+from .fly.encoder import QuadratureDecoder, SimulatedEncoder
+from .fly.offset import FlyOffset
+from .fly.scale import FlyScale
 from .player.player import JobPlayer
 from .player.start_input import StartInput
 from .settings import ScanSettings
@@ -122,6 +127,8 @@ class GalvoScanTop(wiring.Component):
         host's job too).
     player_led : ``Out(1)``, with the player
         On while the player is busy; blinking while the last start's image was refused.
+    encoder_x_a, encoder_x_b, encoder_y_a, encoder_y_b : ``In(1)``, with marking on the fly
+        The belt's quadrature encoders (ENCODER X and Y, through RS-422 receivers).
     xy2_status : ``In(1)``, with the head status receiver
         The scan head's STATUS line (through an RS-422 receiver; low with no head, which then
         reads as missing).
@@ -185,6 +192,8 @@ class GalvoScanTop(wiring.Component):
                             "player_led": Out(1)})
         if self.config.head_status:
             members["xy2_status"] = In(1)
+        if self.config.fly:
+            members.update({f"encoder_{axis}_{line}": In(1) for axis in "xy" for line in "ab"})
         super().__init__(members)
 
     def elaborate(self, platform):
@@ -235,7 +244,7 @@ class GalvoScanTop(wiring.Component):
         # pulses wrap (the host counts by differences).
         status = StatusBlock(
             saturating=[name for name in ("vec_rejected", "vec_underruns", "vec_stalls",
-                                          "head_bad") if name in self.regmap],
+                                          "head_bad", "fly_clipped") if name in self.regmap],
             wrapping=[name for name in ("pulses", "vec_taken") if name in self.regmap])
         m.submodules.status = ResetInserter(regs.soft_reset)(status)
         m.d.comb += [
@@ -325,12 +334,18 @@ class GalvoScanTop(wiring.Component):
         connect(m, select.points, scale.offsets)
         m.d.comb += status.flags.running.eq(select.running)
 
+        # Marking on the fly moves each point after the scale (and the wobble) and before the
+        # correction, as RTC's does.
+        positions = scale.positions
+        self._fly_on_wires = Const(0, 1)
+        if self.config.fly:
+            positions = self._elaborate_fly(m, regs, status, scale.positions)
         if self.correction is None:
-            connect(m, scale.positions, phy.position)
+            connect(m, positions, phy.position)
             m.d.comb += status.flags.clipped.eq(clipped)
         else:
             m.submodules.correction = correction = FieldCorrection(self.correction)
-            connect(m, scale.positions, correction.positions_in)
+            connect(m, positions, correction.positions_in)
             connect(m, correction.positions_out, phy.position)
             m.d.comb += [
                 correction.enable.eq(regs.cor_enable),
@@ -346,6 +361,21 @@ class GalvoScanTop(wiring.Component):
 
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
+        if self.config.fly:
+            # The fly's clipped point, followed to the wires: held by the correction stage (one
+            # point at most), then the PHY's from the clock it takes it to the next take.
+            entering = self._fly.positions_out.valid & self._fly.positions_out.ready
+            taken = phy.position.valid & phy.position.ready
+            clipped_fly = Signal()
+            if self.correction is None:
+                m.d.comb += clipped_fly.eq(self._fly.clipped)
+            else:
+                held = Signal()
+                with m.If(entering):
+                    m.d.sync += held.eq(self._fly.clipped)
+                m.d.comb += clipped_fly.eq(held)
+            with m.If(taken):
+                m.d.sync += self._fly_on_wires.eq(clipped_fly)
 
         # --- scan head status ---------------------------------------------------------------
         self._head = None
@@ -368,6 +398,41 @@ class GalvoScanTop(wiring.Component):
         if self.config.player:
             self._elaborate_player(m, arbiter, regs, phy, sources[Mode.VECTOR], laser, status)
         return m
+
+    def _elaborate_fly(self, m, regs, status, positions):
+        """The encoders, the simulated encoder, the fly offset; returns the moved points."""
+        control = FlyControl(regs.fly_ctrl)
+        m.submodules.fly_simulated = simulated = SimulatedEncoder()
+        m.d.comb += [simulated.enable.eq(regs.fly_sim_period != 0),
+                     simulated.reverse.eq(control.reverse),
+                     simulated.period.eq(regs.fly_sim_period)]
+        decoders = {}
+        for axis in "xy":
+            decoders[axis] = decoder = QuadratureDecoder()
+            m.submodules[f"encoder_{axis}"] = decoder
+            from_simulated = control[f"{axis}_simulated"]
+            m.d.comb += [
+                decoder.a.eq(Mux(from_simulated, simulated.a, getattr(self, f"encoder_{axis}_a"))),
+                decoder.b.eq(Mux(from_simulated, simulated.b, getattr(self, f"encoder_{axis}_b"))),
+                decoder.clear.eq(regs.fly_clear | regs.soft_reset),
+                getattr(regs, f"enc_{axis}").eq(decoder.count[:16]),
+                getattr(regs, f"enc_{axis}_hi").eq(decoder.count[16:]),
+                getattr(regs, f"enc_{axis}_bad").eq(decoder.illegal),
+            ]
+        m.submodules.fly_scale = scale = FlyScale()
+        m.d.comb += [
+            scale.count_x.eq(decoders["x"].count), scale.count_y.eq(decoders["y"].count),
+            scale.scale_x.eq(Cat(regs.fly_scale_x, regs.fly_scale_x_hi)),
+            scale.scale_y.eq(Cat(regs.fly_scale_y, regs.fly_scale_y_hi)),
+            scale.enable.eq(control.on),
+        ]
+        m.submodules.fly = fly = self._fly = FlyOffset()
+        connect(m, positions, fly.positions_in)
+        m.d.comb += [fly.offset_x.eq(scale.offset_x), fly.offset_y.eq(scale.offset_y),
+                     status.events.fly_clipped.eq(fly.positions_out.valid &
+                                                  fly.positions_out.ready & fly.clipped)]
+        self._fly_on_wires = Signal()
+        return fly.positions_out
 
     def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):
         """The job player, its flash reader and start input, and the PLC's lines."""
@@ -515,7 +580,8 @@ class GalvoScanTop(wiring.Component):
             laser.link_fault.eq(decoder.refused),
             self._fault_latched.eq(laser.faults.as_value().any()),
             laser.fault_clear.eq(regs.fault_clear),
-            laser.marking.eq(marking.marking),
+            # (A point the fly offset held at the field's edge is never marked.)
+            laser.marking.eq(marking.marking & ~self._fly_on_wires),
             laser.interlock_open.eq(self.interlock_open),
             laser.guide.eq(regs.guide),
         ]

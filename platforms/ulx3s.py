@@ -3,8 +3,9 @@
 The iCEBreaker's UP5K holds the system only with features left out; the ECP5 on the ULX3S holds
 all of it with room to spare (``galvoscan build --board ulx3s``): the spiral with its
 interpolator, raster, vector mode with the RTC delays and the wobble stage, the correction
-stage with a 33 × 33 table, the job player, and both host links, the SPI target and the UART
-on the board's FT231X at 3 Mbaud (the player's machine lines have pins of their own here).
+stage with a 33 × 33 table, the job player, the scan head's status, marking on the fly (two
+encoder inputs), and both host links, the SPI target and the UART on the board's FT231X at
+3 Mbaud (the player's machine lines have pins of their own here).
 
 The clock: 24 MHz, the PLL's CLKOS from the 25 MHz crystal (25 MHz is no whole, even multiple
 of XY2-100's 2 MHz bit rate). 24 MHz is the slowest clock that gives XY2-100 a whole, even
@@ -67,8 +68,8 @@ ULX3S_DEVICES = {"12F": ULX3S_12F_Platform, "25F": ULX3S_25F_Platform,
                  "45F": ULX3S_45F_Platform, "85F": ULX3S_85F_Platform}
 
 #: Every signal on the GPIO header: name → (header pin, direction, where it goes). Pins marked
-#: "spare" are kept for what is still to come (the Z axis, the head's status, marking on the
-#: fly's encoders, the part sensor): wire them now and a later bitstream uses them.
+#: "spare" are kept for what is still to come (the Z axis, the part sensor): wire them now and a
+#: later bitstream uses them.
 ULX3S_PINS = {
     "xy2_clk": ("GP0", "o", "RS-422 driver → head CLOCK±"),
     "xy2_sync": ("GN0", "o", "RS-422 driver → head SYNC±"),
@@ -101,10 +102,10 @@ ULX3S_PINS = {
     "busy": ("GN16", "o", "optocoupler → PLC: a job is checked or played"),
     "ready": ("GP17", "o", "optocoupler → PLC: armed and past the MO lead"),
     "part_sensor": ("GN17", "spare", "optocoupler ← part sensor"),
-    "encoder0_a": ("GP18", "spare", "RS-422 receiver ← encoder 0 A"),
-    "encoder0_b": ("GN18", "spare", "RS-422 receiver ← encoder 0 B"),
-    "encoder1_a": ("GP19", "spare", "RS-422 receiver ← encoder 1 A"),
-    "encoder1_b": ("GN19", "spare", "RS-422 receiver ← encoder 1 B"),
+    "encoder_x_a": ("GP18", "i", "RS-422 receiver ← ENCODER X A (marking on the fly)"),
+    "encoder_x_b": ("GN18", "i", "RS-422 receiver ← ENCODER X B"),
+    "encoder_y_a": ("GP19", "i", "RS-422 receiver ← ENCODER Y A"),
+    "encoder_y_b": ("GN19", "i", "RS-422 receiver ← ENCODER Y B"),
 }
 
 
@@ -164,6 +165,10 @@ def ulx3s_platform(device="25F"):
         # Pulled down: with nothing on it the line is low, and the head reads as missing.
         Resource("head_status", 0, _pins("xy2_status", direction="i"),
                  Attrs(**lvcmos, PULLMODE="DOWN")),
+        Resource("encoder", 0,
+                 *(Subsignal(f"{axis}_{line}", _pins(f"encoder_{axis}_{line}", direction="i"))
+                   for axis in "xy" for line in "ab"),
+                 Attrs(**lvcmos)),
         Resource("machine", 0,
                  Subsignal("start_n", _pins("start_n", direction="i"), Attrs(PULLMODE="UP")),
                  Subsignal("busy", _pins("busy", direction="o")),
@@ -199,10 +204,10 @@ class ULX3SScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
                baud=None, wobble=True, interpolation=True, delays=True, pixel_lines=True,
-               player=True, head_status=True):
+               player=True, head_status=True, fly=True):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
-        RTC delays, pixel lines, wobble, the job player, the head's status, both links). ``clock`` in Hz (None: 24 MHz) must
+        RTC delays, pixel lines, wobble, the job player, the head's status, marking on the fly, both links). ``clock`` in Hz (None: 24 MHz) must
         be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
         where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
@@ -218,7 +223,16 @@ class ULX3SScanner(Elaboratable):
             wobble=wobble and "vector" in modes,
             spiral_interpolation=interpolation, vector_delays=delays,
             pixel_lines=pixel_lines and delays and "vector" in modes,
-            player=player and "vector" in modes, links=LINKS, head_status=head_status)
+            player=player and "vector" in modes, links=LINKS, head_status=head_status,
+            fly=fly)
+
+    def _encoder_pins(self, platform):
+        """The encoders' lines, by the top's port names (none without marking on the fly)."""
+        if not self.config.fly:
+            return {}
+        encoder = platform.request("encoder", 0, dir="-")
+        return {f"encoder_{axis}_{line}": getattr(encoder, f"{axis}_{line}")
+                for axis in "xy" for line in "ab"}
 
     def elaborate(self, platform):
         m = Module()
@@ -245,7 +259,8 @@ class ULX3SScanner(Elaboratable):
             "interlock_open": platform.request("interlock", 0, dir="-"),
             "laser_alarm": platform.request("laser_alarm", 0, dir="-"),
             **({"xy2_status": platform.request("head_status", 0, dir="-")}
-               if self.config.head_status else {})})
+               if self.config.head_status else {}),
+            **self._encoder_pins(platform)})
         plain_outputs(m, scanner, {"uart_tx": uart.tx, "spi_cipo": spi.cipo})
         running_led(m, scanner, platform.request("led", 0, dir="-"))
         if self.config.player:

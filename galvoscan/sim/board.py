@@ -19,6 +19,7 @@ the host's clock.
 
 import os
 import select
+from dataclasses import dataclass
 import threading
 import time
 from collections import deque
@@ -39,11 +40,21 @@ from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
 
-__all__ = ["SimulatedBoard", "PTYServer", "SimTransport", "SimSPITransport",
+__all__ = ["SimulatedBoard", "Belt", "PTYServer", "SimTransport", "SimSPITransport",
            "BACKENDS",
            "LASER_PINS", "PIN_FIELDS"]
 
 
+
+
+@dataclass
+class Belt:
+    """The conveyor's encoder (:mod:`.belt`): its rate, count and the glitches to come."""
+    axis: str = "x"
+    counts_per_s: int = 0
+    count: int = 0
+    fraction: int = 0
+    glitch_periods: int = 0
 
 
 class SimulatedBoard:
@@ -117,6 +128,9 @@ class SimulatedBoard:
         ``("bad_stop", byte)`` (appended to only).
     start_pressed : bool
         The foot switch on ``start_n``, pressed (set by the host; the machine's period).
+    belt : :class:`Belt`
+        The conveyor's encoder on a build that marks on the fly (:meth:`belt_moves`; its
+        ``count``, and ``glitch_periods``: machine periods with both lines turned over).
     head_word : int or None
         The head's status word now (set by a test: a head that grows hot), sent from the
         next frame on; None: no head answers.
@@ -156,6 +170,17 @@ class SimulatedBoard:
                        self._engine(backend, say or (lambda line: None), **records))
         self.backend = self.engine.name
         self.run_for(1 / self.clk_freq)     # start the processes in this thread
+
+    def belt_moves(self, mm_s, counts_per_mm, *, axis="x"):
+        """Run the belt under the encoder on ``axis`` at ``mm_s`` (signed), its encoder giving
+        ``counts_per_mm`` counts a mm (every edge a count): from the next machine period on."""
+        if axis not in ("x", "y"):
+            raise ValueError(f"the belt's encoder is on x or y, not {axis!r}")
+        rate = round(mm_s * counts_per_mm)
+        if abs(rate) * self.machine_period_s > 1:
+            raise ValueError(f"{mm_s:g} mm/s at {counts_per_mm:g} counts/mm is more than a "
+                             f"count a machine period ({self.machine_period_s * 1e6:g} µs)")
+        self.belt.axis, self.belt.counts_per_s = axis, rate
 
     @staticmethod
     def _checked_head(word):
@@ -203,6 +228,7 @@ class SimulatedBoard:
         self.pins_every_clock = []
         self.interlock_closed, self.alarms_clear = self._machine_at_power_up
         self.head_word = self._head_at_power_up
+        self.belt = Belt()
         self.start_pressed = False
         self.flash = None
         if self.config is not None and self.config.player:

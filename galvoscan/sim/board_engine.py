@@ -13,6 +13,7 @@ from amaranth.hdl import C, ClockDomain, Elaboratable, Module, Signal
 from amaranth.sim import Simulator
 
 from .contract import LASER_PINS, PIN_FIELDS, SPI_IDLE_S, pack_pins
+from .belt import advance, lines
 from .head import status_frame_bits
 from .xy2_receiver import XY2Receiver
 
@@ -168,12 +169,24 @@ class PythonEngine:
             results.append("done")
 
     async def _machine(self, ctx):
-        # The interlock loop and the laser's alarm outputs, as the machine has them, and the
-        # foot switch.
+        # The interlock loop and the laser's alarm outputs, as the machine has them, the foot
+        # switch, and the belt's encoder (:mod:`.belt`).
         board = self.board
         alarm = getattr(board.top, "laser_alarm", None)
         start = getattr(board.top, "start_n", None)
+        fly = hasattr(board.top, "encoder_x_a")
+        period_fs = round(float(board.machine_period_s) * 1e15)
         while True:
+            if fly:
+                belt = board.belt
+                belt.count, belt.fraction = advance(belt.count, belt.fraction,
+                                                    belt.counts_per_s, period_fs)
+                a, b = lines(belt.count, inverted=belt.glitch_periods > 0)
+                belt.glitch_periods = max(0, belt.glitch_periods - 1)
+                for axis in "xy":
+                    on = axis == belt.axis
+                    ctx.set(getattr(board.top, f"encoder_{axis}_a"), a if on else 0)
+                    ctx.set(getattr(board.top, f"encoder_{axis}_b"), b if on else 0)
             ctx.set(board.top.interlock_open, 0 if board.interlock_closed else 1)
             if alarm is not None:
                 ctx.set(alarm, 0 if board.alarms_clear else 2 ** len(alarm) - 1)

@@ -16,7 +16,8 @@ from ..fields import Capabilities, HeadState, HeadStatus, Mode, PlayerStatus, St
 
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
            "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_REGISTERS",
-           "CORRECTION_REGISTERS", "PLAYER_REGISTERS", "HEAD_REGISTERS"]
+           "CORRECTION_REGISTERS", "PLAYER_REGISTERS", "HEAD_REGISTERS",
+           "FLY_REGISTERS"]
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,8 @@ class Register:
     fixed: bool = False
     #: The build options it comes with (all of them): scan modes (``"spiral"``, ``"raster"``,
     #: ``"vector"``) and stages (``"interpolation"``, ``"delays"``, ``"wobble"``,
-    #: ``"correction"``, ``"laser"``, ``"player"``, ``"head"``); a build without one answers its address
+    #: ``"correction"``, ``"laser"``, ``"player"``, ``"head"``, ``"fly"``); a build without one
+    #: answers its address
     #: as unknown.
     needs: tuple = ()
 
@@ -356,6 +358,49 @@ def all_registers(table_points, correction_nodes):
         Register("head_bad", 0x1F, "ro", 0, 0, 0, "frames",
                  "status frames refused (a code other than 001, odd parity, or no head) since "
                  "reset; stops at 65535", needs=('head',)),
+        # --- marking on the fly ---------------------------------------------------------------
+        Register("fly_ctrl", 0x60, "rw", 0, 0, 15, "flags",
+                 "marking on the fly: bit 0 on (each point moved by scale × count on each "
+                 "axis, before the correction; 0 = RTC's fly_return: no offset), bit 1 the X "
+                 "count from the simulated encoder instead of ENCODER X, bit 2 likewise Y, "
+                 "bit 3 the simulated encoder counts down", width=4, needs=('fly',)),
+        Register("fly_clear", 0x61, "strobe", 0, 0, 1, "write 1",
+                 "zeroes both encoder counts and their illegal-step counts (a part's start: "
+                 "RTC's set_fly resets its counter)", width=1, needs=('fly',)),
+        Register("fly_scale_x", 0x62, "rw", 0, 0, WORD_MAX, "2^-16 units/count",
+                 "the X fly scale's low 16 bits: galvo units a count, 16 fraction bits "
+                 "(65536 = one unit a count); its top 8 bits are fly_scale_x_hi",
+                 needs=('fly',)),
+        Register("fly_scale_x_hi", 0x63, "rw", 0, -128, 127, "2^0 units/count",
+                 "the X fly scale's top 8 bits, two's complement (the sign: the belt's "
+                 "direction on the field); write it after fly_scale_x, with the fly off",
+                 width=8, signed=True, needs=('fly',)),
+        Register("fly_scale_y", 0x64, "rw", 0, 0, WORD_MAX, "2^-16 units/count",
+                 "the Y fly scale's low 16 bits (as fly_scale_x)", needs=('fly',)),
+        Register("fly_scale_y_hi", 0x65, "rw", 0, -128, 127, "2^0 units/count",
+                 "the Y fly scale's top 8 bits, two's complement (as fly_scale_x_hi)",
+                 width=8, signed=True, needs=('fly',)),
+        Register("fly_sim_period", 0x66, "rw", 0, 0, WORD_MAX, "clocks/count",
+                 "the simulated encoder (RTC's simulate_encoder, for trials without a belt): "
+                 "a count every this many clocks; 0 = stopped", needs=('fly',)),
+        Register("enc_x", 0x67, "ro", 0, 0, 0, "counts",
+                 "ENCODER X's count, bits 15:0 (every edge counts; stops at its 32-bit ends, "
+                 "never wraps)", needs=('fly',)),
+        Register("enc_x_hi", 0x68, "ro", 0, 0, 0, "counts",
+                 "ENCODER X's count, bits 31:16 (two's complement with enc_x; read hi, lo, hi "
+                 "again while the belt moves)", needs=('fly',)),
+        Register("enc_y", 0x69, "ro", 0, 0, 0, "counts",
+                 "ENCODER Y's count, bits 15:0", needs=('fly',)),
+        Register("enc_y_hi", 0x6A, "ro", 0, 0, 0, "counts",
+                 "ENCODER Y's count, bits 31:16", needs=('fly',)),
+        Register("enc_x_bad", 0x6B, "ro", 0, 0, 0, "steps",
+                 "ENCODER X's illegal steps (both lines changed at once: noise, or a belt too "
+                 "fast), never counted as a move; stops at 65535", needs=('fly',)),
+        Register("enc_y_bad", 0x6C, "ro", 0, 0, 0, "steps",
+                 "ENCODER Y's illegal steps", needs=('fly',)),
+        Register("fly_clipped", 0x6D, "ro", 0, 0, 0, "points",
+                 "points the fly offset pushed off the field, held at its edge with the laser "
+                 "off, since reset; stops at 65535", needs=('fly',)),
     ]
 
 
@@ -389,3 +434,6 @@ PLAYER_REGISTERS = _needing("player")
 
 #: Registers only a build with the head status receiver has.
 HEAD_REGISTERS = _needing("head")
+
+#: Registers only a build with marking on the fly has.
+FLY_REGISTERS = _needing("fly")

@@ -33,9 +33,10 @@ from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NO
                       WOBBLE_MAX_HZ, WORD_MAX)
 from .. import fields
 from . import register_list
-from ..fields import (STATUS_BITS, Capabilities, HeadState, HeadStatus, Mode, PlayerResult,
+from ..fields import (STATUS_BITS, Capabilities, FlyControl, HeadState, HeadStatus, Mode,
+                      PlayerResult,
                       PlayerState, PlayerStatus, Status, VectorOp, WobbleShape, pack)
-from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, HEAD_REGISTERS,
+from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, FLY_REGISTERS, HEAD_REGISTERS,
                             INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, PLAYER_REGISTERS,
                             WOBBLE_REGISTERS, Register,
@@ -72,10 +73,11 @@ class RegisterMap:
     vector_delays : bool
     pixel_lines : bool
     head : bool
+    fly : bool
     """
 
     def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
-                 wobble=False, vector_delays=False, pixel_lines=False, head=False):
+                 wobble=False, vector_delays=False, pixel_lines=False, head=False, fly=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -90,6 +92,7 @@ class RegisterMap:
         self.vector_delays = vector_delays
         self.pixel_lines = pixel_lines
         self.head = head
+        self.fly = fly
 
     def __iter__(self):
         return iter(self.registers)
@@ -112,8 +115,8 @@ class RegisterMap:
 
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
-                 vector_delays=False, pixel_lines=False, player=False, head=False, resets=None,
-                 fixed=None):
+                 vector_delays=False, pixel_lines=False, player=False, head=False, fly=False,
+                 resets=None, fixed=None):
     """The register map of a build (by default, the default build's: the same defaults as
     :class:`~galvoscan.gateware.top.GalvoScanTop`).
 
@@ -144,6 +147,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     head : bool
         The build has the head status receiver (else its ``head*`` registers are left out;
         ``head_state`` and ``head_check`` also need the laser).
+    fly : bool
+        The build marks on the fly (else its ``fly_*`` and ``enc_*`` registers are left out).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -174,7 +179,7 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     options |= {name for name, built in (
         ("correction", correction_nodes is not None), ("laser", laser), ("wobble", wobble),
         ("interpolation", spiral_interpolation), ("delays", vector_delays),
-        ("player", player), ("head", head)) if built}
+        ("player", player), ("head", head), ("fly", fly)) if built}
     every = {r.name: r for r in all_registers(table_points, correction_nodes or 2)}
     leave_out = {name for name, reg in every.items() if not set(reg.needs) <= options}
     if not vector_delays:
@@ -215,7 +220,7 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                        modes=modes, laser=bool(laser), wobble=bool(wobble),
                        vector_delays=bool(vector_delays) and Mode.VECTOR in modes,
                        pixel_lines=bool(pixel_lines and vector_delays) and Mode.VECTOR in modes,
-                       head=bool(head))
+                       head=bool(head), fly=bool(fly))
 
 
 def _host_map():
@@ -225,7 +230,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True,
+                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True, fly=True,
                         resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
@@ -240,4 +245,4 @@ BY_ADDRESS = HOST_MAP.by_address
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
-           WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS + HEAD_REGISTERS)
+           WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS + HEAD_REGISTERS + FLY_REGISTERS)

@@ -269,6 +269,13 @@ struct Board {
     // foot switch.
     int64_t machine_wake = 0;
     bool interlock_closed = true, alarms_clear = true, start_pressed = false;
+#if GS_FLY
+    // The belt's encoder (galvoscan/sim/belt.py): counts a second, the count and its fraction
+    // (counts × 10^-15), advanced each machine period; periods left with both lines turned
+    // over (a glitch); the axis whose encoder it drives (0: X, 1: Y).
+    int64_t belt_rate = 0, belt_count = 0, belt_fraction = 0, belt_glitch = 0;
+    int belt_axis = 0;
+#endif
 
 #if GS_PLAYER
     FlashModel flash;
@@ -443,6 +450,28 @@ struct Board {
     }
 
     void set_machine_pins() {
+#if GS_FLY
+        const int64_t femto = 1000000000000000LL;
+        belt_fraction += belt_rate * machine_fs;
+        int64_t whole = belt_fraction / femto, left = belt_fraction % femto;
+        if (left < 0) {             // (floor division, as Python's)
+            left += femto;
+            whole -= 1;
+        }
+        belt_count += whole;
+        belt_fraction = left;
+        int phase = int(((belt_count % 4) + 4) % 4);     // QUADRATURE_CYCLE: 00 10 11 01
+        bool a = phase == 1 || phase == 2, b = phase == 2 || phase == 3;
+        if (belt_glitch > 0) {
+            a = !a;
+            b = !b;
+            belt_glitch--;
+        }
+        top.GS_PORT_encoder_x_a.set<bool>(belt_axis == 0 && a);
+        top.GS_PORT_encoder_x_b.set<bool>(belt_axis == 0 && b);
+        top.GS_PORT_encoder_y_a.set<bool>(belt_axis == 1 && a);
+        top.GS_PORT_encoder_y_b.set<bool>(belt_axis == 1 && b);
+#endif
         top.GS_PORT_interlock_open.set<bool>(!interlock_closed);
 #if GS_ALARM_BITS > 0
         top.GS_PORT_laser_alarm.set<uint32_t>(alarms_clear ? 0u : (1u << GS_ALARM_BITS) - 1);
@@ -732,6 +761,20 @@ void gs_board_machine(void *handle, int interlock_closed, int alarms_clear) {
 
 // The head's status word on its STATUS line (-1: no head; a build with the receiver).
 void gs_board_head(void *handle, int word) { static_cast<Board *>(handle)->head_word = word; }
+
+// The belt (a build that marks on the fly): its rate in counts a second, its axis (0: X,
+// 1: Y), and machine periods of glitch to add. Returns its count (any build: 0 without).
+int64_t gs_board_belt(void *handle, int64_t counts_per_s, int axis, int64_t glitch) {
+#if GS_FLY
+    Board *board = static_cast<Board *>(handle);
+    board->belt_rate = counts_per_s;
+    board->belt_axis = axis;
+    board->belt_glitch += glitch;
+    return board->belt_count;
+#else
+    return 0;
+#endif
+}
 
 // The foot switch on start_n (a build with the job player).
 void gs_board_start(void *handle, int pressed) {

@@ -64,6 +64,7 @@ class CompiledEngine:
                                  "the job player")
         self._machine_sent = None   # the machine's inputs as last handed to the model
         self._head_sent = ()        # the head's word likewise (none yet: the model's is -1)
+        self._belt_sent = (0, "x")  # the belt's rate and axis likewise (the model's: still)
         self._status = (ctypes.c_int64 * 4)()
         self._counted = (0, 0)      # UART items and SPI transfers started, as last counted
         self._given = 0          # items of board.to_board already handed to the model
@@ -98,11 +99,20 @@ class CompiledEngine:
             lib.gs_board_machine(handle, int(machine[0]), int(machine[1]))
             lib.gs_board_start(handle, int(machine[2]))
             self._machine_sent = machine
+        belt = board.belt
+        if (belt.counts_per_s, belt.axis) != self._belt_sent or belt.glitch_periods:
+            self._belt_sent = (belt.counts_per_s, belt.axis)
+            lib.gs_board_belt(handle, belt.counts_per_s, "xy".index(belt.axis),
+                              belt.glitch_periods)
+            belt.glitch_periods = 0
         if board.head_word != self._head_sent:
             lib.gs_board_head(handle, -1 if board.head_word is None else board.head_word)
             self._head_sent = board.head_word
         status, (started, transfers) = self._status, self._counted
         outcome = lib.gs_board_run_until(handle, int(seconds * 1e15))
+        if self._belt_sent[0]:
+            # (The count as the model left it: a rate of the same value changes nothing.)
+            belt.count = lib.gs_board_belt(handle, belt.counts_per_s, "xy".index(belt.axis), 0)
         lib.gs_board_status(handle, status)
         for _ in range(status[0] - started):
             board.to_board.popleft()

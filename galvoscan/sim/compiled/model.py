@@ -101,6 +101,8 @@ class Design:
     player : bool
         The design has the job player's pins (:data:`PLAYER_ROLES`): the board gives it a
         flash and a foot switch.
+    fly : bool
+        The design has the encoders' lines (``encoder_x_a`` …): the board's belt drives them.
     head : bool
         The design has the head's STATUS line (``xy2_status``): the board's head answers on it.
     settle_falling : bool
@@ -119,6 +121,7 @@ class Design:
     alarm_bits: int = 0
     player: bool = False
     head: bool = False
+    fly: bool = False
     settle_falling: bool = False
     optimise: bool = True
     description: str = field(default="this design", compare=False)
@@ -130,6 +133,7 @@ class Design:
                   f"#define GS_ALARM_BITS {self.alarm_bits}",
                   f"#define GS_PLAYER {int(self.player)}",
                   f"#define GS_HEAD {int(self.head)}",
+                  f"#define GS_FLY {int(self.fly)}",
                   f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
@@ -160,8 +164,12 @@ def top_design(top):
     head = "xy2_status" in members
     if head:
         ports["xy2_status"] = "xy2_status"
+    fly = "encoder_x_a" in members
+    if fly:
+        ports.update({f"encoder_{axis}_{line}": f"encoder_{axis}_{line}"
+                      for axis in "xy" for line in "ab"})
     return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
-                  alarm_bits=alarm_bits, player=player, head=head)
+                  alarm_bits=alarm_bits, player=player, head=head, fly=fly)
 
 
 def _board_source():
@@ -195,6 +203,7 @@ class CompiledModel:
             "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
             "gs_board_start": (None, [p, ctypes.c_int]),
             "gs_board_head": (None, [p, ctypes.c_int]),
+            "gs_board_belt": (i64, [p, i64, ctypes.c_int, i64]),
             "gs_board_flash": (ctypes.c_int, [p, i64, ctypes.c_char_p, i64, ctypes.c_int]),
             "gs_board_run_until": (ctypes.c_int, [p, i64]),
             "gs_board_message": (ctypes.c_char_p, [p]),
