@@ -14,6 +14,8 @@ from .xy2_100 import XY2TransmitterSpec
 from .player import PlayerSpec
 from .vector import FreeDDASequencer, PixelLineSpec
 from .encoder import QuadratureSpec
+from .fly import ClippedOnWiresSpec, FlyOffsetSpec
+from ..gateware.fly.offset import ClippedOnWires, FlyOffset
 from .xy2_status import XY2StatusSpec
 from ..gateware.phy.xy2_status import XY2StatusReceiver
 from ..gateware.fly.encoder import QuadratureDecoder
@@ -22,7 +24,7 @@ from ..gateware.player.player import JobPlayer
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
            "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof", "encoder_proof",
-           "head_status_proof",
+           "head_status_proof", "fly_offset_proof", "fly_clipped_proof",
            "LASER_PROOF_PARAMETERS"]
 
 
@@ -340,6 +342,30 @@ def head_status_proof(*, make_receiver=None, helpers=True, name="head_status"):
         depth=4, cover_depth=90, bmc_depth=90)
 
 
+def fly_offset_proof(*, make_stage=None, name="fly_offset"):
+    """The fly offset stage: a point moved by the belt's offset is held in the field, never
+    wrapped, and flagged when held (a combinational stage: one clock is the whole proof)."""
+    make_stage = make_stage or FlyOffset
+    return Proof(
+        name=name,
+        description="fly offset: each axis is the point plus its offset held within 0 … "
+                    "65535, never wrapped; clipped exactly when held",
+        harness=lambda: FlyOffsetSpec(make_stage()),
+        depth=1, cover_depth=2)
+
+
+def fly_clipped_proof(*, held=True, make_gate=None, helpers=True, name=None):
+    """The gate that keeps the laser off while a point held at the field's edge is on the
+    wires, with the correction stage between (``held``) or without."""
+    make_gate = make_gate or (lambda: ClippedOnWires(held=held))
+    return Proof(
+        name=name or f"fly_clipped_{'held' if held else 'direct'}",
+        description="fly: marking passes exactly while the point on the wires was not held at "
+                    "the field's edge: a clipped point never fires",
+        harness=lambda: ClippedOnWiresSpec(make_gate(), helpers=helpers),
+        depth=3, cover_depth=6)
+
+
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
@@ -360,4 +386,7 @@ PROOFS = [
     pixel_line_proof("dark_lines"),
     encoder_proof(),
     head_status_proof(),
+    fly_offset_proof(),
+    fly_clipped_proof(held=True),
+    fly_clipped_proof(held=False),
 ]

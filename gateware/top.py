@@ -38,7 +38,7 @@ from .laser.marking_select import MarkingSelect
 from .phy.xy2_100 import FRAME_BITS, XY2Transmitter
 from .phy.xy2_status import XY2StatusReceiver
 from .fly.encoder import QuadratureDecoder, SimulatedEncoder
-from .fly.offset import FlyOffset
+from .fly.offset import ClippedOnWires, FlyOffset
 from .fly.scale import FlyScale
 from .player.player import JobPlayer
 from .player.start_input import StartInput
@@ -362,20 +362,17 @@ class GalvoScanTop(wiring.Component):
         for name in ("xy2_clk", "xy2_sync", "xy2_x", "xy2_y"):
             m.d.comb += getattr(self, name).eq(getattr(phy, name))
         if self.config.fly:
-            # The fly's clipped point, followed to the wires: held by the correction stage (one
-            # point at most), then the PHY's from the clock it takes it to the next take.
-            entering = self._fly.positions_out.valid & self._fly.positions_out.ready
-            taken = phy.position.valid & phy.position.ready
-            clipped_fly = Signal()
-            if self.correction is None:
-                m.d.comb += clipped_fly.eq(self._fly.clipped)
-            else:
-                held = Signal()
-                with m.If(entering):
-                    m.d.sync += held.eq(self._fly.clipped)
-                m.d.comb += clipped_fly.eq(held)
-            with m.If(taken):
-                m.d.sync += self._fly_on_wires.eq(clipped_fly)
+            # The fly's clipped point, followed to the wires (the correction stage holds one
+            # point at most): the laser is off while it is sent.
+            m.submodules.fly_clipped = clipped_on_wires = ClippedOnWires(
+                held=self.correction is not None)
+            m.d.comb += [
+                clipped_on_wires.entering.eq(self._fly.positions_out.valid &
+                                             self._fly.positions_out.ready),
+                clipped_on_wires.clipped.eq(self._fly.clipped),
+                clipped_on_wires.taken.eq(phy.position.valid & phy.position.ready),
+                self._fly_on_wires.eq(clipped_on_wires.on_wires),
+            ]
 
         # --- scan head status ---------------------------------------------------------------
         self._head = None

@@ -15,7 +15,7 @@ from ..points import FIELD_MAX, FieldPoint
 from .scale import OFFSET_BITS
 
 
-__all__ = ["FlyOffset"]
+__all__ = ["FlyOffset", "ClippedOnWires"]
 
 
 class FlyOffset(wiring.Component):
@@ -48,12 +48,82 @@ class FlyOffset(wiring.Component):
             moved = Signal(signed(OFFSET_BITS + 1), name=f"moved_{axis}")
             m.d.comb += moved.eq(self.positions_in.payload[axis] + getattr(self, f"offset_{axis}"))
             low, high = moved < 0, moved > FIELD_MAX
-            m.d.comb += self.positions_out.payload[axis].eq(
-                Mux(low, 0, Mux(high, FIELD_MAX, moved[:16])))
+            m.d.comb += self.positions_out.payload[axis].eq(self._held(moved, low, high))
             clips.append(low | high)
         m.d.comb += [
             self.positions_out.valid.eq(self.positions_in.valid),
             self.positions_in.ready.eq(self.positions_out.ready),
-            self.clipped.eq(clips[0] | clips[1]),
+            self.clipped.eq(self._flag(*clips)),
         ]
         return m
+
+    def _held(self, moved, low, high):
+        """The axis's position: the sum held at the field's edge."""
+        return Mux(low, 0, Mux(high, FIELD_MAX, moved[:16]))
+
+    def _flag(self, clipped_x, clipped_y):
+        """The point's flag: either axis held."""
+        return clipped_x | clipped_y
+
+
+class ClippedOnWires(wiring.Component):
+    """Follows each point's :attr:`FlyOffset.clipped` flag to the wires, and keeps the laser
+    off while a clipped point is on them.
+
+    A point leaves the fly stage (``entering``) into the correction stage, which holds one
+    point at most and hands it to the PHY (``taken``) at a frame's start, or with no such stage
+    straight into the PHY (``entering`` and ``taken`` on the same clock). The PHY sends the
+    point it took from the next clock until it takes the next one: :attr:`on_wires` is that
+    point's flag, and :attr:`marking_out` is ``marking_in`` while it is low.
+
+    Parameters
+    ----------
+    held : bool
+        A stage between holds the point (the correction stage); False: the PHY takes the
+        point as it leaves the fly stage.
+
+    Interface attributes
+    --------------------
+    entering, clipped : ``In(1)``
+        A point leaves the fly stage now; it was held at the field's edge.
+    taken : ``In(1)``
+        The PHY takes a point now.
+    marking_in : ``In(1)``
+    marking_out : ``Out(1)``
+    on_wires : ``Out(1)``
+        The point on the wires now was held at the field's edge.
+    """
+
+    entering: In(1)
+    clipped: In(1)
+    taken: In(1)
+    marking_in: In(1)
+    marking_out: Out(1)
+    on_wires: Out(1)
+
+    def __init__(self, *, held):
+        self.held = bool(held)
+        super().__init__()
+        #: The flag of the point the stage between holds (with ``held``).
+        self.held_clipped = Signal()
+
+    def elaborate(self, platform):
+        m = Module()
+        if self.held:
+            with m.If(self.entering):
+                m.d.sync += self.held_clipped.eq(self.clipped)
+            next_on_wires = self.held_clipped
+        else:
+            next_on_wires = self.clipped
+        with m.If(self._moves_on()):
+            m.d.sync += self.on_wires.eq(next_on_wires)
+        m.d.comb += self.marking_out.eq(self.marking_in & ~self._gate())
+        return m
+
+    def _moves_on(self):
+        """When the point on the wires changes: the PHY takes the next."""
+        return self.taken
+
+    def _gate(self):
+        """What keeps the laser off: the point on the wires clipped."""
+        return self.on_wires

@@ -10,7 +10,7 @@ import pytest
 
 from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_path_proof,
                                     correction_link_proof, correction_proof, encoder_proof,
-                                    head_status_proof,
+                                    fly_clipped_proof, fly_offset_proof, head_status_proof,
                                     laser_safety_proof, pixel_line_proof, player_proof,
                                     spi_frame_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
@@ -20,6 +20,7 @@ from galvoscan.formal.runner import run_sby
 from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS, SPI_TARGET_SOLVERS
 from broken_encoder import ENCODER_FAULTS, BrokenDecoder
 from broken_status import STATUS_FAULTS, BrokenReceiver
+from broken_fly import GATE_FAULTS, OFFSET_FAULTS, BrokenGate, BrokenOffset
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
@@ -214,3 +215,23 @@ def test_broken_status_receivers_fail_the_proof(fault, tmp_path):
     bmc = proof.check(tmp_path)
     assert bmc.status == "FAIL"
     assert property in failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(OFFSET_FAULTS))
+def test_broken_fly_offsets_fail_the_proof(fault, tmp_path):
+    _, property = OFFSET_FAULTS[fault]
+    proof = fly_offset_proof(make_stage=partial(BrokenOffset, fault), name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert property in failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(GATE_FAULTS))
+def test_broken_clipped_gates_fail_the_proof(fault, tmp_path):
+    _, held = GATE_FAULTS[fault]
+    proof = fly_clipped_proof(held=held, make_gate=partial(BrokenGate, fault), helpers=False,
+                              name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert "marking passes exactly while the point on the wires was not clipped" in \
+        failed_properties(bmc), (fault, bmc.failed)
