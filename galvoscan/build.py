@@ -87,7 +87,7 @@ PRESETS = {
     # A marking station: vector mode with the RTC delays, the correction stage, and the job
     # player (stand-alone from the flash, started by a foot switch), on the PLL's 24 MHz.
     # (The head status receiver does not fit beside them: 5,274 of 5,280 logic cells, which
-    # nextpnr cannot place.)
+    # nextpnr's static placer cannot place and HeAP places at 23.7 MHz, short of 24.)
     "marker": board_config("icebreaker", modes=("vector",), delays=True, player=True,
                            clock=24e6),
     # An engraver of photos and dense fills: vector mode with its delays and pixel lines (a
