@@ -448,7 +448,8 @@ def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None):
 class Report:
     """What a run did: ``segments`` sent, ``pulses`` the laser fired, the board's
     ``counters`` (``vec_underruns``, ``vec_stalls``, ``vec_rejected``, ``errors``),
-    ``clean`` (marked as planned), and on a simulated board ``marks_mm``, the marked points
+    ``clean`` (marked as planned), ``clipped`` (on the fly: points the belt carried past the
+    field's edge, held there unmarked), and on a simulated board ``marks_mm``, the marked points
     off the XY2-100 wires in field mm (None on a real board)."""
     stream: StreamReport
     marks_mm: np.ndarray = field(default=None)
@@ -468,6 +469,11 @@ class Report:
     @property
     def clean(self):
         return self.stream.clean
+
+    @property
+    def clipped(self):
+        """On the fly: points the belt carried past the field's edge, held there unmarked."""
+        return self.stream.clipped
 
 
 def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):

@@ -304,15 +304,15 @@ def _cmd_mark(args):
                 f"{counters['vec_rejected']}, errors {counters['errors']}" +
                 (f" (damaged on the link and sent again {report.resent} time(s): every "
                  f"frame landed)" if counters["errors"] else ""))
-            if not report.clean:
-                failed("the board refused segments or the queue ran dry: the job was not marked "
-                     "as planned (see the counts above)" +
-                     ("; the serial was not advanced" if serial is not None else ""))
             if report.clipped:
                 failed(f"the belt carried {report.clipped} point(s) past the field's edge, "
                        f"held there with the laser off: the part is not marked whole (did the "
                        f"belt run faster than {fly.speed_mm_s:g} mm/s?)" +
                        ("; the serial was not advanced" if serial is not None else ""))
+            if not report.clean:
+                failed("the board refused segments or the queue ran dry: the job was not marked "
+                     "as planned (see the counts above)" +
+                     ("; the serial was not advanced" if serial is not None else ""))
             if counter is not None and not args.sim:
                 try:
                     counter.advance()       # this part is marked: its number is taken

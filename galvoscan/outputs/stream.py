@@ -23,8 +23,8 @@ from its last point without marking it again. The one underrun the board counts 
 runs dry at the hold is the pause's, not a fault: the report leaves it out.
 
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
-first thing sent after it is ``arm = 0``, then ``run = 0`` (and a job on the fly's
-``fly_ctrl = 0``: RTC's ``fly_return``); the exception then goes on to the caller.
+first thing sent after it is ``arm = 0``, then ``run = 0`` (and a job on the fly's fly
+off: RTC's ``fly_return``); the exception then goes on to the caller.
 
 A job on the fly (its registers hold ``fly_ctrl``: :mod:`galvoscan.plan.fly`) is set up with
 the fly off; as it starts, once armed and past the MO lead, the encoder's count is zeroed
@@ -145,10 +145,11 @@ class StreamReport:
 
     @property
     def clean(self):
-        """No segment refused for a full queue, and no underrun. (Frames the link damaged are
-        counted in ``errors``, and were sent again: every write of a job that ends with a
-        report landed, acknowledged.)"""
-        return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
+        """No segment refused for a full queue, no underrun, and (on the fly) no point held
+        at the field's edge. (Frames the link damaged are counted in ``errors``, and were
+        sent again: every write of a job that ends with a report landed, acknowledged.)"""
+        return not self.clipped and \
+            not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
 
 
 class Pause:
@@ -326,11 +327,15 @@ class JobStreamer:
 
     def disarm(self):
         """``arm = 0`` then ``run = 0``, the guide laser off and a job on the fly's fly off
-        (``fly_ctrl = 0``); best effort (the link may be what failed)."""
-        names = ("arm", "run", "guide") + (("fly_ctrl",) if self._fly is not None else ())
-        for name in names:
+        (``fly_ctrl``'s on bit 0: the count still follows the encoder it was set to, so a
+        later layer of the part goes on from it); best effort (the link may be what
+        failed)."""
+        writes = [("arm", 0), ("run", 0), ("guide", 0)]
+        if self._fly is not None:
+            writes.append(("fly_ctrl", self._fly & ~pack(FlyControl, on=1)))
+        for name, value in writes:
             try:
-                self.board.write(name, 0)
+                self.board.write(name, value)
             except LinkLost:        # a lost link: the board's watchdog switches it off
                 return
             except Exception:

@@ -22,6 +22,7 @@ from galvoscan.cli import main
 from galvoscan.link.client import HostClient
 from galvoscan.outputs.stream import JobAborted, JobStreamer
 from galvoscan.sim.board import SimTransport, SimulatedBoard
+from galvoscan.sim.xy2_receiver import frame_of_each_pulse
 
 from fly_marks import pulsed_frames, writes
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
@@ -87,19 +88,22 @@ def ulx3s_sim():
 SIM_ULX3S = ["--sim", "--board", "ulx3s", "--baud", "1e6", "--timeout", "600", "--json"]
 
 
-def square_distance(point):
-    """Field mm from ``point`` to the square's outline."""
+def square_distance(point, centres=(OFFSET,)):
+    """Field mm from ``point`` to the nearest outline of the squares centred at ``centres``."""
     half = SIDE_MM / 2
-    dx, dy = abs(point[0] - OFFSET[0]), abs(point[1] - OFFSET[1])
-    if dx <= half and dy <= half:
-        return min(half - dx, half - dy)
-    return math.hypot(max(dx - half, 0), max(dy - half, 0))
+    nearest = math.inf
+    for centre in centres:
+        dx, dy = abs(point[0] - centre[0]), abs(point[1] - centre[1])
+        nearest = min(nearest, min(half - dx, half - dy) if dx <= half and dy <= half else
+                      math.hypot(max(dx - half, 0), max(dy - half, 0)))
+    return nearest
 
 
-def on_the_square(board, mm_s, axis, sign):
+def on_the_square(board, mm_s, axis, sign, centres=(OFFSET,)):
     """Each mark off the wires, in field mm, moved back by the belt's travel (``mm_s`` along
-    ``axis``, towards ``sign``) since the count was zeroed: the worst distance off the square
-    so, the worst without the move, the furthest travel (mm), and the marks moved back."""
+    ``axis``, towards ``sign``) since the count was zeroed: the worst distance off the squares
+    (centred at ``centres``) so, the worst without the move, the furthest travel (mm), and
+    the marks moved back."""
     cleared = writes(board.bytes_in, "fly_clear")
     assert len(cleared) == 1, cleared
     start = cleared[0][0]
@@ -112,20 +116,20 @@ def on_the_square(board, mm_s, axis, sign):
         furthest = max(furthest, travel)
         moved = point.copy()
         moved["XY".index(axis)] -= sign * travel
-        worst = max(worst, square_distance(moved))
-        worst_still = max(worst_still, square_distance(point))
+        worst = max(worst, square_distance(moved, centres))
+        worst_still = max(worst_still, square_distance(point, centres))
         back.append(moved)
     return worst, worst_still, furthest, np.array(back)
 
 
-def assert_whole_square(back):
+def assert_whole_square(back, centre=OFFSET):
     """A mark near each corner and along each side: the square was marked whole."""
     half = SIDE_MM / 2
     for cx in (-half, 0, half):
         for cy in (-half, 0, half):
             if cx == cy == 0:
                 continue
-            target = np.array(OFFSET) + (cx, cy)
+            target = np.array(centre) + (cx, cy)
             assert np.hypot(*(back - target).T).min() < 2 * HALF_PITCH_MM, target
 
 
@@ -134,7 +138,8 @@ def assert_whole_square(back):
 def test_the_simulated_encoder_carries_the_marks_and_they_lie_on_the_drawing(files, capsys):
     """`--fly X --fly-speed 100`: the simulated encoder at 1000 counts/mm (80 clocks a count at
     8 MHz), the fly set up off, turned on as the job starts with the count zeroed, and off
-    (fly_return) after the last pulse; the marks, moved back, lie on the square."""
+    (fly_return: the on bit; the count still the simulated encoder's) after the last pulse;
+    the marks, moved back, lie on the square."""
     with ulx3s_sim() as Board:
         assert main(mark_args(files, "--fly", "X", "--fly-speed", "100", *SIM_ULX3S)) == 0
     result = last_json(capsys)
@@ -142,7 +147,7 @@ def test_the_simulated_encoder_carries_the_marks_and_they_lie_on_the_drawing(fil
     assert [v for _, v in writes(board.bytes_in, "fly_sim_period")] == \
         [round(8e6 / (100 * SIM_COUNTS_PER_MM))]
     control = writes(board.bytes_in, "fly_ctrl")
-    assert [v for _, v in control] == [X_SIMULATED, X_SIMULATED | FLY_ON, 0]
+    assert [v for _, v in control] == [X_SIMULATED, X_SIMULATED | FLY_ON, X_SIMULATED]
     assert control[1][0] < board.pulses[0] and control[2][0] > board.pulses[-1]
     scale = round(UNITS_PER_MM / SIM_COUNTS_PER_MM * 65536)
     assert [v for _, v in writes(board.bytes_in, "fly_scale_x")] == [scale & 0xFFFF]
@@ -183,11 +188,75 @@ def test_a_real_encoder_under_the_boards_belt_carries_the_marks(files, capsys):
           f"({worst * UNITS_PER_MM:.2f} units) off the square after {furthest:.3f} mm of belt")
 
 
-def test_a_fault_mid_job_turns_the_fly_off(files):
-    """Through the API on a SimulatedBoard of the ULX3S: the interlock opens while the part is
-    marked; the job stops, and the fly is turned off (fly_return) after the laser is
-    disarmed, as at a job's end."""
-    board = SimulatedBoard(backend="compiled", **ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"]))
+# --- through the API, on one simulated ULX3S ---------------------------------------------------
+
+@pytest.fixture(scope="module")
+def api_board():
+    """A SimulatedBoard of the ULX3S's bitstream (8 MHz), reset for each test."""
+    return SimulatedBoard(backend="compiled", **ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"]))
+
+
+@pytest.fixture
+def board(api_board):
+    api_board.reset()
+    return api_board
+
+
+#: Two squares side by side, red and black: each a layer of its own.
+TWO_SQUARES = ('<svg xmlns="http://www.w3.org/2000/svg" width="8mm" height="4mm" '
+               'viewBox="0 0 8 4"><rect x="1" y="1" width="2" height="2" fill="none" '
+               'stroke="#ff0000"/><rect x="5" y="1" width="2" height="2" fill="none" '
+               'stroke="black"/></svg>')
+
+
+def test_layers_are_one_part_on_the_belt(files, board, tmp_path):
+    """A job of two layers on the fly (api.run): each layer set up and run on its own, the
+    count zeroed once, as the first starts, and counting on between the layers (the fly off
+    keeps the simulated encoder's count: 5 ms of belt were lost when it did not), so the
+    second layer's marks follow the part on from where the first left it: both squares'
+    marks, moved back by the belt's travel since that one zeroing, lie on the drawing."""
+    drawing = tmp_path / "two.svg"
+    drawing.write_text(TWO_SQUARES)
+    profile = api.load_profile(files / "machine.toml")
+    plan = api.plan(api.Job(drawings=[api.Drawing(str(drawing), offset_mm=OFFSET)],
+                            layers=[api.Layer("#ff0000", speed_mm_s=500)], speed_mm_s=1000,
+                            fly=api.Fly("X", speed_mm_s=100)), profile)
+    assert len(plan.vector_job.layers) == 2
+    report = api.run(plan, board)
+    assert report.clean and report.clipped == 0
+    assert [v for _, v in writes(board.bytes_in, "fly_ctrl")] == \
+        [X_SIMULATED, X_SIMULATED | FLY_ON, X_SIMULATED] * 2
+    centres = [(OFFSET[0] - 2, OFFSET[1]), (OFFSET[0] + 2, OFFSET[1])]
+    worst, still, furthest, back = on_the_square(board, 100, "X", +1, centres)
+    assert furthest > 1.0 and still > 10 * HALF_PITCH_MM
+    assert worst <= HALF_PITCH_MM, worst
+    for centre in centres:
+        assert_whole_square(back, centre)
+    print(f"two layers, 100 mm/s: worst {worst * 1000:.1f} µm off the squares after "
+          f"{furthest:.3f} mm of belt")
+
+
+def test_a_belt_faster_than_planned_holds_points_at_the_edge_unmarked(files, board):
+    """Planned for a 50 mm/s belt (2 mm of room: 40 ms), the board's belt runs at 900: the
+    points it carries past the field's edge are held there, none fired, and the report counts
+    them; the job is not clean."""
+    profile = api.load_profile(files / "machine.toml")
+    plan = api.plan(api.Job(drawings=[api.Drawing(str(files / "square.svg"),
+                                                  offset_mm=(52.0, 0.0))],
+                            fly=api.Fly("X", counts_per_mm=100, belt_speed_mm_s=50)), profile)
+    assert plan.fly.in_field_s == pytest.approx((55 - 53) / 50)
+    board.belt_moves(900, 100)
+    report = api.run(plan, board)
+    edge = {k for k, (_, x, _) in enumerate(board.frames) if x == 65535}
+    assert report.clipped > 0 and edge and not report.clean
+    fired = {k for k, _ in frame_of_each_pulse(board.sync_rises, board.pulses,
+                                               len(board.frames))}
+    assert fired and not edge & fired
+
+
+def test_a_fault_mid_job_turns_the_fly_off(files, board):
+    """The interlock opens while the part is marked; the job stops, and the fly is turned off
+    (fly_return) after the laser is disarmed, as at a job's end."""
     profile = api.load_profile(files / "machine.toml")
     plan = api.plan(api.Job(drawings=[api.Drawing(str(files / "square.svg"))],
                             fly=api.Fly("X", speed_mm_s=100)), profile)
@@ -205,11 +274,11 @@ def test_a_fault_mid_job_turns_the_fly_off(files):
                           fly=plan.fly.at_clock(board.clk_freq).registers())
     assert len(board.pulses) > 20
     control = writes(board.bytes_in, "fly_ctrl")
-    assert [v for _, v in control] == [X_SIMULATED, X_SIMULATED | FLY_ON, 0]
+    assert [v for _, v in control] == [X_SIMULATED, X_SIMULATED | FLY_ON, X_SIMULATED]
     disarmed = writes(board.bytes_in, "arm")[-1]
     assert disarmed[1] == 0 and control[1][0] < disarmed[0] < control[2][0]
     assert writes(board.bytes_in)[-1][1] == "fly_ctrl"
-    assert client.read("fly_ctrl") == 0
+    assert client.read("fly_ctrl") == X_SIMULATED
 
 
 # --- refused before any byte -----------------------------------------------------------------
