@@ -35,6 +35,7 @@ from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
 from .inputs.drawings import UNITS, load_drawing
 from .geometry.fill import HatchSet, LineOrder
+from .plan.fly import Fly, check_fly, plan_fly
 from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers, with_file_layers
 from .inputs.photo import Dither, PhotoSpec
@@ -54,10 +55,12 @@ from .build import PRESETS
 
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
-           "HatchSet", "LineOrder", "Job",
+           "HatchSet", "LineOrder", "Fly", "Job",
            "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
            "fields",
-           "job_settings", "job_wobble", "apply_wobble", "stream_layers", "load_lens_table",
+           "job_settings", "job_wobble", "apply_wobble", "check_fly", "plan_fly",
+           "stream_layers",
+           "load_lens_table",
            "load_profile",
            "default_profile", "SimulatedBoard", "PRESETS", "HostClient", "SerialTransport",
            "FTDISPITransport",
@@ -148,8 +151,9 @@ class Job:
     sets (:class:`~galvoscan.geometry.fill.HatchSet`), their line order, a contour fill, whether
     outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
     (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
-    ``[wobble]``; it needs a bitstream with the wobble stage). The numbers are checked against their
-    settings (:mod:`galvoscan.settings.laser`) here."""
+    ``[wobble]``; it needs a bitstream with the wobble stage), and ``fly``: marking on the fly
+    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly). The numbers are
+    checked against their settings (:mod:`galvoscan.settings.laser`) here."""
     drawings: tuple = ()
     texts: tuple = ()
     codes: tuple = ()
@@ -167,8 +171,11 @@ class Job:
     wobble_um: float = None
     wobble_along_um: float = None
     wobble_hz: float = None
+    fly: Fly = None
 
     def __post_init__(self):
+        if self.fly is not None and not isinstance(self.fly, Fly):
+            raise PlanError(f"a job's fly is an api.Fly, not {self.fly!r}")
         for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ):
             value = getattr(self, setting.name)
             if value is not None:
@@ -278,12 +285,14 @@ class Plan:
     layers when the job has them), the ``profile`` it was planned for, and its first
     object's ``placement`` and ``drawing`` (to turn marks back into the drawing's own
     coordinates); ``wobbles``: whether any of it wobbles (the board needs the wobble
-    stage)."""
+    stage); ``fly``: a job on the fly's :class:`~galvoscan.plan.fly.FlyPlan` (its registers,
+    and how long the part stays in the field against how long the job takes), else None."""
     vector_job: object
     profile: object
     placement: object
     drawing: object
     wobbles: bool = False
+    fly: object = None
 
     @property
     def estimate_s(self):
@@ -335,6 +344,8 @@ def plan_made(objects, job, profile):
     planned = plan_objects(objects, job, job_settings(job, profile), profile)
     planned.wobbles = apply_wobble(planned.vector_job, job_wobble(
         job.wobble_um, job.wobble_along_um, job.wobble_hz, profile), profile)
+    if job.fly is not None:
+        planned.fly = plan_fly(job.fly, planned.vector_job, profile)
     return planned
 
 
@@ -410,17 +421,20 @@ def load_lens_table(client, profile, say=None):
     upload_table(client, table)
 
 
-def stream_layers(streamer, vector_job, board, timeout_s):
+def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None):
     """Run ``vector_job`` (its layers one after the other, each at its own settings) with
     ``streamer``: the reports summed into one, and (``board``: a simulated board) the index
-    of each layer's first pulse."""
+    of each layer's first pulse. ``fly``: a job on the fly's registers
+    (:meth:`~galvoscan.plan.fly.FlyPlan.registers`), each layer's too, the count zeroed as
+    the first starts (the part is one)."""
     reports, starts = [], []
     parts = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
     for index, part in enumerate(parts):
         starts.append(len(board.pulses) if board is not None else None)
         try:
-            reports.append(streamer.run_vector(part.segments, part.registers,
-                                               timeout_s=timeout_s, ready_timeout_s=timeout_s))
+            reports.append(streamer.run_vector(part.segments, {**part.registers, **(fly or {})},
+                                               timeout_s=timeout_s, ready_timeout_s=timeout_s,
+                                               clear_count=index == 0))
         except JobAborted as error:
             # A layer marked whole is the part done only if it is the last.
             error.complete = error.complete and index == len(parts) - 1
@@ -434,7 +448,8 @@ def stream_layers(streamer, vector_job, board, timeout_s):
 class Report:
     """What a run did: ``segments`` sent, ``pulses`` the laser fired, the board's
     ``counters`` (``vec_underruns``, ``vec_stalls``, ``vec_rejected``, ``errors``),
-    ``clean`` (marked as planned), and on a simulated board ``marks_mm``, the marked points
+    ``clean`` (marked as planned), ``clipped`` (on the fly: points the belt carried past the
+    field's edge, held there unmarked), and on a simulated board ``marks_mm``, the marked points
     off the XY2-100 wires in field mm (None on a real board)."""
     stream: StreamReport
     marks_mm: np.ndarray = field(default=None)
@@ -455,6 +470,11 @@ class Report:
     def clean(self):
         return self.stream.clean
 
+    @property
+    def clipped(self):
+        """On the fly: points the belt carried past the field's edge, held there unmarked."""
+        return self.stream.clipped
+
 
 def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     """Mark ``plan`` on ``board``: a :class:`~galvoscan.sim.board.SimulatedBoard` (run in
@@ -466,15 +486,21 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     (None: ten times the estimate, a minute at least); ``progress(n)``: called as segments
     go; ``pause``: a :class:`Pause` that another thread may set to hold the job on the board
     (the feed stopped, the queue marked out, the laser disarmed) and clear
-    to let it go on. Returns a :class:`Report`."""
+    to let it go on. A plan on the fly needs a board with the fly (refused, nothing sent, on
+    one without); its simulated encoder counts in a simulated board's own clock, else in
+    the profile's ``[fly] board_clock_mhz``; a real encoder's belt is the board's
+    (``SimulatedBoard.belt_moves``). Returns a :class:`Report`."""
     simulated = isinstance(board, SimulatedBoard)
     client = HostClient(SimTransport(board)) if simulated else board
     if timeout_s is None:
         timeout_s = 1e4 if simulated else max(60.0, 10 * plan.estimate_s)
+    fly = None
+    if plan.fly is not None:
+        fly = (plan.fly.at_clock(board.clk_freq) if simulated else plan.fly).registers()
     load_lens_table(client, plan.profile, say)
     streamer = JobStreamer(client, progress=progress, pause=pause)
     report, _ = stream_layers(streamer, plan.vector_job, board if simulated else None,
-                              timeout_s)
+                              timeout_s, fly=fly)
     marks = None
     if simulated:
         points = [p for p in board.points() if p[2] > 0]

@@ -18,6 +18,7 @@ from ..inputs.photo import Dither
 from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
 from ..plan.pixel_lines import PHOTO_LINES
+from ..settings.fly import BELT_SPEED, ENCODER, FLY, FLY_DIRECTION, FLY_SPEED
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ)
 from .args import int_in, number_in, setting_keywords
@@ -45,6 +46,8 @@ GROUPS = {
     "wobble": "wobble (an ellipse laid over marked lines; needs a bitstream with the wobble "
               "stage; defaults: the profile's [wobble])",
     "placement": "placement",
+    "fly": "marking on the fly (a belt carries the part through the field as it is marked; "
+           "needs a bitstream with the fly: the ULX3S's; defaults: the profile's [fly])",
 }
 
 
@@ -231,6 +234,9 @@ OPTIONS = (
     Option("--rotate", "placement", dict(
         type=number_in("rotate", -360, 360), default=0.0, metavar="DEG",
         help="counter-clockwise, degrees"), section="drawing"),
+    # marking on the fly
+    *(_setting(setting, "fly", "job") for setting in (FLY, ENCODER, FLY_SPEED, FLY_DIRECTION,
+                                                      BELT_SPEED)),
 )
 
 _BY_DEST = {option.dest: option for option in OPTIONS}

@@ -78,9 +78,11 @@ def estimate_record(job, profile, power, prr, passes, preview):
     return record
 
 
-def mark_estimate_record(job, args, profile, *, parts, total_s):
+def mark_estimate_record(job, args, profile, *, parts, total_s, fly=None):
     """``mark --estimate --json``: the plan (a job of layers: its totals and each layer's
-    own), the parts and their time, the fill asked for."""
+    own), the parts and their time, the fill asked for; ``fly``: a job on the fly's
+    :class:`~galvoscan.plan.fly.FlyPlan` (how long the part stays in the field, how long the
+    job takes)."""
     speed, power, prr = job_settings_values(args, profile)
     record = estimate_record(job, profile, power, prr,
                               args.passes or profile.defaults.passes, args.preview)
@@ -101,6 +103,7 @@ def mark_estimate_record(job, args, profile, *, parts, total_s):
         "hatch_lines": args.hatch_lines,
         "contour": [args.contour.spacing_mm, args.contour.count] if args.contour
         else None}
+    record["fly"] = fly.record() if fly is not None else None
     return record
 
 

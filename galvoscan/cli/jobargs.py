@@ -69,7 +69,8 @@ def add_job_link_options(parser):
     link.add_argument("--board", choices=SIMULATED_BOARDS, default=None,
                       help="with --sim: whose bitstream the simulated board runs: the "
                            "iCEBreaker's default build (default; with the wobble stage for a "
-                           "wobbled job, the engraver's for a photo's pixel lines) or the ULX3S's, every feature at {ULX3S_CLOCK_HZ / 1e6:g} MHz "
+                           "wobbled job, the engraver's for a photo's pixel lines) or the "
+                           f"ULX3S's, every feature at {ULX3S_CLOCK_HZ / 1e6:g} MHz "
                            f"and {ULX3S_BAUD / 1e6:g} Mbaud")
     add_backend_option(link, default=None)
 
@@ -87,10 +88,13 @@ def has_link(args, profile):
 
 
 @contextlib.contextmanager
-def board_link(args, profile, *, wobble=False, pixel_lines=False):
+def board_link(args, profile, *, wobble=False, pixel_lines=False, belt=None):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage; ``pixel_lines``: a
-    simulated iCEBreaker runs the engraver's bitstream, which has them)."""
+    simulated iCEBreaker runs the engraver's bitstream, which has them; ``belt``: ``(mm_s,
+    counts_per_mm, axis)``, the simulated board's belt runs so under its encoder from the
+    start, as a real one would under a board; one line, nothing sent, for one its encoder
+    cannot count)."""
     if args.sim:
         # (The ULX3S's bitstream at its own rate unless told another: the profile's baud is
         # the real machine's link.)
@@ -104,6 +108,12 @@ def board_link(args, profile, *, wobble=False, pixel_lines=False):
             board = simulated_board(args, config=config, **contents)
         else:
             board = simulated_board(args, baud=baud_rate, **({"wobble": True} if wobble else {}))
+        if belt is not None:
+            mm_s, counts_per_mm, axis = belt
+            try:
+                board.belt_moves(mm_s, counts_per_mm, axis=axis)
+            except ValueError as error:
+                fail(f"the simulated board's belt: {error}")
         timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
         try:

@@ -76,6 +76,7 @@ def _describe(profile):
     else:
         jumps = f"{_n(galvo.jump_delay_us)} µs after every jump"
     power_reg = profile.power_register(d.power_percent)
+    fly = profile.fly
     rows = [
         ("profile", source),
         ("[field]", None),
@@ -106,6 +107,15 @@ def _describe(profile):
                   f"(laser_power {power_reg})"),
         ("pulse rate", f"{_n(d.prr_khz)} kHz (laser_prr {profile.prr_register(d.prr_khz)})"),
         ("passes", str(d.passes)),
+        ("[fly]", None),
+        ("encoder", "none (mark --fly then needs --encoder, or --fly-speed for the board's "
+                    "simulated encoder)" if fly.counts_per_mm is None else
+                    f"{_n(fly.counts_per_mm)} counts/mm"),
+        ("belt", f"towards {fly.direction}, " + (
+            "its top speed not set (mark --belt-speed)" if fly.belt_speed_mm_s is None
+            else f"at most {_n(fly.belt_speed_mm_s)} mm/s")),
+        ("board clock", f"{_n(fly.board_clock_mhz)} MHz (the simulated encoder counts in "
+                        f"it)"),
     ]
     width = max(len(name) for name, value in rows if value is not None)
     return [name if value is None else f"  {name:<{width}}  {value}" if name != "profile"

@@ -25,6 +25,7 @@ from ..outputs.link_budget import expected_underruns, link_segments_per_s
 from ..outputs.stream import JobStreamer, StreamReport
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..platforms.ulx3s import ULX3S_BAUD
+from ..settings.fly import BELT_SPEED, ENCODER, FLY_DIRECTION, FLY_SPEED
 from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link, link_baud,
                       job_settings_values, load_lens_table, progress_bar,
@@ -37,7 +38,8 @@ from .layers import add_wobble, describe_layers
 from .machine import add_machine_option, profile_from
 
 
-__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job"]
+__all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job",
+           "fly_from_args"]
 
 
 def job_from_args(args):
@@ -48,6 +50,41 @@ def job_from_args(args):
                 power_percent=args.power, prr_khz=args.prr, passes=args.passes,
                 hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                 contour=args.contour, outline=not args.no_outline, tolerance_mm=args.tolerance)
+
+
+#: The options that say how a job flies (``--fly`` says that it does).
+_FLY_OPTIONS = (ENCODER, FLY_SPEED, FLY_DIRECTION, BELT_SPEED)
+
+
+def fly_from_args(args):
+    """The command line's (and its job file's) :class:`~galvoscan.api.Fly`, or None (standing
+    still); one line and exit for an option of the fly without ``--fly``, or two that do not
+    go together."""
+    values = {setting: getattr(args, setting.flag.lstrip("-").replace("-", "_"), None)
+              for setting in _FLY_OPTIONS}
+    if args.fly is None:
+        given = [setting.flag for setting, value in values.items() if value is not None]
+        if given:
+            fail(f"{given[0]} is for marking on the fly: give --fly X or --fly Y too")
+        return None
+    try:
+        return api.Fly(args.fly, counts_per_mm=values[ENCODER],
+                       speed_mm_s=values[FLY_SPEED], belt_speed_mm_s=values[BELT_SPEED],
+                       direction=values[FLY_DIRECTION])
+    except ValueError as error:
+        fail(error)
+
+
+def _fly_plans(args, parts, profile, fly):
+    """Each part's :class:`~galvoscan.plan.fly.FlyPlan` (``fly``: the
+    :class:`~galvoscan.api.Fly`; None: not on the fly), checked: one line and exit for a part
+    that would leave the field before its job is done."""
+    if fly is None:
+        return [None] * len(parts)
+    try:
+        return [api.plan_fly(fly, job, profile) for job, *_ in parts]
+    except PlanError as error:
+        fail(error)
 
 
 def _plan(args, profile, serial=None):
@@ -153,7 +190,10 @@ def _cmd_mark(args):
         fail("a .job is in galvo units and marked as it is: there is no job to --save")
     use_job_file(args)
     profile = profile_from(args)
+    fly = fly_from_args(args)
     try:
+        if fly is not None:
+            api.check_fly(fly, profile)     # (what needs no plan: refused before one)
         counter, serials = part_serials(args, profile)
     except PlanError as error:
         fail(error)
@@ -170,6 +210,9 @@ def _cmd_mark(args):
         finally:
             bar.close()
     job, placement, drawing, profile, wobbles, say = parts[0]
+    flies = _fly_plans(args, parts, profile, fly)
+    if flies[0] is not None:
+        say(flies[0].line())
     if args.save:
         save_job_file(args, args.save)
         say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
@@ -190,7 +233,7 @@ def _cmd_mark(args):
             say("no board given (--port, --spi or --sim): nothing sent")
         if args.json:
             record = mark_estimate_record(job, args, profile, parts=len(parts),
-                                          total_s=total_s)
+                                          total_s=total_s, fly=flies[0])
             print(json.dumps(record))
         return 0
     if counter is not None and not args.sim:
@@ -203,9 +246,26 @@ def _cmd_mark(args):
     timeout = 1e4 if args.sim else max(60.0, 10 * job.estimate_s)
     reports = []
     pixel_lines = any(has_pixel_lines(part.segments) for part, *_ in parts)
-    with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines) as (client, board):
+    fly = flies[0]
+    # A real encoder on the simulated board: its belt runs at the top speed the plan was
+    # checked at, from before the first byte.
+    belt = (fly.speed_mm_s, fly.counts_per_mm, fly.axis.lower()) \
+        if fly is not None and not fly.simulated and args.sim else None
+    with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines, belt=belt) as \
+            (client, board):
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]
+            fly = flies[number]
+            if fly is not None and board is not None:
+                try:
+                    fly = fly.at_clock(board.clk_freq)
+                except PlanError as error:
+                    fail(f"on the simulated board's {board.clk_freq / 1e6:g} MHz clock: "
+                         f"{error}")
+                if number == 0 and fly.sim_period != flies[0].sim_period:
+                    say(f"on the simulated board's {board.clk_freq / 1e6:g} MHz clock the "
+                        f"simulated encoder counts every {fly.sim_period} clocks "
+                        f"({fly.speed_mm_s:.6g} mm/s)")
             bar = progress_bar(None if args.frame else len(part.segments), "seg")
             streamer = JobStreamer(client, progress=bar.update)
 
@@ -226,7 +286,9 @@ def _cmd_mark(args):
                         frame_job(streamer, profile, hull_outline(part.paths_mm), args.frame,
                                   part.registers, timeout_s=timeout, say=say, what="job")
                         return 0
-                    report, layer_starts = api.stream_layers(streamer, part, board, timeout)
+                    report, layer_starts = api.stream_layers(
+                        streamer, part, board, timeout,
+                        fly=fly.registers() if fly is not None else None)
                     reports.append(report)
             finally:
                 bar.close()
@@ -242,6 +304,11 @@ def _cmd_mark(args):
                 f"{counters['vec_rejected']}, errors {counters['errors']}" +
                 (f" (damaged on the link and sent again {report.resent} time(s): every "
                  f"frame landed)" if counters["errors"] else ""))
+            if report.clipped:
+                failed(f"the belt carried {report.clipped} point(s) past the field's edge, "
+                       f"held there with the laser off: the part is not marked whole (did the "
+                       f"belt run faster than {fly.speed_mm_s:g} mm/s?)" +
+                       ("; the serial was not advanced" if serial is not None else ""))
             if not report.clean:
                 failed("the board refused segments or the queue ran dry: the job was not marked "
                      "as planned (see the counts above)" +
@@ -266,6 +333,8 @@ def _cmd_mark(args):
                 rejected=counts["vec_rejected"], errors=counts["errors"])
             if part.layers:     # each layer's own, in "layers"
                 record["pulses_per_point"] = None
+            if fly is not None:
+                record["fly"] = dict(fly.record(), clipped=every.clipped)
             print(json.dumps(record))
         elif args.json:
             print(json.dumps({"segments": every.segments, "pulses": every.pulses,

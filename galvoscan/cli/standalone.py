@@ -45,6 +45,9 @@ def _cmd_store(args):
     if args.repeat != 1:
         fail("an image holds one part: --repeats N plays it N times a start (the same serial "
              "each time)")
+    if args.fly is not None:
+        fail("the stand-alone job player does not mark on the fly: `galvoscan mark --fly` "
+             "runs such a job from the PC")
     profile = profile_from(args)
     try:
         _, (serial,) = part_serials(args, profile)

@@ -21,7 +21,8 @@ ATTRIBUTES = {f"{key.section}_{key.name}": f"{key.section}.{key.name}"
               for keys in SECTIONS.values() for key in keys}
 
 #: The type meerk40t shows a key of each kind as (a pair as text: ``20, 200``).
-_TYPES = {"number": float, "integer": int, "bool": bool, "text": str, "path": str, "pair": str}
+_TYPES = {"number": float, "integer": int, "bool": bool, "text": str, "path": str, "pair": str,
+          "choice": str}
 
 
 def _range(key):

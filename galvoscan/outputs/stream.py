@@ -23,8 +23,15 @@ from its last point without marking it again. The one underrun the board counts 
 runs dry at the hold is the pause's, not a fault: the report leaves it out.
 
 Whatever stops a job early (Ctrl-C, a lost link, a board fault, an error in this code), the
-first thing sent after it is ``arm = 0``, then ``run = 0``; the exception then goes on to the
-caller. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
+first thing sent after it is ``arm = 0``, then ``run = 0`` (and a job on the fly's fly
+off: RTC's ``fly_return``); the exception then goes on to the caller.
+
+A job on the fly (its registers hold ``fly_ctrl``: :mod:`galvoscan.plan.fly`) is set up with
+the fly off; as it starts, once armed and past the MO lead, the encoder's count is zeroed
+(``fly_clear``: the part is where the drawing is) and the fly turned on, just before
+``run = 1``; it is turned off as the job ends, however it ends. The points the fly carried
+past the field's edge (held there, the laser off: ``fly_clipped``) are counted in the
+report. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
 (``errors``) is counted and reported, and :class:`StreamReport` says how many.
 """
 
@@ -33,8 +40,8 @@ import threading
 import time
 from dataclasses import dataclass, field
 
-from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, HeadState, Mode,
-                                    Status, VECTOR_QUEUE_DEPTH)
+from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, FlyControl,
+                                    HeadState, Mode, Status, VECTOR_QUEUE_DEPTH, pack)
 from ..geometry.corners import corner_frames
 from ..geometry.segments import LINE, PIXELS, has_pixel_lines
 from ..link.client import ClientError, LinkLost, encode_write
@@ -110,6 +117,9 @@ class StreamReport:
         Times a :class:`Pause` held the job. The underrun the board counts as its queue runs
         dry at a hold (one a hold at most: the feed had stopped on purpose) is not in
         ``counters``.
+    clipped : int
+        A job on the fly: points the belt carried past the field's edge, held there with the
+        laser off (not marked).
     """
     segments: int = 0
     counters: dict = field(default_factory=dict)
@@ -117,6 +127,7 @@ class StreamReport:
     seconds: float = 0.0
     resent: int = 0
     holds: int = 0
+    clipped: int = 0
 
     @classmethod
     def total(cls, reports):
@@ -129,14 +140,16 @@ class StreamReport:
                 counters[name] = counters.get(name, 0) + value
         return cls(segments=sum(r.segments for r in reports), counters=counters,
                    pulses=sum(r.pulses for r in reports), seconds=sum(r.seconds for r in reports),
-                   resent=sum(r.resent for r in reports), holds=sum(r.holds for r in reports))
+                   resent=sum(r.resent for r in reports), holds=sum(r.holds for r in reports),
+                   clipped=sum(r.clipped for r in reports))
 
     @property
     def clean(self):
-        """No segment refused for a full queue, and no underrun. (Frames the link damaged are
-        counted in ``errors``, and were sent again: every write of a job that ends with a
-        report landed, acknowledged.)"""
-        return not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
+        """No segment refused for a full queue, no underrun, and (on the fly) no point held
+        at the field's edge. (Frames the link damaged are counted in ``errors``, and were
+        sent again: every write of a job that ends with a report landed, acknowledged.)"""
+        return not self.clipped and \
+            not any(self.counters.get(name) for name in ("vec_underruns", "vec_rejected"))
 
 
 class Pause:
@@ -229,6 +242,9 @@ class JobStreamer:
         self._holds = self._held_underruns = 0
         self._pulses_seen = None
         self._capabilities = None
+        self._fly = None            # a job on the fly's fly_ctrl (the fly on), while it runs
+        self._fly_clear = True
+        self._clipped = 0
         self.pulses = 0
         #: Segments the board's queue holds, read by :meth:`check_ready` (None before).
         self.queue_depth = None
@@ -310,11 +326,16 @@ class JobStreamer:
     # --- stopping ------------------------------------------------------------------------------
 
     def disarm(self):
-        """``arm = 0`` then ``run = 0`` and the guide laser off; best effort (the link may be
-        what failed)."""
-        for name in ("arm", "run", "guide"):
+        """``arm = 0`` then ``run = 0``, the guide laser off and a job on the fly's fly off
+        (``fly_ctrl``'s on bit 0: the count still follows the encoder it was set to, so a
+        later layer of the part goes on from it); best effort (the link may be what
+        failed)."""
+        writes = [("arm", 0), ("run", 0), ("guide", 0)]
+        if self._fly is not None:
+            writes.append(("fly_ctrl", self._fly & ~pack(FlyControl, on=1)))
+        for name, value in writes:
             try:
-                self.board.write(name, 0)
+                self.board.write(name, value)
             except LinkLost:        # a lost link: the board's watchdog switches it off
                 return
             except Exception:
@@ -485,6 +506,12 @@ class JobStreamer:
         if armed:
             self.board.write("arm", 1)
             self.wait_ready(ready_timeout_s)
+        if self._fly is not None:
+            # The part is where the drawing is now: the count from here (unless a layer
+            # before this one started it), the fly on, then the run.
+            self.board.write_many([*([("fly_clear", 1)] if self._fly_clear else []),
+                                   ("fly_ctrl", self._fly), ("run", 1)])
+            return
         self.board.write("run", 1)
 
     def _taken(self):
@@ -508,6 +535,7 @@ class JobStreamer:
         taken_before = self._taken() if total is not None else None
         self.sent = 0
         self._holds = self._held_underruns = 0
+        self._clipped = 0
         retries = getattr(self.board, "retries", 0)
         try:
             sent = body()
@@ -537,7 +565,7 @@ class JobStreamer:
         return StreamReport(
             segments=sent, pulses=self.pulses - first, seconds=time.monotonic() - started,
             counters=counters, resent=getattr(self.board, "retries", 0) - retries,
-            holds=self._holds)
+            holds=self._holds, clipped=self._clipped)
 
     def _ending(self, error, taken_before, total):
         """``error`` as a :class:`JobAborted` that says how far the job got."""
@@ -576,22 +604,34 @@ class JobStreamer:
         return registers
 
     def run_vector(self, segments, registers, *, ready_timeout_s=5.0, timeout_s=60.0,
-                   armed=True):
+                   armed=True, clear_count=True):
         """A whole vector job: checks, parameters, arm, stream, wait, disarm, report.
 
         ``registers`` are written after ``mode = vector`` and ``run = 0`` (pitch, pulses per
         point, jump delay, power, PRR …). With ``armed`` false the job runs with the laser
-        off (framing with the guide laser)."""
+        off (framing with the guide laser). A job on the fly (``registers`` hold ``fly_ctrl``,
+        with the fly off) turns it on as it starts, the count zeroed first unless
+        ``clear_count`` is false (a later layer of the same part: the belt has carried it on
+        since the first)."""
         segments = job_segments(segments)
         registers = self._without_missing_delays(registers)
         if has_pixel_lines(segments) and not self.capabilities().pixel_lines:
             raise JobAborted("the board's bitstream has no pixel lines (build --preset "
                              "engraver has them, and the ULX3S's): mark the photo as runs "
                              "with --image-lines runs; nothing was sent")
+        fly = "fly_ctrl" in registers
+        if fly and not self.capabilities().fly:
+            raise JobAborted("the board's bitstream has no marking on the fly (the ULX3S's "
+                             "has it): mark the job standing still, without --fly; nothing "
+                             "was sent")
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
             self.verify(written)
+            if fly:
+                self._fly = written["fly_ctrl"] | pack(FlyControl, on=1)
+                self._fly_clear = clear_count
+                clipped = self.board.read("fly_clipped")
             self._watchdog_ms = self.board.read("watchdog")
             corners = corner_frames(segments, written["polygon_delay"]) \
                 if written.get("polygon_scaled") else None
@@ -602,8 +642,13 @@ class JobStreamer:
             if registers.get("wob_shape"):
                 # A later job that does not ask for wobble must not inherit it.
                 self.board.write("wob_shape", 0)
+            if fly:
+                self._clipped = (self.board.read("fly_clipped") - clipped) & _COUNTER_TOP
             return sent
-        return self._job(body, total=len(segments))
+        try:
+            return self._job(body, total=len(segments))
+        finally:
+            self._fly = None
 
     def run_area(self, registers, *, pulses, timeout_s, ready_timeout_s=5.0):
         """A spiral or raster job: set up, arm, run until the laser has fired ``pulses``

@@ -152,6 +152,11 @@ def _check(value, key, where):
         if not isinstance(value, bool):
             bad("true or false")
         return value
+    if key.kind == "choice":
+        choices = key.setting.choices
+        if value not in choices:
+            bad(" or ".join(f'"{c}"' for c in choices))
+        return value
     if key.kind == "pair":
         if not (isinstance(value, list) and len(value) == 2 and
                 all(_is_number(v) and _in_range(v, key) for v in value)):

@@ -55,7 +55,7 @@ from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
-           "GalvoSection", "JobDefaults", "WobbleSection", "load_profile", "parse_profile",
+           "GalvoSection", "JobDefaults", "WobbleSection", "FlySection", "load_profile", "parse_profile",
            "read_profile_text", "default_profile",
            "DEFAULT_PROFILE_NAME", "SECTIONS", "FULL_RANGE", "FRAME_US",
            "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX"]
@@ -158,6 +158,18 @@ class WobbleSection:
 
 
 @dataclass(frozen=True)
+class FlySection:
+    #: The belt's encoder, counts a mm (every edge), or None: no encoder.
+    counts_per_mm: Optional[float] = _default("fly", "counts_per_mm")
+    #: Which way the belt carries the part along the fly's axis: ``"+"`` or ``"-"``.
+    direction: str = _default("fly", "direction")
+    #: The belt's top speed, mm/s, or None: not said (``mark --belt-speed`` then).
+    belt_speed_mm_s: Optional[float] = _default("fly", "belt_speed_mm_s")
+    #: The board's system clock, MHz: the simulated encoder's period is in its clocks.
+    board_clock_mhz: float = _default("fly", "board_clock_mhz")
+
+
+@dataclass(frozen=True)
 class MachineProfile:
     """A machine profile, checked. Two profiles are equal if their settings are (where they were
     read from is not compared)."""
@@ -168,6 +180,7 @@ class MachineProfile:
     galvo: GalvoSection = GalvoSection()
     defaults: JobDefaults = JobDefaults()
     wobble: WobbleSection = WobbleSection()
+    fly: FlySection = FlySection()
     #: The file it was read from, or None for the built-in defaults.
     source: Optional[Path] = _field(default=None, compare=False)
     _table: object = _field(default=None, compare=False, repr=False)
@@ -287,6 +300,9 @@ class MachineProfile:
                          "prr_khz": self.defaults.prr_khz, "passes": self.defaults.passes},
             "wobble": {"across_um": self.wobble.across_um, "along_um": self.wobble.along_um,
                        "freq_hz": self.wobble.freq_hz},
+            "fly": {"counts_per_mm": self.fly.counts_per_mm, "direction": self.fly.direction,
+                    "belt_speed_mm_s": self.fly.belt_speed_mm_s,
+                    "board_clock_mhz": self.fly.board_clock_mhz},
             "derived": {
                 "units_per_mm": self.units_per_mm,
                 "mm_per_unit": self.mm_per_unit,
@@ -309,7 +325,8 @@ def default_profile():
 # --- reading ---------------------------------------------------------------------------------
 
 _SECTION_CLASSES = {"field": FieldSection, "link": LinkSection, "laser": LaserSection,
-                    "galvo": GalvoSection, "defaults": JobDefaults, "wobble": WobbleSection}
+                    "galvo": GalvoSection, "defaults": JobDefaults, "wobble": WobbleSection,
+                    "fly": FlySection}
 assert all(tuple(k.name for k in keys) == tuple(_SECTION_CLASSES[name].__dataclass_fields__)
            for name, keys in SECTIONS.items())
 

@@ -170,4 +170,24 @@ along_um = {n(d.wobble.along_um)}
 # Turns of the figure a second, in Hz: with the line speed v, the figure repeats every
 # v / freq_hz along the line. {s("wobble", "freq_hz")}.
 freq_hz = {n(d.wobble.freq_hz)}
+
+[fly]
+# Marking on the fly (`galvoscan mark --fly X`, a bitstream with the fly: the ULX3S's): a
+# belt carries the part through the field, an encoder on the belt tells the board how far,
+# and every point follows it. The encoder's A and B go to the board's ENCODER input of
+# that axis (docs/hardware/wiring.md).
+# The encoder's counts a mm of belt, every edge of A and B counted (4 a line period),
+# counting up as the belt runs (else swap A and B). Left out: no encoder (`mark
+# --encoder`, or `--fly-speed` for the board's simulated one). {s("fly", "counts_per_mm")}.
+# counts_per_mm = 100
+# Which way the belt carries the part along the axis: "+" towards +X (or +Y), "-"
+# towards -X.
+direction = "{d.fly.direction}"
+# The belt's top speed, in mm/s: a job on the fly is refused if the part would leave the
+# field at it before the job is done. Left out: `mark --belt-speed`.
+# {s("fly", "belt_speed_mm_s")}.
+# belt_speed_mm_s = 200
+# The board's system clock, in MHz, as its bitstream was built: the simulated encoder
+# (`mark --fly-speed`) counts in its clocks. {s("fly", "board_clock_mhz")}.
+board_clock_mhz = {n(d.fly.board_clock_mhz)}
 """

@@ -18,6 +18,7 @@ from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.host.regmap import BY_NAME, FRAME_US
 from .laser import BAUD, LINK_TIMEOUT_S, PASSES, POWER, PRR, SPEED, TIMEOUT, WOBBLE, \
     WOBBLE_ALONG, WOBBLE_HZ
+from .fly import BELT_SPEED, BOARD_CLOCK, ENCODER, FLY_DIRECTION
 from .schema import ProfileKey, Setting
 
 
@@ -145,4 +146,17 @@ PROFILE = {
                         "along_um: no wobble"))),
                     ("along_um", WOBBLE_ALONG, dict(default=0.0)),
                     ("freq_hz", WOBBLE_HZ, dict(default=1000.0))),
+    # Marking on the fly: the machine's belt and the board's clock (`mark --fly`).
+    "fly": _keys("fly",
+                 ("counts_per_mm", ENCODER, dict(help=(
+                     "the belt's encoder: counts a mm of belt (every edge of A and B), counting "
+                     "up as the belt runs; none: no encoder (mark --fly then needs --encoder "
+                     "or --fly-speed)"))),
+                 ("direction", FLY_DIRECTION, dict(default="+", help=(
+                     "which way the belt carries the part along mark --fly's axis: + towards "
+                     "+X (or +Y), - towards -X"))),
+                 ("belt_speed_mm_s", BELT_SPEED, dict(help=(
+                     "the belt's top speed: a job on the fly is refused if the part would "
+                     "leave the field at it before the job is done"))),
+                 ("board_clock_mhz", BOARD_CLOCK, {})),
 }

@@ -392,7 +392,7 @@ def default_profile_again(meerk40t):
 
 #: What meerk40t shows a key of each kind as (a pair as text, "20, 200").
 SHOWN_AS = {"number": float, "integer": int, "bool": bool, "text": str, "path": str,
-            "pair": str}
+            "pair": str, "choice": str}
 
 
 def test_every_profile_key_is_a_device_setting(meerk40t, default_profile_again):

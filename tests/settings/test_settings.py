@@ -18,7 +18,7 @@ from galvoscan.gateware.host.regmap import BY_NAME
 from galvoscan.plan import layer_keys
 from galvoscan.profile import keys as profile_keys
 from galvoscan.profile.machine import ProfileError, default_profile, parse_profile
-from galvoscan.settings import laser, machine
+from galvoscan.settings import fly, laser, machine
 from galvoscan.settings.schema import (ProfileKey, Setting, SettingError, markdown_table,
                                        profile_table)
 
@@ -228,7 +228,7 @@ def test_every_profile_key_is_a_declaration():
     """The profile reads the declared keys and no others: each a setting declared in
     galvoscan.settings (none written in galvoscan.profile), its defaults the profile's."""
     assert profile_keys.SECTIONS is machine.PROFILE
-    declared = {id(value) for module in (laser, machine) for value in vars(module).values()
+    declared = {id(value) for module in (laser, machine, fly) for value in vars(module).values()
                 if isinstance(value, Setting)}
     profile = default_profile()
     for (section, name), key in _PROFILE_KEYS.items():
