@@ -3,8 +3,9 @@ field, a spooler and :class:`~.driver.GalvoscanDriver`.
 
 Its settings are few and its own: the machine profile it reads (a TOML file; empty: galvoscan's
 default profile), the link (``sim``: a simulated board in meerk40t's process; else a serial
-port: a board's, or the pseudo-terminal ``galvoscan board --sim`` serves) and the chord
-tolerance curves are flattened to. The field, the laser's PRR range and the operations'
+port: a board's, or the pseudo-terminal ``galvoscan board --sim`` serves), the chord
+tolerance curves are flattened to and how often the board's state is read for meerk40t's status
+bar (:mod:`.status`) while no job runs. The field, the laser's PRR range and the operations'
 defaults come from the profile; nothing is written back to it.
 
 The view makes the device's native units galvoscan's galvo units: 65536 across the lens field
@@ -25,7 +26,11 @@ from ..settings.laser import TOLERANCE
 from .driver import SIM, GalvoscanDriver
 
 
-__all__ = ["GalvoscanDevice"]
+__all__ = ["GalvoscanDevice", "STATUS_POLL_S"]
+
+#: How often the board's state is read for meerk40t's status bar while no job runs, s (the
+#: ``status_poll_s`` setting's default).
+STATUS_POLL_S = 2.0
 
 
 class GalvoscanDevice(Service, Status):
@@ -57,6 +62,12 @@ class GalvoscanDevice(Service, Status):
             {"attr": "tolerance_mm", "object": self, "default": TOLERANCE.default,
              "type": float, "label": _("Curve tolerance (mm)"),
              "tip": _("How far a flattened curve may stray from meerk40t's curve."),
+             "section": "_00_General"},
+            {"attr": "status_poll_s", "object": self, "default": STATUS_POLL_S, "type": float,
+             "label": _("Status poll (s)"),
+             "tip": _("How often the board's state (busy or ready, armed, the interlock, "
+                      "faults) is read for the status bar while no job runs; 0: only after "
+                      "jobs."),
              "section": "_00_General"},
         ])
         try:
@@ -107,6 +118,16 @@ class GalvoscanDevice(Service, Status):
         self.view.set_native_scale(scale, scale)
         self.view.transform(flip_y=True)
         self.signal("view;realized")
+
+    def service_attach(self, *args, **kwargs):
+        """The device made the active one: its board's state polled for the status bar."""
+        self.driver.status_bar.start()
+
+    def service_detach(self, *args, **kwargs):
+        self.driver.status_bar.stop()
+
+    def shutdown(self, *args, **kwargs):
+        self.driver.status_bar.stop()
 
     @property
     def safe_label(self):

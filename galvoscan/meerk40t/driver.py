@@ -7,6 +7,9 @@ console.
 
 Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
 after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`).
+
+The board's state goes to meerk40t's status bar (:mod:`.status`): from the job's own status
+reads, after each job (read before the job's outcome is said), and polled while the link is free.
 """
 
 import contextlib
@@ -23,6 +26,7 @@ from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
 from .cutcode import job_from_cuts
+from .status import BoardStatus, console_line
 
 
 __all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
@@ -39,12 +43,13 @@ class StopRequested(KeyboardInterrupt):
 class _StoppableClient:
     """A :class:`~galvoscan.link.client.HostClient` whose next exchange after :meth:`stop`
     raises :class:`StopRequested`, once; the disarming writes (``arm``, ``run`` or ``guide``
-    to 0) always go through."""
+    to 0) always go through. Each ``status`` it reads is handed to ``seen`` (its flags)."""
 
     _DISARM = ("arm", "run", "guide")
 
-    def __init__(self, client):
+    def __init__(self, client, seen):
         self._client = client
+        self._seen = seen
         self.stopping = threading.Event()
 
     def __getattr__(self, name):
@@ -57,7 +62,10 @@ class _StoppableClient:
 
     def read(self, name):
         self._check()
-        return self._client.read(name)
+        value = self._client.read(name)
+        if name == "status":
+            self._seen(Status.from_bits(value))
+        return value
 
     def write(self, name, value):
         if not (name in self._DISARM and value == 0):
@@ -91,6 +99,8 @@ class GalvoscanDriver:
         self._client = None
         self._lock = threading.Lock()
         self.state = "idle"
+        #: The board's state in meerk40t's status bar.
+        self.status_bar = BoardStatus(service, self.read_status)
 
     def __repr__(self):
         return f"GalvoscanDriver({self.name})"
@@ -109,6 +119,7 @@ class GalvoscanDriver:
         link = self.service.link
         if link == SIM:
             if self.board is None:
+                self.status_bar.show("starting the simulated board")
                 self.board = self.make_board()
             return HostClient(SimTransport(self.board)), lambda: None
         profile = self.service.profile
@@ -174,20 +185,25 @@ class GalvoscanDriver:
     @contextlib.contextmanager
     def _on_the_board(self, *, marking):
         """The board's client, opened for one job under the lock (the job talks through
-        ``self._client``, which meerk40t's stop can interrupt), the device busy (``marking``:
-        its laser status active) until the job ends, however it ends, and the link closed;
-        None (one line said, nothing sent) when it cannot be opened."""
+        ``self._client``, which meerk40t's stop can interrupt, and whose status reads go to the
+        status bar), the device busy (``marking``: its laser status active) until the job ends,
+        however it ends, the board's state read for the status bar, and the link closed; None
+        (one line said, nothing sent) when it cannot be opened. The job's outcome is said after
+        this (its ``last_report`` or ``last_error`` set once the link is free)."""
         with self._lock:
             self.state = "busy"
             if marking:
                 self.service.laser_status = "active"
+            self.status_bar.show("busy, marking a job" if marking else "busy, framing")
             try:
                 client, close = self._open()
             except (ClientError, OSError, ValueError) as error:
                 client = close = None
+                self.status_bar.failed(error)
                 self._refuse(f"the board cannot be opened, nothing sent: {error}")
             else:
-                self._client = _StoppableClient(client)
+                self._client = _StoppableClient(
+                    client, lambda flags: self.status_bar.seen(flags, marking=True))
             try:
                 yield client
             finally:
@@ -196,37 +212,45 @@ class GalvoscanDriver:
                 if marking:
                     self.service.laser_status = "idle"
                 if close is not None:
+                    try:
+                        self.status_bar.seen(Status.from_bits(client.read("status")))
+                    except (ClientError, OSError, ValueError) as error:
+                        self.status_bar.failed(error)
                     close()
 
     def _run(self, plan):
         with self._on_the_board(marking=True) as client:
             if client is None:
                 return
-            try:
-                report = api.run(plan, self._client, say=self._say)
-            except JobInterrupted as error:
-                # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
-                # emptied so that the next job is not refused (a board without vec_flush says
-                # so: `galvoscan send soft_reset=1` empties it).
-                more = ""
-                try:
-                    client.write("vec_flush", 1)
-                except (ClientError, ValueError, KeyError) as flush:
-                    more = f"; its queue could not be emptied ({flush})"
-                self._refuse(f"job stopped, laser disarmed: {error}{more}")
-                return
-            except JobAborted as error:
-                self._refuse(f"job stopped, laser disarmed: {error}")
-                return
-            except (ClientError, OSError) as error:
-                self._refuse(f"job stopped, laser disarm sent: the link failed: {error}")
-                return
+            report, failure = self._marked(plan, client)
+        if failure is not None:
+            self._refuse(failure)
+            return
         self.last_report = report
         counters = report.counters
         self._say(f"galvoscan: marked {report.segments} segments, {report.pulses} pulses"
                   f"{'' if report.clean else ' (NOT as planned)'}; underruns "
                   f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
                   f"{counters['vec_rejected']}, errors {counters['errors']}")
+
+    def _marked(self, plan, client):
+        """``(report, None)``: ``plan`` run on the board; ``(None, why)``: it stopped."""
+        try:
+            return api.run(plan, self._client, say=self._say), None
+        except JobInterrupted as error:
+            # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
+            # emptied so that the next job is not refused (a board without vec_flush says
+            # so: `galvoscan send soft_reset=1` empties it).
+            more = ""
+            try:
+                client.write("vec_flush", 1)
+            except (ClientError, ValueError, KeyError) as flush:
+                more = f"; its queue could not be emptied ({flush})"
+            return None, f"job stopped, laser disarmed: {error}{more}"
+        except JobAborted as error:
+            return None, f"job stopped, laser disarmed: {error}"
+        except (ClientError, OSError) as error:
+            return None, f"job stopped, laser disarm sent: the link failed: {error}"
 
     def frame(self, times):
         """Trace the last planned job's outline (its convex hull) ``times`` times with the
@@ -242,6 +266,7 @@ class GalvoscanDriver:
                          "([laser] guide)")
             return
         vector_job = plan.vector_job
+        failure = None
         with self._on_the_board(marking=False) as client:
             if client is None:
                 return
@@ -252,11 +277,12 @@ class GalvoscanDriver:
                           timeout_s=max(60.0, 10 * times * plan.estimate_s),
                           say=lambda line: self._say(f"galvoscan: {line}"), what="job")
             except (JobAborted, JobInterrupted) as error:
-                self._refuse(f"framing stopped, guide laser off: {error}")
-                return
+                failure = f"framing stopped, guide laser off: {error}"
             except (ClientError, OSError) as error:
-                self._refuse(f"framing stopped: the link failed: {error}")
-                return
+                failure = f"framing stopped: the link failed: {error}"
+        if failure is not None:
+            self._refuse(failure)
+            return
         self.last_report = "framed"
 
     def move_abs(self, x, y):
@@ -330,29 +356,35 @@ class GalvoscanDriver:
             finally:
                 close()
 
-    def board_status(self):
-        """The board's state in one line: marking (a job of this device's is running), else
-        read off the board: busy or ready, armed, the interlock, an alarm and the latched
-        faults."""
-        if self._client is not None:
-            return "marking a job"
-        if self.service.link == SIM and self.board is None:
-            return "no simulated board yet (the first job makes it)"
-        with self._lock:
+    def read_status(self, wait=True):
+        """The board's ``status`` flags, read over the device's link (a ``sim`` link's board
+        made if it is not yet); None when a job has the link and not ``wait``."""
+        if not self._lock.acquire(blocking=wait):
+            return None
+        try:
             client, close = self._open()
             try:
-                flags = Status.from_bits(client.read("status"))
+                return Status.from_bits(client.read("status"))
             finally:
                 close()
-        latched = [name for name in ("interlock", "watchdog", "alarm", "link")
-                   if getattr(flags, f"fault_{name}")]
-        return ", ".join([
-            "busy (segments queued)" if flags.vector_busy else "ready",
-            "armed" if flags.armed else "disarmed",
-            "interlock open" if flags.interlock_open else "interlock closed",
-            *(["laser alarm"] if flags.alarm else []),
-            (f"latched fault: {', '.join(latched)} (`galvoscan send fault_clear=1` clears it)"
-             if latched else "no fault latched")])
+        finally:
+            self._lock.release()
+
+    def board_status(self):
+        """The board's state in one line: marking (a job of this device's is running, as its
+        last status read saw the board), else read off the board: busy or ready, armed, the
+        interlock, an alarm and the latched faults (and shown in the status bar)."""
+        if self.service.link == SIM and self.board is None:
+            return "no simulated board yet (the first job or status poll makes it)"
+        try:
+            flags = None if self._client is not None else self.read_status(wait=False)
+        except (ClientError, OSError, ValueError) as error:
+            self.status_bar.failed(error)
+            raise
+        if flags is None:
+            return f"marking a job ({self.status_bar.text})"
+        self.status_bar.seen(flags)
+        return console_line(flags)
 
     # --- the console ---------------------------------------------------------------------------
 

@@ -13,7 +13,6 @@ import socket
 import subprocess
 import sys
 import time
-from importlib.metadata import entry_points
 from pathlib import Path
 
 import numpy as np
@@ -30,10 +29,8 @@ from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
 from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
 from meerk40t.core.cutcode.rastercut import RasterCut   # noqa: E402
 from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
-from meerk40t.kernel import Kernel                      # noqa: E402
 
 from galvoscan import api                               # noqa: E402
-from galvoscan.build import PRESETS                     # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.link.client import HostClient            # noqa: E402
 from galvoscan.meerk40t.cutcode import job_from_cuts    # noqa: E402
@@ -41,6 +38,7 @@ from galvoscan.meerk40t.driver import SIM               # noqa: E402
 from galvoscan.sim.board import PTYServer               # noqa: E402
 from galvoscan.profile.machine import default_profile   # noqa: E402
 
+from meerk40t_kernel import galvoscan_in_meerk40t       # noqa: E402
 from sim_board import SimBoard                          # noqa: E402
 from vector_board import pulses_per_frame               # noqa: E402
 
@@ -58,47 +56,13 @@ LEFT, TOP = RECT_MM[0] - FIELD_MM / 2, FIELD_MM / 2 - RECT_MM[1]
 RIGHT, BOTTOM = LEFT + RECT_MM[2], TOP - RECT_MM[3]
 
 
-def _kernel():
-    """meerk40t's kernel as its test/bootstrap.py makes it, with galvoscan's plugin loaded
-    from the entry point pip installed."""
-    kernel = Kernel("MeerK40t", "0.0.0-testing", "MeerK40t_TEST", ansi=False,
-                    ignore_settings=True)
-    from meerk40t.core import core
-    from meerk40t.device import dummydevice
-    from meerk40t.fill import fills
-    from meerk40t.grbl import plugin as grbl
-    from meerk40t.image import imagetools
-    from meerk40t.network import kernelserver
-    for plugin in (kernelserver.plugin, dummydevice.plugin, core.plugin, imagetools.plugin,
-                   fills.plugin, grbl.plugin):
-        kernel.add_plugin(plugin)
-    found = [ep for ep in entry_points().select(group="meerk40t.extension")
-             if ep.name == "galvoscan"]
-    assert len(found) == 1, "galvoscan's meerk40t.extension entry point is not installed"
-    kernel.add_plugin(found[0].load())
-    kernel(partial=True)
-    kernel.console("service device start -i galvoscan 0\n")
-    return kernel
-
-
 @pytest.fixture(scope="module")
 def meerk40t():
-    """``(kernel, device, board, lines)``: the galvoscan device on a simulated board of the
-    default bitstream (compiled), its wires and laser pins recorded; ``lines``: what the
-    device says on meerk40t's console."""
-    kernel = _kernel()
-    device = kernel.device
-    assert device.name == "galvoscan"
-    config = PRESETS["default"]
-    board = SimBoard(config=config, clk_freq=config.clk_freq, baud=config.baud,
-                     backend="compiled", record_laser=True)
-    device.driver.make_board = lambda: board.board
-    lines = []
-    kernel.channel("console").watch(lambda line: lines.append(str(line)))
-    try:
-        yield kernel, device, board, lines
-    finally:
-        kernel()
+    """``(kernel, device, board, lines)``: the galvoscan device on the simulated board
+    (:func:`meerk40t_kernel.galvoscan_in_meerk40t`), its status poll off: the tests look at the
+    board between jobs."""
+    with galvoscan_in_meerk40t() as running:
+        yield running
 
 
 def _run(kernel, device, command, *, timeout_s=60):
