@@ -356,17 +356,26 @@ class GalvoscanDriver:
             finally:
                 close()
 
-    def read_status(self, wait=True):
+    def read_status(self, wait_s=None):
         """The board's ``status`` flags, read over the device's link (a ``sim`` link's board
-        made if it is not yet); None when a job has the link and not ``wait``."""
-        if not self._lock.acquire(blocking=wait):
+        made if it is not yet) and shown in the status bar, or why they cannot be (and raised);
+        None when a job or another read has the link for longer than ``wait_s`` seconds (None:
+        as long as it has it). Read and shown under the link's lock, so that a job that takes
+        the link next is not shown ready."""
+        if not self._lock.acquire(timeout=-1 if wait_s is None else wait_s):
             return None
         try:
-            client, close = self._open()
             try:
-                return Status.from_bits(client.read("status"))
-            finally:
-                close()
+                client, close = self._open()
+                try:
+                    flags = Status.from_bits(client.read("status"))
+                finally:
+                    close()
+            except (ClientError, OSError, ValueError) as error:
+                self.status_bar.failed(error)
+                raise
+            self.status_bar.seen(flags)
+            return flags
         finally:
             self._lock.release()
 
@@ -376,14 +385,11 @@ class GalvoscanDriver:
         interlock, an alarm and the latched faults (and shown in the status bar)."""
         if self.service.link == SIM and self.board is None:
             return "no simulated board yet (the first job or status poll makes it)"
-        try:
-            flags = None if self._client is not None else self.read_status(wait=False)
-        except (ClientError, OSError, ValueError) as error:
-            self.status_bar.failed(error)
-            raise
-        if flags is None:
-            return f"marking a job ({self.status_bar.text})"
-        self.status_bar.seen(flags)
+        flags = None
+        while flags is None:
+            if self._client is not None:
+                return f"marking a job ({self.status_bar.text})"
+            flags = self.read_status(wait_s=0.1)    # (None: a poll's read, or a job starting)
         return console_line(flags)
 
     # --- the console ---------------------------------------------------------------------------

@@ -8,9 +8,9 @@ read off the board's ``status`` register
 
 - by each status read the device's own job or framing makes (the streamer's), the job busy;
 - after each job or framing, on the link the job had;
-- every :data:`~galvoscan.meerk40t.device.GalvoscanDevice` ``status_poll_s`` seconds while the
-  device is active and its link free (in a thread of its own: a ``sim`` link's simulated board
-  is made by the first read, which may compile it).
+- every ``status_poll_s`` seconds (a setting of :class:`~galvoscan.meerk40t.device.GalvoscanDevice`)
+  while the device is active and its link free, in a thread of its own (a ``sim`` link's
+  simulated board is made by the first read, which may compile it);
 
 and signalled when it changes. ``board_status`` in meerk40t's console says the same state in a
 line (:func:`console_line`).
@@ -24,7 +24,7 @@ from meerk40t.kernel import Job
 from ..link.client import ClientError
 
 
-__all__ = ["SIGNAL", "LATCHED", "short_text", "console_line", "BoardStatus"]
+__all__ = ["SIGNAL", "LATCHED", "latched", "short_text", "console_line", "BoardStatus"]
 
 #: The signal meerk40t's status bar shows (``Laser: {text}``).
 SIGNAL = "pipe;usb_status"
@@ -66,10 +66,11 @@ def console_line(flags):
 
 
 class BoardStatus:
-    """The device's board state, signalled as :data:`SIGNAL` when it changes. ``read(wait)``:
-    the board's ``status`` flags read over the device's link (None when a job has the link and
-    not ``wait``; raises :class:`~galvoscan.link.client.ClientError`, :class:`OSError` or
-    :class:`ValueError` when the board cannot be read)."""
+    """The device's board state, signalled as :data:`SIGNAL` when it changes. ``read(wait_s)``
+    (the driver's): the board's ``status`` read over the device's link and shown here (through
+    :meth:`seen`, or :meth:`failed` and raised as :class:`~galvoscan.link.client.ClientError`,
+    :class:`OSError` or :class:`ValueError`), under the link's lock; None when a job has the
+    link for longer than ``wait_s`` seconds."""
 
     def __init__(self, service, read):
         self.service = service
@@ -95,16 +96,13 @@ class BoardStatus:
         """The board could not be read: why, in the status bar."""
         self.show(f"no board: {error}")
 
-    def poll(self, *, wait=True):
-        """Read the board now and show its state (nothing when a job has the link and not
-        ``wait``: the job's own reads show it)."""
+    def poll(self):
+        """Read the board now, if no job has the link, and show its state (a job's own reads
+        show it)."""
         try:
-            flags = self._read(wait)
-        except (ClientError, OSError, ValueError) as error:
-            self.failed(error)
-            return
-        if flags is not None:
-            self.seen(flags)
+            self._read(0)
+        except (ClientError, OSError, ValueError):
+            pass                                # (shown by failed)
 
     # --- the periodic poll, while the device is active -----------------------------------------
 
@@ -128,7 +126,7 @@ class BoardStatus:
 
     def _poll_once(self):
         try:
-            self.poll(wait=False)
+            self.poll()
         finally:
             self._last_poll = time.monotonic()
             self._polling.release()

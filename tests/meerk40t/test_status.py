@@ -13,6 +13,7 @@ import pytest
 meerk40t_package = pytest.importorskip("meerk40t")
 
 from galvoscan.link.client import HostClient            # noqa: E402
+from galvoscan.meerk40t.driver import SIM               # noqa: E402
 from galvoscan.sim.board import SimTransport            # noqa: E402
 
 from meerk40t_kernel import galvoscan_in_meerk40t       # noqa: E402
@@ -154,3 +155,18 @@ def test_a_fault_latched_by_the_interlock_opening_mid_job(meerk40t):
         client.write("fault_clear", 1)
         client.write("vec_flush", 1)
     _hear(heard, lambda items: items == READY, "ready once the fault is cleared")
+
+
+def test_a_board_that_cannot_be_read_says_why(meerk40t, tmp_path):
+    """The link set to a port that is not there: the next poll says in the status bar that
+    there is no board, and why (the port's error); the simulated board again: ready."""
+    kernel, device, board, heard = meerk40t
+    _hear(heard, lambda items: items == READY, "ready")
+    missing = tmp_path / "no-such-port"
+    device.link = str(missing)
+    try:
+        _hear(heard, lambda items: any(item.startswith("no board:") and str(missing) in item
+                                       for item in items), "no board")
+    finally:
+        device.link = SIM
+    _hear(heard, lambda items: items == READY, "ready again")
