@@ -3,12 +3,13 @@ field, a spooler and :class:`~.driver.GalvoscanDriver`.
 
 Its own settings are few: the machine profile it reads (a TOML file; empty: galvoscan's default
 profile), the link (``sim``: a simulated board in meerk40t's process; else a serial port: a
-board's, or the pseudo-terminal ``galvoscan board --sim`` serves) and the chord tolerance
-curves are flattened to. The rest are the profile's keys, every one a setting of the device
-(:mod:`.settings`, from galvoscan's one declaration of them): the field, the link's baud, the
-laser's power and PRR range, the delays, the operations' defaults. A key changed in meerk40t
-(its settings, or ``galvoscan_profile set KEY VALUE``) is checked by galvoscan's profile
-reader and used at once; it is written back to the file, comments kept, only by
+board's, or the pseudo-terminal ``galvoscan board --sim`` serves), the chord tolerance curves
+are flattened to, and how often the board's state is read for meerk40t's status bar
+(:mod:`.status`) while no job runs. The rest are the profile's keys, every one a setting of the
+device (:mod:`.settings`, from galvoscan's one declaration of them): the field, the link's baud,
+the laser's power and PRR range, the delays, the operations' defaults. A key changed in
+meerk40t (its settings, or ``galvoscan_profile set KEY VALUE``) is checked by galvoscan's
+profile reader and used at once; it is written back to the file, comments kept, only by
 ``galvoscan_profile save [PATH]``.
 
 The view makes the device's native units galvoscan's galvo units: 65536 across the lens field
@@ -30,7 +31,11 @@ from .driver import SIM, GalvoscanDriver
 from .settings import ATTRIBUTES, ProfileSettings, key_line, profile_choices
 
 
-__all__ = ["GalvoscanDevice"]
+__all__ = ["GalvoscanDevice", "STATUS_POLL_S"]
+
+#: How often the board's state is read for meerk40t's status bar while no job runs, s (the
+#: ``status_poll_s`` setting's default).
+STATUS_POLL_S = 2.0
 
 
 class GalvoscanDevice(Service, Status):
@@ -62,6 +67,12 @@ class GalvoscanDevice(Service, Status):
             {"attr": "tolerance_mm", "object": self, "default": TOLERANCE.default,
              "type": float, "label": _("Curve tolerance (mm)"),
              "tip": _("How far a flattened curve may stray from meerk40t's curve."),
+             "section": "_00_General"},
+            {"attr": "status_poll_s", "object": self, "default": STATUS_POLL_S, "type": float,
+             "label": _("Status poll (s)"),
+             "tip": _("How often the board's state (busy or ready, armed, the interlock, "
+                      "faults) is read for the status bar while no job runs; 0: only after "
+                      "jobs."),
              "section": "_00_General"},
         ])
         try:
@@ -138,6 +149,16 @@ class GalvoscanDevice(Service, Status):
         self.view.set_native_scale(scale, scale)
         self.view.transform(flip_y=True)
         self.signal("view;realized")
+
+    def service_attach(self, *args, **kwargs):
+        """The device made the active one: its board's state polled for the status bar."""
+        self.driver.status_bar.start()
+
+    def service_detach(self, *args, **kwargs):
+        self.driver.status_bar.stop()
+
+    def shutdown(self, *args, **kwargs):
+        self.driver.status_bar.stop()
 
     @property
     def safe_label(self):

@@ -16,6 +16,11 @@ meerk40t's trace (its Outline button: ``element* trace hull``) moves the head ro
 elements' outline between the device's ``pre_outline`` and ``post_outline``: the driver gathers
 those moves and walks the outline with the guide laser, the laser never armed, as ``mark
 --frame`` does, after galvoscan's planner has checked it lies in the field.
+
+The board's state goes to meerk40t's status bar (:mod:`.status`), in the words of
+:class:`galvoscan.outputs.board_state.BoardState`: from the job's own status reads (``paused``
+while the board holds it), after each job (read before the job's outcome is said), and polled
+while the link is free.
 """
 
 import contextlib
@@ -28,6 +33,7 @@ from ..build import simulated_bitstream
 from ..cli.jobargs import frame_job
 from ..cli.job_reports import describe_job
 from ..cli.layers import describe_layers
+from ..gateware.host.regmap import Status
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.board_state import read_board_state
 from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
@@ -35,6 +41,7 @@ from ..geometry.field import from_galvo
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
 from .cutcode import job_from_cuts, outline_cuts
+from .status import BoardStatus
 
 
 __all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
@@ -51,12 +58,13 @@ class StopRequested(KeyboardInterrupt):
 class _StoppableClient:
     """A :class:`~galvoscan.link.client.HostClient` whose next exchange after :meth:`stop`
     raises :class:`StopRequested`, once; the disarming writes (``arm``, ``run`` or ``guide``
-    to 0) always go through."""
+    to 0) always go through. Each ``status`` it reads is handed to ``seen`` (its flags)."""
 
     _DISARM = ("arm", "run", "guide")
 
-    def __init__(self, client):
+    def __init__(self, client, seen):
         self._client = client
+        self._seen = seen
         self.stopping = threading.Event()
 
     def __getattr__(self, name):
@@ -69,7 +77,10 @@ class _StoppableClient:
 
     def read(self, name):
         self._check()
-        return self._client.read(name)
+        value = self._client.read(name)
+        if name == "status":
+            self._seen(Status.from_bits(value))
+        return value
 
     def write(self, name, value):
         if not (name in self._DISARM and value == 0):
@@ -109,6 +120,8 @@ class GalvoscanDriver:
         self._client = None
         self._lock = threading.Lock()
         self.state = "idle"
+        #: The board's state in meerk40t's status bar.
+        self.status_bar = BoardStatus(service, self.read_status)
 
     def __repr__(self):
         return f"GalvoscanDriver({self.name})"
@@ -127,6 +140,7 @@ class GalvoscanDriver:
         link = self.service.link
         if link == SIM:
             if self.board is None:
+                self.status_bar.show("starting the simulated board")
                 self.board = self.make_board()
             return HostClient(SimTransport(self.board)), lambda: None
         profile = self.service.profile
@@ -196,20 +210,24 @@ class GalvoscanDriver:
     @contextlib.contextmanager
     def _on_the_board(self, *, marking):
         """The board's client, opened for one job under the lock (the job talks through
-        ``self._client``, which meerk40t's stop can interrupt), the device busy (``marking``:
-        its laser status active) until the job ends, however it ends, and the link closed;
-        None (one line said, nothing sent) when it cannot be opened."""
+        ``self._client``, which meerk40t's stop can interrupt, and whose status reads go to the
+        status bar), the device busy (``marking``: its laser status active) until the job ends,
+        however it ends, the board's state read for the status bar, and the link closed; None
+        (one line said, nothing sent) when it cannot be opened. The job's outcome is said after
+        this (its ``last_report`` or ``last_error`` set once the link is free)."""
         with self._lock:
             self.state = "busy"
             if marking:
                 self.service.laser_status = "active"
+            self.status_bar.show("busy, marking a job" if marking else "busy, framing")
             try:
                 client, close = self._open()
             except (ClientError, OSError, ValueError) as error:
                 client = close = None
+                self.status_bar.failed(error)
                 self._refuse(f"the board cannot be opened, nothing sent: {error}")
             else:
-                self._client = _StoppableClient(client)
+                self._client = _StoppableClient(client, self._seen_by_the_job)
             try:
                 yield client
             finally:
@@ -218,31 +236,26 @@ class GalvoscanDriver:
                 if marking:
                     self.service.laser_status = "idle"
                 if close is not None:
+                    try:
+                        self.status_bar.seen(read_board_state(client))
+                    except (ClientError, OSError, ValueError) as error:
+                        self.status_bar.failed(error)
                     close()
+
+    def _seen_by_the_job(self, flags):
+        """A ``status`` read of the running job's: busy in the status bar, or paused while the
+        board holds the job."""
+        self.status_bar.seen_flags(
+            flags, activity="paused" if self.hold.holding.is_set() else "busy")
 
     def _run(self, plan):
         with self._on_the_board(marking=True) as client:
             if client is None:
                 return
-            try:
-                report = api.run(plan, self._client, say=self._say, pause=self.hold)
-            except JobInterrupted as error:
-                # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
-                # emptied so that the next job is not refused (a board without vec_flush says
-                # so: `galvoscan send soft_reset=1` empties it).
-                more = ""
-                try:
-                    client.write("vec_flush", 1)
-                except (ClientError, ValueError, KeyError) as flush:
-                    more = f"; its queue could not be emptied ({flush})"
-                self._refuse(f"job stopped, laser disarmed: {error}{more}")
-                return
-            except JobAborted as error:
-                self._refuse(f"job stopped, laser disarmed: {error}")
-                return
-            except (ClientError, OSError) as error:
-                self._refuse(f"job stopped, laser disarm sent: the link failed: {error}")
-                return
+            report, failure = self._marked(plan, client)
+        if failure is not None:
+            self._refuse(failure)
+            return
         self.last_report = report
         counters = report.counters
         holds = report.stream.holds
@@ -251,6 +264,25 @@ class GalvoscanDriver:
                   f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
                   f"{counters['vec_rejected']}, errors {counters['errors']}"
                   f"{f'; held {holds} time(s)' if holds else ''}")
+
+    def _marked(self, plan, client):
+        """``(report, None)``: ``plan`` run on the board; ``(None, why)``: it stopped."""
+        try:
+            return api.run(plan, self._client, say=self._say, pause=self.hold), None
+        except JobInterrupted as error:
+            # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
+            # emptied so that the next job is not refused (a board without vec_flush says
+            # so: `galvoscan send soft_reset=1` empties it).
+            more = ""
+            try:
+                client.write("vec_flush", 1)
+            except (ClientError, ValueError, KeyError) as flush:
+                more = f"; its queue could not be emptied ({flush})"
+            return None, f"job stopped, laser disarmed: {error}{more}"
+        except JobAborted as error:
+            return None, f"job stopped, laser disarmed: {error}"
+        except (ClientError, OSError) as error:
+            return None, f"job stopped, laser disarm sent: the link failed: {error}"
 
     def frame(self, times):
         """Trace the last planned job's outline (its convex hull) ``times`` times with the
@@ -296,6 +328,7 @@ class GalvoscanDriver:
             self._refuse("nothing framed: the machine profile says there is no guide laser "
                          "([laser] guide)")
             return
+        failure = None
         with self._on_the_board(marking=False) as client:
             if client is None:
                 return
@@ -306,11 +339,12 @@ class GalvoscanDriver:
                           timeout_s=max(60.0, 10 * times * plan.estimate_s),
                           say=lambda line: self._say(f"galvoscan: {line}"), what=what)
             except (JobAborted, JobInterrupted) as error:
-                self._refuse(f"framing stopped, guide laser off: {error}")
-                return
+                failure = f"framing stopped, guide laser off: {error}"
             except (ClientError, OSError) as error:
-                self._refuse(f"framing stopped: the link failed: {error}")
-                return
+                failure = f"framing stopped: the link failed: {error}"
+        if failure is not None:
+            self._refuse(failure)
+            return
         self.last_report = "framed"
 
     def move_abs(self, x, y):
@@ -402,21 +436,42 @@ class GalvoscanDriver:
             finally:
                 close()
 
-    def board_status(self):
-        """The board's state in one line: marking (a job of this device's is running), else
-        read off the board: busy or ready, armed, the interlock, an alarm and the latched
-        faults."""
-        if self._client is not None:
-            return "a job held (paused), the laser disarmed" if self.hold.holding.is_set() \
-                else "marking a job"
-        if self.service.link == SIM and self.board is None:
-            return "no simulated board yet (the first job makes it)"
-        with self._lock:
-            client, close = self._open()
+    def read_status(self, wait_s=None):
+        """The board's :class:`~galvoscan.outputs.board_state.BoardState`, read over the
+        device's link (a ``sim`` link's board made if it is not yet) and shown in the status
+        bar, or why it cannot be (and raised); None when a job or another read has the link for
+        longer than ``wait_s`` seconds (None: as long as it has it). Read and shown under the
+        link's lock, so that a job that takes the link next is not shown ready."""
+        if not self._lock.acquire(timeout=-1 if wait_s is None else wait_s):
+            return None
+        try:
             try:
-                state = read_board_state(client)
-            finally:
-                close()
+                client, close = self._open()
+                try:
+                    state = read_board_state(client)
+                finally:
+                    close()
+            except (ClientError, OSError, ValueError) as error:
+                self.status_bar.failed(error)
+                raise
+            self.status_bar.seen(state)
+            return state
+        finally:
+            self._lock.release()
+
+    def board_status(self):
+        """The board's state in one line: marking or held (a job of this device's is running:
+        as its last status read saw the board), else read off the board: busy or ready, armed,
+        the interlock, an alarm, the latched faults and the head (and shown in the status
+        bar)."""
+        if self.service.link == SIM and self.board is None:
+            return "no simulated board yet (the first job or status poll makes it)"
+        state = None
+        while state is None:
+            if self._client is not None:
+                return "a job held (paused), the laser disarmed" if self.hold.holding.is_set() \
+                    else f"marking a job ({self.status_bar.text})"
+            state = self.read_status(wait_s=0.1)    # (None: a poll's read, or a job starting)
         return state.summary() + ("" if state.head is None else
                                   f"; head: {state.head.describe()}")
 

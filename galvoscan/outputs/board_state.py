@@ -1,5 +1,7 @@
 """The board's state read off its registers and said in words: what ``galvoscan status``
-prints, what the meerk40t device shows, and what the job streamer refuses on.
+prints, what the meerk40t device says in its console (:meth:`BoardState.summary`) and shows in
+meerk40t's status bar (:meth:`BoardState.short`, the same words, fewer), and what the job
+streamer refuses on.
 
 The scan head's part comes from a bitstream with the head status receiver (``caps`` bit
 ``head``): the head's status word as RTC5/RTC6's ``get_head_status`` reads it (Power OK, Temp
@@ -58,6 +60,14 @@ class HeadReading:
         low = [said for name, said in _HEAD_WORDS[:2] if not getattr(self.bits, name)]
         return f"{' and '.join(low)} low" if low else None
 
+    def short(self):
+        """A few words for a status bar: ``head ok``, ``head missing`` or what is low (``head:
+        Temp OK low``); its latched fault is among the board's (:meth:`BoardState.latched`)."""
+        if self.missing:
+            return "head missing"
+        problem = self.problem()
+        return f"head: {problem}" if problem else "head ok"
+
     def describe(self):
         """One line: the bits set, the word, the check and the fault."""
         if self.missing:
@@ -95,16 +105,40 @@ class BoardState:
             names.append("head")
         return names
 
+    def busy(self):
+        """What keeps the board busy, in words (segments queued, or the flash's job playing),
+        or None: it is ready."""
+        if self.flags.vector_busy:
+            return "segments queued"
+        if self.flags.player_busy:
+            return "playing the flash's job"
+        return None
+
+    def _conditions(self):
+        """The words the console's line and the status bar share after busy or ready."""
+        flags = self.flags
+        return ["armed" if flags.armed else "disarmed",
+                "interlock open" if flags.interlock_open else "interlock closed",
+                *(["laser alarm"] if flags.alarm else [])]
+
     def summary(self):
         """One line: busy or ready, armed, the interlock, an alarm, the latched faults."""
-        flags, latched = self.flags, self.latched()
+        busy, latched = self.busy(), self.latched()
         return ", ".join([
-            "busy (segments queued)" if flags.vector_busy else "ready",
-            "armed" if flags.armed else "disarmed",
-            "interlock open" if flags.interlock_open else "interlock closed",
-            *(["laser alarm"] if flags.alarm else []),
+            f"busy ({busy})" if busy else "ready", *self._conditions(),
             (f"latched fault: {', '.join(latched)} (`galvoscan send fault_clear=1` clears it)"
              if latched else "no fault latched")])
+
+    def short(self, activity=None):
+        """The state in a few words, for a status bar: busy or ready (``activity``: what the
+        host knows the board is doing, in their place: ``busy`` while its job runs, whatever
+        the queue holds), armed, the interlock, an alarm, the head (:meth:`HeadReading.short`:
+        a bitstream with the receiver) and the latched faults (``fault: interlock``)."""
+        latched = self.latched()
+        return ", ".join([
+            activity or ("busy" if self.busy() else "ready"), *self._conditions(),
+            *([] if self.head is None else [self.head.short()]),
+            *([f"fault: {', '.join(latched)}"] if latched else [])])
 
     def lines(self):
         """What ``galvoscan status`` prints."""

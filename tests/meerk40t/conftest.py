@@ -6,6 +6,7 @@ import socket
 import pytest
 
 from galvoscan.build import PRESETS
+from galvoscan.meerk40t.device import STATUS_POLL_S
 
 from meerk40t_session import make_kernel
 from sim_board import SimBoard
@@ -15,14 +16,20 @@ from sim_board import SimBoard
 def meerk40t():
     """``(kernel, device, board, lines)``: the galvoscan device on a simulated board of the
     default bitstream (compiled), its wires and laser pins recorded; ``lines``: what the
-    device says on meerk40t's console."""
-    kernel = make_kernel()
-    device = kernel.device
-    assert device.name == "galvoscan"
+    device says on meerk40t's console. The device's status poll is off (``status_poll_s`` 0),
+    so that a test looks at the board between jobs without a poll's thread reading it at the
+    same time; a test of the poll sets it (tests/meerk40t/test_status.py). The board is made
+    first, and the poll turned off before the device's first one is due
+    (:data:`~galvoscan.meerk40t.device.STATUS_POLL_S` after its start)."""
     config = PRESETS["default"]
     board = SimBoard(config=config, clk_freq=config.clk_freq, baud=config.baud,
                      backend="compiled", record_laser=True)
+    kernel = make_kernel()
+    device = kernel.device
+    assert device.name == "galvoscan"
     device.driver.make_board = lambda: board.board
+    device.status_poll_s = 0.0
+    assert device.driver.board is None, f"polled within {STATUS_POLL_S} s of the start"
     lines = []
     kernel.channel("console").watch(lambda line: lines.append(str(line)))
     try:

@@ -44,6 +44,7 @@ from meerk40t_session import (BOTTOM, FIELD_MM, LEFT, POWER_PERMILLE, PRR_KHZ,  
                               outline_gaps, plan_name, rect_command, spool_and_wait)
 from sim_board import SimBoard                          # noqa: E402
 
+
 def test_a_rectangle_from_meerk40t_is_marked_on_the_simulated_board(meerk40t):
     """meerk40t's rectangle, engraved through the device: every mark off the wires lies on the
     rectangle within half a pitch (and a galvo unit of rounding), the marks go all round it,
@@ -415,7 +416,7 @@ def test_every_profile_key_is_a_device_setting(meerk40t, default_profile_again):
             else:
                 assert shown == ("" if value is None else value)
     # What is left: the device's own settings.
-    assert set(choices) == {"label", "profile_path", "link", "tolerance_mm"}
+    assert set(choices) == {"label", "profile_path", "link", "tolerance_mm", "status_poll_s"}
     settings = device.profile_settings
     settings.field_size_mm = 70.0                   # as meerk40t's panel sets it
     settings.laser_prr_khz = "30, 80"

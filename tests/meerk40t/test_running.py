@@ -19,7 +19,7 @@ from galvoscan.sim.board import LASER_PINS              # noqa: E402
 
 from meerk40t_session import (BOTTOM, LEFT, RECT_MM, RIGHT, TOP, UNIT_MM,  # noqa: E402
                               GrblSender, distance_to_rect, outline_gaps, plan_name,
-                              rect_command)
+                              rect_command, status_bar_heard)
 from vector_board import pulses_per_frame               # noqa: E402
 
 
@@ -34,6 +34,11 @@ EMITTING = [LASER_PINS.index(name) for name in ("laser_enable", "laser_mo", "las
                                                   "laser_latch")]
 #: Board seconds the tests watch a held job for.
 HELD_S = 5e-3
+#: meerk40t's status bar while the board holds a job (its items), and once it is done.
+HELD = {"paused", "disarmed", "interlock closed"}
+READY = {"ready", "disarmed", "interlock closed"}
+#: The longest the status bar may take to show a state: the kernel's signal ticks.
+HEARD_WITHIN_S = 5.0
 
 
 def _zigzag():
@@ -80,11 +85,18 @@ def unpaused(meerk40t):
     return _pulses_at(board, before), report
 
 
-def _until(condition, what, timeout_s=60):
+def _waited(condition, timeout_s):
+    """Whether ``condition()`` came true within ``timeout_s``."""
     deadline = time.monotonic() + timeout_s
     while not condition():
-        assert time.monotonic() < deadline, f"waited in vain for {what}"
+        if time.monotonic() >= deadline:
+            return False
         time.sleep(0.005)
+    return True
+
+
+def _until(condition, what, timeout_s=60):
+    assert _waited(condition, timeout_s), f"waited in vain for {what}"
 
 
 class _Writes:
@@ -119,39 +131,47 @@ def test_a_job_paused_from_meerk40t_is_held_on_the_board_and_goes_on(meerk40t, u
                                                                      monkeypatch):
     """meerk40t's ``pause`` (its Pause button) mid-way through the zigzag: the board marks out
     its queue and holds, disarmed (arm = 0 written, no pulse, every emitting pin low for 5 ms
-    of its time), the driver's state ``hold``; ``pause`` again lets it go on (arm = 1), and the
-    job ends marked as the same job unpaused marks it, every position with the same pulses,
-    with every segment and no underrun reported."""
+    of its time), the driver's state ``hold`` and meerk40t's status bar ``paused, disarmed``
+    (the status poll off: from the held job's own reads); ``pause`` again lets it go on (arm =
+    1), and the job ends marked as the same job unpaused marks it, every position with the same
+    pulses, with every segment and no underrun reported, the status bar ``ready`` again."""
     kernel, device, board, lines = meerk40t
     reference, reference_report = unpaused
     writes = _Writes(monkeypatch)
-    board.run_for(0)
-    before = len(board.xy2_frames())
-    sim = board.board
-    fired = len(sim.pulses)
-    _spool_zigzag(kernel, device)
-    _until(lambda: len(sim.pulses) > fired + 50 or _ended(device), "the laser")
-    assert not _ended(device), device.driver.last_error
-    said = len(lines)
-    kernel.console("pause\n")
-    pulses, changes, pins = _watch_the_hold(board, device)
-    assert device.driver.status()[1] == "hold"
-    kernel.console("board_status\n")
-    assert any("a job held (paused), the laser disarmed" in line for line in lines[said:])
-    kernel.console("pause\n")                           # (the Pause button again: resume)
-    _until(lambda: _ended(device), "the job's end")
-    assert device.driver.last_error is None, device.driver.last_error
-    report = device.driver.last_report
-    assert pulses == 0
-    assert not any(pins[i] for i in EMITTING)
-    assert not any(p[i] for _, p in changes for i in EMITTING)
-    assert writes.arms() == [1, 0, 1, 0]
-    assert report.stream.holds == 1
-    assert report.segments == reference_report.segments
-    assert report.counters["vec_underruns"] == 0 and report.clean
-    assert _pulses_at(board, before) == reference
-    assert any(line.endswith("held 1 time(s)") for line in lines[said:])
-    assert device.driver.status()[1] == "idle"
+    with status_bar_heard(kernel) as heard:
+        board.run_for(0)
+        before = len(board.xy2_frames())
+        sim = board.board
+        fired = len(sim.pulses)
+        _spool_zigzag(kernel, device)
+        _until(lambda: len(sim.pulses) > fired + 50 or _ended(device), "the laser")
+        assert not _ended(device), device.driver.last_error
+        said = len(lines)
+        kernel.console("pause\n")
+        pulses, changes, pins = _watch_the_hold(board, device)
+        assert device.driver.status()[1] == "hold"
+        # (Waited for, and looked at once the job goes on: a held job left held would hang.)
+        _waited(lambda: heard and heard[-1] == HELD, HEARD_WITHIN_S)
+        while_held = list(heard)
+        kernel.console("board_status\n")
+        held_said = [line for line in lines[said:] if "galvoscan: board:" in line]
+        kernel.console("pause\n")                           # (the Pause button again: resume)
+        assert while_held and while_held[-1] == HELD, while_held[-5:]
+        assert len(held_said) == 1 and "a job held (paused), the laser disarmed" in held_said[0]
+        _until(lambda: _ended(device), "the job's end")
+        _until(lambda: heard and heard[-1] == READY, "the status bar to say the board is ready")
+        assert device.driver.last_error is None, device.driver.last_error
+        report = device.driver.last_report
+        assert pulses == 0
+        assert not any(pins[i] for i in EMITTING)
+        assert not any(p[i] for _, p in changes for i in EMITTING)
+        assert writes.arms() == [1, 0, 1, 0]
+        assert report.stream.holds == 1
+        assert report.segments == reference_report.segments
+        assert report.counters["vec_underruns"] == 0 and report.clean
+        assert _pulses_at(board, before) == reference
+        assert any(line.endswith("held 1 time(s)") for line in lines[said:])
+        assert device.driver.status()[1] == "idle"
 
 
 def test_a_grbl_senders_feed_hold_holds_the_job_and_cycle_start_goes_on(meerk40t, unpaused,

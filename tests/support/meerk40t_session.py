@@ -2,15 +2,21 @@
 it (its test/bootstrap.py: a kernel of its core plugins, console commands), for the tests of
 tests/meerk40t/: the kernel (:func:`make_kernel`; the fixtures in tests/meerk40t/conftest.py
 give each test module one, on one simulated board), a job spooled and waited for
-(:func:`spool_and_wait`), the marks read off the XY2-100 wires and the laser pins by the
-tests' own readers (:func:`marks_off_the_wires`), measured against a rectangle meerk40t was told
-to draw, and a G-code sender on meerk40t's GRBL server (:class:`GrblSender`)."""
+(:func:`spool_and_wait`), what meerk40t's window shows in its status bar
+(:func:`status_bar_signal`, :func:`status_bar_heard`), the marks read off the XY2-100 wires and
+the laser pins by the tests' own readers (:func:`marks_off_the_wires`), measured against a
+rectangle meerk40t was told to draw, and a G-code sender on meerk40t's GRBL server
+(:class:`GrblSender`)."""
 
+import contextlib
 import itertools
+import re
 import socket
 import time
 from importlib.metadata import entry_points
+from pathlib import Path
 
+import meerk40t
 import numpy as np
 from meerk40t.core import core
 from meerk40t.device import dummydevice
@@ -27,8 +33,9 @@ from vector_board import pulses_per_frame
 
 __all__ = ["PROFILE", "FIELD_MM", "UNIT_MM", "RECT_MM", "SPEED_MM_S", "PRR_KHZ",
            "POWER_PERMILLE", "LEFT", "TOP", "RIGHT", "BOTTOM", "make_kernel", "spool_and_wait",
-           "plan_name", "rect_command", "marks_off_the_wires", "distance_to_rect",
-           "outline_gaps", "median_pitch", "GrblSender"]
+           "status_bar_signal", "status_bar_heard", "plan_name", "rect_command",
+           "marks_off_the_wires", "distance_to_rect", "outline_gaps", "median_pitch",
+           "GrblSender"]
 
 
 PROFILE = default_profile()
@@ -71,6 +78,35 @@ def spool_and_wait(kernel, device, command, *, timeout_s=60):
     while device.driver.last_report is None and device.driver.last_error is None:
         assert time.monotonic() < deadline, "the device did not finish the job"
         time.sleep(0.02)
+
+
+def status_bar_signal():
+    """The signal whose text meerk40t's main window puts in its status bar as "Laser: …": the
+    ``@signal_listener`` of the handler that sets it, read off meerk40t's source (its
+    gui/wxmmain.py, read as text: the tests have no wxPython)."""
+    source = (Path(meerk40t.__file__).parent / "gui" / "wxmmain.py").read_text()
+    found = re.findall(r'@signal_listener\("([^"]+)"\)\s+def \w+\(self, origin, value\):\s+'
+                       r'self\.main_statusbar\.SetStatusText\(\s+_\("Laser: \{index\}"\)'
+                       r'\.format\(index=value\)', source)
+    assert len(found) == 1, "meerk40t's window no longer shows a device's state so"
+    return found[0]
+
+
+@contextlib.contextmanager
+def status_bar_heard(kernel):
+    """Within it, each text meerk40t's status bar is sent (as its window hears it: the kernel
+    passes on the last of a signal's texts at each of its ticks), as a set of its items
+    (``ready``, ``disarmed`` …), in order."""
+    heard = []
+    signal = status_bar_signal()
+
+    def listener(origin, text):
+        heard.append(set(text.split(", ")))
+    kernel.listen(signal, listener)
+    try:
+        yield heard
+    finally:
+        kernel.unlisten(signal, listener)
 
 
 _plans = itertools.count(1)
