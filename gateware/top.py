@@ -371,8 +371,8 @@ class GalvoScanTop(wiring.Component):
                                              self._fly.positions_out.ready),
                 clipped_on_wires.clipped.eq(self._fly.clipped),
                 clipped_on_wires.taken.eq(phy.position.valid & phy.position.ready),
-                self._fly_on_wires.eq(clipped_on_wires.on_wires),
             ]
+            self._fly_on_wires = clipped_on_wires.on_wires
 
         # --- scan head status ---------------------------------------------------------------
         self._head = None
@@ -428,7 +428,6 @@ class GalvoScanTop(wiring.Component):
         m.d.comb += [fly.offset_x.eq(scale.offset_x), fly.offset_y.eq(scale.offset_y),
                      status.events.fly_clipped.eq(fly.positions_out.valid &
                                                   fly.positions_out.ready & fly.clipped)]
-        self._fly_on_wires = Signal()
         return fly.positions_out
 
     def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):

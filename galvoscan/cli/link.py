@@ -131,6 +131,7 @@ def _cmd_status(args):
 
 def _cmd_reset(args):
     from ..link.client import ClientError, HostClient
+    from ..outputs.board_state import LATCHED_FAULTS
     from ..gateware.fields import Capabilities, Status
     with open_link(args) as link:
         board = HostClient(link)
@@ -144,8 +145,7 @@ def _cmd_reset(args):
                 board.read("caps")).vector else None
         except ClientError as error:           # the board or the link, once opened
             failed(error)
-    latched = [name for name in ("interlock", "watchdog", "alarm", "link")
-               if getattr(flags, f"fault_{name}")]
+    latched = [name for name in LATCHED_FAULTS if getattr(flags, f"fault_{name}")]
     print("reset: every register back to its power-up value (laser disarmed)" +
           (f", vector queue emptied ({free} segments free)" if free is not None else "") +
           "; kept: " +
