@@ -426,8 +426,11 @@ class GalvoScanTop(wiring.Component):
         m.submodules.fly = fly = self._fly = FlyOffset()
         connect(m, positions, fly.positions_in)
         m.d.comb += [fly.offset_x.eq(scale.offset_x), fly.offset_y.eq(scale.offset_y),
-                     status.events.fly_clipped.eq(fly.positions_out.valid &
-                                                  fly.positions_out.ready & fly.clipped)]
+                     ]
+        # Counted a clock after the point goes on (the count's clock enable would otherwise end
+        # the path from the source select through the scale's multiplier and this stage's sum).
+        m.d.sync += status.events.fly_clipped.eq(fly.positions_out.valid &
+                                                 fly.positions_out.ready & fly.clipped)
         return fly.positions_out
 
     def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):
