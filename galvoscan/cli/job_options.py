@@ -20,7 +20,7 @@ from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
 from ..plan.pixel_lines import PHOTO_LINES
 from ..settings.fly import BELT_SPEED, ENCODER, FLY, FLY_DIRECTION, FLY_SPEED
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
-                              WOBBLE_HZ)
+                              WOBBLE_HZ, Z)
 from .args import int_in, number_in, setting_keywords
 from .jobargs import pair_mm
 from .layers import LayerAction
@@ -207,6 +207,8 @@ OPTIONS = (
     _setting(TOLERANCE, "drawing", "job"),
     # wobble
     *(_setting(setting, "wobble", "job") for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),
+    # the focus shifter
+    _setting(Z, "laser", "job"),
     # placement
     Option("--origin", "placement", dict(
         choices=["centre", "center", "lower-left", "page"], default="centre",

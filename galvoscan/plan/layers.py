@@ -66,6 +66,7 @@ class Layer:
     wobble_um: float = None
     wobble_along_um: float = None
     wobble_hz: float = None
+    z_mm: float = None
     delays_us: tuple = ()
 
     def __post_init__(self):
@@ -109,7 +110,8 @@ class Layer:
         out = []
         words = {"speed_mm_s": "speed", "power_percent": "power", "prr_khz": "PRR",
                  "passes": "passes", "pulses_per_point": "pulses per point",
-                 "wobble_um": "wobble", "wobble_along_um": "wobble along", "wobble_hz": "wobble"}
+                 "wobble_um": "wobble", "wobble_along_um": "wobble along", "wobble_hz": "wobble",
+                 "z_mm": "Z"}
         for name, what in words.items():
             value = getattr(self, name)
             unit = _UNITS.get(name, "")             # the setting's (pulses: none)
