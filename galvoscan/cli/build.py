@@ -130,7 +130,10 @@ def _cmd_build(args):
     built = [what for what, on in (("RTC delays", args.delays), ("wobble", args.wobble),
                                    ("spiral interpolation", args.interpolation),
                                    ("job player", args.player),
-                                   ("head status", args.head_status)) if on]
+                                   ("head status", args.head_status),
+                                   # (The ULX3S's alone: every feature is in its bitstream.)
+                                   ("marking on the fly", args.board == "ulx3s"),
+                                   ("Z channel", args.board == "ulx3s")) if on]
     print(f"  with         {', '.join(built) if built else 'no build options'}")
     print(f"  {report.logic_name:<12} {report.luts:5d} / {report.luts_available}")
     print(f"  block RAMs   {report.brams:5d} / {report.brams_available}")
