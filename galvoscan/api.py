@@ -46,7 +46,9 @@ from .profile.machine import default_profile, load_profile
 from .outputs.stream import JobAborted, JobStreamer, Pause, StreamReport
 from .inputs.text import TextSpec, text_drawing
 from .plan.objects import JobSettings, MarkObject
+from .plan.sky import job_sky
 from .plan.wobble import WobbleSettings, wobble_registers
+from .settings.sky import SKY_SETTINGS
 from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
 from .sim.board import SimTransport, SimulatedBoard
 # The bitstreams `galvoscan build --preset` builds, by name: a SimulatedBoard of one
@@ -151,9 +153,12 @@ class Job:
     sets (:class:`~galvoscan.geometry.fill.HatchSet`), their line order, a contour fill, whether
     outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
     (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
-    ``[wobble]``; it needs a bitstream with the wobble stage), and ``fly``: marking on the fly
-    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly). The numbers are
-    checked against their settings (:mod:`galvoscan.settings.laser`) here."""
+    ``[wobble]``; it needs a bitstream with the wobble stage), ``fly``: marking on the fly
+    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly), and SkyWriting
+    (``sky_mode`` 0 … 3, ``timelag_us``, ``laser_on_shift_us``, ``nprev_us``, ``npost_us``,
+    ``sky_limit``; None: the profile's ``[sky]``; it needs a bitstream with pixel lines,
+    :mod:`galvoscan.plan.sky`). The numbers are checked against their settings
+    (:mod:`galvoscan.settings.laser`, :mod:`galvoscan.settings.sky`) here."""
     drawings: tuple = ()
     texts: tuple = ()
     codes: tuple = ()
@@ -172,11 +177,18 @@ class Job:
     wobble_along_um: float = None
     wobble_hz: float = None
     fly: Fly = None
+    sky_mode: int = None
+    timelag_us: float = None
+    laser_on_shift_us: float = None
+    nprev_us: float = None
+    npost_us: float = None
+    sky_limit: float = None
 
     def __post_init__(self):
         if self.fly is not None and not isinstance(self.fly, Fly):
             raise PlanError(f"a job's fly is an api.Fly, not {self.fly!r}")
-        for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ):
+        for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ,
+                        *SKY_SETTINGS):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
@@ -226,7 +238,10 @@ def job_settings(job, profile):
         else defaults.power_percent,
         prr_khz=job.prr_khz if job.prr_khz is not None else defaults.prr_khz,
         passes=job.passes or defaults.passes, hatch=job.hatch,
-        hatch_lines=LineOrder(job.hatch_lines), contour=job.contour, outline=job.outline)
+        hatch_lines=LineOrder(job.hatch_lines), contour=job.contour, outline=job.outline,
+        sky=job_sky(profile, mode=job.sky_mode, timelag_us=job.timelag_us,
+                    laser_on_shift_us=job.laser_on_shift_us, nprev_us=job.nprev_us,
+                    npost_us=job.npost_us, limit=job.sky_limit))
 
 
 def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.default):
