@@ -352,7 +352,7 @@ def merged(layer_jobs):
                      paths_mm=paths, jump_before_mm=before, jump_after_mm=after,
                      pitch=jobs[0].pitch, registers=jobs[0].registers,
                      estimate_s=total("estimate_s"), mark_mm=total("mark_mm"),
-                     sky_s=total("sky_s"),
+                     sky_s=total("sky_s"), sky_mode=max(job.sky_mode for job in jobs),
                      jump_mm=jump_mm,
                      bounds_mm=(*bounds[:, :2].min(axis=0).tolist(),
                                 *bounds[:, 2:].max(axis=0).tolist()),

@@ -6,7 +6,8 @@ missing end, and the polygon delay holds each corner with the laser on. SkyWriti
 runs the set point through a mark's ends at the mark's own speed:
 
 * **mode 1**: before each mark (a jump's polyline) a run-in of ``nprev_us``, after it a run-out
-  of ``npost_us``, both on the mark's line and at its speed with the laser off;
+  of ``npost_us``, both on the mark's line and at its speed with the laser off (the run-in
+  ends a pitch before the mark's start, which the mark then steps onto, lit);
 * **mode 2**: also every corner between two marks that turns is taken apart: run-out along the
   mark that ends there, jump, run-in along the one that leaves it;
 * **mode 3**: only the corners whose cos φ is below ``limit`` (φ the turn); the others keep
@@ -212,17 +213,20 @@ def sky_segments(segments, sky, *, pitch_units, dwell_us, start=(FIELD_CENTRE, F
 
     def run_in(first, direction):
         """A jump to the run-in's start (the jump before the mark moved there) and the
-        run-in to ``first``."""
+        run-in up to the point a pitch before ``first``: the mark then steps from there, its
+        first point (lit) ``first`` (a run-in to ``first`` itself would leave that point dark:
+        the board marks a mark's start point only after the laser was off)."""
         if not n_in:
             if not (out and out[-1][0] == JUMP and out[-1][1:] == first):
                 out.append((JUMP, *first))
             return
-        begin = _point(first, direction, -len_in, "run-in")
+        before = _point(first, direction, -pitch_units, "run-in")
+        begin = _point(before, direction, -len_in, "run-in")
         if out and out[-1][0] == JUMP and out[-1][1:] == first:
             out[-1] = (JUMP, *begin)
         else:
             out.append((JUMP, *begin))
-        out.append((LINE, *first))
+        out.append((LINE, *before))
         counts["in"] += 1
 
     def run_out(last, direction):

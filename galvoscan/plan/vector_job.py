@@ -63,6 +63,7 @@ class VectorJob:
     notes: list = field(default_factory=list)
     layers: list = None             # a job of layers: its LayerJobs (.layers), run in turn
     sky_s: float = 0.0              # the time SkyWriting adds (its runs and corner jumps), s
+    sky_mode: int = 0               # SkyWriting's mode (a job of layers: the highest of theirs)
 
 
 def segments_from_paths(paths_units):
@@ -199,7 +200,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
                      jump_after_mm=after, pitch=pitch, registers=registers,
                      estimate_s=estimate, mark_mm=mark_mm, jump_mm=jump_mm,
                      bounds_mm=tuple(float(v) for v in bounds), notes=list(notes),
-                     sky_s=sky_s)
+                     sky_s=sky_s, sky_mode=sky.mode if sky is not None else 0)
 
 
 def plan_job_file(segments, settings, profile):
