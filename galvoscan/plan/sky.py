@@ -9,7 +9,8 @@ runs the set point through a mark's ends at the mark's own speed:
   of ``npost_us``, both on the mark's line and at its speed with the laser off (the run-in
   ends a pitch before the mark's start, which the mark then steps onto, lit);
 * **mode 2**: also every corner between two marks that turns is taken apart: run-out along the
-  mark that ends there, jump, run-in along the one that leaves it;
+  mark that ends there, jump, run-in along the one that leaves it (up to the corner, which the
+  mark that ends there has lit: lit twice it would get twice the dose);
 * **mode 3**: only the corners whose cos φ is below ``limit`` (φ the turn); the others keep
   the polygon delay (scaled by (1 - cos φ), a hold the host sends with each corner).
 
@@ -211,16 +212,17 @@ def sky_segments(segments, sky, *, pitch_units, dwell_us, start=(FIELD_CENTRE, F
     counts = {"in": 0, "out": 0, "corners": 0}
     here = tuple(start)
 
-    def run_in(first, direction):
+    def run_in(first, direction, lit):
         """A jump to the run-in's start (the jump before the mark moved there) and the
-        run-in up to the point a pitch before ``first``: the mark then steps from there, its
-        first point (lit) ``first`` (a run-in to ``first`` itself would leave that point dark:
-        the board marks a mark's start point only after the laser was off)."""
+        run-in: up to the point a pitch before ``first`` when ``first`` is to be ``lit`` (the
+        mark then steps onto it; a run-in to ``first`` itself leaves that point dark, the
+        board marking a mark's start point only after the laser was off), else up to
+        ``first`` (a corner taken apart: the mark that ends there has marked it)."""
         if not n_in:
             if not (out and out[-1][0] == JUMP and out[-1][1:] == first):
                 out.append((JUMP, *first))
             return
-        before = _point(first, direction, -pitch_units, "run-in")
+        before = _point(first, direction, -pitch_units, "run-in") if lit else first
         begin = _point(before, direction, -len_in, "run-in")
         if out and out[-1][0] == JUMP and out[-1][1:] == first:
             out[-1] = (JUMP, *begin)
@@ -267,12 +269,12 @@ def sky_segments(segments, sky, *, pitch_units, dwell_us, start=(FIELD_CENTRE, F
             position = mark[1:]
         pieces.append((piece, first_direction, last_direction))
         position = here
-        for piece, first_direction, last_direction in pieces:
+        for number, (piece, first_direction, last_direction) in enumerate(pieces):
             if first_direction is None:             # dots only: nothing to run through
                 out.extend(piece)
                 position = piece[-1][1:]
                 continue
-            run_in(tuple(position), first_direction)
+            run_in(tuple(position), first_direction, lit=number == 0)
             out.extend(piece)
             position = piece[-1][1:]
             run_out(tuple(position), last_direction)

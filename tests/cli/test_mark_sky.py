@@ -145,7 +145,7 @@ def test_mode_2_marks_each_side_of_a_square_up_to_its_corners(files, capsys, boa
     clocks_per_us = board.clk_freq / 1e6
     positions, in_force, edges = wires(board)
     # Four marks, each lit from the set point at one corner to the set point at the next,
-    # each edge Timelag after, to the clock.
+    # each edge Timelag after the set point's, to the clock.
     assert [level for _, level in edges] == [1, 0] * 4
     corners = [galvo(-1, 1), galvo(-1, -1), galvo(1, -1), galvo(1, 1)]
     lit = []
@@ -155,11 +155,15 @@ def test_mode_2_marks_each_side_of_a_square_up_to_its_corners(files, capsys, boa
         k1 = next(k for k, clock in enumerate(in_force)
                   if clock + 1 + timelag * clocks_per_us == fall) - 1
         lit.append((positions[k0], positions[k1]))
-    def corner_of(point):
-        found = [k for k, c in enumerate(corners) if near(point, c)]
+    def corner_of(point, units=1.0):
+        found = [k for k, c in enumerate(corners) if near(point, c, units)]
         assert len(found) == 1, point
         return found[0]
-    sides = [(corner_of(first), corner_of(last)) for first, last in lit]
+    # A side ends on its corner; the next starts a pitch (at most 30 µm) past it, the corner
+    # lit once, by the side that ends there (the first side, after a jump, on its corner).
+    pitch_units = 0.03 * UNITS_PER_MM
+    sides = [(corner_of(first, pitch_units), corner_of(last)) for first, last in lit]
+    assert near(lit[0][0], corners[sides[0][0]])
     # Each side from a corner to the one next to it, every corner a side's start once.
     assert sorted(a for a, _ in sides) == [0, 1, 2, 3]
     assert all((b - a) % 4 in (1, 3) for a, b in sides), sides
