@@ -259,3 +259,15 @@ def test_a_bitstream_without_pixel_lines_refuses_skywriting_before_any_write(tmp
                                          r"run-outs are .* \(--sky 0\); nothing was sent"):
         JobStreamer(client).run_vector(planned.segments, planned.vector_job.registers)
     assert client.read("link_seq") == 0
+
+
+def test_store_refuses_skywriting_in_one_line(files, capsys, tmp_path):
+    """The stand-alone player takes no pixel lines: one line, no image written."""
+    image = tmp_path / "job.img"
+    with pytest.raises(SystemExit) as stop:
+        main(["store", str(files / "square.svg"), "--machine", str(files / "machine.toml"),
+              "--sky", "1", "-o", str(image)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "does not take SkyWriting's run-ins and run-outs" in err[-1], err
+    assert not image.exists()

@@ -170,3 +170,16 @@ def test_any_sky_is_taken_or_refused_in_one_line(mode, timelag, shift, nprev):
     assert mode in (0, 1, 2, 3) and 0 <= timelag <= 1023
     if mode:
         assert 0 <= sky.laser_on_delay <= 1023 and 0 <= sky.laser_off_delay <= 1023
+
+
+def test_a_programs_layer_is_held_to_the_sky_settings():
+    from galvoscan.plan.layer_keys import check_layer, layer_from_pairs
+    from galvoscan.plan.layers import Layer
+    with pytest.raises(ValueError, match=r"layer 1: sky: --sky must be from 0 to 3, not 7"):
+        check_layer(Layer("#000000", sky_mode=7), "layer 1")
+    layer = layer_from_pairs("#000000", [("sky", "3"), ("sky_limit", "0.2"), ("timelag", "90")],
+                             "--layer")
+    base = JobSettings(SPEED, 10.0, PRR_KHZ, sky=Sky(mode=0, timelag_us=80.0))
+    assert layer.settings(base).sky == Sky(mode=3, timelag_us=90.0, limit=0.2)
+    with pytest.raises(ValueError, match="--layer: timelag: timelag must be from 0 to 1023"):
+        layer_from_pairs("#000000", [("timelag", "5000")], "--layer")
