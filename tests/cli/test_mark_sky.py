@@ -271,3 +271,43 @@ def test_store_refuses_skywriting_in_one_line(files, capsys, tmp_path):
     err = capsys.readouterr().err.strip().splitlines()
     assert "does not take SkyWriting's run-ins and run-outs" in err[-1], err
     assert not image.exists()
+
+
+@pytest.mark.parametrize("table, said", [
+    ("[job]\nsky = 9\n", "sky"),
+    ("[job]\nsky = 1\ntimelag = \"long\"\n", "timelag"),
+    ("[job]\nsky = 1\nnpost = -3\n", "npost"),
+    ("[[layer]]\nmatch = \"#000000\"\nsky_limit = 4\n", "sky_limit"),
+])
+def test_a_job_files_bad_sky_key_is_one_line(files, capsys, boards, tmp_path, table, said):
+    job = tmp_path / "job.toml"
+    job.write_text(table + f"[[drawing]]\nfile = \"{files / 'square.svg'}\"\n")
+    with pytest.raises(SystemExit) as stop:
+        main(["mark", str(job), "--machine", str(files / "machine.toml"), *NOPORT])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert said in err[-1] and "ttyUSB9" not in err[-1], err
+    assert not boards
+
+
+@hypothesis_settings(max_examples=30, deadline=None,
+                     suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(key=st.sampled_from(["mode", "timelag_us", "laser_on_shift_us", "nprev_us", "npost_us",
+                            "limit"]),
+       value=st.one_of(st.integers(-3000, 3000), st.floats(-1e4, 1e4, allow_nan=False),
+                       st.booleans(), st.text(alphabet="ab0.-e ", max_size=4)))
+def test_any_profile_sky_value_is_taken_or_refused_in_one_line(tmp_path_factory, key, value):
+    from galvoscan.profile.machine import ProfileError, parse_profile
+    text = f"[sky]\nmode = 1\n{key} = {json.dumps(value)}\n" if key != "mode" else \
+        f"[sky]\nmode = {json.dumps(value)}\n"
+    try:
+        profile = parse_profile(text)
+    except ProfileError as error:
+        assert "\n" not in str(error) and "[sky]" in str(error)
+        return
+    # Taken: a job plans with it (or says in one line why its Timelag cannot be).
+    from galvoscan.plan.sky import job_sky
+    sky = job_sky(profile)
+    assert sky.mode in (0, 1, 2, 3)
+    if sky.mode:
+        assert 0 <= sky.laser_on_delay <= 1023
