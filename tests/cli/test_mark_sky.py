@@ -311,3 +311,29 @@ def test_any_profile_sky_value_is_taken_or_refused_in_one_line(tmp_path_factory,
     assert sky.mode in (0, 1, 2, 3)
     if sky.mode:
         assert 0 <= sky.laser_on_delay <= 1023
+
+
+@pytest.mark.parametrize("limit, pieces", [(0.5, 2), (-0.9, 1), (0.9, 3)])
+def test_mode_3_takes_apart_only_the_corners_sharper_than_its_limit(files, capsys, boards,
+                                                                      tmp_path, limit, pieces):
+    """A polyline turning 30° and then 120° (cos 0.87 and -0.5): at limit 0.5 the laser
+    switches off and on again at the 120° corner only, on the wires; at -0.9 at neither, at
+    0.9 at both."""
+    import math
+    points = [(0.0, 0.0), (2.0, 0.0)]
+    heading = 0.0
+    for turn in (30, 120):
+        heading += math.radians(turn)
+        x, y = points[-1]
+        points.append((x + 2 * math.cos(heading), y + 2 * math.sin(heading)))
+    svg = tmp_path / "turns.svg"
+    svg.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="10mm" '
+                   'viewBox="-5 -5 10 10"><polyline points="' +
+                   " ".join(f"{x:.4f},{y:.4f}" for x, y in points) +
+                   '" fill="none" stroke="black"/></svg>')
+    assert main(["mark", str(svg), "--machine", str(files / "machine.toml"), "--sky", "3",
+                 "--sky-limit", str(limit), "--timelag", "100", "--sim", "--json"]) == 0
+    capsys.readouterr()
+    board, = boards
+    _, _, edges = wires(board)
+    assert [level for _, level in edges] == [1, 0] * pieces
