@@ -32,8 +32,8 @@ from ..gateware.points import FIELD_CENTRE
 from ..geometry.field import PlanError
 from ..geometry.segments import JUMP, LINE, MARK, PIXELS, has_pixel_lines
 from ..settings.schema import SettingError
-from ..settings.sky import (LASER_ON_SHIFT, NPOST, NPOST_SHARE, NPREV, NPREV_SHARE, SKY,
-                            SKY_LIMIT, TIMELAG)
+from ..settings.sky import (LASER_ON_SHIFT, LIMIT_DEFAULT, NPOST, NPOST_SHARE, NPREV,
+                            NPREV_SHARE, SKY, SKY_LIMIT, TIMELAG)
 
 
 __all__ = ["Sky", "SkyPlan", "job_sky", "layer_sky", "sky_segments", "sky_registers",
@@ -61,7 +61,7 @@ class Sky:
     laser_on_shift_us: float = 0.0
     nprev_us: float = None
     npost_us: float = None
-    limit: float = 0.5
+    limit: float = LIMIT_DEFAULT
 
     def __post_init__(self):
         for setting, value in ((SKY, self.mode), (TIMELAG, self.timelag_us),

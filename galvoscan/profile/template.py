@@ -9,6 +9,7 @@ too), so the template cannot disagree with what is checked.
 
 from ..link.client import frame_seconds
 from .keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num
+from ..settings.sky import NPOST_SHARE, NPREV_SHARE
 from .machine import _LASER_ON_HIGH_US, DEFAULT_PROFILE_NAME, default_profile
 
 
@@ -207,7 +208,7 @@ mode = {d.sky.mode}
 # must be 0 … {_LASER_ON_HIGH_US} µs. {s("sky", "laser_on_shift_us")}.
 laser_on_shift_us = {n(d.sky.laser_on_shift_us)}
 # Nprev and Npost, in µs: the run-in before and the run-out after each mark, whole
-# points at its speed. Left out: 0.15 and 0.1 × Timelag. {s("sky", "nprev_us")}.
+# points at its speed. Left out: {NPREV_SHARE:g} and {NPOST_SHARE:g} × Timelag. {s("sky", "nprev_us")}.
 # nprev_us = 12
 # npost_us = 8
 # Mode 3: a corner is taken apart where cos φ is below this (φ the turn: 1 straight on,

@@ -20,10 +20,15 @@ from ..gateware.host.regmap import BY_NAME
 from .schema import Setting
 
 
-__all__ = ["SKY", "TIMELAG", "LASER_ON_SHIFT", "NPREV", "NPOST", "SKY_LIMIT", "SKY_SETTINGS",
+__all__ = ["MODE_DEFAULT", "SHIFT_DEFAULT", "LIMIT_DEFAULT", "SKY", "TIMELAG", "LASER_ON_SHIFT", "NPREV", "NPOST", "SKY_LIMIT", "SKY_SETTINGS",
            "NPREV_SHARE", "NPOST_SHARE", "RUN_MAX_US"]
 
 
+#: The machine profile's ``[sky]`` defaults: SkyWriting off, no shift, mode 3's Limit (a
+#: corner turning more than 60° taken apart: galvoscan's choice).
+MODE_DEFAULT = 0
+SHIFT_DEFAULT = 0.0
+LIMIT_DEFAULT = 0.5
 #: RTC's defaults for Nprev and Npost: these shares of Timelag.
 NPREV_SHARE = 0.15
 NPOST_SHARE = 0.1
@@ -36,7 +41,7 @@ _ON, _OFF = BY_NAME["laser_on_delay"], BY_NAME["laser_off_delay"]
 _PROFILE = "the profile's [sky]"
 
 SKY = Setting("sky_mode", "integer", "", 0, 3, what="--sky", flag="--sky", key="sky",
-              metavar="MODE", default_said=f"{_PROFILE} mode, 0",
+              metavar="MODE", default_said=f"{_PROFILE} mode, {MODE_DEFAULT}",
               help="SkyWriting (RTC's modes): 0 off; 1 every mark run in and out at its own "
                    "speed with the laser off, the laser switched Timelag after the mirrors' "
                    "set point crosses its ends; 2 also every corner between two marks taken "
@@ -51,7 +56,8 @@ TIMELAG = Setting("timelag_us", "number", "µs", 0, _OFF.high, what="timelag",
                        "point crosses a mark's ends")
 LASER_ON_SHIFT = Setting("laser_on_shift_us", "number", "µs", -_ON.high, _ON.high,
                          what="laser-on shift", flag="--laser-on-shift", key="laser_on_shift",
-                         metavar="US", default_said=f"{_PROFILE} laser_on_shift_us, 0",
+                         metavar="US",
+                         default_said=f"{_PROFILE} laser_on_shift_us, {SHIFT_DEFAULT:g}",
                          help="SkyWriting's LaserOnShift: laser-on moved by this (negative: "
                               "earlier); Timelag + it must be from 0 to "
                               f"{_ON.high} µs")
@@ -67,7 +73,7 @@ NPOST = Setting("npost_us", "number", "µs", 0, RUN_MAX_US, what="npost", flag="
                      "(whole points, at least this long)")
 SKY_LIMIT = Setting("sky_limit", "number", "", -1, 1, what="sky limit", flag="--sky-limit",
                     key="sky_limit", metavar="COS",
-                    default_said=f"{_PROFILE} limit, 0.5",
+                    default_said=f"{_PROFILE} limit, {LIMIT_DEFAULT:g}",
                     help="SkyWriting mode 3's Limit: a corner is taken apart where cos φ is "
                          "below it (φ the turn: 1 straight on, 0 a right angle, -1 a "
                          "reversal); the others keep the polygon delay")

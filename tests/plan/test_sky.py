@@ -183,3 +183,12 @@ def test_a_programs_layer_is_held_to_the_sky_settings():
     assert layer.settings(base).sky == Sky(mode=3, timelag_us=90.0, limit=0.2)
     with pytest.raises(ValueError, match="--layer: timelag: timelag must be from 0 to 1023"):
         layer_from_pairs("#000000", [("timelag", "5000")], "--layer")
+
+
+def test_the_settings_pages_sky_table_is_the_declarations():
+    from pathlib import Path
+    from galvoscan.settings.schema import markdown_table
+    from galvoscan.settings.sky import SKY_SETTINGS
+    page = (Path(__file__).parents[2] / "docs" / "reference" / "settings.md").read_text(
+        encoding="utf-8")
+    assert markdown_table(SKY_SETTINGS) in page
