@@ -64,11 +64,14 @@ class Sky:
     limit: float = LIMIT_DEFAULT
 
     def __post_init__(self):
+        # Off, only the mode must be one: a profile's tracking delay may be longer than any
+        # Timelag the board takes, and a job that does not skywrite must not be refused for it.
         for setting, value in ((SKY, self.mode), (TIMELAG, self.timelag_us),
                                (LASER_ON_SHIFT, self.laser_on_shift_us),
                                (NPREV, self.nprev_us), (NPOST, self.npost_us),
                                (SKY_LIMIT, self.limit)):
-            if value is None and setting in (NPREV, NPOST):
+            if value is None and setting in (NPREV, NPOST) or \
+                    setting is not SKY and self.mode == 0:
                 continue
             try:
                 setting.check(value)

@@ -167,8 +167,18 @@ def test_mode_2_marks_each_side_of_a_square_up_to_its_corners(files, capsys, boa
     # Each side from a corner to the one next to it, every corner a side's start once.
     assert sorted(a for a, _ in sides) == [0, 1, 2, 3]
     assert all((b - a) % 4 in (1, 3) for a, b in sides), sides
-    # Between two sides the set point runs out, jumps and runs in: dark (no edge between).
-    assert all(a[0] < b[0] for a, b in zip(edges, edges[1:]))
+    # Between two sides the set point runs out, jumps and runs in, dark: every pulse falls
+    # while the mirror (Timelag behind the set point) and the set point are on one side's line,
+    # never while the mirror jumps to the next.
+    import bisect
+    lines = [(0, corners[0][0]), (0, corners[2][0]), (1, corners[1][1]), (1, corners[0][1])]
+
+    def set_point(clock):
+        return positions[bisect.bisect_right(in_force, clock) - 1]
+    for clock in board.pulses:
+        now, then = set_point(clock), set_point(clock - timelag * clocks_per_us)
+        assert any(abs(now[axis] - at) <= 1 and abs(then[axis] - at) <= 1
+                   for axis, at in lines), (clock, now, then)
 
 
 def test_estimate_says_the_time_skywriting_adds(files, capsys):

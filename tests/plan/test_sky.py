@@ -137,6 +137,28 @@ def test_mode_0_changes_nothing():
         planned(segments, None).segments
 
 
+def test_a_tracking_delay_longer_than_any_timelag_refuses_only_skywriting():
+    """[galvo] tracking_delay_us may be up to 2 ms; Timelag (laser_off_delay) up to 1023 µs:
+    a job without SkyWriting plans, one with it is refused in one line."""
+    from galvoscan import api
+    from galvoscan.geometry.drawing import Drawing
+    from galvoscan.geometry.field import Placement
+    from galvoscan.plan.objects import MarkObject
+    import numpy as np
+    profile = parse_profile("[galvo]\ntracking_delay_us = 1500\n")
+    path = np.array([(0.0, 0.0), (2.0, 0.0)])
+    for mode in (0, 1):
+        job = api.Job(sky_mode=mode)
+        try:
+            settings = api.job_settings(job, profile)
+        except PlanError as error:
+            assert mode == 1 and "timelag must be from 0 to 1023, not 1500" in str(error)
+            continue
+        assert mode == 0
+        made = MarkObject(Drawing("line", (path,), (False,)), Placement(), settings)
+        assert api.plan_made([made], job, profile).vector_job.sky_s == 0
+
+
 def test_a_run_in_past_the_fields_edge_is_refused():
     segments = [("jump", 20, 30000), ("mark", 3000, 30000)]
     with pytest.raises(PlanError, match="SkyWriting: the run-in .* past the field's edge"):
@@ -167,8 +189,9 @@ def test_any_sky_is_taken_or_refused_in_one_line(mode, timelag, shift, nprev):
     except PlanError as error:
         assert str(error).startswith("SkyWriting") and "\n" not in str(error)
         return
-    assert mode in (0, 1, 2, 3) and 0 <= timelag <= 1023
+    assert mode in (0, 1, 2, 3)
     if mode:
+        assert 0 <= timelag <= 1023
         assert 0 <= sky.laser_on_delay <= 1023 and 0 <= sky.laser_off_delay <= 1023
 
 
