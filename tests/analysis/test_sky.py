@@ -1,14 +1,18 @@
-"""SkyWriting against the delays and against nothing (galvoscan/analysis/sky.py): an L marked on
-the simulated board, its frames through the galvo model. The docs page's table is a fresh run's
-(generated, never written by hand), its figure is there, and what its prose says of the runs
-and of the study's set-up holds."""
+"""SkyWriting against the delays and against nothing (galvoscan/analysis/sky.py, `galvoscan
+analyze --sky`): an L marked on the simulated board, its frames through the galvo model. The
+docs page's table is a fresh run's (generated, never written by hand), its figure is there and
+the command writes one, and what its prose says of the runs and of the study's set-up holds."""
 
+import inspect
+import json
 from pathlib import Path
 import re
 
 import pytest
 
-from galvoscan.analysis.sky import LONG_RUNS, markdown_table, plot_sky, sky_report, sky_study
+from galvoscan.analysis.galvo import GalvoModel
+from galvoscan.analysis.sky import LONG_RUNS, markdown_table, model_timelag_us, sky_job_dose
+from galvoscan.cli import main
 from galvoscan.profile.machine import default_profile
 from galvoscan.settings.sky import NPOST_SHARE, NPREV_SHARE
 
@@ -19,18 +23,30 @@ TEXT = " ".join(PAGE.split())
 
 
 @pytest.fixture(scope="module")
-def study():
-    results = sky_study()
-    return results, {r["run"]: r for r in sky_report(results)}
+def study(tmp_path_factory):
+    """`galvoscan analyze --sky --json`'s rows, and the folder it wrote its figure in."""
+    out = tmp_path_factory.mktemp("sky")
+    capture = pytest.MonkeyPatch()
+    import io
+    import sys
+    printed = io.StringIO()
+    capture.setattr(sys, "stdout", printed)
+    try:
+        assert main(["analyze", "--sky", "--json", "--out", str(out)]) == 0
+    finally:
+        capture.undo()
+    rows = json.loads(printed.getvalue())
+    return rows, {r["run"]: r for r in rows}, out
 
 
 def test_the_pages_table_is_a_fresh_run(study):
-    results, _ = study
-    assert markdown_table(sky_report(results)) in PAGE
+    rows, _, out = study
+    assert markdown_table(rows) in PAGE
+    assert (out / "sky.png").stat().st_size > 10_000
 
 
 def test_what_the_page_says_of_the_runs_holds(study):
-    results, rows = study
+    _, rows, _ = study
     nothing, delays = rows["nothing"], rows["delays"]
     sky, long = rows["SkyWriting"], rows["SkyWriting, long runs"]
     # "Without delays the line starts with a burnt dot and the corner is rounded."
@@ -44,21 +60,21 @@ def test_what_the_page_says_of_the_runs_holds(study):
     assert max(long["start_peak"], long["corner_peak"], long["end_peak"]) <= 1.2
     # "SkyWriting's runs and the corner's jump cost that much more."
     assert nothing["estimate_ms"] < sky["estimate_ms"] < long["estimate_ms"]
-    assert results[2]["sky_s"] > 0
     # The laser delays SkyWriting sets: Timelag, the galvo model's tracking error.
-    assert sky["laser_on_delay_us"] == sky["laser_off_delay_us"] == results[2]["timelag_us"]
+    timelag = model_timelag_us(GalvoModel.from_step_times())
+    assert sky["laser_on_delay_us"] == sky["laser_off_delay_us"] == timelag
 
 
-def test_the_pages_set_up_is_the_studys(study, tmp_path):
-    results, _ = study
-    length = results[0]["length_mm"]
-    assert f"an L ({length:g} mm along X, then {length:g} mm along Y, at 1,000 mm/s)" in TEXT
-    assert "at spot scale (a 50 µm spot)" in TEXT
+def test_the_pages_set_up_is_the_studys():
+    length = inspect.signature(sky_job_dose).parameters["length_mm"].default
+    from galvoscan.cli import parser
+    args = parser().parse_args(["analyze", "--sky"])        # what `analyze --sky` runs at
+    assert f"an L ({length:g} mm along X, then {length:g} mm along Y, at " \
+           f"{args.mark_speed:,.0f} mm/s)" in TEXT
+    assert f"at spot scale (a {args.spot * 1000:g} µm spot)" in TEXT
     assert f"with runs of {LONG_RUNS} × Timelag" in TEXT
     assert f"left out: {NPREV_SHARE:g} × Timelag" in TEXT
     assert f"left out: {NPOST_SHARE:g} × Timelag" in TEXT
     assert f"some {default_profile().galvo.tracking_delay_us:g} µs" in TEXT
     figure = re.search(r"!\[[^]]*\]\(\.\./(analysis/sky\.png)\)", PAGE)
     assert figure and (DOCS / figure[1]).exists()
-    plot_sky(tmp_path / "sky.png", results)
-    assert (tmp_path / "sky.png").stat().st_size > 10_000
