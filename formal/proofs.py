@@ -94,7 +94,7 @@ class Proof:
         return bmc
 
 
-def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
+def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None, z=False):
     """The XY2-100 transmitter proof at ``clocks_per_bit`` system clocks per bit.
 
     ``make_phy(clk_freq=…, bit_rate=…)`` builds the design under proof (the real transmitter
@@ -105,19 +105,23 @@ def xy2_phy_proof(clocks_per_bit, *, make_phy=None, reset_free=True, name=None):
     to the PHY's (the position latched, the shift registers, the counters), so k-induction
     needs only a few clocks at any divider, resets included (without them it had to see a
     whole frame: 125 clocks at 6 clocks a bit). The cover needs two frames.
+
+    With ``z``, the transmitter drives the Z line too, and the spec checks it as X and Y.
     """
     make_phy = XY2Transmitter if make_phy is None else make_phy
     bit_rate = 2_000_000
     frame = FRAME_BITS * clocks_per_bit
 
     def harness(reset_free=reset_free):
-        phy = make_phy(clk_freq=clocks_per_bit * bit_rate, bit_rate=bit_rate)
+        phy = make_phy(clk_freq=clocks_per_bit * bit_rate, bit_rate=bit_rate,
+                       **({"z": True} if z else {}))
         return XY2TransmitterSpec(phy, clocks_per_bit=clocks_per_bit, reset_free=reset_free)
 
     return Proof(
-        name=name or f"xy2_100_{clocks_per_bit}x",
+        name=name or f"xy2_100_{clocks_per_bit}x" + ("_z" if z else ""),
         description=f"XY2-100 PHY at {clocks_per_bit} system clocks per bit: clock, edges, "
-                    f"20-bit frames, SYNC, parity, control bits, latched data; from power-up"
+                    f"20-bit frames, SYNC, parity, control bits, latched data"
+                    + (", the Z line's too" if z else "") + "; from power-up"
                     + (" and after any reset, mid-frame included" if reset_free else ""),
         harness=harness,
         # The helpers are inductive on their own (depth 1 passes); 3 leaves a little room.
@@ -372,6 +376,8 @@ PROOFS = [
     # The iCEBreaker's 12 MHz system clock, from power-up and after any reset (with the helper
     # invariants the induction is a few clocks deep, so the free reset costs nothing).
     xy2_phy_proof(6),
+    # With the Z line (the ULX3S's build), at the smallest divider.
+    xy2_phy_proof(2, z=True),
     spi_frame_proof(),
     command_path_proof(),
     laser_safety_proof(),

@@ -33,7 +33,10 @@ class XY2TransmitterSpec(Elaboratable):
     * **content**: on each axis, the three control bits are ``control_bits``, the 20 bits have
       even parity, and the 16 data bits are the position taken from the stream at the start of
       the frame (the centre until the first one);
-    * **latching**: the stream is ready only on the clock before a frame starts.
+    * **latching**: the stream is ready only on the clock before a frame starts;
+    * **Z** (a transmitter with ``xy2_z``): the Z line keeps the same edges, control bits and
+      parity, and its 16 data bits are ``z`` as it was on the clock the frame's position was
+      taken (free on every clock).
 
     Parameters
     ----------
@@ -73,13 +76,18 @@ class XY2TransmitterSpec(Elaboratable):
             dut.position.valid.eq(AnySeq(1)),
             dut.position.payload.eq(AnySeq(len(dut.position.payload.as_value()))),
         ]
+        has_z = "xy2_z" in dut.signature.members
+        if has_z:
+            m.d.comb += dut.z.eq(AnySeq(16))
 
         half = self.clocks_per_bit // 2
         clk, sync, x, y = dut.xy2_clk, dut.xy2_sync, dut.xy2_x, dut.xy2_y
+        # (Without a Z line, a constant low one: every property of it holds trivially.)
+        z = dut.xy2_z if has_z else Signal(name="no_z")
 
         # The wires one clock ago; all low at power-up and after reset.
-        clk_q, sync_q, x_q, y_q = (Signal(name=f"{s.name}_q") for s in (clk, sync, x, y))
-        m.d.sync += [clk_q.eq(clk), sync_q.eq(sync), x_q.eq(x), y_q.eq(y)]
+        clk_q, sync_q, x_q, y_q, z_q = (Signal(name=f"{s.name}_q") for s in (clk, sync, x, y, z))
+        m.d.sync += [clk_q.eq(clk), sync_q.eq(sync), x_q.eq(x), y_q.eq(y), z_q.eq(z)]
         rise = clk & ~clk_q
         fall = ~clk & clk_q
         sync_rise = sync & ~sync_q
@@ -101,6 +109,8 @@ class XY2TransmitterSpec(Elaboratable):
         # --- edges ------------------------------------------------------------------------------
         m.d.comb += Assert(rise | ((sync == sync_q) & (x == x_q) & (y == y_q)),
                            "SYNC, X and Y change only with a rising xy2_clk")
+        if has_z:
+            m.d.comb += Assert(rise | (z == z_q), "Z changes only with a rising xy2_clk")
 
         # --- frames -----------------------------------------------------------------------------
         in_frame = Signal()         # the first SYNC rise has been seen
@@ -133,6 +143,14 @@ class XY2TransmitterSpec(Elaboratable):
         frame_position = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
         with m.If(sync_rise):
             m.d.sync += frame_position.eq(taken)
+        # Z likewise, whether or not a position is offered.
+        taken_z = Signal(16, init=FIELD_CENTRE)
+        frame_z = Signal(16, init=FIELD_CENTRE)
+        if has_z:
+            with m.If(dut.position.ready):
+                m.d.sync += taken_z.eq(dut.z)
+            with m.If(sync_rise):
+                m.d.sync += frame_z.eq(taken_z)
         if hasattr(dut, "_latched"):
             # Helper invariant (proved too): the spec's memory of the last position taken is
             # the transmitter's. It spares the induction looking back over several frames.
@@ -140,6 +158,8 @@ class XY2TransmitterSpec(Elaboratable):
             # edge it counts) and stay in range.
             bit_q = Signal.like(dut._bit)
             m.d.sync += bit_q.eq(dut._bit)
+            if has_z:
+                m.d.comb += Assert(taken_z == dut._latched_z, "helper: the Z taken is latched")
             m.d.comb += [
                 Assert(taken.as_value() == dut._latched.as_value(),
                        "helper: the position taken is the one latched"),
@@ -151,10 +171,12 @@ class XY2TransmitterSpec(Elaboratable):
         # Sample like a scan head: on the falling edge.
         rx_x = Signal(FRAME_BITS - 1)
         rx_y = Signal(FRAME_BITS - 1)
+        rx_z = Signal(FRAME_BITS - 1)
         with m.If(fall):
-            m.d.sync += [rx_x.eq(Cat(x, rx_x)), rx_y.eq(Cat(y, rx_y))]
+            m.d.sync += [rx_x.eq(Cat(x, rx_x)), rx_y.eq(Cat(y, rx_y)), rx_z.eq(Cat(z, rx_z))]
         word_x = Cat(x, rx_x)   # the whole frame, valid on the parity bit's falling edge
         word_y = Cat(y, rx_y)
+        word_z = Cat(z, rx_z)
         parity_sampled = fall & in_frame & (bit_no == FRAME_BITS - 1)
         with m.If(parity_sampled):
             m.d.comb += [
@@ -165,6 +187,12 @@ class XY2TransmitterSpec(Elaboratable):
                 Assert(word_x[1:17] == frame_position.x, "X data is the latched position"),
                 Assert(word_y[1:17] == frame_position.y, "Y data is the latched position"),
             ]
+            if has_z:
+                m.d.comb += [
+                    Assert(word_z.xor() == 0, "Z frame has even parity"),
+                    Assert(word_z[17:20] == self.control_bits, "Z control bits"),
+                    Assert(word_z[1:17] == frame_z, "Z data is the latched Z"),
+                ]
 
         if hasattr(dut, "_latched"):
             # Helper invariants (proved too) that tie every bit of the spec's state to the
@@ -202,11 +230,17 @@ class XY2TransmitterSpec(Elaboratable):
                 Assert(sync_rise | (frame_position.as_value() == latched.as_value()),
                        "helper: the frame's position is the one latched"),
             ]
+            if has_z:
+                m.d.comb += Assert(sync_rise | (frame_z == dut._latched_z),
+                                   "helper: the frame's Z is the one latched")
             # Bits of the frame the spec has sampled: one a bit, on its falling edge.
             sampled = bit + (tick > half)
-            for axis, wire, wire_q, shift, rx in (("x", x, x_q, internals["shift_x"], rx_x),
-                                                  ("y", y, y_q, internals["shift_y"], rx_y)):
-                word = frame_word(self.control_bits, getattr(latched, axis))
+            lines = [("x", x, x_q, internals["shift_x"], rx_x, latched.x),
+                     ("y", y, y_q, internals["shift_y"], rx_y, latched.y)]
+            if has_z:
+                lines.append(("z", z, z_q, internals["shift_z"], rx_z, dut._latched_z))
+            for axis, wire, wire_q, shift, rx, value in lines:
+                word = frame_word(self.control_bits, value)
                 m.d.comb += [
                     Assert(~(started | (tick == 0)) |
                            (shift == (word << bit)[:FRAME_BITS]),
@@ -228,6 +262,9 @@ class XY2TransmitterSpec(Elaboratable):
             m.d.sync += last_x.eq(word_x[1:17])
             with m.If(frames_done != 3):
                 m.d.sync += frames_done.eq(frames_done + 1)
+        if has_z:
+            m.d.comb += Cover(parity_sampled & (frames_done == 1) &
+                              (word_z[1:17] != FIELD_CENTRE), "a frame with a new Z")
         m.d.comb += [
             Cover(parity_sampled & (frames_done == 1) & (word_x[1:17] != last_x) &
                   (word_y[1:17] != FIELD_CENTRE), "two frames with new data"),

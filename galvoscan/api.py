@@ -49,7 +49,8 @@ from .plan.objects import JobSettings, MarkObject
 from .plan.sky import job_sky
 from .plan.wobble import WobbleSettings, wobble_registers
 from .settings.sky import SKY_SETTINGS
-from .settings.laser import PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
+from .settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
+                             WOBBLE_HZ, Z)
 from .sim.board import SimTransport, SimulatedBoard
 # The bitstreams `galvoscan build --preset` builds, by name: a SimulatedBoard of one
 # (config=PRESETS["default"]) is the board that bitstream makes.
@@ -60,7 +61,7 @@ __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAY
            "HatchSet", "LineOrder", "Fly", "Job",
            "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
            "fields",
-           "job_settings", "job_wobble", "apply_wobble", "check_fly", "plan_fly",
+           "job_settings", "job_wobble", "apply_wobble", "apply_z", "check_fly", "plan_fly",
            "stream_layers",
            "load_lens_table",
            "load_profile",
@@ -154,7 +155,9 @@ class Job:
     outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
     (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
     ``[wobble]``; it needs a bitstream with the wobble stage), ``fly``: marking on the fly
-    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly), and SkyWriting
+    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly), ``z_mm``: the
+    focus shift on the Z channel (None: Z left alone, unless a layer gives one; it needs the
+    profile's ``[field] z_units_per_mm`` and a bitstream with the Z channel), and SkyWriting
     (``sky_mode`` 0 … 3, ``timelag_us``, ``laser_on_shift_us``, ``nprev_us``, ``npost_us``,
     ``sky_limit``; None: the profile's ``[sky]``; it needs a bitstream with pixel lines,
     :mod:`galvoscan.plan.sky`). The numbers are checked against their settings
@@ -177,6 +180,7 @@ class Job:
     wobble_along_um: float = None
     wobble_hz: float = None
     fly: Fly = None
+    z_mm: float = None
     sky_mode: int = None
     timelag_us: float = None
     laser_on_shift_us: float = None
@@ -188,7 +192,7 @@ class Job:
         if self.fly is not None and not isinstance(self.fly, Fly):
             raise PlanError(f"a job's fly is an api.Fly, not {self.fly!r}")
         for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ,
-                        *SKY_SETTINGS):
+                        Z, *SKY_SETTINGS):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
@@ -359,6 +363,7 @@ def plan_made(objects, job, profile):
     planned = plan_objects(objects, job, job_settings(job, profile), profile)
     planned.wobbles = apply_wobble(planned.vector_job, job_wobble(
         job.wobble_um, job.wobble_along_um, job.wobble_hz, profile), profile)
+    apply_z(planned.vector_job, job.z_mm, profile)
     if job.fly is not None:
         planned.fly = plan_fly(job.fly, planned.vector_job, profile)
     return planned
@@ -415,6 +420,30 @@ def apply_wobble(vector_job, base, profile):
                             f"field (−{half:g}…{half:g} mm): move it towards the centre or "
                             f"wobble less")
         part.registers.update(regs)
+    if vector_job.layers:
+        vector_job.registers.update(vector_job.layers[0].job.registers)
+    return True
+
+
+# --- Z ---------------------------------------------------------------------------------------
+
+def apply_z(vector_job, z_mm, profile):
+    """Each layer's ``z`` register: the job's focus shift ``z_mm`` (mm; None: none of its own),
+    a layer's own in its place; once any gives one, every layer has one (0 mm, the focus
+    shifter's middle, where neither does). Returns whether anything sets Z; a
+    :class:`~galvoscan.geometry.field.PlanError` (one line) without a focus shifter in the
+    profile, or past its range."""
+    parts = [(lj.layer, lj.job) for lj in vector_job.layers] if vector_job.layers else \
+        [(None, vector_job)]
+    found = [layer.z_mm if layer is not None and layer.z_mm is not None else z_mm
+             for layer, _ in parts]
+    if all(z is None for z in found):
+        return False
+    for (_, part), z in zip(parts, found):
+        try:
+            part.registers["z"] = profile.z_register(0.0 if z is None else z)
+        except ValueError as error:
+            raise PlanError(str(error)) from None
     if vector_job.layers:
         vector_job.registers.update(vector_job.layers[0].job.registers)
     return True

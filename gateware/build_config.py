@@ -112,6 +112,9 @@ class BuildConfig:
         Build marking on the fly: two quadrature encoder inputs (``encoder_x_a`` …), a
         simulated encoder, the fly offset before the correction, and the ``fly_*`` and
         ``enc_*`` registers.
+    z_axis : bool
+        Drive XY2-100's Z channel (``xy2_z``, a focus shifter) in every frame, from the ``z``
+        register.
     """
 
     modes: tuple = MODES
@@ -135,6 +138,7 @@ class BuildConfig:
     head_status: bool = False
     head_check: bool = False
     fly: bool = False
+    z_axis: bool = False
 
     def __post_init__(self):
         def put(name, value):       # (frozen: the normalised values are set once, here)
@@ -164,6 +168,7 @@ class BuildConfig:
             raise ValueError("vector mode times its points by the laser's pulses: it needs the "
                              "laser controller")
         put("fly", bool(self.fly))
+        put("z_axis", bool(self.z_axis))
         put("head_status", bool(self.head_status))
         put("head_check", bool(self.head_check))
         if self.head_check and not (self.head_status and self.laser):
@@ -232,7 +237,7 @@ class BuildConfig:
                 "delays": self.vector_delays, "interpolation": self.spiral_interpolation,
                 "uart": "uart" in self.links, "spi": "spi" in self.links,
                 "player": self.player, "pixel_lines": self.pixel_lines,
-                "head": self.head_status, "fly": self.fly}
+                "head": self.head_status, "fly": self.fly, "z": self.z_axis}
 
     def register_map(self, *, table_points=DEFAULT_TABLE_POINTS,
                      correction_nodes=DEFAULT_CORRECTION_NODES, resets=None):
@@ -247,6 +252,7 @@ class BuildConfig:
             modes=self.modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
             pixel_lines=self.pixel_lines, player=self.player, head=self.head_status, fly=self.fly,
+            z=self.z_axis,
             resets={**(resets or {}), **({"head_check": 1} if self.head_check else {})},
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
@@ -260,7 +266,7 @@ class BuildConfig:
                                        ("delays", self.vector_delays),
                                        ("pixel lines", self.pixel_lines), ("wobble", self.wobble),
                                        ("player", self.player), ("head status", self.head_status),
-                                       ("marking on the fly", self.fly),
+                                       ("marking on the fly", self.fly), ("Z", self.z_axis),
                                        ("laser", self.laser)) if on]
         return (f"{self.clk_freq / 1e6:g} MHz, XY2 {self.bit_rate / 1e6:g} Mbit/s, "
                 f"{self.baud:,} baud; modes {','.join(self.modes)}; links "

@@ -100,6 +100,7 @@ Capabilities = data.StructLayout({
     "pixel_lines": 1,       # vector mode's pixel lines (vec_op bit 8)
     "head": 1,              # the head status receiver (the head, head_state, head_check registers)
     "fly": 1,               # marking on the fly: two encoder inputs, the fly offset
+    "z": 1,                 # the XY2-100 Z channel (a focus shifter) and its z register
 })
 
 

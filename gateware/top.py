@@ -10,7 +10,8 @@ and the inputs ``interlock_open`` and ``laser_alarm[n-1:0]`` (``n`` = ``laser_al
 with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``flash_copi``,
 ``flash_cipo``, the start inputs ``start_n[1:0]`` and the outputs ``busy``, ``ready`` and
 ``player_led``; with the head status receiver, the head's ``xy2_status``; with marking on the
-fly, the encoders' ``encoder_x_a``, ``encoder_x_b``, ``encoder_y_a``, ``encoder_y_b``.
+fly, the encoders' ``encoder_x_a``, ``encoder_x_b``, ``encoder_y_a``, ``encoder_y_b``; with
+the Z channel, its data line ``xy2_z``.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, ResetInserter, Signal
@@ -132,6 +133,8 @@ class GalvoScanTop(wiring.Component):
     xy2_status : ``In(1)``, with the head status receiver
         The scan head's STATUS line (through an RS-422 receiver; low with no head, which then
         reads as missing).
+    xy2_z : ``Out(1)``, with the Z channel
+        XY2-100's Z data line (a focus shifter), in the same frames as X and Y.
 
     Attributes
     ----------
@@ -194,6 +197,8 @@ class GalvoScanTop(wiring.Component):
             members["xy2_status"] = In(1)
         if self.config.fly:
             members.update({f"encoder_{axis}_{line}": In(1) for axis in "xy" for line in "ab"})
+        if self.config.z_axis:
+            members["xy2_z"] = Out(1)
         super().__init__(members)
 
     def elaborate(self, platform):
@@ -263,7 +268,10 @@ class GalvoScanTop(wiring.Component):
         m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None,
                                                  multiplier=self.config.multiplier)
         m.submodules.phy = phy = XY2Transmitter(clk_freq=self.config.clk_freq,
-                                                bit_rate=self.config.bit_rate)
+                                                bit_rate=self.config.bit_rate,
+                                                z=self.config.z_axis)
+        if self.config.z_axis:
+            m.d.comb += [phy.z.eq(regs.z), self.xy2_z.eq(phy.xy2_z)]
         for name in ("amp_x", "amp_y", "center_x", "center_y"):
             m.d.comb += getattr(scale, name).eq(getattr(regs, name))
 
@@ -426,8 +434,11 @@ class GalvoScanTop(wiring.Component):
         m.submodules.fly = fly = self._fly = FlyOffset()
         connect(m, positions, fly.positions_in)
         m.d.comb += [fly.offset_x.eq(scale.offset_x), fly.offset_y.eq(scale.offset_y),
-                     status.events.fly_clipped.eq(fly.positions_out.valid &
-                                                  fly.positions_out.ready & fly.clipped)]
+                     ]
+        # Counted a clock after the point goes on (the count's clock enable would otherwise end
+        # the path from the source select through the scale's multiplier and this stage's sum).
+        m.d.sync += status.events.fly_clipped.eq(fly.positions_out.valid &
+                                                 fly.positions_out.ready & fly.clipped)
         return fly.positions_out
 
     def _elaborate_player(self, m, arbiter, regs, phy, vector, laser, status):

@@ -4,7 +4,7 @@ The iCEBreaker's UP5K holds the system only with features left out; the ECP5 on 
 all of it with room to spare (``galvoscan build --board ulx3s``): the spiral with its
 interpolator, raster, vector mode with the RTC delays and the wobble stage, the correction
 stage with a 33 × 33 table, the job player, the scan head's status, marking on the fly (two
-encoder inputs), and both host links, the SPI target and the UART on the board's FT231X at
+encoder inputs), XY2-100's Z channel (a focus shifter), and both host links, the SPI target and the UART on the board's FT231X at
 3 Mbaud (the player's machine lines have pins of their own here).
 
 The clock: 24 MHz, the PLL's CLKOS from the 25 MHz crystal (25 MHz is no whole, even multiple
@@ -75,7 +75,7 @@ ULX3S_PINS = {
     "xy2_sync": ("GN0", "o", "RS-422 driver → head SYNC±"),
     "xy2_x": ("GP1", "o", "RS-422 driver → head CHAN1± (X)"),
     "xy2_y": ("GN1", "o", "RS-422 driver → head CHAN2± (Y)"),
-    "xy2_z": ("GP2", "spare", "RS-422 driver → head CHAN3± (Z)"),
+    "xy2_z": ("GP2", "o", "RS-422 driver → head CHAN3± (Z, a focus shifter)"),
     "xy2_status": ("GN2", "i", "RS-422 receiver ← head STATUS± (fail-safe: no head reads as missing)"),
     "laser_power[0]": ("GP3", "o", "5 V buffer → DB25 1"),
     "laser_power[1]": ("GN3", "o", "5 V buffer → DB25 2"),
@@ -148,6 +148,7 @@ def ulx3s_platform(device="25F"):
     platform.add_resources([
         Resource("xy2", 0, *_subsignals(["xy2_clk", "xy2_sync", "xy2_x", "xy2_y"]),
                  Attrs(**lvcmos, DRIVE="8")),
+        Resource("xy2_z", 0, _pins("xy2_z", direction="o"), Attrs(**lvcmos, DRIVE="8")),
         Resource("laser", 0,
                  Subsignal("power", _pins(*power, direction="o")),
                  *_subsignals(["laser_latch", "laser_mo", "laser_am", "laser_prr",
@@ -204,10 +205,11 @@ class ULX3SScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
                baud=None, wobble=True, interpolation=True, delays=True, pixel_lines=True,
-               player=True, head_status=True, fly=True):
+               player=True, head_status=True, fly=True, z_axis=True):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
-        RTC delays, pixel lines, wobble, the job player, the head's status, marking on the fly, both links). ``clock`` in Hz (None: 24 MHz) must
+        RTC delays, pixel lines, wobble, the job player, the head's status, marking on the fly,
+        the Z channel, both links). ``clock`` in Hz (None: 24 MHz) must
         be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
         where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
@@ -224,7 +226,7 @@ class ULX3SScanner(Elaboratable):
             spiral_interpolation=interpolation, vector_delays=delays,
             pixel_lines=pixel_lines and delays and "vector" in modes,
             player=player and "vector" in modes, links=LINKS, head_status=head_status,
-            fly=fly)
+            fly=fly, z_axis=z_axis)
 
     def _encoder_pins(self, platform):
         """The encoders' lines, by the top's port names (none without marking on the fly)."""
@@ -248,6 +250,7 @@ class ULX3SScanner(Elaboratable):
         laser = platform.request("laser", 0, dir="-")
         registered_outputs(m, scanner, {
             **{f"xy2_{name}": getattr(xy2, name) for name in ("clk", "sync", "x", "y")},
+            **({"xy2_z": platform.request("xy2_z", 0, dir="-")} if self.config.z_axis else {}),
             **{f"laser_{name}": getattr(laser, name)
                for name in ("power", "latch", "mo", "am", "prr", "enable", "guide")}})
 

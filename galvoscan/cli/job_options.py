@@ -21,7 +21,7 @@ from ..plan.pixel_lines import PHOTO_LINES
 from ..settings.fly import BELT_SPEED, ENCODER, FLY, FLY_DIRECTION, FLY_SPEED
 from ..settings.sky import SKY_SETTINGS
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
-                              WOBBLE_HZ)
+                              WOBBLE_HZ, Z)
 from .args import int_in, number_in, setting_keywords
 from .jobargs import pair_mm
 from .layers import LayerAction
@@ -211,6 +211,8 @@ OPTIONS = (
     _setting(TOLERANCE, "drawing", "job"),
     # wobble
     *(_setting(setting, "wobble", "job") for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),
+    # the focus shifter
+    _setting(Z, "laser", "job"),
     # placement
     Option("--origin", "placement", dict(
         choices=["centre", "center", "lower-left", "page"], default="centre",

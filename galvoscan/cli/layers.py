@@ -6,13 +6,13 @@ registers; and the layered job's plan said a layer a line."""
 
 import argparse
 
-from ..api import apply_wobble, job_wobble
+from ..api import apply_wobble, apply_z, job_wobble
 from ..geometry.field import PlanError
 from ..plan.layer_keys import LAYER_KEYS, layer_from_pairs
 from .args import fail
 
 
-__all__ = ["LayerAction", "layer_from_words", "add_wobble", "describe_layers"]
+__all__ = ["LayerAction", "layer_from_words", "add_wobble", "add_z", "describe_layers"]
 
 
 def layer_from_words(words):
@@ -82,6 +82,21 @@ def add_wobble(job, args, profile):
         fail(error)
 
 
+def add_z(job, args, profile):
+    """Each layer's ``z`` register (the command line's ``--z``, a layer's own in its place),
+    by the API (:func:`galvoscan.api.apply_z`); one line for a Z the profile cannot make."""
+    try:
+        return apply_z(job, args.z, profile)
+    except PlanError as error:
+        fail(error)
+
+
+def _z_words(registers, profile):
+    if "z" not in registers:
+        return ""
+    return f", Z {(registers['z'] - 32768) / profile.field.z_units_per_mm:+g} mm"
+
+
 def describe_layers(job, profile):
     """A line a layer: what it matches, its settings, its plan and time."""
     lines = []
@@ -96,5 +111,6 @@ def describe_layers(job, profile):
             f"{pitch.pulses_per_point} pulse{'s' if pitch.pulses_per_point > 1 else ''}), "
             f"{s.power_percent:g} % ({profile.power_w(s.power_percent):.3g} W), "
             f"{s.prr_khz:g} kHz, {s.passes} pass(es)" + _wobble_words(part.registers, profile) +
+            _z_words(part.registers, profile) +
             f"; {part.estimate_s:.3f} s")
     return lines

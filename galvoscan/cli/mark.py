@@ -35,7 +35,7 @@ from .content import check_content_options, content_objects, part_serials
 from .job_options import add_job_file_options, option_of_flag as option
 from .jobfile import save_job_file, use_job_file
 from .job_reports import describe_job, mark_estimate_record, sim_report
-from .layers import add_wobble, describe_layers
+from .layers import add_wobble, add_z, describe_layers
 from .machine import add_machine_option, profile_from
 
 
@@ -51,6 +51,7 @@ def job_from_args(args):
                 power_percent=args.power, prr_khz=args.prr, passes=args.passes,
                 hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                 contour=args.contour, outline=not args.no_outline, tolerance_mm=args.tolerance,
+                z_mm=args.z,
                 **{setting.name: getattr(args, option(setting.flag).dest)
                    for setting in SKY_SETTINGS})
 
@@ -146,6 +147,7 @@ def planned_job(args, *, profile=None, serial=None, quiet=False):
     profile = profile or profile_from(args)
     job, placement, drawing = _plan(args, profile, serial)
     wobbles = add_wobble(job, args, profile)
+    add_z(job, args, profile)
     speed, power, prr = job_settings_values(args, profile)
     say = (lambda line: print(line, file=sys.stderr)) if getattr(args, "json", False) \
         else print

@@ -630,6 +630,9 @@ class JobStreamer:
             raise JobAborted("the board's bitstream has no marking on the fly (the ULX3S's "
                              "has it): mark the job standing still, without --fly; nothing "
                              "was sent")
+        if "z" in registers and not self.capabilities().z:
+            raise JobAborted("the board's bitstream has no Z channel (the ULX3S's has it): "
+                             "mark the job without --z or a layer's z; nothing was sent")
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})

@@ -23,7 +23,8 @@ import difflib
 from ..gateware.host.regmap import BY_NAME
 from ..geometry.field import PlanError
 from ..geometry.fill import Contour, HatchSet, LineOrder
-from ..settings.laser import PASSES, POWER, PRR, PULSES, SPEED, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ
+from ..settings.laser import (PASSES, POWER, PRR, PULSES, SPEED, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ,
+                              Z)
 from ..settings.machine import DELAYS
 from ..settings.schema import Setting, SettingError, range_text, value_text
 from ..settings.sky import SKY, SKY_LIMIT, SKY_SETTINGS
@@ -90,6 +91,7 @@ LAYER_KEYS = {one.key: one for one in (
              said=f"{HATCH.metavar}, repeated for more sets; none: no hatch"),
     LayerKey(HATCH_LINES), LayerKey(CONTOUR), LayerKey(OUTLINE),
     *(LayerKey(setting) for setting in (WOBBLE, WOBBLE_ALONG, WOBBLE_HZ)),
+    LayerKey(Z),
     # The jump delay (else the job's longest jump's) and the laser, mark and polygon delays
     # (else the profile's), said in their registers' units.
     *(LayerKey(setting, said=BY_NAME[setting.name].unit) for setting in DELAYS),

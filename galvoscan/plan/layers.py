@@ -67,6 +67,7 @@ class Layer:
     wobble_um: float = None
     wobble_along_um: float = None
     wobble_hz: float = None
+    z_mm: float = None
     delays_us: tuple = ()
     sky_mode: int = None
     timelag_us: float = None
@@ -118,7 +119,8 @@ class Layer:
         out = []
         words = {"speed_mm_s": "speed", "power_percent": "power", "prr_khz": "PRR",
                  "passes": "passes", "pulses_per_point": "pulses per point",
-                 "wobble_um": "wobble", "wobble_along_um": "wobble along", "wobble_hz": "wobble"}
+                 "wobble_um": "wobble", "wobble_along_um": "wobble along", "wobble_hz": "wobble",
+                 "z_mm": "Z"}
         for name, what in words.items():
             value = getattr(self, name)
             unit = _UNITS.get(name, "")             # the setting's (pulses: none)

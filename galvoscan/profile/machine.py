@@ -51,7 +51,7 @@ except ModuleNotFoundError:                      # Python < 3.11
 
 from ..correction.files import load_table
 from ..gateware.host.regmap import BY_NAME
-from ..gateware.points import FIELD_MAX
+from ..gateware.points import FIELD_CENTRE, FIELD_MAX
 from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
                    SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
                    _unknown_key, _unknown_section, default as _default)
@@ -78,6 +78,8 @@ class FieldSection:
     size_mm: float = _default("field", "size_mm")
     #: The correction table file (absolute), or None for the board's identity table.
     correction: Optional[Path] = _default("field", "correction")
+    #: The focus shifter's galvo units a mm of Z (0: none).
+    z_units_per_mm: float = _default("field", "z_units_per_mm")
 
 
 @dataclass(frozen=True)
@@ -250,6 +252,21 @@ class MachineProfile:
         registers["polygon_scaled"] = int(self.galvo.polygon_scaled)
         return registers
 
+    def z_register(self, z_mm):
+        """``z`` for a focus shift of ``z_mm`` (0: the focus shifter's middle, 32768), to the
+        nearest unit; a :class:`ValueError` (one line) without a focus shifter, or past its
+        range."""
+        per_mm = self.field.z_units_per_mm
+        if not per_mm:
+            raise ValueError(f"Z {z_mm:g} mm needs a focus shifter: set [field] "
+                             f"z_units_per_mm in the profile (its galvo units a mm)")
+        units = math.floor(FIELD_CENTRE + z_mm * per_mm + 0.5)
+        if not 0 <= units <= FIELD_MAX:
+            low, high = -FIELD_CENTRE / per_mm, (FIELD_MAX - FIELD_CENTRE) / per_mm
+            raise ValueError(f"Z {z_mm:g} mm is past the focus shifter's range "
+                             f"({low:.3g} … {high:.3g} mm at {per_mm:g} units/mm)")
+        return units
+
     def head_registers(self):
         """``head_check``, as a job writes it before it arms (a board that cannot read the
         head takes a job only with it 0)."""
@@ -300,7 +317,8 @@ class MachineProfile:
             "field": {"size_mm": self.field.size_mm,
                       "correction": None if self.field.correction is None
                       else str(self.field.correction),
-                      "correction_nodes": None if table is None else table.n},
+                      "correction_nodes": None if table is None else table.n,
+                      "z_units_per_mm": self.field.z_units_per_mm},
             "link": {"port": self.link.port, "baud": self.link.baud, "spi": self.link.spi,
                      "timeout_s": self.link.timeout_s},
             "laser": {"max_power_w": self.laser.max_power_w,

@@ -58,6 +58,11 @@ size_mm = {n(d.field.size_mm)}
 # a SCANLAB .ctb or a JCZ (EzCad) .cor file. A relative path is relative to the folder
 # of this file. Left out, the board's identity table is used: no correction.
 # correction = "f160.cor"
+# The focus shifter on XY2-100's Z channel (SCANLAB's varioSCAN; a ULX3S bitstream drives
+# it on GP2): its galvo units a mm of focus shift, from its data sheet or a focus test.
+# `mark --z MM` (and a layer's z) shifts the focus by MM; Z 0 is the shifter's middle.
+# 0: no focus shifter, and --z is refused. {s("field", "z_units_per_mm")}.
+z_units_per_mm = {n(d.field.z_units_per_mm)}
 
 [link]
 # Serial port of the board: on Linux usually the second of its two /dev/ttyUSB ports,

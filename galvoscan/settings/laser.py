@@ -17,7 +17,7 @@ from .schema import Setting, number_text
 
 
 __all__ = ["SPEED", "POWER", "PRR", "PASSES", "PULSES", "WOBBLE", "WOBBLE_ALONG", "WOBBLE_HZ",
-           "TOLERANCE", "TIMEOUT", "LINK_TIMEOUT_S", "BAUD", "PRESS_TIMEOUT", "ALL",
+           "TOLERANCE", "Z", "TIMEOUT", "LINK_TIMEOUT_S", "BAUD", "PRESS_TIMEOUT", "ALL",
            "JOB_SETTINGS", "PRR_STEPS_PER_KHZ"]
 
 
@@ -61,6 +61,10 @@ WOBBLE_HZ = Setting("wobble_hz", "number", "Hz", BY_NAME["wob_freq"].low, WOBBLE
                     what="wobble-hz", flag="--wobble-hz", key="wobble_hz", metavar="HZ",
                     default_said=_WOBBLE,
                     help="turns of the wobble's figure a second")
+Z = Setting("z_mm", "number", "mm", -100, 100, what="Z", flag="--z", key="z", metavar="MM",
+            help="focus shift on XY2-100's Z channel (a focus shifter, [field] z_units_per_mm "
+                 "in the profile; a bitstream with the Z channel, the ULX3S's): + away from "
+                 "the lens, 0 its middle (default: 0 with a layer's z, else Z left alone)")
 TOLERANCE = Setting("tolerance_mm", "number", "mm", 0.0005, 1, default=0.01,
                     what="tolerance", flag="--tolerance", key="tolerance", metavar="MM",
                     help="curves as chords at most this far off")
@@ -87,8 +91,9 @@ PRESS_TIMEOUT = Setting("press_timeout_s", "integer", "s", 1, 3600, default=600,
 
 #: A job's own settings, which a layer may change: by the key a job file and a layer use.
 JOB_SETTINGS = {s.key: s for s in (SPEED, POWER, PRR, PASSES, WOBBLE, WOBBLE_ALONG,
-                                   WOBBLE_HZ)}
+                                   WOBBLE_HZ, Z)}
 
 #: The settings docs/reference/settings.md lists, in its order (``standalone``'s press timeout is that
 #: command's own).
-ALL = (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ, TIMEOUT, BAUD)
+ALL = (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ, Z, TIMEOUT,
+       BAUD)

@@ -24,7 +24,7 @@ from .sky import (LASER_ON_SHIFT, LIMIT_DEFAULT, MODE_DEFAULT, NPOST, NPREV, SHI
 from .schema import ProfileKey, Setting
 
 
-__all__ = ["SIZE", "CORRECTION", "PORT", "SPI", "MAX_POWER", "SPOT", "GUIDE", "JUMP_DELAY",
+__all__ = ["SIZE", "CORRECTION", "Z_UNITS", "PORT", "SPI", "MAX_POWER", "SPOT", "GUIDE", "JUMP_DELAY",
            "MIN_JUMP_DELAY", "JUMP_LENGTH_LIMIT", "MAX_SPEED", "TRACKING_DELAY", "LASER_ON_DELAY", "LASER_OFF_DELAY", "MARK_DELAY",
            "POLYGON_DELAY", "POLYGON_SCALED", "DELAYS", "LASER_DELAYS", "PROFILE"]
 
@@ -36,6 +36,11 @@ CORRECTION = Setting("correction", "path",
                      help="the lens's distortion correction table (a galvoscan .json, a "
                           "SCANLAB .ctb or a JCZ .cor), relative to the profile's folder; "
                           "none: no correction")
+Z_UNITS = Setting("z_units_per_mm", "number", "units/mm", 0, 65_535, default=0.0,
+                  help="the focus shifter on XY2-100's Z channel (SCANLAB's varioSCAN, a "
+                       "ULX3S bitstream's GP2): its galvo units a mm of focus shift, from its "
+                       "data sheet or a focus test; Z 0 mm is its middle, 32768; 0: none "
+                       "(--z refused)")
 PORT = Setting("port", "text", help="serial port of the board; none: --port on the command "
                                     "line")
 SPI = Setting("spi", "text", help="instead of port: the pyftdi URL of an FTDI SPI adapter "
@@ -107,7 +112,8 @@ def _keys(section, *keys):
 
 #: Every section of the machine profile and its keys, in the template's order.
 PROFILE = {
-    "field": _keys("field", ("size_mm", SIZE, {}), ("correction", CORRECTION, {})),
+    "field": _keys("field", ("size_mm", SIZE, {}), ("correction", CORRECTION, {}),
+                   ("z_units_per_mm", Z_UNITS, {})),
     "link": _keys("link", ("port", PORT, {}),
                   ("baud", BAUD, dict(default=DEFAULT_BAUD, kind="integer",
                                       help="serial rate in baud, as the bitstream was built")),

@@ -110,6 +110,8 @@ class SimulatedBoard:
         The backend that runs it (``"python"`` or ``"compiled"``).
     frames : list of (int, int, int)
         ``(cycle, x, y)``: the clock on which each XY2-100 frame was complete, and its position.
+    z_frames : list of (int, int)
+        ``(cycle, z)``: the same for the Z line's frames (a build with the Z channel).
     pulses : list of int
         Clock of each laser pulse (a PRR rising edge with modulation on).
     laser_changes : list of (int, tuple)
@@ -220,6 +222,7 @@ class SimulatedBoard:
         self.framing_errors = 0
         self.bytes_in = []              # (cycle its stop bit ended, byte) of every byte in
         self.frames = []
+        self.z_frames = []
         self.sync_rises = []
         self.pulses = []
         self.laser_changes = []

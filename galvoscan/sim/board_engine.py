@@ -62,9 +62,12 @@ class PythonEngine:
 
     def _add_processes(self):
         self._receiver = XY2Receiver()
+        self._z_receiver = XY2Receiver()
         for process in (self._uart_in, self._uart_out, self._spi_host, self._scan_head,
                         self._sync_edges, self._laser, self._machine):
             self.sim.add_testbench(process, background=True)
+        if hasattr(self.board.top, "xy2_z"):
+            self.sim.add_testbench(self._z_line, background=True)
         if self.board.flash is not None:
             self.sim.add_testbench(self._flash, background=True)
         if hasattr(self.board.top, "xy2_status"):
@@ -86,6 +89,7 @@ class PythonEngine:
         started again (a millisecond, where building the simulator is half a second)."""
         self.sim.reset()
         self._receiver = XY2Receiver()
+        self._z_receiver = XY2Receiver()
         self._reserve_power_up()
 
     def _reserve_power_up(self):
@@ -214,6 +218,15 @@ class PythonEngine:
             frame = self._receiver.sample(sync, x, y)
             if frame is not None:
                 board.frames.append((cycles, frame.x, frame.y))
+
+    async def _z_line(self, ctx):
+        # The Z line's frames, by the same receiver as X and Y's (Z on both of its inputs).
+        board, top = self.board, self.board.top
+        async for _, sync, z, cycles in ctx.negedge(top.xy2_clk).sample(
+                top.xy2_sync, top.xy2_z, self._clocked.cycles):
+            frame = self._z_receiver.sample(sync, z, z)
+            if frame is not None:
+                board.z_frames.append((cycles, frame.x))
 
     async def _head_status(self, ctx):
         # The head's STATUS line (:mod:`.head`): a bit on each rising CLOCK edge, from the one

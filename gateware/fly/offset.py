@@ -47,7 +47,11 @@ class FlyOffset(wiring.Component):
             # 16 bits unsigned + 18 signed: 19 signed bits hold every sum.
             moved = Signal(signed(OFFSET_BITS + 1), name=f"moved_{axis}")
             m.d.comb += moved.eq(self.positions_in.payload[axis] + getattr(self, f"offset_{axis}"))
-            low, high = moved < 0, moved > FIELD_MAX
+            # Below the field: the sign bit. Past it: positive with a bit above the field's 16.
+            # (Read off the sum's bits rather than compared: the sum is at the end of a long
+            # combinational path, from the source select through the scale's multiplier.)
+            low = moved[-1]
+            high = ~moved[-1] & moved[16:-1].any()
             m.d.comb += self.positions_out.payload[axis].eq(self._held(moved, low, high))
             clips.append(low | high)
         m.d.comb += [

@@ -17,7 +17,7 @@ from ..fields import Capabilities, HeadState, HeadStatus, Mode, PlayerStatus, St
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
            "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_REGISTERS",
            "CORRECTION_REGISTERS", "PLAYER_REGISTERS", "HEAD_REGISTERS",
-           "FLY_REGISTERS"]
+           "FLY_REGISTERS", "Z_REGISTERS"]
 
 
 @dataclass(frozen=True)
@@ -401,6 +401,11 @@ def all_registers(table_points, correction_nodes):
         Register("fly_clipped", 0x6D, "ro", 0, 0, 0, "points",
                  "points the fly offset pushed off the field, held at its edge with the laser "
                  "off, since reset; stops at 65535", needs=('fly',)),
+        # --- Z channel --------------------------------------------------------------------------
+        Register("z", 0x70, "rw", FIELD_CENTRE, 0, FIELD_MAX, "galvo units",
+                 "the XY2-100 Z channel (a focus shifter such as varioSCAN), sent in every "
+                 "frame on its own data line: 32768 = the middle of its range (no focus "
+                 "shift); taken with each frame's position", needs=('z',)),
     ]
 
 
@@ -437,3 +442,6 @@ HEAD_REGISTERS = _needing("head")
 
 #: Registers only a build with marking on the fly has.
 FLY_REGISTERS = _needing("fly")
+
+#: Registers only a build with the Z channel has.
+Z_REGISTERS = _needing("z")

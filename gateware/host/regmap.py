@@ -37,6 +37,7 @@ from ..fields import (STATUS_BITS, Capabilities, FlyControl, HeadState, HeadStat
                       PlayerResult,
                       PlayerState, PlayerStatus, Status, VectorOp, WobbleShape, pack)
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, FLY_REGISTERS, HEAD_REGISTERS,
+                            Z_REGISTERS,
                             INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, PLAYER_REGISTERS,
                             WOBBLE_REGISTERS, Register,
@@ -77,7 +78,8 @@ class RegisterMap:
     """
 
     def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
-                 wobble=False, vector_delays=False, pixel_lines=False, head=False, fly=False):
+                 wobble=False, vector_delays=False, pixel_lines=False, head=False, fly=False,
+                 z=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -93,6 +95,7 @@ class RegisterMap:
         self.pixel_lines = pixel_lines
         self.head = head
         self.fly = fly
+        self.z = z
 
     def __iter__(self):
         return iter(self.registers)
@@ -116,6 +119,7 @@ class RegisterMap:
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
                  vector_delays=False, pixel_lines=False, player=False, head=False, fly=False,
+                 z=False,
                  resets=None, fixed=None):
     """The register map of a build (by default, the default build's: the same defaults as
     :class:`~galvoscan.gateware.top.GalvoScanTop`).
@@ -149,6 +153,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         ``head_state`` and ``head_check`` also need the laser).
     fly : bool
         The build marks on the fly (else its ``fly_*`` and ``enc_*`` registers are left out).
+    z : bool
+        The build drives the Z channel (else its ``z`` register is left out).
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -179,7 +185,7 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     options |= {name for name, built in (
         ("correction", correction_nodes is not None), ("laser", laser), ("wobble", wobble),
         ("interpolation", spiral_interpolation), ("delays", vector_delays),
-        ("player", player), ("head", head), ("fly", fly)) if built}
+        ("player", player), ("head", head), ("fly", fly), ("z", z)) if built}
     every = {r.name: r for r in all_registers(table_points, correction_nodes or 2)}
     leave_out = {name for name, reg in every.items() if not set(reg.needs) <= options}
     if not vector_delays:
@@ -220,7 +226,7 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                        modes=modes, laser=bool(laser), wobble=bool(wobble),
                        vector_delays=bool(vector_delays) and Mode.VECTOR in modes,
                        pixel_lines=bool(pixel_lines and vector_delays) and Mode.VECTOR in modes,
-                       head=bool(head), fly=bool(fly))
+                       head=bool(head), fly=bool(fly), z=bool(z))
 
 
 def _host_map():
@@ -230,7 +236,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True, fly=True,
+                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True, fly=True, z=True,
                         resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
@@ -245,4 +251,5 @@ BY_ADDRESS = HOST_MAP.by_address
 assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
-           WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS + HEAD_REGISTERS + FLY_REGISTERS)
+           WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS + HEAD_REGISTERS + FLY_REGISTERS +
+           Z_REGISTERS)

@@ -44,7 +44,8 @@ def clocks_per_bit(clk_freq, bit_rate):
 
 
 class XY2Transmitter(wiring.Component):
-    """XY2-100 transmitter for one X/Y scan head.
+    """XY2-100 transmitter for one X/Y scan head, and optionally its Z channel (a focus shifter
+    such as SCANLAB's varioSCAN, on its own data line in the same frame).
 
     Sends frames back to back, with no idle clock between them: 20 bits at ``bit_rate``, so
     100 000 frames/s (10 µs each) at the standard 2 Mbit/s. Each frame carries one position per
@@ -66,6 +67,9 @@ class XY2Transmitter(wiring.Component):
     control_bits : int
         The three control bits C2 C1 C0. ``0b001`` (16-bit position) is what scan heads expect;
         the source paper's ``0b000`` is accepted for heads that want it.
+    z : bool
+        Drive a third data line, ``xy2_z``, with :attr:`z` in every frame (the same control
+        bits and parity as X and Y).
 
     Interface attributes
     --------------------
@@ -76,16 +80,14 @@ class XY2Transmitter(wiring.Component):
         10 µs base tick of the position sources.
     xy2_clk, xy2_sync, xy2_x, xy2_y : ``Out(1)``
         The bus, single-ended, for an RS-422 driver.
+    z : ``In(16)``, with ``z``
+        The Z channel's position in galvo units (32768: the middle of the focus shifter's
+        range), taken with each frame's position, at the frame boundary.
+    xy2_z : ``Out(1)``, with ``z``
+        The Z data line.
     """
 
-    position: In(stream.Signature(FieldPoint))
-    frame_strobe: Out(1)
-    xy2_clk: Out(1)
-    xy2_sync: Out(1)
-    xy2_x: Out(1)
-    xy2_y: Out(1)
-
-    def __init__(self, *, clk_freq, bit_rate=2_000_000, control_bits=0b001):
+    def __init__(self, *, clk_freq, bit_rate=2_000_000, control_bits=0b001, z=False):
         per_bit = clocks_per_bit(clk_freq, bit_rate)
         if not isinstance(control_bits, int) or not 0 <= control_bits <= 0b111:
             raise ValueError(f"control_bits must be a 3-bit integer, not {control_bits!r}")
@@ -96,10 +98,17 @@ class XY2Transmitter(wiring.Component):
         self.clocks_per_bit = per_bit
         #: System clocks per frame.
         self.clocks_per_frame = FRAME_BITS * self.clocks_per_bit
-        super().__init__()
+        #: The Z channel is driven.
+        self.z_axis = bool(z)
+        members = {"position": In(stream.Signature(FieldPoint)), "frame_strobe": Out(1),
+                   "xy2_clk": Out(1), "xy2_sync": Out(1), "xy2_x": Out(1), "xy2_y": Out(1)}
+        if self.z_axis:
+            members.update({"z": In(16), "xy2_z": Out(1)})
+        super().__init__(members)
         # The position of the frame being sent (made here so that the proof's helper
-        # invariant can name it).
+        # invariant can name it), and its Z.
         self._latched = Signal(FieldPoint, init={"x": FIELD_CENTRE, "y": FIELD_CENTRE})
+        self._latched_z = Signal(16, init=FIELD_CENTRE)
         self._bit = Signal(range(FRAME_BITS), init=FRAME_BITS - 1)    # bit number, 0 = C2
 
     @property
@@ -135,27 +144,24 @@ class XY2Transmitter(wiring.Component):
             self.frame_strobe.eq(frame_end),
         ]
 
-        shift_x = Signal(FRAME_BITS)
-        shift_y = Signal(FRAME_BITS)
+        # Each data line: its value for the next frame, what it latches, and its wire.
+        lines = [(next_position.x, None, self.xy2_x, "x"),
+                 (next_position.y, None, self.xy2_y, "y")]
+        if self.z_axis:
+            lines.append((self.z, self._latched_z, self.xy2_z, "z"))
         with m.If(frame_end):
-            word_x = frame_word(self.control_bits, next_position.x)
-            word_y = frame_word(self.control_bits, next_position.y)
-            m.d.sync += [
-                latched.eq(next_position),
-                shift_x.eq(word_x),
-                shift_y.eq(word_y),
-                self.xy2_x.eq(word_x[-1]),
-                self.xy2_y.eq(word_y[-1]),
-                self.xy2_sync.eq(1),
-            ]
+            m.d.sync += [latched.eq(next_position), self.xy2_sync.eq(1)]
         with m.Elif(bit_end):
-            m.d.sync += [
-                shift_x.eq(shift_x << 1),
-                shift_y.eq(shift_y << 1),
-                self.xy2_x.eq(shift_x[-2]),
-                self.xy2_y.eq(shift_y[-2]),
-                # Low for the parity bit, which is the one after bit 18.
-                self.xy2_sync.eq(bit != FRAME_BITS - 2),
-            ]
+            # Low for the parity bit, which is the one after bit 18.
+            m.d.sync += self.xy2_sync.eq(bit != FRAME_BITS - 2)
+        for value, latch, wire, axis in lines:
+            shift = Signal(FRAME_BITS, name=f"shift_{axis}")
+            with m.If(frame_end):
+                word = frame_word(self.control_bits, value)
+                m.d.sync += [shift.eq(word), wire.eq(word[-1])]
+                if latch is not None:
+                    m.d.sync += latch.eq(value)
+            with m.Elif(bit_end):
+                m.d.sync += [shift.eq(shift << 1), wire.eq(shift[-2])]
 
         return m

@@ -24,7 +24,7 @@ from broken_fly import GATE_FAULTS, OFFSET_FAULTS, BrokenGate, BrokenOffset
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
 from broken_player import PLAYER_FAULTS, TamperedPlayer
-from broken_phys import FAULTS, TamperedPHY
+from broken_phys import FAULTS, Z_FAULTS, TamperedPHY
 from broken_vector import VECTOR_FAULTS, TamperedSequencer
 
 
@@ -72,6 +72,16 @@ def test_broken_phy_fails_the_proof(fault, tmp_path):
                    cover_depth=proof.bmc_depth if not resets else 12, tasks=("bmc",))
     assert bmc.status == "FAIL"
     assert expected_properties(FAULTS[fault]) & failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(Z_FAULTS))
+def test_broken_z_line_fails_the_proof(fault, tmp_path):
+    proof = xy2_phy_proof(2, make_phy=partial(TamperedPHY, fault), reset_free=False,
+                          name=f"broken_{fault}", z=True)
+    bmc, = run_sby(proof.harness(), proof.name, tmp_path, depth=proof.depth,
+                   cover_depth=proof.bmc_depth, tasks=("bmc",))
+    assert bmc.status == "FAIL"
+    assert expected_properties(Z_FAULTS[fault]) & failed_properties(bmc), (fault, bmc.failed)
 
 
 @pytest.mark.parametrize("fault", sorted(BROKEN_COMMAND_PATHS))

@@ -48,7 +48,7 @@ def test_bad_options_are_refused_at_construction(options, message):
 def test_the_caps_register_is_what_the_configuration_built():
     # The caps bits in the order the README's register table gives them, bit 0 first.
     order = ("spiral", "raster", "vector", "laser", "correction", "wobble", "delays",
-             "interpolation", "uart", "spi", "player", "pixel_lines", "head", "fly")
+             "interpolation", "uart", "spi", "player", "pixel_lines", "head", "fly", "z")
     for name, config in PRESETS.items():
         caps = preset_register_map(name)["caps"].reset
         built = {flag: bool(caps >> bit & 1) for bit, flag in enumerate(order)}

@@ -23,6 +23,7 @@ from profile_files import DEFAULTS, toml
 # range in the module is a test failure to look at. (section, key): (low, high, whole number).
 RANGES = {
     ("field", "size_mm"): (1, 2000, False),
+    ("field", "z_units_per_mm"): (0, 65_535, False),
     ("link", "baud"): (300, 12_000_000, True),
     ("link", "timeout_s"): (0.01, 600, False),
     ("laser", "max_power_w"): (0.1, 10_000, False),

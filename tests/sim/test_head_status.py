@@ -61,9 +61,17 @@ def run(backend):
     return readings, board, hot_from
 
 
+@pytest.fixture(scope="module")
+def sessions():
+    """:func:`run` on each backend, once for the module's tests (in one xdist group, so that
+    one worker runs them)."""
+    return {backend: run(backend) for backend in ("compiled", "python")}
+
+
+@pytest.mark.xdist_group("head_sessions")
 @pytest.mark.parametrize("backend", ["compiled", "python"])
-def test_a_head_that_grows_hot_stops_the_laser_latched(backend):
-    readings, board, hot_from = run(backend)
+def test_a_head_that_grows_hot_stops_the_laser_latched(sessions, backend):
+    readings, board, hot_from = sessions[backend]
     assert readings["head"] == HEALTHY_HEAD and readings["state"] == 0
     assert readings["check"] == 1
     assert readings["armed"] >> STATUS_BITS["laser_ready"] & 1
@@ -106,9 +114,10 @@ def test_no_head_reads_missing_and_the_laser_stays_off(backend):
 
 
 def test_with_the_check_off_the_head_is_only_reported():
-    board = SimulatedBoard(backend="compiled", head_word=HEALTHY_HEAD & ~POWER_OK,
-                           **dict(BUILD, head_check=False))
+    # (The build's check on at power-up, written off: the model the other tests use.)
+    board = SimulatedBoard(backend="compiled", head_word=HEALTHY_HEAD & ~POWER_OK, **BUILD)
     client = HostClient(SimTransport(board))
+    client.write("head_check", 0)
     assert client.read("head_check") == 0
     assert client.read("head") == HEALTHY_HEAD & ~POWER_OK
     client.write("laser_prr", 500)
@@ -118,8 +127,9 @@ def test_with_the_check_off_the_head_is_only_reported():
     assert client.read("status") >> STATUS_BITS["laser_ready"] & 1
 
 
-def test_both_backends_keep_the_same_records():
-    (a, compiled, _), (b, python, _) = run("compiled"), run("python")
+@pytest.mark.xdist_group("head_sessions")
+def test_both_backends_keep_the_same_records(sessions):
+    (a, compiled, _), (b, python, _) = sessions["compiled"], sessions["python"]
     assert a == b
     for name in ("frames", "sync_rises", "pulses", "laser_changes"):
         assert getattr(compiled, name) == getattr(python, name), name

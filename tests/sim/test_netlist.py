@@ -361,6 +361,9 @@ def model_differences(mapped_blocks, tmp_path_factory):
 
 
 @pytest.mark.toolchain
+# One worker runs them all: the module's fixture (a Yosys run and a C++ compile, some 45 s) is
+# made once, not once for each worker the cases would otherwise be spread over.
+@pytest.mark.xdist_group("ecp5_models")
 @pytest.mark.parametrize("broken", [None, *BROKEN_MODELS])
 def test_the_ram_and_multiplier_models_do_what_yosys_does(model_differences, broken):
     """galvoscan's DP16KD and MULT18X18D (ecp5_sim.v) in the netlist synth_ecp5 makes of RAMs

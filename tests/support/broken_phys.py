@@ -11,10 +11,10 @@ from galvoscan.gateware.phy.xy2_100 import XY2Transmitter
 
 
 class TamperedPHY(wiring.Component):
-    def __init__(self, kind, *, clk_freq, bit_rate, control_bits=0b001):
+    def __init__(self, kind, *, clk_freq, bit_rate, control_bits=0b001, z=False):
         self.kind = kind
         self.inner = XY2Transmitter(clk_freq=clk_freq, bit_rate=bit_rate,
-                                    control_bits=control_bits)
+                                    control_bits=control_bits, z=z)
         super().__init__(self.inner.signature)
 
     def elaborate(self, platform):
@@ -33,6 +33,8 @@ class TamperedPHY(wiring.Component):
 
         clk, sync, x, y = inner.xy2_clk, inner.xy2_sync, inner.xy2_x, inner.xy2_y
         payload_x, ready = self.position.payload.x, inner.position.ready
+        if inner.z_axis:
+            z, z_in = inner.xy2_z, self.z
 
         # The wrapper's own view of which bit is on the wires, aligned with them: on the clock
         # where xy2_clk rises it is already the new bit.
@@ -73,6 +75,18 @@ class TamperedPHY(wiring.Component):
             ready = ready | (started & (bit == 9) & rise)
         elif kind == "ignores_reset":
             pass
+        elif kind == "z_bad_parity":
+            # Z inverted during the parity bit.
+            z = z ^ (~sync & started)
+        elif kind == "z_corrupt":
+            # The Z sent is not the one taken.
+            z_in = z_in ^ 0x0100
+        elif kind == "z_late":
+            # Z a clock old when the frame's position is taken: a Z that changes on that clock
+            # goes out a frame late.
+            z_q = Signal(16)
+            m.d.sync += z_q.eq(z_in)
+            z_in = z_q
         elif kind == "idle_clock":
             # One clock pulse a frame is swallowed.
             clk = clk & ~(started & (bit == 10))
@@ -90,8 +104,17 @@ class TamperedPHY(wiring.Component):
             self.xy2_x.eq(x),
             self.xy2_y.eq(y),
         ]
+        if inner.z_axis:
+            m.d.comb += [inner.z.eq(z_in), self.xy2_z.eq(z)]
         return m
 
+
+#: Each fault of the Z line (a transmitter built with it) and the property it must break.
+Z_FAULTS = {
+    "z_bad_parity": "Z frame has even parity",
+    "z_corrupt": "Z data is the latched Z",
+    "z_late": "Z data is the latched Z",
+}
 
 #: Each fault and the property (the Assert message in formal/xy2_100.py) it must break.
 FAULTS = {

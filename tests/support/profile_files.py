@@ -2,7 +2,7 @@
 and a profile's text from its keys."""
 
 DEFAULTS = {
-    "field": {"size_mm": 110.0, "correction": None},
+    "field": {"size_mm": 110.0, "correction": None, "z_units_per_mm": 0.0},
     "link": {"port": None, "baud": 1_000_000, "spi": None, "timeout_s": 0.5},
     "laser": {"max_power_w": 20.0, "prr_khz": [20.0, 200.0], "spot_mm": 0.05, "guide": True},
     "galvo": {"jump_delay_us": 500.0, "min_jump_delay_us": 240.0, "jump_length_limit_mm": 5.0,

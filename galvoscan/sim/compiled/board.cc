@@ -45,7 +45,7 @@ enum LaserPin { ENABLE, MO, AM, PRR, LATCH, GUIDE };
 
 // The records (gs_board_take).
 enum Record { FRAMES, SYNC_RISES, PULSES, LASER_CHANGES, BYTES_IN, BYTES_OUT, XY2_SAMPLES,
-              PIN_CHANGES, SPI_RESULTS, RECORDS };
+              PIN_CHANGES, SPI_RESULTS, Z_FRAMES, RECORDS };
 
 // Flags of gs_board_new.
 enum Flag { RECORD_SAMPLES = 1, RECORD_PINS = 2 };
@@ -296,6 +296,10 @@ struct Board {
     int64_t last_pins = -1;
 
     XY2Receiver receiver;
+#if GS_Z
+    // The Z line's frames, by the same decoder as X and Y's (Z on both of its inputs).
+    XY2Receiver z_receiver;
+#endif
     char message[256] = {0};
 
     // The records, taken by Python in batches (Record order).
@@ -397,6 +401,17 @@ struct Board {
                 records[FRAMES].push_back(frame_x);
                 records[FRAMES].push_back(frame_y);
             }
+#if GS_Z
+            bool z = top.GS_PORT_xy2_z.get<bool>();
+            int32_t frame_z = 0, unused = 0;
+            int got_z = z_receiver.sample(sync, z, z, frame_z, unused, message, sizeof message);
+            if (got_z < 0)
+                ok = false;
+            else if (got_z > 0) {
+                records[Z_FRAMES].push_back(cycles);
+                records[Z_FRAMES].push_back(frame_z);
+            }
+#endif
         }
 #if GS_HEAD
         if (!last_xy2_clk && xy2_clk) {

@@ -20,7 +20,7 @@ def _fs(seconds):
 
 # The board's records (gs_board_take, board.cc's Record), its flags and its queue's items.
 (FRAMES, SYNC_RISES, PULSES, LASER_CHANGES, BYTES_IN, BYTES_OUT, XY2_SAMPLES, PIN_CHANGES,
- SPI_RESULTS) = range(9)
+ SPI_RESULTS, Z_FRAMES) = range(10)
 RECORD_SAMPLES, RECORD_PINS = 1, 2
 BAD_STOP = 0x100
 SPI_DONE = 2
@@ -163,6 +163,9 @@ class CompiledEngine:
         if pending & 1 << PIN_CHANGES:
             values = self._take(PIN_CHANGES)
             board.pin_changes.extend(zip(values[0::2], values[1::2]))
+        if pending & 1 << Z_FRAMES:
+            values = self._take(Z_FRAMES)
+            board.z_frames.extend(zip(values[0::2], values[1::2]))
         if pending & 1 << SPI_RESULTS:
             for value in self._take(SPI_RESULTS):
                 if value == SPI_DONE:

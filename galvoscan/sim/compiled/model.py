@@ -101,6 +101,8 @@ class Design:
     player : bool
         The design has the job player's pins (:data:`PLAYER_ROLES`): the board gives it a
         flash and a foot switch.
+    z : bool
+        The design has XY2-100's Z line (``xy2_z``): the board decodes its frames.
     fly : bool
         The design has the encoders' lines (``encoder_x_a`` …): the board's belt drives them.
     head : bool
@@ -122,6 +124,7 @@ class Design:
     player: bool = False
     head: bool = False
     fly: bool = False
+    z: bool = False
     settle_falling: bool = False
     optimise: bool = True
     description: str = field(default="this design", compare=False)
@@ -134,6 +137,7 @@ class Design:
                   f"#define GS_PLAYER {int(self.player)}",
                   f"#define GS_HEAD {int(self.head)}",
                   f"#define GS_FLY {int(self.fly)}",
+                  f"#define GS_Z {int(self.z)}",
                   f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
@@ -168,8 +172,11 @@ def top_design(top):
     if fly:
         ports.update({f"encoder_{axis}_{line}": f"encoder_{axis}_{line}"
                       for axis in "xy" for line in "ab"})
+    z = "xy2_z" in members
+    if z:
+        ports["xy2_z"] = "xy2_z"
     return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
-                  alarm_bits=alarm_bits, player=player, head=head, fly=fly)
+                  alarm_bits=alarm_bits, player=player, head=head, fly=fly, z=z)
 
 
 def _board_source():
