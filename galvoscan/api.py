@@ -46,7 +46,9 @@ from .profile.machine import default_profile, load_profile
 from .outputs.stream import JobAborted, JobStreamer, Pause, StreamReport
 from .inputs.text import TextSpec, text_drawing
 from .plan.objects import JobSettings, MarkObject
+from .plan.sky import job_sky
 from .plan.wobble import WobbleSettings, wobble_registers
+from .settings.sky import SKY_SETTINGS
 from .settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                              WOBBLE_HZ, Z)
 from .sim.board import SimTransport, SimulatedBoard
@@ -152,11 +154,14 @@ class Job:
     sets (:class:`~galvoscan.geometry.fill.HatchSet`), their line order, a contour fill, whether
     outlines are marked, the chord tolerance (mm), and the wobble laid over the lines
     (``wobble_um`` across, ``wobble_along_um`` along, ``wobble_hz``; None: the profile's
-    ``[wobble]``; it needs a bitstream with the wobble stage), and ``fly``: marking on the fly
-    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly), and ``z_mm``: the
+    ``[wobble]``; it needs a bitstream with the wobble stage), ``fly``: marking on the fly
+    (a :class:`Fly`; None: standing still; it needs a bitstream with the fly), ``z_mm``: the
     focus shift on the Z channel (None: Z left alone, unless a layer gives one; it needs the
-    profile's ``[field] z_units_per_mm`` and a bitstream with the Z channel). The numbers are
-    checked against their settings (:mod:`galvoscan.settings.laser`) here."""
+    profile's ``[field] z_units_per_mm`` and a bitstream with the Z channel), and SkyWriting
+    (``sky_mode`` 0 … 3, ``timelag_us``, ``laser_on_shift_us``, ``nprev_us``, ``npost_us``,
+    ``sky_limit``; None: the profile's ``[sky]``; it needs a bitstream with pixel lines,
+    :mod:`galvoscan.plan.sky`). The numbers are checked against their settings
+    (:mod:`galvoscan.settings.laser`, :mod:`galvoscan.settings.sky`) here."""
     drawings: tuple = ()
     texts: tuple = ()
     codes: tuple = ()
@@ -176,12 +181,18 @@ class Job:
     wobble_hz: float = None
     fly: Fly = None
     z_mm: float = None
+    sky_mode: int = None
+    timelag_us: float = None
+    laser_on_shift_us: float = None
+    nprev_us: float = None
+    npost_us: float = None
+    sky_limit: float = None
 
     def __post_init__(self):
         if self.fly is not None and not isinstance(self.fly, Fly):
             raise PlanError(f"a job's fly is an api.Fly, not {self.fly!r}")
         for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ,
-                        Z):
+                        Z, *SKY_SETTINGS):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
@@ -231,7 +242,10 @@ def job_settings(job, profile):
         else defaults.power_percent,
         prr_khz=job.prr_khz if job.prr_khz is not None else defaults.prr_khz,
         passes=job.passes or defaults.passes, hatch=job.hatch,
-        hatch_lines=LineOrder(job.hatch_lines), contour=job.contour, outline=job.outline)
+        hatch_lines=LineOrder(job.hatch_lines), contour=job.contour, outline=job.outline,
+        sky=job_sky(profile, mode=job.sky_mode, timelag_us=job.timelag_us,
+                    laser_on_shift_us=job.laser_on_shift_us, nprev_us=job.nprev_us,
+                    npost_us=job.npost_us, limit=job.sky_limit))
 
 
 def mark_object(item, settings, profile, *, serial=None, tolerance_mm=TOLERANCE.default):

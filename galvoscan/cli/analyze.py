@@ -14,6 +14,8 @@ __all__ = ["add_parsers"]
 def _cmd_analyze(args):
     if args.delays:
         return _cmd_delays(args)
+    if args.sky:
+        return _cmd_sky(args)
     # Here: analysis.report takes 1.7 s to import; `galvoscan --help` need not wait.
     from ..analysis.report import AnalysisInputError, run_analyze
     try:
@@ -45,6 +47,27 @@ def _cmd_delays(args):
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         plot_delays(out / "delays.png", without, chosen)
+    return 0
+
+
+def _cmd_sky(args):
+    """SkyWriting against the delays and nothing on an L, on the simulated board."""
+    from ..analysis.sky import markdown_table, plot_sky, sky_report, sky_study
+    galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
+    results = sky_study(galvo=galvo, speed_mm_s=args.mark_speed, spot_mm=args.spot,
+                        backend=getattr(args, "backend", None) or "auto")
+    rows = sky_report(results)
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        print(f"an L of 2 × {results[0]['length_mm']:g} mm at {args.mark_speed:g} mm/s on the "
+              f"simulated board, its frames through the galvo model (Timelag "
+              f"{results[0]['timelag_us']} µs, its tracking error):")
+        print(markdown_table(rows))
+    if not args.no_plots:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        plot_sky(out / "sky.png", results)
     return 0
 
 
@@ -102,8 +125,14 @@ def add_parsers(commands):
                       help="instead: the RTC laser and scanner delays on an L-shaped vector "
                            "mark (dose at its ends and corner without and with the delays "
                            "that keep them within 20 %% of mid-line; figure delays.png)")
+    what.add_argument("--sky", action="store_true",
+                      help="instead: SkyWriting (mode 2, Timelag the galvo's tracking error) "
+                           "against the delays and against nothing on an L-shaped mark, marked "
+                           "on the simulated board and its frames run through the galvo model: "
+                           "dose at its ends and corner, pulses off the L (figure sky.png)")
     what.add_argument("--mark-speed", type=number_in("mark speed", 1, 10_000), default=1000.0,
-                      metavar="MM_S", help="marking speed for --delays, mm/s (default: 1000)")
+                      metavar="MM_S", help="marking speed for --delays and --sky, mm/s "
+                                           "(default: 1000)")
     what.add_argument("--out", type=output_dir, default="build/analysis", metavar="DIR",
                       help="where figures go (default: %(default)s)")
     what.add_argument("--no-plots", action="store_true", help="write no figures")

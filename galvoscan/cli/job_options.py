@@ -19,6 +19,7 @@ from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
 from ..plan.pixel_lines import PHOTO_LINES
 from ..settings.fly import BELT_SPEED, ENCODER, FLY, FLY_DIRECTION, FLY_SPEED
+from ..settings.sky import SKY_SETTINGS
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ, Z)
 from .args import int_in, number_in, setting_keywords
@@ -48,6 +49,9 @@ GROUPS = {
     "placement": "placement",
     "fly": "marking on the fly (a belt carries the part through the field as it is marked; "
            "needs a bitstream with the fly: the ULX3S's; defaults: the profile's [fly])",
+    "sky": "SkyWriting (SCANLAB RTC's: each mark run in and out at its speed, laser off, the "
+           "laser switched as the lagging mirrors cross its ends; needs a bitstream with "
+           "pixel lines: the ULX3S's, build --preset engraver; defaults: the profile's [sky])",
 }
 
 
@@ -239,6 +243,8 @@ OPTIONS = (
     # marking on the fly
     *(_setting(setting, "fly", "job") for setting in (FLY, ENCODER, FLY_SPEED, FLY_DIRECTION,
                                                       BELT_SPEED)),
+    # SkyWriting
+    *(_setting(setting, "sky", "job") for setting in SKY_SETTINGS),
 )
 
 _BY_DEST = {option.dest: option for option in OPTIONS}
@@ -257,6 +263,11 @@ SECTIONS = {
 def option(dest):
     """The option whose value is ``dest``."""
     return _BY_DEST[dest]
+
+
+def option_of_flag(flag):
+    """The option whose flag is ``flag`` (``--sky``)."""
+    return next(o for o in OPTIONS if o.flag == flag)
 
 
 def defaults():

@@ -68,6 +68,7 @@ def estimate_record(job, profile, power, prr, passes, preview):
         "laser_on_delay_us": regs["laser_on_delay"], "laser_off_delay_us": regs["laser_off_delay"],
         "mark_delay_us": regs["mark_delay"], "polygon_delay_us": regs["polygon_delay"],
         "polygon_scaled": bool(regs["polygon_scaled"]), "estimate_s": round(job.estimate_s, 6),
+        "sky_s": round(getattr(job, "sky_s", 0.0), 6),
         "notes": list(job.notes), "preview": preview,
     }
     if regs.get("wob_shape"):
@@ -90,7 +91,7 @@ def mark_estimate_record(job, args, profile, *, parts, total_s, fly=None):
         # Each layer's settings are its own: the top level keeps the totals only.
         record = {key: record[key] for key in ("segments", "mark_mm", "jump_mm",
                                                 "bounds_mm", "field_mm", "estimate_s",
-                                                "notes", "preview")}
+                                                "sky_s", "notes", "preview")}
         record["layers"] = [
             {"match": lj.label, "sets": lj.layer.changes() if lj.layer else None,
              **estimate_record(lj.job, profile, lj.settings.power_percent,

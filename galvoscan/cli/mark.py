@@ -26,12 +26,13 @@ from ..outputs.stream import JobStreamer, StreamReport
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..platforms.ulx3s import ULX3S_BAUD
 from ..settings.fly import BELT_SPEED, ENCODER, FLY_DIRECTION, FLY_SPEED
+from ..settings.sky import SKY_SETTINGS
 from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link, link_baud,
                       job_settings_values, load_lens_table, progress_bar,
                       stopped_in_one_line)
 from .content import check_content_options, content_objects, part_serials
-from .job_options import add_job_file_options
+from .job_options import add_job_file_options, option_of_flag as option
 from .jobfile import save_job_file, use_job_file
 from .job_reports import describe_job, mark_estimate_record, sim_report
 from .layers import add_wobble, add_z, describe_layers
@@ -50,7 +51,9 @@ def job_from_args(args):
                 power_percent=args.power, prr_khz=args.prr, passes=args.passes,
                 hatch=tuple(args.hatch or ()), hatch_lines=LineOrder(args.hatch_lines),
                 contour=args.contour, outline=not args.no_outline, tolerance_mm=args.tolerance,
-                z_mm=args.z)
+                z_mm=args.z,
+                **{setting.name: getattr(args, option(setting.flag).dest)
+                   for setting in SKY_SETTINGS})
 
 
 #: The options that say how a job flies (``--fly`` says that it does).

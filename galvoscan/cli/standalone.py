@@ -54,6 +54,10 @@ def _cmd_store(args):
     except PlanError as error:
         fail(error)
     job, _, _, _, _, say = planned_job(args, profile=profile, serial=serial)
+    if job.sky_mode:
+        fail("the stand-alone job player does not take SkyWriting's run-ins and run-outs "
+             "(pixel lines, which the marker build has not): store the job with --sky 0, or "
+             "mark it from the PC")
     if job.layers and len(job.layers) > 1:
         fail(f"the job has {len(job.layers)} layers, each at its own settings; an image holds "
              f"one set (the player sets the registers once): mark it from the PC, or store "

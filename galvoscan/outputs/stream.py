@@ -616,6 +616,12 @@ class JobStreamer:
         segments = job_segments(segments)
         registers = self._without_missing_delays(registers)
         if has_pixel_lines(segments) and not self.capabilities().pixel_lines:
+            if not any(op == PIXELS for op, *_ in segments):
+                # Pixel lines without pixel words: SkyWriting's run-ins and run-outs.
+                raise JobAborted("the board's bitstream has no pixel lines, which "
+                                 "SkyWriting's run-ins and run-outs are (build --preset "
+                                 "engraver has them, and the ULX3S's): mark without "
+                                 "SkyWriting (--sky 0); nothing was sent")
             raise JobAborted("the board's bitstream has no pixel lines (build --preset "
                              "engraver has them, and the ULX3S's): mark the photo as runs "
                              "with --image-lines runs; nothing was sent")

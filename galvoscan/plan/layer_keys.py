@@ -27,6 +27,7 @@ from ..settings.laser import (PASSES, POWER, PRR, PULSES, SPEED, WOBBLE, WOBBLE_
                               Z)
 from ..settings.machine import DELAYS
 from ..settings.schema import Setting, SettingError, range_text, value_text
+from ..settings.sky import SKY, SKY_LIMIT, SKY_SETTINGS
 from .layers import Layer
 
 
@@ -93,7 +94,10 @@ LAYER_KEYS = {one.key: one for one in (
     LayerKey(Z),
     # The jump delay (else the job's longest jump's) and the laser, mark and polygon delays
     # (else the profile's), said in their registers' units.
-    *(LayerKey(setting, said=BY_NAME[setting.name].unit) for setting in DELAYS))}
+    *(LayerKey(setting, said=BY_NAME[setting.name].unit) for setting in DELAYS),
+    # SkyWriting (else the job's): its mode, Timelag, LaserOnShift, Nprev, Npost, Limit.
+    *(LayerKey(setting, said={SKY: "0 (off) … 3", SKY_LIMIT: "cos φ"}.get(setting))
+      for setting in SKY_SETTINGS))}
 assert {one.field for one in LAYER_KEYS.values()} <= set(Layer.__dataclass_fields__)
 
 

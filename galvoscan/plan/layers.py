@@ -20,6 +20,7 @@ from ..geometry.drawing import Drawing
 from ..geometry.field import place, Placement, PlanError
 from ..geometry.order import jump_length
 from ..geometry.speed import jump_mark_lengths
+from .sky import LAYER_FIELDS as _SKY_FIELDS, layer_sky
 from .vector_job import check_clear, plan_objects, VectorJob
 
 from ..settings.laser import JOB_SETTINGS
@@ -68,6 +69,12 @@ class Layer:
     wobble_hz: float = None
     z_mm: float = None
     delays_us: tuple = ()
+    sky_mode: int = None
+    timelag_us: float = None
+    laser_on_shift_us: float = None
+    nprev_us: float = None
+    npost_us: float = None
+    sky_limit: float = None
 
     def __post_init__(self):
         if not str(self.match).strip():
@@ -103,6 +110,8 @@ class Layer:
                  if getattr(self, name) is not None}
         if self.delays_us:
             given["delays_us"] = tuple({**dict(base.delays_us), **dict(self.delays_us)}.items())
+        if any(getattr(self, name) is not None for name in _SKY_FIELDS):
+            given["sky"] = layer_sky(self, base.sky)
         return replace(base, **given)
 
     def changes(self):
@@ -127,6 +136,11 @@ class Layer:
         if self.outline is not None:
             out.append("outline" if self.outline else "no outline")
         out += [f"{register.replace('_', ' ')} {value} µs" for register, value in self.delays_us]
+        sky_words = {"sky_mode": "sky", "timelag_us": "timelag", "laser_on_shift_us":
+                     "laser-on shift", "nprev_us": "nprev", "npost_us": "npost",
+                     "sky_limit": "sky limit"}
+        out += [f"{what} {getattr(self, name):g}{'' if name in ('sky_mode', 'sky_limit') else ' µs'}"
+                for name, what in sky_words.items() if getattr(self, name) is not None]
         return ", ".join(out) or "the job's settings"
 
 
@@ -340,6 +354,7 @@ def merged(layer_jobs):
                      paths_mm=paths, jump_before_mm=before, jump_after_mm=after,
                      pitch=jobs[0].pitch, registers=jobs[0].registers,
                      estimate_s=total("estimate_s"), mark_mm=total("mark_mm"),
+                     sky_s=total("sky_s"), sky_mode=max(job.sky_mode for job in jobs),
                      jump_mm=jump_mm,
                      bounds_mm=(*bounds[:, :2].min(axis=0).tolist(),
                                 *bounds[:, 2:].max(axis=0).tolist()),

@@ -28,6 +28,7 @@ class JobSettings:
     outline: bool = True
     pulses_per_point: int = None    # None: chosen with the pitch for the speed
     delays_us: tuple = ()           # (register, µs) pairs in place of the profile's delays
+    sky: object = None              # SkyWriting (a plan.sky.Sky), None: off
 
 
 @dataclass(frozen=True, eq=False)

@@ -19,6 +19,7 @@ from ..geometry.speed import (choose_pitch, estimate_seconds, fixed_pitch, jump_
                               settled_jumps)
 from .objects import MarkObject
 from .pixel_lines import pixel_line_segments
+from .sky import sky_registers, sky_segments
 
 
 __all__ = ["VectorJob", "plan_vector_job", "plan_objects", "check_clear", "segments_from_paths"]
@@ -61,6 +62,8 @@ class VectorJob:
     bounds_mm: tuple
     notes: list = field(default_factory=list)
     layers: list = None             # a job of layers: its LayerJobs (.layers), run in turn
+    sky_s: float = 0.0              # the time SkyWriting adds (its runs and corner jumps), s
+    sky_mode: int = 0               # SkyWriting's mode (a job of layers: the highest of theirs)
 
 
 def segments_from_paths(paths_units):
@@ -117,9 +120,23 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
     prr_register, prr_hz, pitch = _machine_settings(settings, profile, pitch_units=pitch_units)
     units_per_mm = profile.units_per_mm
     table = profile.correction_table()
+    sky = settings.sky if settings.sky is not None and settings.sky.on else None
+    plain = segments
+    if sky is not None:
+        dwell_us = pitch.pulses_per_point / prr_hz * 1e6
+        sky_plan = sky_segments(segments, sky, pitch_units=pitch.pitch_units, dwell_us=dwell_us)
+        segments = sky_plan.segments
     _check_corrected(segments, table)
     notes = list(notes)
     jump_delay = dict(settings.delays_us).get("jump_delay")        # a layer's own
+    if sky is not None:
+        # The time SkyWriting adds: the job's estimate against the same job without it.
+        timing = dict(pitch_units=pitch.pitch_units, pulses_per_point=pitch.pulses_per_point,
+                      prr_hz=prr_hz)
+        if jump_delay is None:
+            plain, plain_delay, _, _ = settled_jumps(plain, profile, units_per_mm, settle=settle)
+        plain_s = estimate_seconds(plain, jump_delay_us=plain_delay if jump_delay is None
+                                   else jump_delay, **timing)
     if jump_delay is None:
         segments, jump_delay, extra, longest = settled_jumps(segments, profile, units_per_mm,
                                                              settle=settle)
@@ -136,7 +153,7 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
         **profile.delay_registers(),
         **profile.head_registers(),
     }
-    if has_pixel_lines(segments):
+    if sky is None and has_pixel_lines(segments):
         # A pixel line is timed by its scan offset: the laser follows each point's bit, at
         # once, and the line's run-out ends it.
         moved = [name for name in ("laser_on_delay", "laser_off_delay", "mark_delay")
@@ -146,6 +163,9 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
             notes.append(f"pixel lines: {', '.join(moved)} 0 (the scan offset and the run-in "
                          f"and run-out stand for them)")
     registers.update(dict(settings.delays_us))
+    if sky is not None:
+        notes += sky_registers(sky, registers, dwell_us=dwell_us,
+                               out_points=sky_plan.out_points)
     if table is not None:
         registers["cor_enable"] = 1
     estimate = estimate_seconds(segments, pitch_units=pitch.pitch_units,
@@ -163,12 +183,24 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
                      f"{DEFAULT_CLOCK_HZ / 1e6:g} MHz): expect about {joints} stalls, a "
                      f"10 µs pause with the laser off at each joint between two marks (a "
                      f"lower PRR, or more pulses per point, avoids them)")
+    sky_s = 0.0
+    if sky is not None:
+        sky_s = estimate - plain_s
+        notes.append(f"{sky.said()}: run-ins of {sky_plan.in_points} points "
+                     f"({sky_plan.in_points * dwell_us:g} µs), run-outs of "
+                     f"{sky_plan.out_points} ({sky_plan.out_points * dwell_us:g} µs), laser off"
+                     + (f"; {sky_plan.corners} corner(s) taken apart" if sky.mode > 1 else "")
+                     + f"; laser on {registers['laser_on_delay']} µs and off "
+                     f"{registers['laser_off_delay']} µs after the set point crosses a mark's "
+                     + (f"ends; adds {sky_s * 1e3:.2f} ms" if sky_s < 1 else
+                        f"ends; adds {sky_s:.3f} s"))
     marks = np.concatenate(paths_mm)
     bounds = (*marks.min(axis=0), *marks.max(axis=0))
     return VectorJob(segments=segments, paths_mm=paths_mm, jump_before_mm=before,
                      jump_after_mm=after, pitch=pitch, registers=registers,
                      estimate_s=estimate, mark_mm=mark_mm, jump_mm=jump_mm,
-                     bounds_mm=tuple(float(v) for v in bounds), notes=list(notes))
+                     bounds_mm=tuple(float(v) for v in bounds), notes=list(notes),
+                     sky_s=sky_s, sky_mode=sky.mode if sky is not None else 0)
 
 
 def plan_job_file(segments, settings, profile):

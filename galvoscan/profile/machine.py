@@ -14,6 +14,8 @@ comment on every key (:func:`galvoscan.profile.template.profile_text`)::
                 polygon_scaled, tracking_delay_us, head_check
     [defaults]  speed_mm_s, power_percent, prr_khz, passes
     [wobble]    across_um, along_um, freq_hz
+    [fly]       counts_per_mm, direction, belt_speed_mm_s, board_clock_mhz
+    [sky]       mode, timelag_us, laser_on_shift_us, nprev_us, npost_us, limit
 
 Every key is optional (its default is safe near a laser: 10 % power, one pass). A key or section
 that is not known is an error, with the nearest known name suggested: a typo must not pass
@@ -48,6 +50,7 @@ except ModuleNotFoundError:                      # Python < 3.11
     import tomli as tomllib
 
 from ..correction.files import load_table
+from ..gateware.host.regmap import BY_NAME
 from ..gateware.points import FIELD_CENTRE, FIELD_MAX
 from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX, PRR_RANGE_KHZ,
                    SECTIONS, ProfileError, _JUMP, _PRR, _PRR_STEPS_PER_KHZ, _check, _num, _shown,
@@ -55,7 +58,7 @@ from .keys import (DELAY_KEYS, FRAME_US, JUMP_DELAY_RANGE_US, POWER_REGISTER_MAX
 
 
 __all__ = ["ProfileError", "MachineProfile", "FieldSection", "LinkSection", "LaserSection",
-           "GalvoSection", "JobDefaults", "WobbleSection", "FlySection", "load_profile", "parse_profile",
+           "GalvoSection", "JobDefaults", "WobbleSection", "FlySection", "SkySection", "load_profile", "parse_profile",
            "read_profile_text", "default_profile",
            "DEFAULT_PROFILE_NAME", "SECTIONS", "FULL_RANGE", "FRAME_US",
            "PRR_RANGE_KHZ", "JUMP_DELAY_RANGE_US", "POWER_REGISTER_MAX"]
@@ -172,6 +175,21 @@ class FlySection:
 
 
 @dataclass(frozen=True)
+class SkySection:
+    #: SkyWriting's mode for jobs that do not give one: 0 off, 1 … 3.
+    mode: int = _default("sky", "mode")
+    #: Timelag, µs, or None: ``[galvo] tracking_delay_us``.
+    timelag_us: Optional[float] = _default("sky", "timelag_us")
+    #: LaserOnShift, µs (signed).
+    laser_on_shift_us: float = _default("sky", "laser_on_shift_us")
+    #: Nprev and Npost, µs, or None: 0.15 and 0.1 × Timelag.
+    nprev_us: Optional[float] = _default("sky", "nprev_us")
+    npost_us: Optional[float] = _default("sky", "npost_us")
+    #: Mode 3's Limit: corners whose cos φ is below it are taken apart.
+    limit: float = _default("sky", "limit")
+
+
+@dataclass(frozen=True)
 class MachineProfile:
     """A machine profile, checked. Two profiles are equal if their settings are (where they were
     read from is not compared)."""
@@ -183,6 +201,7 @@ class MachineProfile:
     defaults: JobDefaults = JobDefaults()
     wobble: WobbleSection = WobbleSection()
     fly: FlySection = FlySection()
+    sky: SkySection = SkySection()
     #: The file it was read from, or None for the built-in defaults.
     source: Optional[Path] = _field(default=None, compare=False)
     _table: object = _field(default=None, compare=False, repr=False)
@@ -321,6 +340,10 @@ class MachineProfile:
             "fly": {"counts_per_mm": self.fly.counts_per_mm, "direction": self.fly.direction,
                     "belt_speed_mm_s": self.fly.belt_speed_mm_s,
                     "board_clock_mhz": self.fly.board_clock_mhz},
+            "sky": {"mode": self.sky.mode, "timelag_us": self.sky.timelag_us,
+                    "laser_on_shift_us": self.sky.laser_on_shift_us,
+                    "nprev_us": self.sky.nprev_us, "npost_us": self.sky.npost_us,
+                    "limit": self.sky.limit},
             "derived": {
                 "units_per_mm": self.units_per_mm,
                 "mm_per_unit": self.mm_per_unit,
@@ -335,6 +358,12 @@ class MachineProfile:
         }
 
 
+#: SkyWriting's laser-on (Timelag + LaserOnShift) is the ``laser_on_delay`` register.
+_LASER_ON_HIGH_US = BY_NAME["laser_on_delay"].high
+#: And Timelag the ``laser_off_delay`` register.
+_LASER_OFF_HIGH_US = BY_NAME["laser_off_delay"].high
+
+
 def default_profile():
     """The built-in profile: what ``galvoscan machine init`` writes."""
     return MachineProfile()
@@ -344,7 +373,7 @@ def default_profile():
 
 _SECTION_CLASSES = {"field": FieldSection, "link": LinkSection, "laser": LaserSection,
                     "galvo": GalvoSection, "defaults": JobDefaults, "wobble": WobbleSection,
-                    "fly": FlySection}
+                    "fly": FlySection, "sky": SkySection}
 assert all(tuple(k.name for k in keys) == tuple(_SECTION_CLASSES[name].__dataclass_fields__)
            for name, keys in SECTIONS.items())
 
@@ -422,6 +451,16 @@ def parse_profile(text, *, path=DEFAULT_PROFILE_NAME):
         # Its default, above a jump delay the file gives: that delay after every jump, as the
         # file says.
         built["galvo"] = galvo = replace(galvo, min_jump_delay_us=galvo.jump_delay_us)
+    sky = built["sky"]
+    timelag = sky.timelag_us if sky.timelag_us is not None else galvo.tracking_delay_us
+    if sky.mode and not 0 <= timelag <= _LASER_OFF_HIGH_US:
+        raise ProfileError(f"{path}: [sky] mode {sky.mode} needs a Timelag (timelag_us, else "
+                           f"[galvo] tracking_delay_us) from 0 to {_LASER_OFF_HIGH_US} µs, not "
+                           f"{_num(timelag)}")
+    if sky.mode and not 0 <= timelag + sky.laser_on_shift_us <= _LASER_ON_HIGH_US:
+        raise ProfileError(f"{path}: [sky] laser_on_shift_us must keep Timelag + it within "
+                           f"0 … {_LASER_ON_HIGH_US} µs (Timelag {_num(timelag)} µs), not "
+                           f"{_num(sky.laser_on_shift_us)}")
     if defaults.speed_mm_s > galvo.max_speed_mm_s:
         raise ProfileError(f"{path}: [defaults] speed_mm_s must be at most [galvo] "
                            f"max_speed_mm_s ({_num(galvo.max_speed_mm_s)} mm/s), not "

@@ -9,7 +9,8 @@ too), so the template cannot disagree with what is checked.
 
 from ..link.client import frame_seconds
 from .keys import FRAME_US, POWER_REGISTER_MAX, SECTIONS, _toml_num
-from .machine import DEFAULT_PROFILE_NAME, default_profile
+from ..settings.sky import NPOST_SHARE, NPREV_SHARE
+from .machine import _LASER_ON_HIGH_US, DEFAULT_PROFILE_NAME, default_profile
 
 
 def _key(section, name):
@@ -195,4 +196,27 @@ direction = "{d.fly.direction}"
 # The board's system clock, in MHz, as its bitstream was built: the simulated encoder
 # (`mark --fly-speed`) counts in its clocks. {s("fly", "board_clock_mhz")}.
 board_clock_mhz = {n(d.fly.board_clock_mhz)}
+
+[sky]
+# SkyWriting (SCANLAB RTC's; `galvoscan mark --sky 1`, a bitstream with pixel lines: the
+# ULX3S's, or build --preset engraver): the mirrors run through each mark's ends at the
+# mark's speed, laser off, and the laser switches Timelag after the set point crosses
+# them, so the dose is even up to the ends. docs/user/skywriting.md.
+# The mode jobs take when they do not give --sky: 0 off; 1 every mark run in and out;
+# 2 also every corner taken apart into run-out, jump and run-in; 3 the corners sharper
+# than limit only. {s("sky", "mode")}.
+mode = {d.sky.mode}
+# Timelag, in µs: the head's tracking error. Left out: [galvo] tracking_delay_us.
+# {s("sky", "timelag_us")}.
+# timelag_us = 80
+# LaserOnShift, in µs: laser-on moved this much later (negative: earlier); Timelag + it
+# must be 0 … {_LASER_ON_HIGH_US} µs. {s("sky", "laser_on_shift_us")}.
+laser_on_shift_us = {n(d.sky.laser_on_shift_us)}
+# Nprev and Npost, in µs: the run-in before and the run-out after each mark, whole
+# points at its speed. Left out: {NPREV_SHARE:g} and {NPOST_SHARE:g} × Timelag. {s("sky", "nprev_us")}.
+# nprev_us = 12
+# npost_us = 8
+# Mode 3: a corner is taken apart where cos φ is below this (φ the turn: 1 straight on,
+# 0 a right angle, -1 a reversal); the others keep the polygon delay. {s("sky", "limit")}.
+limit = {n(d.sky.limit)}
 """

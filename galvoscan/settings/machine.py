@@ -19,6 +19,8 @@ from ..gateware.host.regmap import BY_NAME, FRAME_US
 from .laser import BAUD, LINK_TIMEOUT_S, PASSES, POWER, PRR, SPEED, TIMEOUT, WOBBLE, \
     WOBBLE_ALONG, WOBBLE_HZ
 from .fly import BELT_SPEED, BOARD_CLOCK, ENCODER, FLY_DIRECTION
+from .sky import (LASER_ON_SHIFT, LIMIT_DEFAULT, MODE_DEFAULT, NPOST, NPREV, SHIFT_DEFAULT, SKY,
+                  SKY_LIMIT, TIMELAG)
 from .schema import ProfileKey, Setting
 
 
@@ -165,4 +167,19 @@ PROFILE = {
                      "the belt's top speed: a job on the fly is refused if the part would "
                      "leave the field at it before the job is done"))),
                  ("board_clock_mhz", BOARD_CLOCK, {})),
+    # SkyWriting (`mark --sky`): the machine's own Timelag and runs, and the mode jobs take.
+    "sky": _keys("sky",
+                 ("mode", SKY, dict(default=MODE_DEFAULT, help=(
+                     "SkyWriting's mode for jobs that do not give --sky: 0 off; 1 every mark "
+                     "run in and out at its speed, laser off; 2 also every corner taken "
+                     "apart; 3 the corners sharper than limit"))),
+                 ("timelag_us", TIMELAG, dict(help=(
+                     "SkyWriting's Timelag, the head's tracking error; none: [galvo] "
+                     "tracking_delay_us"))),
+                 ("laser_on_shift_us", LASER_ON_SHIFT, dict(default=SHIFT_DEFAULT)),
+                 ("nprev_us", NPREV, dict(help=(
+                     "SkyWriting's run-in before each mark; none: 0.15 × Timelag"))),
+                 ("npost_us", NPOST, dict(help=(
+                     "SkyWriting's run-out after each mark; none: 0.1 × Timelag"))),
+                 ("limit", SKY_LIMIT, dict(default=LIMIT_DEFAULT))),
 }
