@@ -63,7 +63,8 @@ def test_every_pin_is_on_the_header_once():
 LPF_NAMES = [(r"xy2_0__(\w+)__io", r"xy2_\1"), (r"laser_0__(\w+)__io", r"laser_\1"),
              (r"host_spi_0__(\w+)__io", r"spi_\1"), (r"machine_0__(\w+)__io", r"\1"),
              (r"interlock_0__io", "interlock_open"), (r"laser_alarm_0__io", "laser_alarm"),
-             (r"head_status_0__io", "xy2_status"), (r"encoder_0__(\w+)__io", r"encoder_\1")]
+             (r"head_status_0__io", "xy2_status"), (r"encoder_0__(\w+)__io", r"encoder_\1"),
+             (r"xy2_z_0__io", "xy2_z")]
 
 
 def test_the_configuration_holds_every_feature():

@@ -146,6 +146,9 @@ def test_the_ulx3s_builds_netlist_behaves_as_its_design(ulx3s_build):
     # start set, and the ideal PLL is locked from the first), the output flip-flop one.
     assert offsets([f[0] for f in design.frames[:frames]],
                    [f[0] for f in netlist.frames[:frames]]) == {3}
+    # The Z line's frames too (the shifter's middle, from power-up), decoded off xy2_z.
+    assert len(netlist.z_frames) >= frames and \
+        [z for _, z in netlist.z_frames[:frames]] == [z for _, z in design.z_frames[:frames]]
     # The host's commands act at once: late by the output flip-flop, give or take a UART bit
     # (8 clocks at 3 Mbaud).
     assert_a_host_session_alike(netlist, design, max_pin_late=9)

@@ -62,6 +62,7 @@ ULX3S_PORTS = {
     **NETLIST_PORTS, "clk": "clk25_0__io",
     "flash_cs_n": "spi_flash_0__cs__io", "flash_copi": "spi_flash_0__copi__io",
     "flash_cipo": "spi_flash_0__cipo__io", "flash_clk": "flash_clk", "start_n": "start_n",
+    "xy2_z": "xy2_z_0__io",
 }
 #: The two start inputs the ULX3S's ``start_n`` is made of (bit 0, bit 1), and whether the
 #: pin is active high (FIRE 1 reads 1 pressed; the system top's bit is low then).
@@ -432,7 +433,9 @@ def netlist_design(build_dir):
                                f"its PLL's clock is not known")
         check_ecp5_cells(netlist, top, float(record["clock_mhz"]) * 1e6)
         player = _ulx3s_player_ports(netlist, top)
-        pins = {role: pin for role, pin in pins.items() if player or role in NETLIST_PORTS}
+        pins = {role: pin for role, pin in pins.items()
+                if role in NETLIST_PORTS or (player and role != "xy2_z") or
+                (role == "xy2_z" and pin in ports)}
         files = {"trellis_io_sim.v": _resource("trellis_io_sim.v"),
                  "ecp5_sim.v": _resource("ecp5_sim.v"),
                  # (Galvoscan's own models stand for the cells they model.)
@@ -454,7 +457,7 @@ def netlist_design(build_dir):
     modules = {"top": top}
     return Design(files={"top.json": json.dumps({"modules": modules}), **files},
                   script=script, ports=dict(pins), alarm_bits=alarm_bits, player=player,
-                  settle_falling=True,
+                  z="xy2_z" in pins, settle_falling=True,
                   # A netlist's C++ is some 5 MB: the compiler's light optimisation (its
                   # measured times in compiler.py), not -O3.
                   optimise=False,
