@@ -22,11 +22,12 @@ pytest.importorskip("meerk40t")
 
 from meerk40t.core.cutcode.cubiccut import CubicCut     # noqa: E402
 from meerk40t.core.cutcode.dwellcut import DwellCut     # noqa: E402
+from meerk40t.core.cutcode.inputcut import InputCut     # noqa: E402
 from meerk40t.core.cutcode.linecut import LineCut       # noqa: E402
+from meerk40t.core.cutcode.outputcut import OutputCut   # noqa: E402
 from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
 from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
 from meerk40t.core.cutcode.rastercut import RasterCut   # noqa: E402
-from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
 
 from galvoscan import api                               # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
@@ -565,9 +566,10 @@ def _max_distance(curve, polyline):
 
 def test_an_images_dark_runs_are_its_lines():
     """A RasterCut of a small image (meerk40t's image operation): a line each run of dark
-    pixels, as long as the run and on its row, none anywhere else (each starting half a pixel
-    before its first pixel's edge, where meerk40t's plot planner, which its galvo driver
-    follows too, puts it)."""
+    pixels, on its row's centre line, from its first pixel's centre to its last's (one pixel:
+    a dot), none anywhere else: meerk40t's pixel ``i`` is the square from ``offset + i × step``
+    to ``offset + (i + 1) × step`` (its image operation's bounds; its raster plotter puts a run
+    half a step before that, which the device moves back)."""
     rows = [".##.#...##",
             "...#......",
             "##########"]
@@ -588,16 +590,26 @@ def test_an_images_dark_runs_are_its_lines():
     found = []
     for path in raster.paths:
         units = (path - 0) / UNIT_MM + 32768       # back to galvo units
-        assert np.ptp(units[:, 1]) < 1              # along one row
-        row = round((units[0, 1] - int(corner[1])) / step)
-        first = (units[:, 0].min() - int(corner[0])) / step
-        found.append((row, round(first + 0.5), round(np.ptp(units[:, 0]) / step)))
+        assert np.ptp(units[:, 1]) < 1e-6           # along one row
+        row = (units[0, 1] - int(corner[1])) / step - 0.5
+        first = (units[:, 0].min() - int(corner[0])) / step - 0.5
+        pixels = np.ptp(units[:, 0]) / step + 1
+        assert (row, first, pixels) == pytest.approx(
+            (round(row), round(first), round(pixels)), abs=1e-6)
+        found.append((round(row), round(first), round(pixels)))
     assert sorted(found) == wanted
 
 
 def test_a_cut_it_cannot_mark_is_refused_in_one_line():
-    with pytest.raises(PlanError, match="WaitCut is not one the galvoscan device marks"):
-        job_from_cuts([WaitCut(5.0)], PROFILE, tolerance_mm=0.01)
+    """meerk40t's input and output cuts (its I/O operations): one line naming galvoscan's issue
+    #38 (the queue has no I/O yet)."""
+    for cut in (InputCut(1, 1), OutputCut(1, 1)):
+        with pytest.raises(PlanError) as refused:
+            job_from_cuts([LineCut(_native(0, 0), _native(1, 0), settings={}), cut], PROFILE,
+                          tolerance_mm=0.01)
+        said = str(refused.value)
+        assert f"{type(cut).__name__} (an I/O operation)" in said and "issue #38" in said
+        assert "\n" not in said
 
 
 def _numbers(low, high):
