@@ -227,7 +227,11 @@ def job_from_cuts(cuts, profile, *, tolerance_mm):
             # (A PRR that is not a number is refused with the layer's other settings.)
             pulses = max(1, round(operation.dwell_ms * prr_khz)) if math.isfinite(prr_khz) \
                 else None
-            layer = Layer(name, speed_mm_s=layer.speed_mm_s, power_percent=layer.power_percent,
+            # A dwell's dot does not move: its speed is one its pulses make (a galvo unit's
+            # pitch), whatever the operation's or the profile's.
+            speed = prr_khz * 1e3 / profile.units_per_mm / pulses if pulses else \
+                layer.speed_mm_s
+            layer = Layer(name, speed_mm_s=speed, power_percent=layer.power_percent,
                           prr_khz=layer.prr_khz, pulses_per_point=pulses)
         paths = tuple(np.asarray(from_galvo(np.array(p, dtype=float), field_mm))
                       for p in operation.paths)

@@ -532,7 +532,10 @@ def test_each_cut_kind_becomes_its_operations_layer():
     job, objects = job_from_cuts(cuts, PROFILE, tolerance_mm=0.01)
     assert [(layer.speed_mm_s, layer.power_percent, layer.prr_khz, layer.pulses_per_point)
             for layer in job.layers] == [(300, 25, 40, None), (100, 100, 20, None),
-                                         (None, 50, 30, 60), (200, 80, 25, None)]
+                                         # (A dot's speed: a galvo unit a point of
+                                         # its 60 pulses at 30 kHz.)
+                                         (pytest.approx(UNIT_MM * 30e3 / 60), 50, 30, 60),
+                                         (200, 80, 25, None)]
     lines, curves, dwell, raster = (o.drawing for o in objects)
     assert len(lines.paths) == 1
     assert lines.paths[0] == pytest.approx(np.array([[0, 0], [10, 0], [10, 10]]),

@@ -61,18 +61,18 @@ def _ended(device, timeout_s=60):
 def _pulses(board, since):
     """Each laser pulse, frame ``since`` on: ``(clock, position)``, the position (field mm)
     the frame in force at it put the mirrors at, read off the pins and wires as
-    :func:`vector_board.pulses_per_frame` reads them (its frame for a pulse)."""
+    :func:`vector_board.pulses_per_frame` reads them (a rising PRR edge while modulation is
+    on, given to the frame in force before it)."""
     board.run_for(0)
-    frames = [xy for xy, _ in pulses_per_frame(board, 0)]
-    sync, pins = board.sync_pins, board.laser_pins
-    starts = [i for i in range(1, len(sync)) if sync[i] and not sync[i - 1]]
-    first = starts[since] if 0 < since < len(starts) else 1
-    clocks, where = [], []
-    for clock in range(max(1, first), len(pins)):
-        if pins[clock][2] and not pins[clock - 1][2] and pins[clock][1]:
-            clocks.append(clock)
-            where.append(frames[np.searchsorted(starts, clock) - 2])
-    return np.array(clocks), (np.array(where, dtype=float).reshape(-1, 2) - 32768) * UNIT_MM
+    frames = np.array([xy for _, xy in board.xy2_frames()], dtype=float)
+    sync = np.array(board.sync_pins, dtype=bool)
+    starts = np.flatnonzero(sync[1:] & ~sync[:-1]) + 1
+    first = max(1, int(starts[since])) if 0 < since < len(starts) else 1
+    pins = np.array(board.laser_pins[first - 1:], dtype=np.int32)
+    rising = np.flatnonzero((pins[1:, 2] == 1) & (pins[:-1, 2] == 0) & (pins[1:, 1] == 1))
+    clocks = rising + first
+    where = frames[np.searchsorted(starts, clocks) - 2]
+    return clocks, (where.reshape(-1, 2) - 32768) * UNIT_MM
 
 
 def _nearest(points, others, within):
@@ -204,3 +204,203 @@ def test_an_image_is_marked_on_its_dark_pixels(meerk40t):
     nearest = np.min(np.hypot(*(centres[:, None, :] - marks[None, :, :]).transpose(2, 0, 1)),
                      axis=1)
     assert nearest.max() <= pitch / 2 + UNIT_MM
+
+
+# --- two operations in one job; a wait between two --------------------------------------------
+
+#: The engrave: a rectangle (scene mm: x, y, width, height) at its speed (mm/s), power (‰) and
+#: PRR (kHz); the cut: a circle (scene mm: centre, radius) at its own.
+ENGRAVE_RECT, ENGRAVE = (48.0, 50.0, 5.0, 3.0), (400.0, 600.0, 50.0)
+CUT_CIRCLE, CUT = (60.0, 57.0, 2.0), (150.0, 300.0, 25.0)
+
+
+@pytest.fixture
+def unclassified(meerk40t):
+    """meerk40t not classifying new elements into operations (its default adds each to every
+    operation of its colour, and makes one where none is): each element in the one operation
+    its command gives it."""
+    kernel, device, board, lines = meerk40t
+    elements = kernel.elements
+    before = elements.classify_new
+    elements.classify_new = False
+    yield
+    elements.classify_new = before
+
+
+def _rect_field(x, y, width, height):
+    """A scene rectangle's (left, top, right, bottom), field mm."""
+    left, top = x - FIELD_MM / 2, FIELD_MM / 2 - y
+    return left, top, left + width, top - height
+
+
+def _measured(board, before, on):
+    """The marks (field mm) frame ``before`` on that ``on`` (a function of the points) picks,
+    their pitch (mm, median), pulses per point (median) and PRR (kHz: the laser's pulses'
+    median spacing on the pins, at the board's clock)."""
+    marks, pulses = marks_off_the_wires(board, before)
+    picked = on(marks)
+    clocks, where = _pulses(board, before)
+    spacing = np.diff(clocks[on(where)])
+    return (marks[picked], median_pitch(marks[picked]), int(np.median(pulses[picked])),
+            board.clk_freq / float(np.median(spacing)) / 1e3)
+
+
+def test_two_operations_are_two_layers_each_at_its_own_speed(meerk40t, unclassified):
+    """An engrave and a cut in one job: each its own layer (the console says both, each at
+    its speed, power and PRR), and on the wires each marked at its own speed: its pitch × its
+    PRR (measured on the laser's pins) / its pulses per point."""
+    kernel, device, board, lines = meerk40t
+    kernel.elements.clear_all()
+    kernel.console(f"rect {' '.join(f'{v:g}mm' for v in ENGRAVE_RECT)} engrave "
+                   f"-s {ENGRAVE[0]:g} -p {ENGRAVE[1]:g} frequency {ENGRAVE[2]:g}\n")
+    kernel.console(f"circle {' '.join(f'{v:g}mm' for v in CUT_CIRCLE)} cut "
+                   f"-s {CUT[0]:g} -p {CUT[1]:g} frequency {CUT[2]:g}\n")
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    said = len(lines)
+    device.driver.last_report = device.driver.last_error = None
+    kernel.console(f"{plan_name()} copy preprocess validate blob preopt optimize spool\n")
+    _ended(device)
+    console = " ".join(" ".join(lines[said:]).split())
+    for speed, power, prr in (ENGRAVE, CUT):
+        assert f"speed {speed:g} mm/s, power {power / 10:g} %, PRR {prr:g} kHz" in console
+    left, top, right, bottom = _rect_field(*ENGRAVE_RECT)
+    cx, cy = CUT_CIRCLE[0] - FIELD_MM / 2, FIELD_MM / 2 - CUT_CIRCLE[1]
+
+    def on_rect(points):
+        return distance_to_rect(points, left, top, right, bottom) <= 0.05
+
+    def on_circle(points):
+        return abs(np.hypot(points[:, 0] - cx, points[:, 1] - cy) - CUT_CIRCLE[2]) <= 0.05
+    for on, (speed, _, prr) in ((on_rect, ENGRAVE), (on_circle, CUT)):
+        marks, pitch, per_point, prr_khz = _measured(board, before, on)
+        assert len(marks) > 100
+        assert prr_khz == pytest.approx(prr, rel=0.01)
+        assert pitch * prr_khz * 1e3 / per_point == pytest.approx(speed, rel=0.03)
+    # Nothing marked off the two.
+    marks, _ = marks_off_the_wires(board, before)
+    assert (on_rect(marks) | on_circle(marks)).all()
+    rect_marks = marks[on_rect(marks)]
+    assert outline_gaps(rect_marks, left, top, right, bottom) <= median_pitch(rect_marks) / 2 \
+        + UNIT_MM
+
+
+#: The wait between the two rectangles (s: meerk40t's wait operation's unit).
+WAIT_S = 0.01
+#: How far (s) the time a wait adds on the wires may be from the wait: the link's exchanges
+#: around the hold (a few frames).
+WAIT_SLACK_S = 0.5e-3
+
+
+def _gap_between_two_rects(kernel, device, board, wait_s):
+    """Two rectangles engraved in one job as two operations, meerk40t's wait operation
+    (``waitop``: a WaitCut in the job) between them if ``wait_s``: the time (s) on the pins
+    from the first's last pulse to the second's first, each marked whole."""
+    kernel.elements.clear_all()
+    first, second = (48.0, 50.0, 3.0, 2.0), (56.0, 50.0, 3.0, 2.0)
+    kernel.console(f"rect {' '.join(f'{v:g}mm' for v in first)} engrave -s 400 -p 500 "
+                   f"frequency 50\n")
+    if wait_s:
+        kernel.console(f"waitop {wait_s:g}\n")
+    kernel.console(f"rect {' '.join(f'{v:g}mm' for v in second)} engrave -s 400 -p 500 "
+                   f"frequency 50\n")
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    device.driver.last_report = device.driver.last_error = None
+    kernel.console(f"{plan_name()} copy preprocess validate blob preopt optimize spool\n")
+    _ended(device)
+    assert device.driver.last_report.clean
+    clocks, where = _pulses(board, before)
+    on_first = distance_to_rect(where, *_rect_field(*first)) <= 0.05
+    on_second = distance_to_rect(where, *_rect_field(*second)) <= 0.05
+    assert (on_first | on_second).all() and on_first.sum() > 100 and on_second.sum() > 100
+    # The first marked whole before the second began.
+    assert clocks[on_first].max() < clocks[on_second].min()
+    return (clocks[on_second].min() - clocks[on_first].max()) / board.clk_freq
+
+
+def test_a_wait_operation_holds_the_board_for_its_time(meerk40t, unclassified):
+    """An engrave, meerk40t's wait operation and another engrave: both marked, and on the pins
+    the laser fires nothing between them for the wait, and the wait adds its time to the gap
+    the same two operations have without it (the host ends one part and starts the next as it
+    always does: its status polls and the laser's MO lead)."""
+    kernel, device, board, lines = meerk40t
+    without = _gap_between_two_rects(kernel, device, board, 0)
+    said = len(lines)
+    gap = _gap_between_two_rects(kernel, device, board, WAIT_S)
+    assert gap >= WAIT_S
+    assert gap - without == pytest.approx(WAIT_S, abs=WAIT_SLACK_S), (gap, without)
+    assert any(f"waited {WAIT_S * 1e3:g} ms" in line for line in lines[said:])
+
+
+def test_the_drivers_wait_and_dwell_on_the_board(meerk40t):
+    """meerk40t's driver calls ``wait`` (a hold: the board's frames go on for its time, no
+    pulse, the laser disarmed) and ``dwell`` (the laser on where the head is: its time ×
+    the PRR in pulses, at that point), spooled as meerk40t's own commands are."""
+    kernel, device, board, lines = meerk40t
+    spool_and_wait_items(kernel, device, [("wait", 10)])    # (the board made, idle)
+    board.run_for(0)
+    frames, pulses = len(board.xy2_frames()), len(board.board.pulses)
+    clocks = len(board.laser_pins)
+    spool_and_wait_items(kernel, device, [("wait", 10)])
+    board.run_for(0)
+    held_s = (len(board.xy2_frames()) - frames) * FRAME_PERIOD
+    assert 10e-3 <= held_s <= 10e-3 + WAIT_SLACK_S, held_s
+    assert len(board.board.pulses) == pulses
+    enable = board.LASER_PIN_NAMES.index("laser_enable")
+    assert not any(pins[enable] for pins in board.laser_pins[clocks:])
+    # A dwell of 4 ms at 50 kHz where the head was moved: 200 pulses at one point.
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    spool_and_wait_items(kernel, device, [("move_abs", "52mm", "53mm"),
+                                          ("dwell", 4, {"power": 500.0, "frequency": 50.0})])
+    assert device.driver.last_report.clean
+    marks, counts = marks_off_the_wires(board, before)
+    assert len(marks) == 1 and counts.tolist() == [200]
+    assert marks[0] == pytest.approx([52 - FIELD_MM / 2, FIELD_MM / 2 - 53], abs=UNIT_MM)
+
+
+def spool_and_wait_items(kernel, device, items, timeout_s=60):
+    """``items`` (what meerk40t's spooler calls the driver with) as a job of meerk40t's
+    spooler, and wait until the device has done it."""
+    device.driver.last_report = device.driver.last_error = None
+    device.spooler.laserjob(list(items), label="test items", helper=True)
+    _ended(device, timeout_s)
+
+
+# --- input and output operations --------------------------------------------------------------
+
+def test_io_cuts_are_refused_in_one_line_naming_issue_38_and_nothing_sent(meerk40t):
+    """A job with meerk40t's output cut in it, spooled to the device: one line on the console
+    naming galvoscan's issue #38, and not a byte to the board, not even the lines before it."""
+    kernel, device, board, lines = meerk40t
+    sent = len(board.board.bytes_in)
+    said = len(lines)
+    device.driver.last_report = device.driver.last_error = None
+    settings = {"speed": 400.0, "power": 500.0, "frequency": 50.0}
+    line = LineCut((30000, 30000), (31000, 30000), settings=settings)
+    device.spooler.laserjob([("plot", line), ("plot", OutputCut(1, 1)), "plot_start"],
+                            label="test io", helper=True)
+    deadline = time.monotonic() + 30
+    while device.driver.last_error is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    errors = [said_line for said_line in lines[said:] if "galvoscan: error:" in said_line]
+    assert len(errors) == 1 and "issue #38" in errors[0] and "nothing sent" in errors[0]
+    assert len(board.board.bytes_in) == sent
+
+
+def test_waits_split_a_job_and_a_bad_wait_is_one_line():
+    """WaitCuts split the cuts into parts and holds (ms as seconds; a wait of 0 none); a wait
+    below 0, not a number or over an hour is one line."""
+    a = LineCut((30000, 30000), (31000, 30000), settings={})
+    b = LineCut((31000, 30000), (31000, 31000), settings={})
+    assert job_parts([a, WaitCut(250.0), WaitCut(0), b]) == \
+        [("cuts", [a]), ("hold", 0.25), ("cuts", [b])]
+    assert job_parts([WaitCut(5.0)]) == [("hold", 0.005)]
+    for bad in (-1.0, float("nan"), float("inf"), 4e6, "soon"):
+        with pytest.raises(PlanError) as refused:
+            job_parts([a, WaitCut(bad)])
+        assert "a wait" in str(refused.value) and "\n" not in str(refused.value)
+    with pytest.raises(PlanError, match="issue #38"):
+        job_from_cuts([InputCut(1, 1)], PROFILE, tolerance_mm=0.01)
