@@ -24,7 +24,9 @@ while the link is free.
 """
 
 import contextlib
+import tempfile
 import threading
+from pathlib import Path
 
 import numpy as np
 from meerk40t.core.cutcode.dwellcut import DwellCut
@@ -52,6 +54,8 @@ __all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
 SIM = "sim"
 #: A hold (a wait) is let pass in slices of this (s), a stop heard between them.
 HOLD_SLICE_S = 0.05
+#: The blobs of meerk40t's G-code loader (its ``data_type``) the device marks.
+GCODE_BLOBS = ("grbl", "gcode")
 
 
 class StopRequested(KeyboardInterrupt):
@@ -186,6 +190,37 @@ class GalvoscanDriver:
 
     def plot(self, plot):
         self.queue.append(plot)
+
+    def blob(self, data_type, data):
+        """meerk40t's G-code loader's blob (a .gcode, .nc or .gc file opened in meerk40t):
+        read by galvoscan's G-code reader, as ``galvoscan mark FILE.gcode`` reads it (each S and
+        F a layer of its own), placed as meerk40t places a G-code file on its GRBL device: the
+        file's 0,0 at the lens field's lower left corner, Y up; planned and checked before a
+        byte is sent. Another kind of blob is one line, nothing sent."""
+        self.last_report = self.last_error = None
+        if data_type not in GCODE_BLOBS:
+            self._refuse(f"meerk40t's {data_type!r} data is not marked by the galvoscan device "
+                         f"(G-code is): nothing sent")
+            return
+        profile = self.service.profile
+        half = profile.field.size_mm / 2
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "meerk40t.gcode"
+            path.write_bytes(data.encode("latin-1") if isinstance(data, str) else bytes(data))
+            try:
+                plan = api.plan(api.Job(drawings=(api.Drawing(str(path), origin="page",
+                                                              offset_mm=(-half, -half)),),
+                                        tolerance_mm=self.service.tolerance_mm), profile)
+            except ValueError as error:
+                self._refuse(f"G-code refused, nothing sent: "
+                             f"{str(error).replace(str(path), 'the G-code')}")
+                return
+        self.last_plan = plan
+        for line in describe_job(plan.vector_job, profile, ""):
+            self._say(f"galvoscan: {line}")
+        for line in describe_layers(plan.vector_job, profile):
+            self._say(f"galvoscan: {line}")
+        self._run([("plan", plan)])
 
     def plot_start(self):
         """Plan and check the gathered cuts, then run them on the board; nothing is sent if

@@ -404,3 +404,46 @@ def test_waits_split_a_job_and_a_bad_wait_is_one_line():
         assert "a wait" in str(refused.value) and "\n" not in str(refused.value)
     with pytest.raises(PlanError, match="issue #38"):
         job_from_cuts([InputCut(1, 1)], PROFILE, tolerance_mm=0.01)
+
+
+# --- G-code opened in meerk40t ----------------------------------------------------------------
+
+#: An L in G-code (mm, Y up as G-code's is): its corner, a stem STEM mm up and a foot FOOT mm
+#: to the right: it is not its mirror image either way, so a flip in X or Y shows.
+L_CORNER, STEM, FOOT = (50.0, 52.0), 4.0, 2.0
+L_GCODE = (f"G21 G90\nG0 X{L_CORNER[0]:g} Y{L_CORNER[1] + STEM:g}\nM4 S500 F24000\n"
+           f"G1 X{L_CORNER[0]:g} Y{L_CORNER[1]:g}\nG1 X{L_CORNER[0] + FOOT:g} "
+           f"Y{L_CORNER[1]:g}\nM5\n")
+
+
+def test_gcode_opened_in_meerk40t_is_marked_the_right_way_up(meerk40t, tmp_path):
+    """A G-code file opened in meerk40t (its G-code loader: a blob of the file for the device)
+    is marked as meerk40t places G-code on its GRBL device: the file's 0,0 at the lens field's
+    lower left corner, its Y up. The L off the wires: its stem above its corner, its foot to
+    the right, at the file's coordinates from that corner, at F24000's 400 mm/s."""
+    kernel, device, board, lines = meerk40t
+    kernel.elements.clear_all()
+    path = tmp_path / "l.gcode"
+    path.write_text(L_GCODE)
+    kernel.console(f"load {path}\n")
+    assert [op.type for op in kernel.elements.ops()] == ["blob"]
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    device.driver.last_report = device.driver.last_error = None
+    kernel.console(f"{plan_name()} copy preprocess validate blob preopt optimize spool\n")
+    _ended(device)
+    assert device.driver.last_report.clean
+    marks, pulses = marks_off_the_wires(board, before)
+    # The file's mm from the field's lower left corner (field mm: centre 0,0, Y up).
+    x, y = marks[:, 0] + FIELD_MM / 2, marks[:, 1] + FIELD_MM / 2
+    x0, y0 = L_CORNER
+    pitch = median_pitch(marks)
+    reach = pitch / 2 + UNIT_MM
+    on_stem = (abs(x - x0) <= reach) & (y0 - reach <= y) & (y <= y0 + STEM + reach)
+    on_foot = (abs(y - y0) <= reach) & (x0 - reach <= x) & (x <= x0 + FOOT + reach)
+    assert (on_stem | on_foot).all()
+    # All along both: the stem's top and the foot's end marked.
+    assert np.hypot(x - x0, y - (y0 + STEM)).min() <= reach
+    assert np.hypot(x - (x0 + FOOT), y - y0).min() <= reach
+    speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))
+    assert speed == pytest.approx(24000 / 60, rel=0.03)
