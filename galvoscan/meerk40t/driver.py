@@ -3,7 +3,11 @@ it by name). Cuts are gathered by :meth:`GalvoscanDriver.plot`; :meth:`~Galvosca
 turns them into galvoscan's job (:mod:`.cutcode`), plans and checks it with galvoscan's planner
 (:func:`galvoscan.api.plan_made`) before a byte is sent, and runs it on the board
 (:func:`galvoscan.api.run`). A refusal, or a job the board stopped, is one line in meerk40t's
-console.
+console. A WaitCut (meerk40t's wait operation) splits the job into parts, all planned and
+checked first; between them the board is held for the wait (:meth:`GalvoscanDriver._hold`: the
+time let pass on the link's clock, the laser disarmed), as the driver's own ``wait`` holds it;
+its ``dwell`` fires the laser where the head is. A G-code file opened in meerk40t comes as a
+blob (:meth:`GalvoscanDriver.blob`), read by galvoscan's G-code reader.
 
 Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
 after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`). Pause holds the

@@ -15,6 +15,7 @@ import matplotlib
 import numpy as np
 import pytest
 from PIL import Image
+from hypothesis import given, settings, strategies as st
 
 pytest.importorskip("meerk40t")
 
@@ -447,3 +448,20 @@ def test_gcode_opened_in_meerk40t_is_marked_the_right_way_up(meerk40t, tmp_path)
     assert np.hypot(x - (x0 + FOOT), y - y0).min() <= reach
     speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))
     assert speed == pytest.approx(24000 / 60, rel=0.03)
+
+
+@settings(max_examples=80, deadline=None)
+@given(wait=st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-10**9, 10**9),
+                      st.text(max_size=5), st.none(), st.just(3.6e6)))
+def test_any_wait_is_a_hold_or_one_line(wait):
+    """A WaitCut's time comes from outside (a wait operation's setting, G-code's G4): any
+    value is a hold of 0 s to an hour, or refused in one line naming the wait."""
+    line = LineCut((30000, 30000), (31000, 30000), settings={})
+    try:
+        parts = job_parts([line, WaitCut(wait), line])
+    except PlanError as error:
+        assert str(error).startswith("a wait of") and "\n" not in str(error)
+        return
+    holds = [seconds for kind, seconds in parts if kind == "hold"]
+    assert all(0 < seconds <= 3600 for seconds in holds)
+    assert [kind for kind, _ in parts] in (["cuts", "hold", "cuts"], ["cuts", "cuts"])
