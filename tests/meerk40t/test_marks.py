@@ -234,13 +234,13 @@ def _rect_field(x, y, width, height):
     return left, top, left + width, top - height
 
 
-def _measured(board, before, on):
-    """The marks (field mm) frame ``before`` on that ``on`` (a function of the points) picks,
-    their pitch (mm, median), pulses per point (median) and PRR (kHz: the laser's pulses'
-    median spacing on the pins, at the board's clock)."""
-    marks, pulses = marks_off_the_wires(board, before)
+def _measured(board, wires, on):
+    """Of ``wires`` (:func:`marks_off_the_wires`' marks and pulses, :func:`_pulses`' clocks
+    and positions), the marks (field mm) that ``on`` (a function of the points) picks, their
+    pitch (mm, median), pulses per point (median) and PRR (kHz: the laser's pulses' median
+    spacing on the pins, at the board's clock)."""
+    marks, pulses, clocks, where = wires
     picked = on(marks)
-    clocks, where = _pulses(board, before)
     spacing = np.diff(clocks[on(where)])
     return (marks[picked], median_pitch(marks[picked]), int(np.median(pulses[picked])),
             board.clk_freq / float(np.median(spacing)) / 1e3)
@@ -273,13 +273,14 @@ def test_two_operations_are_two_layers_each_at_its_own_speed(meerk40t, unclassif
 
     def on_circle(points):
         return abs(np.hypot(points[:, 0] - cx, points[:, 1] - cy) - CUT_CIRCLE[2]) <= 0.05
+    wires = (*marks_off_the_wires(board, before), *_pulses(board, before))
     for on, (speed, _, prr) in ((on_rect, ENGRAVE), (on_circle, CUT)):
-        marks, pitch, per_point, prr_khz = _measured(board, before, on)
+        marks, pitch, per_point, prr_khz = _measured(board, wires, on)
         assert len(marks) > 100
         assert prr_khz == pytest.approx(prr, rel=0.01)
         assert pitch * prr_khz * 1e3 / per_point == pytest.approx(speed, rel=0.03)
     # Nothing marked off the two.
-    marks, _ = marks_off_the_wires(board, before)
+    marks = wires[0]
     assert (on_rect(marks) | on_circle(marks)).all()
     rect_marks = marks[on_rect(marks)]
     assert outline_gaps(rect_marks, left, top, right, bottom) <= median_pitch(rect_marks) / 2 \
