@@ -46,6 +46,7 @@ from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.board_state import read_board_state
 from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer, StreamReport
 from ..geometry.field import from_galvo
+from ..geometry.segments import PIXELS
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
 from .cutcode import job_from_cuts, job_parts, outline_cuts
@@ -313,6 +314,7 @@ class GalvoscanDriver:
             self._refuse(failure)
             return
         self.last_report = report
+        self._head_at_the_end(steps)
         counters = report.counters
         holds = report.stream.holds
         waits = sum(seconds for kind, seconds in steps if kind == "hold")
@@ -322,6 +324,20 @@ class GalvoscanDriver:
                   f"{counters['vec_rejected']}, errors {counters['errors']}"
                   f"{f'; held {holds} time(s)' if holds else ''}"
                   f"{f'; waited {waits * 1e3:g} ms' if waits else ''}")
+
+    def _head_at_the_end(self, steps):
+        """The head where the last plan of ``steps`` left it (its last segment's end, galvo
+        units): what meerk40t's position and GRBL's ``?`` report."""
+        plans = [step for kind, step in steps if kind == "plan"]
+        if not plans:
+            return
+        vector_job = plans[-1].vector_job
+        jobs = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
+        # (A pixel word's x and y are pixels, not a place.)
+        ends = [segment for segment in jobs[-1].segments if segment[0] != PIXELS]
+        if ends:
+            _, x, y, *_ = ends[-1]
+            self.native_x, self.native_y = int(x), int(y)
 
     def _marked(self, steps, client):
         """``(report, None)``: ``steps`` run on the board (the plans' reports as one);

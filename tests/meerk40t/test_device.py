@@ -217,8 +217,10 @@ GRBL_CORNER, GRBL_SIDE = (50.0, 50.0), 6.0
 def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     """meerk40t's GRBL server (``grblcontrol``) with the galvoscan device active: a sender's
     square at M4 S500 F6000 has every line answered ok and is marked, the marks off the wires
-    on the square (its G-code coordinates are meerk40t's scene's, through the device's view),
-    at 100 mm/s and 50 %; ``?`` is answered with a status report."""
+    on the square (its G-code coordinates taken as a sender's, Y up, through the device's view),
+    at 100 mm/s and 50 %; ``?`` is answered with a status report. (The square's place: G-code's
+    0,0 at the field's lower left corner, its Y up; tests/meerk40t/test_marks.py has an L that
+    shows the way up.)"""
     kernel, device, board, lines = meerk40t
     device.driver.last_report = device.driver.last_error = None
     port = grbl_port
@@ -244,8 +246,9 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     said = "\n".join(lines)
     assert "(speed 100 mm/s, power 50 %)" in said          # F6000 mm/min, S500 of 1000
     marks, pulses = marks_off_the_wires(board, before)
-    left, top = x0 - FIELD_MM / 2, FIELD_MM / 2 - y0      # the scene's Y is down
-    right, bottom = left + GRBL_SIDE, top - GRBL_SIDE
+    # G-code's 0,0 at the field's lower left corner, its Y up.
+    left, bottom = x0 - FIELD_MM / 2, y0 - FIELD_MM / 2
+    right, top = left + GRBL_SIDE, bottom + GRBL_SIDE
     pitch = median_pitch(marks)
     # GRBL gives no PRR: the profile's. The speed off the wires is F6000's 100 mm/s.
     speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))

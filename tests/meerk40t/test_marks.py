@@ -7,6 +7,7 @@ PRR and pulses per point measured on the wires), a wait operation between two (t
 for its time, measured on the wires), the driver's own ``wait`` and ``dwell``, and I/O
 operations refused in one line naming galvoscan issue #38."""
 
+import re
 import shutil
 import time
 from pathlib import Path
@@ -30,8 +31,9 @@ from galvoscan.analysis.galvo import FRAME_PERIOD       # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.meerk40t.cutcode import job_from_cuts, job_parts  # noqa: E402
 
-from meerk40t_session import (FIELD_MM, PROFILE, UNIT_MM, distance_to_rect,  # noqa: E402
-                              marks_off_the_wires, median_pitch, outline_gaps, plan_name)
+from meerk40t_session import (FIELD_MM, PROFILE, UNIT_MM, GrblSender,  # noqa: E402
+                              distance_to_rect, marks_off_the_wires, median_pitch,
+                              outline_gaps, plan_name)
 from vector_board import pulses_per_frame               # noqa: E402
 
 
@@ -466,3 +468,38 @@ def test_any_wait_is_a_hold_or_one_line(wait):
     holds = [seconds for kind, seconds in parts if kind == "hold"]
     assert all(0 < seconds <= 3600 for seconds in holds)
     assert [kind for kind, _ in parts] in (["cuts", "hold", "cuts"], ["cuts", "cuts"])
+
+
+def test_a_senders_gcode_is_marked_the_right_way_up(meerk40t, grbl_port):
+    """The same L from a G-code sender on the device's ``grblcontrol``: marked as the file
+    opened in meerk40t is, its stem above its corner and its foot to the right, the file's mm
+    from the field's lower left corner; ``?`` at the end says where the head is in the same
+    G-code coordinates (the foot's end)."""
+    kernel, device, board, lines = meerk40t
+    device.driver.last_report = device.driver.last_error = None
+    kernel.console(f"grblcontrol -p {grbl_port}\n")
+    board.run_for(0)
+    before = len(board.xy2_frames())
+    sender = GrblSender(grbl_port)
+    try:
+        answers = [sender.send(line) for line in L_GCODE.splitlines()]
+        _ended(device)
+        sender.socket.sendall(b"?")
+        status = sender.line()
+    finally:
+        sender.close()
+        kernel.console("grblcontrol quit\n")
+    assert answers == ["ok"] * len(answers)
+    assert device.driver.last_report.clean
+    marks, _ = marks_off_the_wires(board, before)
+    x, y = marks[:, 0] + FIELD_MM / 2, marks[:, 1] + FIELD_MM / 2
+    x0, y0 = L_CORNER
+    reach = median_pitch(marks) / 2 + UNIT_MM
+    on_stem = (abs(x - x0) <= reach) & (y0 - reach <= y) & (y <= y0 + STEM + reach)
+    on_foot = (abs(y - y0) <= reach) & (x0 - reach <= x) & (x <= x0 + FOOT + reach)
+    assert (on_stem | on_foot).all()
+    assert np.hypot(x - x0, y - (y0 + STEM)).min() <= reach
+    assert np.hypot(x - (x0 + FOOT), y - y0).min() <= reach
+    reported = re.search(r"MPos:([-\d.]+),([-\d.]+),", status)
+    assert reported, status
+    assert (float(reported[1]), float(reported[2])) == pytest.approx((x0 + FOOT, y0), abs=0.01)
