@@ -503,3 +503,30 @@ def test_a_senders_gcode_is_marked_the_right_way_up(meerk40t, grbl_port):
     reported = re.search(r"MPos:([-\d.]+),([-\d.]+),", status)
     assert reported, status
     assert (float(reported[1]), float(reported[2])) == pytest.approx((x0 + FOOT, y0), abs=0.01)
+
+
+def test_damaged_gcode_or_another_blob_is_one_line_and_nothing_sent(meerk40t):
+    """A G-code blob with a damaged line (the line named, as ``galvoscan mark`` names it), or a
+    blob of another kind (a Lihuiyu device's EGV): one line on the console, not a byte to the
+    board."""
+    kernel, device, board, lines = meerk40t
+    sent = len(board.board.bytes_in)
+    for data_type, data, words in (("grbl", b"G21 G90\nM3 S500 F600\nG1 X10 Y1O\n",
+                                    "line 3 ('G1 X10 Y1O')"),
+                                   ("egv", b"IPPzzzzFNSE-\n", "'egv' data")):
+        said = len(lines)
+        spool_and_wait_items_refused(kernel, device, [("blob", data_type, data)])
+        errors = [line for line in lines[said:] if "galvoscan: error:" in line]
+        assert len(errors) == 1 and words in errors[0] and "nothing sent" in errors[0], \
+            lines[said:]
+        assert "/tmp" not in errors[0]
+    assert len(board.board.bytes_in) == sent
+
+
+def spool_and_wait_items_refused(kernel, device, items, timeout_s=30):
+    device.driver.last_report = device.driver.last_error = None
+    device.spooler.laserjob(list(items), label="test refused", helper=True)
+    deadline = time.monotonic() + timeout_s
+    while device.driver.last_error is None:
+        assert time.monotonic() < deadline and device.driver.last_report is None
+        time.sleep(0.02)
