@@ -8,8 +8,11 @@ turns them into field mm. Curves are flattened to the job's chord tolerance by t
 own rule; a PlotCut's (a plotted path: what meerk40t's G-code reader makes) steps at half the
 operation's power or more are lines at its power; a dwell is a dot whose pulses are the dwell's
 time at the operation's frequency; a RasterCut's (a raster or image operation's) runs of dark
-pixels are lines, walked as meerk40t's own galvo driver walks them. Other cuts (waits, I/O)
-are refused in one line.
+pixels are lines, in the order meerk40t's own galvo driver walks them, each from its first
+pixel's centre to its last's (one pixel: a dot), as ``mark --image`` marks a photo's runs.
+A WaitCut (a wait operation's) splits the job (:func:`job_parts`): the driver holds the board
+for its time between the parts. Input and output cuts are refused in one line: galvoscan's queue
+has no I/O yet (galvoscan issue #38).
 """
 
 import math
@@ -22,6 +25,7 @@ from meerk40t.core.cutcode.linecut import LineCut
 from meerk40t.core.cutcode.plotcut import PlotCut
 from meerk40t.core.cutcode.quadcut import QuadCut
 from meerk40t.core.cutcode.rastercut import RasterCut
+from meerk40t.core.cutcode.waitcut import WaitCut
 from meerk40t.core.plotplanner import PlotPlanner
 from meerk40t.device.basedevice import PLOT_FINISH, PLOT_JOG, PLOT_RAPID
 from svgelements import CubicBezier, QuadraticBezier
@@ -33,13 +37,15 @@ from ..inputs.svg import bezier_points
 from ..plan.objects import MarkObject
 
 
-__all__ = ["POWER_FULL", "DARK", "job_from_cuts", "operation_layer", "outline_cuts"]
+__all__ = ["POWER_FULL", "DARK", "job_from_cuts", "job_parts", "operation_layer", "outline_cuts"]
 
 #: meerk40t's power setting at full power (its galvo devices show it as 100 %).
 POWER_FULL = 1000.0
 #: A PlotCut step at this share of the operation's power or more is marked; below it, jumped
 #: (the board holds one power a layer: no grey levels).
 DARK = 0.5
+#: The longest wait (ms) a WaitCut may ask for: an hour.
+MAX_WAIT_MS = 3.6e6
 
 
 @dataclass
@@ -99,13 +105,20 @@ def _cut_points(cut, tolerance_units):
         return runs
     if isinstance(cut, RasterCut):
         return _raster_runs(cut)
+    if type(cut).__name__ in ("InputCut", "OutputCut"):
+        raise PlanError(f"meerk40t's {type(cut).__name__} (an I/O operation) is not marked by "
+                        f"the galvoscan device: galvoscan's queue has no I/O yet (galvoscan "
+                        f"issue #38)")
     raise PlanError(f"meerk40t's {type(cut).__name__} is not one the galvoscan device marks "
-                    f"(lines, curves, dwells, PlotCuts and RasterCuts are)")
+                    f"(lines, curves, dwells, waits, PlotCuts and RasterCuts are)")
 
 
 def _raster_runs(cut):
     """A RasterCut's (a raster or image operation's) dark runs, as meerk40t's own galvo driver
-    walks it: its plot planner's moves, a step at half the power or more marked."""
+    walks it: its plot planner's moves, a step at half the power or more marked; each run
+    moved onto meerk40t's own geometry of the image (pixel ``i`` of a row from ``offset + i ×
+    step`` to ``offset + (i + 1) × step``, a row likewise), and marked from its first pixel's
+    centre to its last's (:func:`_on_the_pixels`)."""
     planner = PlotPlanner(dict(), single=True, ppi=False, shift=False, group=True,
                           require_uniform_movement=False)
     planner.settings_then_jog = True
@@ -124,7 +137,61 @@ def _raster_runs(cut):
             else:
                 runs.append([last, (x, y)])
         last = (x, y)
-    return runs
+    return [_on_the_pixels(run, cut.step_x, cut.step_y) for run in runs]
+
+
+def _on_the_pixels(run, step_x, step_y):
+    """A run of meerk40t's raster plotter on the pixels it stands for: the plotter puts pixel
+    ``i`` at ``offset + i × step`` and a run of ``n`` pixels from half a step before its first
+    pixel's place to half a step after its last's; the image's pixel ``i`` is the square from
+    ``offset + i × step`` to ``offset + (i + 1) × step``. So the run moves half a step along
+    both axes (onto the pixels' centres' line, from its first pixel's left edge to its last's
+    right edge), and each end comes in half a pixel along the run: first pixel's centre to
+    last's, one pixel a dot."""
+    points = np.array(run, dtype=float) + (step_x / 2, step_y / 2)
+    ends = []
+    for end, inner in ((0, 1), (-1, -2)):
+        along = points[inner] - points[end]
+        length = math.hypot(*along)
+        if length == 0:
+            ends.append(points[end])
+            continue
+        unit = along / length
+        # Half a pixel along the run's direction (a row's: step_x; a column's: step_y); no
+        # further than the middle of the step (a run of one pixel: a dot).
+        half = 0.5 * math.hypot(unit[0] * step_x, unit[1] * step_y)
+        ends.append(points[end] + unit * min(half, length / 2))
+    points[0], points[-1] = ends
+    return [(float(x), float(y)) for x, y in points]
+
+
+def job_parts(cuts):
+    """``cuts`` split at meerk40t's WaitCuts: a list of ``("cuts", [cut, …])`` and ``("hold",
+    seconds)`` in order (empty cut lists left out). A wait that is not a time of 0 ms or more
+    (meerk40t gives its WaitCut's in ms) is a :class:`~galvoscan.geometry.field.PlanError` (one
+    line)."""
+    parts, current = [], []
+    for cut in cuts:
+        if isinstance(cut, WaitCut):
+            wait_ms = cut.dwell_time
+            try:
+                wait_ms = float(wait_ms)
+            except (TypeError, ValueError):
+                raise PlanError(f"a wait of {wait_ms!r} ms: a wait is a time of 0 ms or more")\
+                    from None
+            if not (math.isfinite(wait_ms) and 0 <= wait_ms <= MAX_WAIT_MS):
+                raise PlanError(f"a wait of {wait_ms:g} ms: a wait is from 0 to "
+                                f"{MAX_WAIT_MS:g} ms")
+            if current:
+                parts.append(("cuts", current))
+                current = []
+            if wait_ms > 0:
+                parts.append(("hold", wait_ms / 1e3))
+        else:
+            current.append(cut)
+    if current:
+        parts.append(("cuts", current))
+    return parts
 
 
 def job_from_cuts(cuts, profile, *, tolerance_mm):
@@ -160,7 +227,11 @@ def job_from_cuts(cuts, profile, *, tolerance_mm):
             # (A PRR that is not a number is refused with the layer's other settings.)
             pulses = max(1, round(operation.dwell_ms * prr_khz)) if math.isfinite(prr_khz) \
                 else None
-            layer = Layer(name, speed_mm_s=layer.speed_mm_s, power_percent=layer.power_percent,
+            # A dwell's dot does not move: its speed is one its pulses make (a galvo unit's
+            # pitch), whatever the operation's or the profile's.
+            speed = prr_khz * 1e3 / profile.units_per_mm / pulses if pulses else \
+                layer.speed_mm_s
+            layer = Layer(name, speed_mm_s=speed, power_percent=layer.power_percent,
                           prr_khz=layer.prr_khz, pulses_per_point=pulses)
         paths = tuple(np.asarray(from_galvo(np.array(p, dtype=float), field_mm))
                       for p in operation.paths)

@@ -28,6 +28,7 @@ from ..link.client import ClientError
 from ..profile.writer import ProfileDocument
 from ..settings.laser import TOLERANCE
 from .driver import SIM, GalvoscanDriver
+from .grbl import GcodeUpControl
 from .settings import ATTRIBUTES, ProfileSettings, key_line, profile_choices
 
 
@@ -250,6 +251,30 @@ class GalvoscanDevice(Service, Status):
             self.driver.pause()
             channel("galvoscan: paused: the board marks what it holds queued, then holds the "
                     "job with the laser disarmed (`pause` or `resume` lets it go on)")
+
+        @self.console_option("port", "p", type=int, default=23, help=_("port to listen on."))
+        @self.console_option("verbose", "v", type=bool, action="store_true",
+                             help=_("watch server channels"))
+        @self.console_option("quit", "q", type=bool, action="store_true",
+                             help=_("shutdown current grblserver"))
+        @self.console_command("grblcontrol", help=_("meerk40t's GRBL server, G-code's Y up "
+                                                     "(its 0,0 the field's lower left corner)"))
+        def grblcontrol(command, channel, _, port=23, verbose=False, quit=False,
+                        remainder=None, **kwargs):
+            # meerk40t's own command, but for the server it starts (GcodeUpControl).
+            if remainder and remainder.lower() in ("stop", "quit"):
+                quit = True
+            control = self.lookup("grblcontrol")
+            if control is None:
+                if quit:
+                    channel(_("No control instance to stop."))
+                    return
+                control = GcodeUpControl(self.kernel.root)
+                self.register("grblcontrol", control)
+                control.start(port, verbose)
+            if quit:
+                control.quit()
+                self.unregister("grblcontrol")
 
         @self.console_command("resume", help=_("Let a held job go on"))
         def resume(command, channel, _, **kwargs):

@@ -3,7 +3,11 @@ it by name). Cuts are gathered by :meth:`GalvoscanDriver.plot`; :meth:`~Galvosca
 turns them into galvoscan's job (:mod:`.cutcode`), plans and checks it with galvoscan's planner
 (:func:`galvoscan.api.plan_made`) before a byte is sent, and runs it on the board
 (:func:`galvoscan.api.run`). A refusal, or a job the board stopped, is one line in meerk40t's
-console.
+console. A WaitCut (meerk40t's wait operation) splits the job into parts, all planned and
+checked first; between them the board is held for the wait (:meth:`GalvoscanDriver._hold`: the
+time let pass on the link's clock, the laser disarmed), as the driver's own ``wait`` holds it;
+its ``dwell`` fires the laser where the head is. A G-code file opened in meerk40t comes as a
+blob (:meth:`GalvoscanDriver.blob`), read by galvoscan's G-code reader.
 
 Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
 after it is ``arm = 0`` (:meth:`galvoscan.outputs.stream.JobStreamer.disarm`). Pause holds the
@@ -24,9 +28,13 @@ while the link is free.
 """
 
 import contextlib
+import tempfile
 import threading
+from pathlib import Path
 
 import numpy as np
+from meerk40t.core.cutcode.dwellcut import DwellCut
+from meerk40t.core.cutcode.waitcut import WaitCut
 
 from .. import api
 from ..build import simulated_bitstream
@@ -36,11 +44,12 @@ from ..cli.layers import describe_layers
 from ..gateware.host.regmap import Status
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.board_state import read_board_state
-from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer
+from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer, StreamReport
 from ..geometry.field import from_galvo
+from ..geometry.segments import PIXELS
 from ..plan.vector_job import hull_outline
 from ..sim.board import SimTransport
-from .cutcode import job_from_cuts, outline_cuts
+from .cutcode import job_from_cuts, job_parts, outline_cuts
 from .status import BoardStatus
 
 
@@ -48,6 +57,10 @@ __all__ = ["GalvoscanDriver", "StopRequested", "SIM"]
 
 #: The link setting that runs jobs on a simulated board in meerk40t's own process.
 SIM = "sim"
+#: A hold (a wait) is let pass in slices of this (s), a stop heard between them.
+HOLD_SLICE_S = 0.05
+#: The blobs of meerk40t's G-code loader (its ``data_type``) the device marks.
+GCODE_BLOBS = ("grbl", "gcode")
 
 
 class StopRequested(KeyboardInterrupt):
@@ -183,35 +196,77 @@ class GalvoscanDriver:
     def plot(self, plot):
         self.queue.append(plot)
 
+    def blob(self, data_type, data):
+        """meerk40t's G-code loader's blob (a .gcode, .nc or .gc file opened in meerk40t):
+        read by galvoscan's G-code reader, as ``galvoscan mark FILE.gcode`` reads it (each S and
+        F a layer of its own), placed as meerk40t places a G-code file on its GRBL device: the
+        file's 0,0 at the lens field's lower left corner, Y up; planned and checked before a
+        byte is sent. Another kind of blob is one line, nothing sent."""
+        self.last_report = self.last_error = None
+        if data_type not in GCODE_BLOBS:
+            self._refuse(f"meerk40t's {data_type!r} data is not marked by the galvoscan device "
+                         f"(G-code is): nothing sent")
+            return
+        profile = self.service.profile
+        half = profile.field.size_mm / 2
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "meerk40t.gcode"
+            path.write_bytes(data.encode("latin-1") if isinstance(data, str) else bytes(data))
+            try:
+                plan = api.plan(api.Job(drawings=(api.Drawing(str(path), origin="page",
+                                                              offset_mm=(-half, -half)),),
+                                        tolerance_mm=self.service.tolerance_mm), profile)
+            except ValueError as error:
+                self._refuse(f"G-code refused, nothing sent: "
+                             f"{str(error).replace(str(path), 'the G-code')}")
+                return
+        self.last_plan = plan
+        for line in describe_job(plan.vector_job, profile, ""):
+            self._say(f"galvoscan: {line}")
+        for line in describe_layers(plan.vector_job, profile):
+            self._say(f"galvoscan: {line}")
+        self._run([("plan", plan)])
+
     def plot_start(self):
         """Plan and check the gathered cuts, then run them on the board; nothing is sent if
-        the plan is refused."""
+        any part of them is refused. A WaitCut splits them: the parts before and after it are
+        marked with the board held for its time between them (:meth:`_hold`)."""
         cuts, self.queue = self.queue, []
         if not cuts:            # (meerk40t's G-code reader ends every M5 so, moves or not)
             return
-        first = cuts[0].settings or {}
+        first = next((cut.settings for cut in cuts if cut.settings), None) or {}
         self.speed, self.power = first.get("speed", 0), first.get("power", 0)
         self.last_report = self.last_error = None
         profile = self.service.profile
+        steps = []
         try:
-            job, objects = job_from_cuts(cuts, profile, tolerance_mm=self.service.tolerance_mm)
-            plan = api.plan_made(objects, job, profile)
+            for kind, part in job_parts(cuts):
+                if kind == "hold":
+                    steps.append(("hold", part))
+                    continue
+                job, objects = job_from_cuts(part, profile,
+                                             tolerance_mm=self.service.tolerance_mm)
+                steps.append(("plan", api.plan_made(objects, job, profile)))
         except ValueError as error:
             self._refuse(f"job refused, nothing sent: {error}")
             return
-        self.last_plan = plan
-        vector_job = plan.vector_job
-        for line in describe_job(vector_job, profile, ""):
-            self._say(f"galvoscan: {line}")
-        for line in describe_layers(vector_job, profile):
-            self._say(f"galvoscan: {line}")
-        self._run(plan)
+        plans = [plan for kind, plan in steps if kind == "plan"]
+        if plans:
+            self.last_plan = plans[-1]
+        for plan in plans:
+            vector_job = plan.vector_job
+            for line in describe_job(vector_job, profile, ""):
+                self._say(f"galvoscan: {line}")
+            for line in describe_layers(vector_job, profile):
+                self._say(f"galvoscan: {line}")
+        self._run(steps)
 
     @contextlib.contextmanager
-    def _on_the_board(self, *, marking):
+    def _on_the_board(self, *, marking, doing="framing"):
         """The board's client, opened for one job under the lock (the job talks through
         ``self._client``, which meerk40t's stop can interrupt, and whose status reads go to the
-        status bar), the device busy (``marking``: its laser status active) until the job ends,
+        status bar), the device busy (``marking``: its laser status active; else ``doing``, in
+        the status bar) until the job ends,
         however it ends, the board's state read for the status bar, and the link closed; None
         (one line said, nothing sent) when it cannot be opened. The job's outcome is said after
         this (its ``last_report`` or ``last_error`` set once the link is free)."""
@@ -219,7 +274,7 @@ class GalvoscanDriver:
             self.state = "busy"
             if marking:
                 self.service.laser_status = "active"
-            self.status_bar.show("busy, marking a job" if marking else "busy, framing")
+            self.status_bar.show("busy, marking a job" if marking else f"busy, {doing}")
             try:
                 client, close = self._open()
             except (ClientError, OSError, ValueError) as error:
@@ -248,27 +303,56 @@ class GalvoscanDriver:
         self.status_bar.seen_flags(
             flags, activity="paused" if self.hold.holding.is_set() else "busy")
 
-    def _run(self, plan):
+    def _run(self, steps):
+        """Run ``steps`` (``("plan", plan)`` and ``("hold", seconds)``, in order) on the board
+        in one session of the link, and say how it went."""
         with self._on_the_board(marking=True) as client:
             if client is None:
                 return
-            report, failure = self._marked(plan, client)
+            report, failure = self._marked(steps, client)
         if failure is not None:
             self._refuse(failure)
             return
         self.last_report = report
+        self._head_at_the_end(steps)
         counters = report.counters
         holds = report.stream.holds
+        waits = sum(seconds for kind, seconds in steps if kind == "hold")
         self._say(f"galvoscan: marked {report.segments} segments, {report.pulses} pulses"
                   f"{'' if report.clean else ' (NOT as planned)'}; underruns "
                   f"{counters['vec_underruns']}, stalls {counters['vec_stalls']}, rejected "
                   f"{counters['vec_rejected']}, errors {counters['errors']}"
-                  f"{f'; held {holds} time(s)' if holds else ''}")
+                  f"{f'; held {holds} time(s)' if holds else ''}"
+                  f"{f'; waited {waits * 1e3:g} ms' if waits else ''}")
 
-    def _marked(self, plan, client):
-        """``(report, None)``: ``plan`` run on the board; ``(None, why)``: it stopped."""
+    def _head_at_the_end(self, steps):
+        """The head where the last plan of ``steps`` left it (its last segment's end, galvo
+        units): what meerk40t's position and GRBL's ``?`` report."""
+        plans = [step for kind, step in steps if kind == "plan"]
+        if not plans:
+            return
+        vector_job = plans[-1].vector_job
+        jobs = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
+        # (A pixel word's x and y are pixels, not a place.)
+        ends = [segment for segment in jobs[-1].segments if segment[0] != PIXELS]
+        if ends:
+            _, x, y, *_ = ends[-1]
+            self.native_x, self.native_y = int(x), int(y)
+
+    def _marked(self, steps, client):
+        """``(report, None)``: ``steps`` run on the board (the plans' reports as one);
+        ``(None, why)``: it stopped."""
         try:
-            return api.run(plan, self._client, say=self._say, pause=self.hold), None
+            reports = []
+            for kind, step in steps:
+                if kind == "hold":
+                    self._hold(step)
+                else:
+                    reports.append(api.run(step, self._client, say=self._say,
+                                           pause=self.hold))
+                    if not reports[-1].clean:
+                        break
+            return api.Report(StreamReport.total(r.stream for r in reports)), None
         except JobInterrupted as error:
             # Stopped from meerk40t: the streamer has disarmed; what is left in the queue is
             # emptied so that the next job is not refused (a board without vec_flush says
@@ -279,10 +363,27 @@ class GalvoscanDriver:
             except (ClientError, ValueError, KeyError) as flush:
                 more = f"; its queue could not be emptied ({flush})"
             return None, f"job stopped, laser disarmed: {error}{more}"
+        except StopRequested as error:
+            # (Stopped while holding: nothing armed, nothing queued.)
+            return None, f"job stopped, laser disarmed: {error} during a wait"
         except JobAborted as error:
             return None, f"job stopped, laser disarmed: {error}"
         except (ClientError, OSError) as error:
             return None, f"job stopped, laser disarm sent: the link failed: {error}"
+
+    def _hold(self, seconds):
+        """Hold the board ``seconds`` on the link's clock (a simulated board runs for them in
+        its own time; a real one is left that long by the host), the laser disarmed (each part
+        of a job ends so) and the mirrors where the last part left them; in slices, so that
+        meerk40t's stop ends it (:class:`StopRequested`) and a pause lengthens it."""
+        left = seconds
+        while left > 0:
+            if self.hold.paused:
+                self._client.sleep(HOLD_SLICE_S)        # (paused: the wait waits too)
+                continue
+            step = min(left, HOLD_SLICE_S)
+            self._client.sleep(step)
+            left -= step
 
     def frame(self, times):
         """Trace the last planned job's outline (its convex hull) ``times`` times with the
@@ -380,11 +481,39 @@ class GalvoscanDriver:
         pass
 
     def wait(self, time_in_ms):
-        pass
+        """Hold the board ``time_in_ms`` ms (meerk40t's wait: a wait operation spooled, G-code's
+        G4 through ``grblcontrol``), the laser disarmed, as a WaitCut within a job is held
+        (:meth:`_hold`); a time that is not one (below 0, not a number, over an hour) is one
+        line and nothing is sent."""
+        self.last_report = self.last_error = None
+        try:
+            (kind, seconds), = job_parts([WaitCut(time_in_ms)]) or [("hold", 0.0)]
+        except ValueError as error:
+            self._refuse(f"wait refused, nothing sent: {error}")
+            return
+        failure = None
+        with self._on_the_board(marking=False, doing="holding (a wait)") as client:
+            if client is None:
+                return
+            try:
+                self._hold(seconds)
+            except StopRequested as error:
+                failure = f"wait stopped: {error}"
+            except (ClientError, OSError) as error:
+                failure = f"wait stopped: the link failed: {error}"
+        if failure is not None:
+            self._refuse(failure)
+            return
+        self._say(f"galvoscan: waited {seconds * 1e3:g} ms")
+        self.last_report = "waited"
 
     def dwell(self, time_in_ms, settings=None):
-        self._say("galvoscan: error: a dwell outside a job is not marked by the galvoscan "
-                  "device (a dots operation's is)")
+        """Fire the laser ``time_in_ms`` ms where the head is (meerk40t's dwell), at
+        ``settings``' power and frequency (else the profile's): a dwell cut there, planned,
+        checked and marked as a dots operation's is (:meth:`plot_start`)."""
+        self.queue.append(DwellCut((self.native_x, self.native_y), dwell_time=time_in_ms,
+                                   settings=dict(settings) if settings else {}))
+        self.plot_start()
 
     def function(self, function):
         function()

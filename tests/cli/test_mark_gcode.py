@@ -128,3 +128,39 @@ def test_gcode_layers_marked_off_the_wires(tmp_path, capsys):
     assert (square["power_percent"], circle["power_percent"]) == (80, 40)
     # Every point of both: the square's 4 mm and the circle's 2.5 mm at their pitches.
     assert square["points"] >= 4 / (1000 / 50e3) and circle["points"] >= 2.5 / (2000 / 50e3)
+
+
+# An L: its stem 1 mm up from its corner (0, 0), its foot 0.5 mm to the right: not its own
+# mirror image either way, so a flip in X or Y shows.
+L_GCODE = """G21 G90
+G0 X0 Y1
+M4 S800 F60000
+G1 X0 Y0
+G1 X0.5 Y0
+M5
+"""
+
+
+def test_gcode_is_marked_the_right_way_up(tmp_path, capsys):
+    """G-code's Y is up (GRBL's, a sender's view): with ``--origin page`` the file's 0,0 is the
+    field's centre, and on the simulated board the marks off the wires, in the field (Y up),
+    are the L as written: the stem above the corner, the foot to its right."""
+    from sim_board import VECTOR_BOARD, quick_sim_board
+    path = tmp_path / "l.gcode"
+    path.write_text(L_GCODE)
+    machine = tmp_path / "machine.toml"
+    machine.write_text(PROFILE)
+    with quick_sim_board(**VECTOR_BOARD):
+        assert main(["mark", str(path), "--origin", "page", "--prr", "50", "--machine",
+                     str(machine), "--sim", "--timeout", "600", "--json"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["marks_frame"].startswith("field")
+    reach = HALF_PITCH_MM + 2 * UNIT_MM
+    marks = result["marks"]
+    assert len(marks) > 20
+    for x, y in marks:
+        on_stem = abs(x) <= reach and -reach <= y <= 1 + reach
+        on_foot = abs(y) <= reach and -reach <= x <= 0.5 + reach
+        assert on_stem or on_foot, (x, y)
+    assert min(math.hypot(x, y - 1) for x, y in marks) <= reach          # the stem's top
+    assert min(math.hypot(x - 0.5, y) for x, y in marks) <= reach        # the foot's end

@@ -22,11 +22,12 @@ pytest.importorskip("meerk40t")
 
 from meerk40t.core.cutcode.cubiccut import CubicCut     # noqa: E402
 from meerk40t.core.cutcode.dwellcut import DwellCut     # noqa: E402
+from meerk40t.core.cutcode.inputcut import InputCut     # noqa: E402
 from meerk40t.core.cutcode.linecut import LineCut       # noqa: E402
+from meerk40t.core.cutcode.outputcut import OutputCut   # noqa: E402
 from meerk40t.core.cutcode.plotcut import PlotCut       # noqa: E402
 from meerk40t.core.cutcode.quadcut import QuadCut       # noqa: E402
 from meerk40t.core.cutcode.rastercut import RasterCut   # noqa: E402
-from meerk40t.core.cutcode.waitcut import WaitCut       # noqa: E402
 
 from galvoscan import api                               # noqa: E402
 from galvoscan.geometry.field import PlanError          # noqa: E402
@@ -216,8 +217,10 @@ GRBL_CORNER, GRBL_SIDE = (50.0, 50.0), 6.0
 def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     """meerk40t's GRBL server (``grblcontrol``) with the galvoscan device active: a sender's
     square at M4 S500 F6000 has every line answered ok and is marked, the marks off the wires
-    on the square (its G-code coordinates are meerk40t's scene's, through the device's view),
-    at 100 mm/s and 50 %; ``?`` is answered with a status report."""
+    on the square (its G-code coordinates taken as a sender's, Y up, through the device's view),
+    at 100 mm/s and 50 %; ``?`` is answered with a status report. (The square's place: G-code's
+    0,0 at the field's lower left corner, its Y up; tests/meerk40t/test_marks.py has an L that
+    shows the way up.)"""
     kernel, device, board, lines = meerk40t
     device.driver.last_report = device.driver.last_error = None
     port = grbl_port
@@ -243,8 +246,9 @@ def test_a_square_from_a_grbl_sender_through_grblcontrol(meerk40t, grbl_port):
     said = "\n".join(lines)
     assert "(speed 100 mm/s, power 50 %)" in said          # F6000 mm/min, S500 of 1000
     marks, pulses = marks_off_the_wires(board, before)
-    left, top = x0 - FIELD_MM / 2, FIELD_MM / 2 - y0      # the scene's Y is down
-    right, bottom = left + GRBL_SIDE, top - GRBL_SIDE
+    # G-code's 0,0 at the field's lower left corner, its Y up.
+    left, bottom = x0 - FIELD_MM / 2, y0 - FIELD_MM / 2
+    right, top = left + GRBL_SIDE, bottom + GRBL_SIDE
     pitch = median_pitch(marks)
     # GRBL gives no PRR: the profile's. The speed off the wires is F6000's 100 mm/s.
     speed = pitch * PROFILE.defaults.prr_khz * 1e3 / int(np.median(pulses))
@@ -531,7 +535,10 @@ def test_each_cut_kind_becomes_its_operations_layer():
     job, objects = job_from_cuts(cuts, PROFILE, tolerance_mm=0.01)
     assert [(layer.speed_mm_s, layer.power_percent, layer.prr_khz, layer.pulses_per_point)
             for layer in job.layers] == [(300, 25, 40, None), (100, 100, 20, None),
-                                         (None, 50, 30, 60), (200, 80, 25, None)]
+                                         # (A dot's speed: a galvo unit a point of
+                                         # its 60 pulses at 30 kHz.)
+                                         (pytest.approx(UNIT_MM * 30e3 / 60), 50, 30, 60),
+                                         (200, 80, 25, None)]
     lines, curves, dwell, raster = (o.drawing for o in objects)
     assert len(lines.paths) == 1
     assert lines.paths[0] == pytest.approx(np.array([[0, 0], [10, 0], [10, 10]]),
@@ -565,9 +572,10 @@ def _max_distance(curve, polyline):
 
 def test_an_images_dark_runs_are_its_lines():
     """A RasterCut of a small image (meerk40t's image operation): a line each run of dark
-    pixels, as long as the run and on its row, none anywhere else (each starting half a pixel
-    before its first pixel's edge, where meerk40t's plot planner, which its galvo driver
-    follows too, puts it)."""
+    pixels, on its row's centre line, from its first pixel's centre to its last's (one pixel:
+    a dot), none anywhere else: meerk40t's pixel ``i`` is the square from ``offset + i × step``
+    to ``offset + (i + 1) × step`` (its image operation's bounds; its raster plotter puts a run
+    half a step before that, which the device moves back)."""
     rows = [".##.#...##",
             "...#......",
             "##########"]
@@ -588,16 +596,26 @@ def test_an_images_dark_runs_are_its_lines():
     found = []
     for path in raster.paths:
         units = (path - 0) / UNIT_MM + 32768       # back to galvo units
-        assert np.ptp(units[:, 1]) < 1              # along one row
-        row = round((units[0, 1] - int(corner[1])) / step)
-        first = (units[:, 0].min() - int(corner[0])) / step
-        found.append((row, round(first + 0.5), round(np.ptp(units[:, 0]) / step)))
+        assert np.ptp(units[:, 1]) < 1e-6           # along one row
+        row = (units[0, 1] - int(corner[1])) / step - 0.5
+        first = (units[:, 0].min() - int(corner[0])) / step - 0.5
+        pixels = np.ptp(units[:, 0]) / step + 1
+        assert (row, first, pixels) == pytest.approx(
+            (round(row), round(first), round(pixels)), abs=1e-6)
+        found.append((round(row), round(first), round(pixels)))
     assert sorted(found) == wanted
 
 
 def test_a_cut_it_cannot_mark_is_refused_in_one_line():
-    with pytest.raises(PlanError, match="WaitCut is not one the galvoscan device marks"):
-        job_from_cuts([WaitCut(5.0)], PROFILE, tolerance_mm=0.01)
+    """meerk40t's input and output cuts (its I/O operations): one line naming galvoscan's issue
+    #38 (the queue has no I/O yet)."""
+    for cut in (InputCut(1, 1), OutputCut(1, 1)):
+        with pytest.raises(PlanError) as refused:
+            job_from_cuts([LineCut(_native(0, 0), _native(1, 0), settings={}), cut], PROFILE,
+                          tolerance_mm=0.01)
+        said = str(refused.value)
+        assert f"{type(cut).__name__} (an I/O operation)" in said and "issue #38" in said
+        assert "\n" not in said
 
 
 def _numbers(low, high):

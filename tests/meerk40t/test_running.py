@@ -17,8 +17,8 @@ pytest.importorskip("meerk40t")
 from galvoscan.link.client import HostClient            # noqa: E402
 from galvoscan.sim.board import LASER_PINS              # noqa: E402
 
-from meerk40t_session import (BOTTOM, LEFT, RECT_MM, RIGHT, TOP, UNIT_MM,  # noqa: E402
-                              GrblSender, distance_to_rect, outline_gaps, plan_name,
+from meerk40t_session import (BOTTOM, FIELD_MM, LEFT, RECT_MM, RIGHT, TOP,  # noqa: E402
+                              UNIT_MM, GrblSender, distance_to_rect, outline_gaps, plan_name,
                               rect_command, status_bar_heard)
 from vector_board import pulses_per_frame               # noqa: E402
 
@@ -185,7 +185,8 @@ def test_a_grbl_senders_feed_hold_holds_the_job_and_cycle_start_goes_on(meerk40t
     kernel.console(f"grblcontrol -p {grbl_port}\n")
     board.run_for(0)
     before = len(board.xy2_frames())
-    zigzag = _zigzag()
+    # The same zigzag in G-code's coordinates: from the field's lower left corner, Y up.
+    zigzag = [(x, FIELD_MM - y) for x, y in _zigzag()]
     program = ["G21", "G90", f"G0 X{zigzag[0][0]:g} Y{zigzag[0][1]:g}", "M4 S500",
                f"G1 X{zigzag[1][0]:g} Y{zigzag[1][1]:g} F{SPEED_MM_S * 60:g}",
                *(f"G1 X{x:g} Y{y:g}" for x, y in zigzag[2:])]

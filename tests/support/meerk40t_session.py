@@ -20,6 +20,7 @@ import meerk40t
 import numpy as np
 from meerk40t.core import core
 from meerk40t.device import dummydevice
+from meerk40t.extra import hershey
 from meerk40t.fill import fills
 from meerk40t.grbl import plugin as grbl
 from meerk40t.image import imagetools
@@ -57,7 +58,7 @@ def make_kernel():
     kernel = Kernel("MeerK40t", "0.0.0-testing", "MeerK40t_TEST", ansi=False,
                     ignore_settings=True)
     for plugin in (kernelserver.plugin, dummydevice.plugin, core.plugin, imagetools.plugin,
-                   fills.plugin, grbl.plugin):
+                   fills.plugin, grbl.plugin, hershey.plugin):
         kernel.add_plugin(plugin)
     found = [ep for ep in entry_points().select(group="meerk40t.extension")
              if ep.name == "galvoscan"]
