@@ -7,6 +7,7 @@ from collections import Counter
 
 import numpy as np
 
+from ..gateware.points import FIELD_CENTRE
 from ..geometry.field import from_galvo
 from .jobargs import job_settings_values
 
@@ -49,6 +50,9 @@ def describe_job(job, profile, settings_line):
                      f"({regs['wob_across']} × {regs['wob_along']} units) at "
                      f"{regs['wob_freq']} Hz: a turn every "
                      f"{pitch.speed_mm_s / regs['wob_freq'] * 1000:.0f} µm of line")
+    if "z" in regs:
+        lines.append(f"Z {z_mm(regs, profile):+g} mm (the focus shifter's {regs['z']}, "
+                     f"{FIELD_CENTRE} its middle)")
     lines += [f"note: {note}" for note in job.notes]
     return lines
 
@@ -76,7 +80,14 @@ def estimate_record(job, profile, power, prr, passes, preview):
             "across": round(regs["wob_across"] * profile.mm_per_unit * 1000, 1),
             "along": round(regs["wob_along"] * profile.mm_per_unit * 1000, 1),
             "hz": regs["wob_freq"]}
+    if "z" in regs:
+        record["z_mm"] = z_mm(regs, profile)
     return record
+
+
+def z_mm(registers, profile):
+    """The focus shift a job's ``z`` register stands for, mm (to the µm)."""
+    return round((registers["z"] - FIELD_CENTRE) / profile.field.z_units_per_mm, 3)
 
 
 def mark_estimate_record(job, args, profile, *, parts, total_s, fly=None):

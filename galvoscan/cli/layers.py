@@ -10,6 +10,7 @@ from ..api import apply_wobble, apply_z, job_wobble
 from ..geometry.field import PlanError
 from ..plan.layer_keys import LAYER_KEYS, layer_from_pairs
 from .args import fail
+from .job_reports import z_mm
 
 
 __all__ = ["LayerAction", "layer_from_words", "add_wobble", "add_z", "describe_layers"]
@@ -94,7 +95,7 @@ def add_z(job, args, profile):
 def _z_words(registers, profile):
     if "z" not in registers:
         return ""
-    return f", Z {(registers['z'] - 32768) / profile.field.z_units_per_mm:+g} mm"
+    return f", Z {z_mm(registers, profile):+g} mm"
 
 
 def describe_layers(job, profile):

@@ -116,3 +116,12 @@ def test_a_bitstream_without_z_refuses_it_before_any_write(files, capsys):
     assert "the board's bitstream has no Z channel" in err[-1], err
     board, = Board.built
     assert writes(board.bytes_in) == [] and board.pulses == []
+
+
+def test_estimate_says_each_layers_z(files, capsys):
+    """`--estimate --json`: each layer's Z in mm (the red layer the job's, the blue its own)."""
+    import json
+    assert main(mark_args(files, "--z", "1.5", "--layer", "#0000ff", "z=-2", "--estimate",
+                          "--json")) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert [layer["z_mm"] for layer in record["layers"]] == [-2, 1.5]
