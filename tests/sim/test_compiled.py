@@ -429,12 +429,14 @@ def test_the_job_player_from_the_flash_is_the_same_on_both_backends(build):
     """The stand-alone board: the flash (the C++ model in board.cc, the Python one in
     galvoscan/sim/spi_flash.py, both from the datasheet), the foot switch, the player; a good
     image played twice and a damaged one refused, the same to the clock. On the small player
-    build and on the ULX3S bitstream (every feature, its 33-node correction table)."""
+    build and on the ULX3S bitstream (every feature, its 33-node correction table; the good
+    image alone: the refusal is the same player's, and the ULX3S's Python board is the
+    slowest of the suite's)."""
     from galvoscan.outputs.image import job_image
     good = job_image(PLAYER_JOB, REGISTERS, repeats=2)
     damaged = bytearray(good)
     damaged[-1] ^= 0x40
-    for image in (good, bytes(damaged)):
+    for image in (good, bytes(damaged)) if build == "player" else (good,):
         board = PLAYER_BOARD if build == "player" else dict(
             **ulx3s_board(mo_lead=PLAYER_BOARD["mo_lead"], start_debounce_ms=1),
             machine_period_s=PLAYER_BOARD["machine_period_s"])
