@@ -31,6 +31,7 @@ import numpy as np
 from .link.client import FTDISPITransport, HostClient, SerialTransport
 from .correction.upload import upload_table
 from .gateware.fields import WobbleShape
+from .gateware.points import FIELD_CENTRE
 from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
 from .inputs.drawings import UNITS, load_drawing
@@ -439,11 +440,20 @@ def apply_z(vector_job, z_mm, profile):
              for layer, _ in parts]
     if all(z is None for z in found):
         return False
-    for (_, part), z in zip(parts, found):
+    for number, ((layer, part), z) in enumerate(zip(parts, found), 1):
+        z = 0.0 if z is None else z
         try:
-            part.registers["z"] = profile.z_register(0.0 if z is None else z)
+            part.registers["z"] = units = profile.z_register(z)
         except ValueError as error:
-            raise PlanError(str(error)) from None
+            where = f"layer {number} ({layer.match!r}): " if layer is not None and \
+                layer.z_mm is not None else ""
+            raise PlanError(f"{where}{error}") from None
+        sent = (units - FIELD_CENTRE) / profile.field.z_units_per_mm
+        note = f"Z {z:g} mm is not a whole step"
+        if abs(sent - z) > 0.0005 and not any(n.startswith(note) for n in vector_job.notes):
+            vector_job.notes.append(f"{note} of the focus shifter "
+                                    f"({profile.field.z_units_per_mm:g} units/mm): sent as "
+                                    f"{sent:+.4g} mm")
     if vector_job.layers:
         vector_job.registers.update(vector_job.layers[0].job.registers)
     return True

@@ -112,6 +112,7 @@ def describe_layers(job, profile):
             f"{pitch.pulses_per_point} pulse{'s' if pitch.pulses_per_point > 1 else ''}), "
             f"{s.power_percent:g} % ({profile.power_w(s.power_percent):.3g} W), "
             f"{s.prr_khz:g} kHz, {s.passes} pass(es)" + _wobble_words(part.registers, profile) +
-            _z_words(part.registers, profile) +
+            (_z_words(part.registers, profile) if lj.layer is None or lj.layer.z_mm is None
+             else "") +
             f"; {part.estimate_s:.3f} s")
     return lines

@@ -40,6 +40,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 
+from ..gateware.points import FIELD_CENTRE
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, FlyControl,
                                     HeadState, Mode, Status, VECTOR_QUEUE_DEPTH, pack)
 from ..geometry.corners import corner_frames
@@ -633,6 +634,10 @@ class JobStreamer:
         if "z" in registers and not self.capabilities().z:
             raise JobAborted("the board's bitstream has no Z channel (the ULX3S's has it): "
                              "mark the job without --z or a layer's z; nothing was sent")
+        if "z" not in registers and self.capabilities().z:
+            # A job that gives no Z is marked at the focus shifter's middle, never at what the
+            # job before it left there.
+            registers = {**registers, "z": FIELD_CENTRE}
 
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})

@@ -64,7 +64,8 @@ WOBBLE_HZ = Setting("wobble_hz", "number", "Hz", BY_NAME["wob_freq"].low, WOBBLE
 Z = Setting("z_mm", "number", "mm", -100, 100, what="Z", flag="--z", key="z", metavar="MM",
             help="focus shift on XY2-100's Z channel (a focus shifter, [field] z_units_per_mm "
                  "in the profile; a bitstream with the Z channel, the ULX3S's): + away from "
-                 "the lens, 0 its middle (default: 0 with a layer's z, else Z left alone)")
+                 "the lens; default 0, the shifter's middle: a job that gives no Z is marked "
+                 "there, whatever the job before it left)")
 TOLERANCE = Setting("tolerance_mm", "number", "mm", 0.0005, 1, default=0.01,
                     what="tolerance", flag="--tolerance", key="tolerance", metavar="MM",
                     help="curves as chords at most this far off")

@@ -125,3 +125,41 @@ def test_estimate_says_each_layers_z(files, capsys):
                           "--json")) == 0
     record = json.loads(capsys.readouterr().out)
     assert [layer["z_mm"] for layer in record["layers"]] == [-2, 1.5]
+
+
+def test_a_job_without_z_is_marked_at_the_shifters_middle():
+    """The job before left Z at +1.5 mm; the next gives none: its pulses fall on frames with
+    the shifter's middle (the streamer writes it), never on the Z the job before left."""
+    from galvoscan.link.client import HostClient
+    from galvoscan.outputs.stream import JobStreamer
+    from galvoscan.sim.board import SimTransport, SimulatedBoard
+    board = SimulatedBoard(backend="compiled", **ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"]))
+    client = HostClient(SimTransport(board))
+    line = [("jump", 30000, 32768), ("mark", 30400, 32768)]
+    registers = {"pitch": 40, "pulses_per_point": 1, "laser_prr": 500, "laser_power": 50,
+                 "jump_delay": 20}
+    streamer = JobStreamer(client, poll_s=50e-6)
+    streamer.run_vector(line, {**registers, "z": 32768 + 1500})
+    first = len(board.pulses)
+    streamer.run_vector(line, registers)
+    assert first and len(board.pulses) > first
+    z_at = dict(board.z_frames)
+    # Between the first job's last pulse and the second's first (the jobs are far apart).
+    second = (board.pulses[first - 1] + board.pulses[first]) // 2
+    marks = [(clock, z_at[clock]) for clock, _, _ in pulsed_frames(board)]
+    assert {z for clock, z in marks if clock < second} == {32768 + 1500}
+    assert {z for clock, z in marks if clock >= second} == {32768}
+
+
+def test_z_between_the_shifters_steps_is_said(files, capsys):
+    (files / "coarse.toml").write_text("[field]\nz_units_per_mm = 0.5\n")
+    assert main(mark_args(files, "--z", "1", "--estimate", machine="coarse.toml")) == 0
+    out = capsys.readouterr().out
+    assert "note: Z 1 mm is not a whole step of the focus shifter (0.5 units/mm): sent as +2 mm" \
+        in out
+
+
+def test_a_layers_z_past_the_range_names_the_layer(files, capsys):
+    with pytest.raises(SystemExit):
+        main(mark_args(files, "--layer", "#0000ff", "z=-40", *NOPORT))
+    assert "layer 1 ('#0000ff'): Z -40 mm is past" in capsys.readouterr().err
