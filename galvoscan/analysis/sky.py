@@ -67,8 +67,10 @@ def _plan(run, *, length_mm, speed_mm_s, timelag_us):
     drawing = Drawing("L", paths=(path,), closed=(False,))
     sky = run.startswith("SkyWriting")
     runs = float(LONG_RUNS * timelag_us) if run.endswith("long runs") else None
+    # (Off, no SkyWriting setting is given: the API refuses one that would do nothing.)
     job = api.Job(speed_mm_s=speed_mm_s, sky_mode=2 if sky else 0,
-                  timelag_us=float(timelag_us), nprev_us=runs, npost_us=runs)
+                  **(dict(timelag_us=float(timelag_us), nprev_us=runs, npost_us=runs)
+                     if sky else {}))
     settings = api.job_settings(job, profile)
     made = MarkObject(drawing, Placement(origin="page"), settings, keep_order=True)
     return api.plan_made([made], job, profile), path

@@ -82,7 +82,8 @@ class Sky:
             raise PlanError(f"SkyWriting: Timelag {self.timelag_us:g} µs + laser-on shift "
                             f"{self.laser_on_shift_us:+g} µs is {on:g} µs: laser-on must come "
                             f"0 … {_ON.high} µs after the set point reaches a mark's start "
-                            f"(a smaller shift, or a longer --timelag)")
+                            + ("(a shift nearer 0, or a longer Timelag)" if on < 0 else
+                               "(a shift nearer 0, or a shorter Timelag)"))
 
     @property
     def on(self):
@@ -133,6 +134,15 @@ def job_sky(profile, *, mode=None, timelag_us=None, laser_on_shift_us=None, npre
     """A job's :class:`Sky`: each value given, else the profile's ``[sky]`` (its Timelag,
     else ``[galvo] tracking_delay_us``)."""
     section = profile.sky
+    given = [setting.flag for setting, value in ((TIMELAG, timelag_us),
+                                                 (LASER_ON_SHIFT, laser_on_shift_us),
+                                                 (NPREV, nprev_us), (NPOST, npost_us),
+                                                 (SKY_LIMIT, limit)) if value is not None]
+    if given and (mode if mode is not None else section.mode) == 0:
+        # (As the fly's options without --fly: a setting that would do nothing is refused,
+        # not ignored.)
+        raise PlanError(f"{given[0]} is SkyWriting's: give --sky 1, 2 or 3 too (the "
+                        f"profile's [sky] mode is {section.mode})")
     timelag = timelag_us if timelag_us is not None else (
         section.timelag_us if section.timelag_us is not None
         else profile.galvo.tracking_delay_us)

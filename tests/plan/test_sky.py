@@ -215,3 +215,18 @@ def test_the_settings_pages_sky_table_is_the_declarations():
     page = (Path(__file__).parents[2] / "docs" / "reference" / "settings.md").read_text(
         encoding="utf-8")
     assert markdown_table(SKY_SETTINGS) in page
+
+
+@pytest.mark.parametrize("given, flag", [(dict(timelag_us=100), "--timelag"),
+                                         (dict(laser_on_shift_us=-5), "--laser-on-shift"),
+                                         (dict(nprev_us=20), "--nprev"),
+                                         (dict(npost_us=20), "--npost"),
+                                         (dict(limit=0.2), "--sky-limit")])
+def test_a_sky_setting_without_skywriting_is_refused_not_ignored(given, flag):
+    from galvoscan.plan.sky import job_sky
+    profile = parse_profile("")
+    with pytest.raises(PlanError, match=f"^{flag} is SkyWriting's: give --sky 1, 2 or 3 too"):
+        job_sky(profile, **given)
+    with pytest.raises(PlanError):
+        job_sky(profile, mode=0, **given)
+    assert job_sky(profile, mode=1, **given).on
