@@ -11,7 +11,7 @@ from ..api import load_lens_table
 from ..build import SIMULATED_BOARDS, simulated_bitstream
 from ..platforms.ulx3s import ULX3S_BAUD, ULX3S_CLOCK_HZ
 from ..link.client import ClientError, HostClient, SerialTransport
-from ..outputs.stream import JobAborted, JobInterrupted
+from ..outputs.stream import JobAborted, JobInterrupted, JobRefused
 from ..plan.vector_job import frame_segments
 from ..sim.board import PTYServer
 from ..settings.laser import POWER, PRR, SPEED, TIMEOUT
@@ -143,6 +143,8 @@ def stopped_in_one_line(*, on_complete=None):
     except JobInterrupted as error:
         more = on_complete() if error.complete and on_complete is not None else ""
         raise JobInterrupted(f"{error}{more}") from error
+    except JobRefused as error:
+        failed(f"job refused: {error}")
     except JobAborted as error:
         more = on_complete() if error.complete and on_complete is not None else ""
         failed(f"job stopped, laser disarmed: {error}{more}")

@@ -44,7 +44,8 @@ from ..cli.layers import describe_layers
 from ..gateware.host.regmap import Status
 from ..link.client import ClientError, HostClient, SerialTransport
 from ..outputs.board_state import read_board_state
-from ..outputs.stream import JobAborted, JobInterrupted, JobStreamer, StreamReport
+from ..outputs.stream import (JobAborted, JobInterrupted, JobRefused, JobStreamer,
+                              StreamReport)
 from ..geometry.field import from_galvo
 from ..geometry.segments import PIXELS
 from ..plan.vector_job import hull_outline
@@ -366,6 +367,8 @@ class GalvoscanDriver:
         except StopRequested as error:
             # (Stopped while holding: nothing armed, nothing queued.)
             return None, f"job stopped, laser disarmed: {error} during a wait"
+        except JobRefused as error:
+            return None, f"job refused: {error}"
         except JobAborted as error:
             return None, f"job stopped, laser disarmed: {error}"
         except (ClientError, OSError) as error:

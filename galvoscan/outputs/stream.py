@@ -50,7 +50,7 @@ from .board_state import read_head
 from .queue_words import check_segment, job_segments, segment_words
 
 
-__all__ = ["JobAborted", "JobInterrupted", "StreamReport", "JobStreamer", "Pause",
+__all__ = ["JobAborted", "JobRefused", "JobInterrupted", "StreamReport", "JobStreamer", "Pause",
            "QUEUE_DEPTH", "COUNTERS", "DEFAULT_BATCH"]
 
 
@@ -81,6 +81,11 @@ class JobAborted(Exception):
         self.taken = taken
         self.total = total
         self.complete = complete
+
+
+class JobRefused(JobAborted):
+    """The board cannot mark the job (its bitstream lacks what the job needs): refused before
+    anything of the job was sent; the laser was never armed for it."""
 
 
 class JobInterrupted(KeyboardInterrupt):
@@ -619,20 +624,20 @@ class JobStreamer:
         if has_pixel_lines(segments) and not self.capabilities().pixel_lines:
             if not any(op == PIXELS for op, *_ in segments):
                 # Pixel lines without pixel words: SkyWriting's run-ins and run-outs.
-                raise JobAborted("the board's bitstream has no pixel lines, which "
+                raise JobRefused("the board's bitstream has no pixel lines, which "
                                  "SkyWriting's run-ins and run-outs are (build --preset "
                                  "engraver has them, and the ULX3S's): mark without "
                                  "SkyWriting (--sky 0); nothing was sent")
-            raise JobAborted("the board's bitstream has no pixel lines (build --preset "
+            raise JobRefused("the board's bitstream has no pixel lines (build --preset "
                              "engraver has them, and the ULX3S's): mark the photo as runs "
                              "with --image-lines runs; nothing was sent")
         fly = "fly_ctrl" in registers
         if fly and not self.capabilities().fly:
-            raise JobAborted("the board's bitstream has no marking on the fly (the ULX3S's "
+            raise JobRefused("the board's bitstream has no marking on the fly (the ULX3S's "
                              "has it): mark the job standing still, without --fly; nothing "
                              "was sent")
         if "z" in registers and not self.capabilities().z:
-            raise JobAborted("the board's bitstream has no Z channel (the ULX3S's has it): "
+            raise JobRefused("the board's bitstream has no Z channel (the ULX3S's has it): "
                              "mark the job without --z or a layer's z; nothing was sent")
         if "z" not in registers and self.capabilities().z:
             # A job that gives no Z is marked at the focus shifter's middle, never at what the
