@@ -164,10 +164,16 @@ def sky_job_dose(run, *, galvo=None, length_mm=2.0, speed_mm_s=1000.0, spot_mm=0
             "sky_s": planned.vector_job.sky_s, "estimate_s": planned.estimate_s}
 
 
-def sky_study(*, galvo=None, **job):
-    """The L's three runs (:data:`RUNS`), each :func:`sky_job_dose`'s."""
+def sky_study(*, galvo=None, say=None, **job):
+    """The L's runs (:data:`RUNS`), each :func:`sky_job_dose`'s; ``say(line)`` before each
+    (each is a second or two of the simulated board)."""
     galvo = GalvoModel.from_step_times() if galvo is None else galvo
-    return [sky_job_dose(run, galvo=galvo, **job) for run in RUNS]
+    results = []
+    for number, run in enumerate(RUNS, 1):
+        if say is not None:
+            say(f"run {number} of {len(RUNS)}: {run}, on the simulated board")
+        results.append(sky_job_dose(run, galvo=galvo, **job))
+    return results
 
 
 def sky_report(results):

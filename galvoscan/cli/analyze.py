@@ -1,6 +1,7 @@
 """``galvoscan analyze``: how a scan pattern doses a part, before burning one."""
 
 import json
+import sys
 from pathlib import Path
 
 from ..analysis.galvo import GalvoModel
@@ -54,8 +55,9 @@ def _cmd_sky(args):
     """SkyWriting against the delays and nothing on an L, on the simulated board."""
     from ..analysis.sky import markdown_table, plot_sky, sky_report, sky_study
     galvo = GalvoModel.ideal() if args.ideal_galvo else GalvoModel.from_step_times()
+    say = None if args.quiet else (lambda line: print(line, file=sys.stderr))
     results = sky_study(galvo=galvo, speed_mm_s=args.mark_speed, spot_mm=args.spot,
-                        backend=getattr(args, "backend", None) or "auto")
+                        backend=getattr(args, "backend", None) or "auto", say=say)
     rows = sky_report(results)
     if args.json:
         print(json.dumps(rows, indent=2))
@@ -68,6 +70,8 @@ def _cmd_sky(args):
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         plot_sky(out / "sky.png", results)
+        if say is not None:
+            say(f"wrote {out / 'sky.png'}")
     return 0
 
 
