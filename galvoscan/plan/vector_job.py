@@ -186,10 +186,14 @@ def _finish(segments, paths_mm, before, after, settings, profile, notes, *, sett
     sky_s = 0.0
     if sky is not None:
         sky_s = estimate - plain_s
-        notes.append(f"{sky.said()}: run-ins of {sky_plan.in_points} points "
+        def points(n):
+            return f"{n} point{'' if n == 1 else 's'}"
+        notes.append(f"{sky.said()}: run-ins of {points(sky_plan.in_points)} "
                      f"({sky_plan.in_points * dwell_us:g} µs), run-outs of "
-                     f"{sky_plan.out_points} ({sky_plan.out_points * dwell_us:g} µs), laser off"
-                     + (f"; {sky_plan.corners} corner(s) taken apart" if sky.mode > 1 else "")
+                     f"{points(sky_plan.out_points)} ({sky_plan.out_points * dwell_us:g} µs), "
+                     f"laser off"
+                     + (f"; {sky_plan.corners} corner{'' if sky_plan.corners == 1 else 's'} "
+                        f"taken apart" if sky.mode > 1 else "")
                      + f"; laser on {registers['laser_on_delay']} µs and off "
                      f"{registers['laser_off_delay']} µs after the set point crosses a mark's "
                      + (f"ends; adds {sky_s * 1e3:.2f} ms" if sky_s < 1 else

@@ -189,7 +189,7 @@ def test_estimate_says_the_time_skywriting_adds(files, capsys):
     sky = json.loads(capsys.readouterr().out)
     assert plain["sky_s"] == 0 and sky["sky_s"] > 0
     assert sky["estimate_s"] == pytest.approx(plain["estimate_s"] + sky["sky_s"], abs=2e-6)
-    assert any(note.startswith("SkyWriting mode 2") and "3 corner(s) taken apart" in note
+    assert any(note.startswith("SkyWriting mode 2") and "3 corners taken apart" in note
                for note in sky["notes"])
     assert (sky["laser_on_delay_us"], sky["laser_off_delay_us"], sky["polygon_delay_us"]) == \
         (100, 100, 0)
