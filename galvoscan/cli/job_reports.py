@@ -190,6 +190,15 @@ def sim_report(board, job, placement, drawing, profile, report, *, layer_starts=
             "drawing_frame": SVG_FRAME if svg else DXF_FRAME})
     if job.layers:
         frames["layers"] = _layer_reports(board, job, marked, field_xy, profile, layer_starts)
+    if getattr(board, "z_frames", None):
+        # The Z channel's frame with each marked point's first frame, off the Z line's wire.
+        z_at = dict(board.z_frames)
+        units = [z_at.get(p[4]) for p in marked]
+        frames["marks_z_units"] = units
+        if profile.field.z_units_per_mm:
+            frames["marks_z_mm"] = [None if z is None else
+                                    round((z - FIELD_CENTRE) / profile.field.z_units_per_mm, 4)
+                                    for z in units]
     line_speed, path_speed = _wire_speeds(marked, field_xy, job.pitch.pitch_mm,
                                           profile.mm_per_unit, board.clk_freq)
     prr_hz = job.registers["laser_prr"] * 100.0

@@ -390,7 +390,7 @@ def add_parsers(commands):
     out.add_argument("--json", action="store_true",
                      help="print the result as one JSON object on stdout (with --sim: the "
                           "marked points decoded off the XY2-100 wires, in field mm and in the "
-                          "drawing's own)")
+                          "drawing's own, and on a board with the Z channel each one's Z)")
     add_job_link_options(mark)
     add_machine_option(mark)
     mark.set_defaults(run=_cmd_mark)

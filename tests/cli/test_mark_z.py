@@ -74,9 +74,14 @@ def test_z_per_job_and_per_layer_on_the_wires(files, capsys):
     before the job, the shifter's middle."""
     with ulx3s_sim() as Board:
         assert main(mark_args(files, "--z", "1.5", "--layer", "#0000ff", "z=-2",
-                              *SIM_ULX3S)) == 0
-    out = capsys.readouterr().out
-    assert "Z -2 mm" in out
+                              *SIM_ULX3S, "--json")) == 0
+    captured = capsys.readouterr()
+    assert "Z -2 mm" in captured.err
+    # The record says each marked point's Z, off the Z line: the layers' two.
+    import json
+    record = json.loads(captured.out)
+    assert set(record["marks_z_mm"]) == {1.5, -2.0}
+    assert len(record["marks_z_mm"]) == len(record["marks"])
     board, = Board.built
     assert board.z_frames[0][1] == 32768
     marks = z_of_pulses(board)
