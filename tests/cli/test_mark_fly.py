@@ -10,7 +10,6 @@ square, written out here, within half a pitch. The refusals come before any byte
 axis, a negative encoder, no speed, a part that would leave the field (its figures worked out
 here from the field and the square), a bitstream without the fly."""
 
-import contextlib
 import json
 import math
 
@@ -26,7 +25,7 @@ from galvoscan.sim.xy2_receiver import frame_of_each_pulse
 
 from fly_marks import pulsed_frames, writes
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
-from ulx3s_board import ulx3s_board
+from ulx3s_board import ulx3s_board, ulx3s_sim as shared_ulx3s_sim
 
 
 FIELD_MM = 110.0
@@ -64,25 +63,9 @@ def last_json(capsys):
     return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
 
 
-@contextlib.contextmanager
 def ulx3s_sim():
-    """Within it, `mark --sim --board ulx3s` runs the ULX3S's bitstream at 8 MHz (with a 0.5 ms
-    MO lead: the compiled model tests/sim/test_compiled.py builds too) at 1 Mbaud; every
-    board built is in ``built``."""
-    import galvoscan.sim.board as module
-    original = module.SimulatedBoard
-
-    class Board(original):
-        built = []
-
-        def __init__(self, **kwargs):
-            kwargs.update(ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"]))
-            super().__init__(**kwargs)
-            self.built.append(self)
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(module, "SimulatedBoard", Board)
-        yield Board
+    """:func:`ulx3s_board.ulx3s_sim` with the tests' quick MO lead."""
+    return shared_ulx3s_sim(QUICK_SIM_BOARD["mo_lead"])
 
 
 SIM_ULX3S = ["--sim", "--board", "ulx3s", "--baud", "1e6", "--timeout", "600", "--json"]

@@ -4,7 +4,6 @@ frames decoded off the ``xy2_z`` wire, by the same receiver as X and Y, carry th
 every frame a pulse falls on. The refusals come before any byte: no focus shifter in the
 profile, a Z past its range, a bitstream without the Z channel."""
 
-import contextlib
 
 import pytest
 
@@ -12,7 +11,7 @@ from galvoscan.cli import main
 
 from fly_marks import pulsed_frames, writes
 from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
-from ulx3s_board import ulx3s_board
+from ulx3s_board import ulx3s_board, ulx3s_sim as shared_ulx3s_sim
 
 
 #: The profile's focus shifter: 1000 galvo units a mm of Z (a shift of ±32.8 mm at most).
@@ -41,24 +40,9 @@ def mark_args(files, *more, machine="machine.toml"):
             "--machine", str(files / machine), *more]
 
 
-@contextlib.contextmanager
 def ulx3s_sim():
-    """Within it, `mark --sim --board ulx3s` runs the ULX3S's bitstream at 8 MHz (the tests'
-    0.5 ms MO lead); every board built is in ``built``."""
-    import galvoscan.sim.board as module
-    original = module.SimulatedBoard
-
-    class Board(original):
-        built = []
-
-        def __init__(self, **kwargs):
-            kwargs.update(ulx3s_board(mo_lead=QUICK_SIM_BOARD["mo_lead"]))
-            super().__init__(**kwargs)
-            self.built.append(self)
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(module, "SimulatedBoard", Board)
-        yield Board
+    """:func:`ulx3s_board.ulx3s_sim` with the tests' quick MO lead."""
+    return shared_ulx3s_sim(QUICK_SIM_BOARD["mo_lead"])
 
 
 def z_of_pulses(board):
