@@ -17,6 +17,8 @@ from .encoder import QuadratureSpec
 from .fly import ClippedOnWiresSpec, FlyOffsetSpec
 from ..gateware.fly.offset import ClippedOnWires, FlyOffset
 from .xy2_status import XY2StatusSpec
+from .queue_io import QueueIOSpec
+from ..gateware.sources.queue_io import QueueIO
 from ..gateware.phy.xy2_status import XY2StatusReceiver
 from ..gateware.fly.encoder import QuadratureDecoder
 from ..gateware.player.player import JobPlayer
@@ -24,7 +26,7 @@ from ..gateware.player.player import JobPlayer
 
 __all__ = ["Proof", "PROOFS", "xy2_phy_proof", "spi_frame_proof", "command_path_proof", "laser_safety_proof",
            "correction_proof", "correction_link_proof", "player_proof", "pixel_line_proof", "encoder_proof",
-           "head_status_proof", "fly_offset_proof", "fly_clipped_proof",
+           "head_status_proof", "fly_offset_proof", "fly_clipped_proof", "queue_io_proof",
            "LASER_PROOF_PARAMETERS"]
 
 
@@ -370,6 +372,22 @@ def fly_clipped_proof(*, held=True, make_gate=None, helpers=True, name=None):
         depth=3, cover_depth=6)
 
 
+def queue_io_proof(*, make_stage=None, helpers=True, name="queue_io"):
+    """I/O in the queue: an I/O word never reaches the sequencer and starts only once it is
+    idle; a wait ends only at its input's level; a time-out holds the queue until a flush;
+    the outputs change only as the words say. With 4 frames a ms (``frame_us`` 250: the
+    timer's length does not enter the properties) and the encoders' words built."""
+    make_stage = make_stage or (lambda: QueueIO(frame_us=250, encoders=True))
+    return Proof(
+        name=name,
+        description="queue I/O: an I/O word never reaches the sequencer and starts only once "
+                    "it is idle; a wait for an input ends only at its level (an edge wait: "
+                    "after being away); a timed-out wait holds the queue until a flush, one "
+                    "without a limit never times out; outputs change only by their words",
+        harness=lambda: QueueIOSpec(make_stage(), helpers=helpers),
+        depth=4, cover_depth=12)
+
+
 PROOFS = [
     # The smallest divider, as simulated, with the reset free.
     xy2_phy_proof(2),
@@ -395,4 +413,5 @@ PROOFS = [
     fly_offset_proof(),
     fly_clipped_proof(held=True),
     fly_clipped_proof(held=False),
+    queue_io_proof(),
 ]

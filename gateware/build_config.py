@@ -115,6 +115,12 @@ class BuildConfig:
     z_axis : bool
         Drive XY2-100's Z channel (``xy2_z``, a focus shifter) in every frame, from the ``z``
         register.
+    queue_io : bool
+        Build I/O in the queue (:class:`~.sources.queue_io.QueueIO`): two inputs ``io_in``
+        (a part sensor) and two outputs ``io_out`` (to a PLC), waits and outputs queued as
+        ``vec_op`` words (bit 9), and the ``io`` register. Needs pixel lines (their
+        ``vec_op`` word); with marking on the fly, also waits for an encoder's count and the
+        fly's start and end in the queue.
     """
 
     modes: tuple = MODES
@@ -139,6 +145,7 @@ class BuildConfig:
     head_check: bool = False
     fly: bool = False
     z_axis: bool = False
+    queue_io: bool = False
 
     def __post_init__(self):
         def put(name, value):       # (frozen: the normalised values are set once, here)
@@ -199,6 +206,10 @@ class BuildConfig:
         if self.pixel_lines and not self.vector_delays:
             raise ValueError("pixel lines come with vector mode's delays (their vec_op word): "
                              "build them with vector_delays=True")
+        put("queue_io", bool(self.queue_io) and "vector" in modes)
+        if self.queue_io and not self.pixel_lines:
+            raise ValueError("I/O in the queue comes with pixel lines (their vec_op word): "
+                             "build it with pixel_lines=True")
         put("player", bool(self.player))
         if self.player and not ("vector" in modes and self.laser):
             raise ValueError("the job player plays vector jobs: it needs vector mode and the "
@@ -237,7 +248,8 @@ class BuildConfig:
                 "delays": self.vector_delays, "interpolation": self.spiral_interpolation,
                 "uart": "uart" in self.links, "spi": "spi" in self.links,
                 "player": self.player, "pixel_lines": self.pixel_lines,
-                "head": self.head_status, "fly": self.fly, "z": self.z_axis}
+                "head": self.head_status, "fly": self.fly, "z": self.z_axis,
+                "io": self.queue_io}
 
     def register_map(self, *, table_points=DEFAULT_TABLE_POINTS,
                      correction_nodes=DEFAULT_CORRECTION_NODES, resets=None):
@@ -252,7 +264,7 @@ class BuildConfig:
             modes=self.modes, laser=self.laser, wobble=self.wobble,
             spiral_interpolation=self.spiral_interpolation, vector_delays=self.vector_delays,
             pixel_lines=self.pixel_lines, player=self.player, head=self.head_status, fly=self.fly,
-            z=self.z_axis,
+            z=self.z_axis, queue_io=self.queue_io,
             resets={**(resets or {}), **({"head_check": 1} if self.head_check else {})},
             fixed={"caps": pack(Capabilities, **{name: int(built) for name, built
                                                  in self.capabilities().items()}),
@@ -267,6 +279,7 @@ class BuildConfig:
                                        ("pixel lines", self.pixel_lines), ("wobble", self.wobble),
                                        ("player", self.player), ("head status", self.head_status),
                                        ("marking on the fly", self.fly), ("Z", self.z_axis),
+                                       ("I/O in the queue", self.queue_io),
                                        ("laser", self.laser)) if on]
         return (f"{self.clk_freq / 1e6:g} MHz, XY2 {self.bit_rate / 1e6:g} Mbit/s, "
                 f"{self.baud:,} baud; modes {','.join(self.modes)}; links "

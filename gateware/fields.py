@@ -11,7 +11,7 @@ from amaranth.lib import data, enum
 
 
 __all__ = ["Mode", "VectorOp", "WobbleShape", "Status", "STATUS_BITS", "Capabilities",
-           "HeadStatus", "HeadState", "FlyControl",
+           "HeadStatus", "HeadState", "FlyControl", "IOKind", "IOState",
            "PlayerState", "PlayerResult", "PlayerStatus", "pack"]
 
 
@@ -101,6 +101,7 @@ Capabilities = data.StructLayout({
     "head": 1,              # the head status receiver (the head, head_state, head_check registers)
     "fly": 1,               # marking on the fly: two encoder inputs, the fly offset
     "z": 1,                 # the XY2-100 Z channel (a focus shifter) and its z register
+    "io": 1,                # I/O in the queue (vec_op bit 9): inputs io_in, outputs io_out
 })
 
 
@@ -110,6 +111,31 @@ FlyControl = data.StructLayout({
     "x_simulated": 1,       # the X count from the simulated encoder
     "y_simulated": 1,       # the Y count from the simulated encoder
     "reverse": 1,           # the simulated encoder counts down
+})
+
+
+class IOKind(enum.Enum, shape=3):
+    """What a queued I/O word (``vec_op`` bit 9, ``io``) does, in its bits 2:0. Each waits
+    until every segment before it is marked (the vector sequencer idle) and holds the queue
+    until it is done."""
+    WAIT_INPUT = 0      #: wait for input ``index`` at ``level`` (``edge``: for it to come to it); ``vec_x``: timeout, ms (0: none)
+    SET_OUTPUT = 1      #: set output ``index`` to ``level``; ``vec_x``: for that many 10 µs frames, then back (0: until changed)
+    WAIT_COUNT_UP = 2   #: wait for encoder ``index`` (0 X, 1 Y) to reach ``vec_y:vec_x`` (signed) or more
+    WAIT_COUNT_DOWN = 3 #: wait for it to reach ``vec_y:vec_x`` or less
+    FLY_START = 4       #: clear both encoders' counts and turn the fly offset on (RTC's set_fly)
+    FLY_END = 5         #: turn the fly offset off (RTC's fly_return)
+
+    @property
+    def label(self):
+        return self.name.lower()
+
+
+#: Bits of the ``io`` register, bit 0 first.
+IOState = data.StructLayout({
+    "inputs": 2,            # the inputs io_in now (after the synchroniser)
+    "outputs": 2,           # the outputs io_out now
+    "waiting": 1,           # an I/O word holds the queue: a wait, or segments still marking before it
+    "timed_out": 1,         # latched until vec_flush: a wait for an input ran out of time; the queue holds
 })
 
 

@@ -11,7 +11,8 @@ with the job player, the configuration flash's ``flash_cs_n``, ``flash_clk``, ``
 ``flash_cipo``, the start inputs ``start_n[1:0]`` and the outputs ``busy``, ``ready`` and
 ``player_led``; with the head status receiver, the head's ``xy2_status``; with marking on the
 fly, the encoders' ``encoder_x_a``, ``encoder_x_b``, ``encoder_y_a``, ``encoder_y_b``; with
-the Z channel, its data line ``xy2_z``.
+the Z channel, its data line ``xy2_z``; with I/O in the queue, ``io_in[1:0]`` and
+``io_out[1:0]``.
 """
 
 from amaranth.hdl import Cat, Const, Module, Mux, ResetInserter, Signal
@@ -51,6 +52,7 @@ from .sources.spiral_table import SpiralTable
 from .sources.laser_delays import LaserDelays
 from .sources.vector import DirectedVectorSequencer, VectorSequencer
 from .sources.vector_queue import VectorQueue
+from .sources.queue_io import IO_INPUTS, IO_OUTPUTS, QueueIO
 from .sources.wobble import Wobble
 
 
@@ -135,6 +137,10 @@ class GalvoScanTop(wiring.Component):
         reads as missing).
     xy2_z : ``Out(1)``, with the Z channel
         XY2-100's Z data line (a focus shifter), in the same frames as X and Y.
+    io_in : ``In(2)``, with I/O in the queue
+        Inputs the queue waits on (a part sensor; through optocouplers), 1 = high.
+    io_out : ``Out(2)``, with I/O in the queue
+        Outputs the queue sets (to a PLC; through optocouplers); low from power-up.
 
     Attributes
     ----------
@@ -199,10 +205,13 @@ class GalvoScanTop(wiring.Component):
             members.update({f"encoder_{axis}_{line}": In(1) for axis in "xy" for line in "ab"})
         if self.config.z_axis:
             members["xy2_z"] = Out(1)
+        if self.config.queue_io:
+            members.update({"io_in": In(IO_INPUTS), "io_out": Out(IO_OUTPUTS)})
         super().__init__(members)
 
     def elaborate(self, platform):
         m = Module()
+        self._queue_io = None
 
         # --- host link ----------------------------------------------------------------------
         m.submodules.decoder = decoder = self._decoder = CommandDecoder()
@@ -267,7 +276,7 @@ class GalvoScanTop(wiring.Component):
         # combinational in front of it: either way one point waits for the PHY, never two.
         m.submodules.scale = scale = ScaleOffset(buffered=self.correction is None,
                                                  multiplier=self.config.multiplier)
-        m.submodules.phy = phy = XY2Transmitter(clk_freq=self.config.clk_freq,
+        m.submodules.phy = phy = self._phy = XY2Transmitter(clk_freq=self.config.clk_freq,
                                                 bit_rate=self.config.bit_rate,
                                                 z=self.config.z_axis)
         if self.config.z_axis:
@@ -407,6 +416,10 @@ class GalvoScanTop(wiring.Component):
     def _elaborate_fly(self, m, regs, status, positions):
         """The encoders, the simulated encoder, the fly offset; returns the moved points."""
         control = FlyControl(regs.fly_ctrl)
+        # The queue's fly start and end (I/O in the queue), beside the host's fly_ctrl.
+        queue_clear, queue_on = Const(0, 1), Const(0, 1)
+        if self._queue_io is not None:
+            queue_clear, queue_on = self._queue_io.fly_clear, self._queue_io.fly_on
         m.submodules.fly_simulated = simulated = SimulatedEncoder()
         m.d.comb += [simulated.enable.eq(regs.fly_sim_period != 0),
                      simulated.reverse.eq(control.reverse),
@@ -419,7 +432,7 @@ class GalvoScanTop(wiring.Component):
             m.d.comb += [
                 decoder.a.eq(Mux(from_simulated, simulated.a, getattr(self, f"encoder_{axis}_a"))),
                 decoder.b.eq(Mux(from_simulated, simulated.b, getattr(self, f"encoder_{axis}_b"))),
-                decoder.clear.eq(regs.fly_clear | regs.soft_reset),
+                decoder.clear.eq(regs.fly_clear | regs.soft_reset | queue_clear),
                 getattr(regs, f"enc_{axis}").eq(decoder.count[:16]),
                 getattr(regs, f"enc_{axis}_hi").eq(decoder.count[16:]),
                 getattr(regs, f"enc_{axis}_bad").eq(decoder.illegal),
@@ -429,8 +442,11 @@ class GalvoScanTop(wiring.Component):
             scale.count_x.eq(decoders["x"].count), scale.count_y.eq(decoders["y"].count),
             scale.scale_x.eq(Cat(regs.fly_scale_x, regs.fly_scale_x_hi)),
             scale.scale_y.eq(Cat(regs.fly_scale_y, regs.fly_scale_y_hi)),
-            scale.enable.eq(control.on),
+            scale.enable.eq(control.on | queue_on),
         ]
+        if self._queue_io is not None:
+            m.d.comb += [self._queue_io.count_x.eq(decoders["x"].count),
+                         self._queue_io.count_y.eq(decoders["y"].count)]
         m.submodules.fly = fly = self._fly = FlyOffset()
         connect(m, positions, fly.positions_in)
         m.d.comb += [fly.offset_x.eq(scale.offset_x), fly.offset_y.eq(scale.offset_y),
@@ -454,7 +470,9 @@ class GalvoScanTop(wiring.Component):
         fault, took_over, laser_ready = Signal(), Signal(), Signal()
         read_start, read_stop = Signal(), Signal()
         m.d.sync += [
-            fault.eq(laser.faults.as_value().any()),
+            # (A wait for an input that timed out stops a job as a fault does.)
+            fault.eq(laser.faults.as_value().any() |
+                     (self._queue_io.timed_out if self._queue_io is not None else 0)),
             took_over.eq(arbiter.host_took_over),
             laser_ready.eq(laser.mo_ready & laser.laser_enable),
             read_start.eq(player.read_start), read_stop.eq(player.read_stop),
@@ -474,7 +492,7 @@ class GalvoScanTop(wiring.Component):
             player.host_took_over.eq(took_over),
             player.queue_ready.eq(self._queue.ready),
             player.queue_empty.eq(self._queue.empty),
-            player.vector_busy.eq(vector.busy),
+            player.vector_busy.eq(self._vector_busy),
             player.laser_ready.eq(laser_ready),
             player.fault.eq(fault),
             self._player_alive.eq(player.alive),
@@ -498,7 +516,8 @@ class GalvoScanTop(wiring.Component):
         """The queue between the ``vec_op`` register and the vector sequencer."""
         queue = VectorQueue(depth=self.config.vector_queue_depth,
                             delays=self.config.vector_delays,
-                            pixel_lines=self.config.pixel_lines)
+                            pixel_lines=self.config.pixel_lines,
+                            queue_io=self.config.queue_io)
         m.submodules.queue = ResetInserter(self._vector_flush)(queue)
         decoder = self._decoder
         m.d.comb += [
@@ -511,13 +530,37 @@ class GalvoScanTop(wiring.Component):
             queue.vec_y.eq(regs.vec_y),
             regs.vec_op_ready.eq(queue.ready),
             regs.fifo_free.eq(queue.free),
-            status.flags.vector_busy.eq(vector.busy),
             status.events.vec_rejected.eq(regs.vec_op_refused),
-            status.events.vec_underruns.eq(vector.underrun),
             status.events.vec_stalls.eq(vector.stall),
-            status.events.vec_taken.eq(vector.commands.valid & vector.commands.ready),
+            # Every command the queue hands on (an I/O word too): how far a job got.
+            status.events.vec_taken.eq(queue.commands.valid & queue.commands.ready),
         ]
-        connect(m, queue.commands, vector.commands)
+        # Vector mode is busy while the sequencer marks, or an I/O word holds the queue.
+        self._vector_busy = Signal()
+        if self.config.queue_io:
+            # Its outputs keep their level through a flush (a PLC may be reading them): a
+            # soft reset alone clears them.
+            self._queue_io = queue_io = QueueIO(frame_us=int(self.config.frame_us),
+                                                encoders=self.config.fly)
+            m.submodules.queue_io = ResetInserter(regs.soft_reset)(queue_io)
+            connect(m, queue.commands, queue_io.commands_in)
+            connect(m, queue_io.commands_out, vector.commands)
+            m.d.comb += [
+                queue_io.sequencer_busy.eq(vector.busy),
+                queue_io.frame_strobe.eq(self._phy.frame_strobe),
+                queue_io.flush.eq(self._vector_flush),
+                queue_io.io_in.eq(self.io_in),
+                self.io_out.eq(queue_io.io_out),
+                regs.io.eq(queue_io.state),
+                self._vector_busy.eq(vector.busy | queue_io.holding),
+                # The queue looks empty to the sequencer while an I/O word waits: no underrun.
+                status.events.vec_underruns.eq(vector.underrun & ~queue_io.holding),
+            ]
+        else:
+            connect(m, queue.commands, vector.commands)
+            m.d.comb += [self._vector_busy.eq(vector.busy),
+                         status.events.vec_underruns.eq(vector.underrun)]
+        m.d.comb += status.flags.vector_busy.eq(self._vector_busy)
         self._queue = queue
 
     def _elaborate_laser(self, m, decoder, regs, phy, sources, select, status):

@@ -68,8 +68,7 @@ ULX3S_DEVICES = {"12F": ULX3S_12F_Platform, "25F": ULX3S_25F_Platform,
                  "45F": ULX3S_45F_Platform, "85F": ULX3S_85F_Platform}
 
 #: Every signal on the GPIO header: name → (header pin, direction, where it goes). Pins marked
-#: "spare" are kept for what is still to come (the Z axis, the part sensor): wire them now and a
-#: later bitstream uses them.
+#: "spare" are kept for what is still to come: wire them now and a later bitstream uses them.
 ULX3S_PINS = {
     "xy2_clk": ("GP0", "o", "RS-422 driver → head CLOCK±"),
     "xy2_sync": ("GN0", "o", "RS-422 driver → head SYNC±"),
@@ -101,7 +100,10 @@ ULX3S_PINS = {
     "start_n": ("GP16", "i", "optocoupler ← foot switch or PLC start, to GND (pulled up)"),
     "busy": ("GN16", "o", "optocoupler → PLC: a job is checked or played"),
     "ready": ("GP17", "o", "optocoupler → PLC: armed and past the MO lead"),
-    "part_sensor": ("GN17", "spare", "optocoupler ← part sensor"),
+    "io_in[0]": ("GN17", "i", "optocoupler ← part sensor (I/O in the queue, input 0)"),
+    "io_in[1]": ("GN11", "i", "optocoupler ← a second input (input 1)"),
+    "io_out[0]": ("GP12", "o", "optocoupler → PLC (I/O in the queue, output 0)"),
+    "io_out[1]": ("GN12", "o", "optocoupler → PLC (output 1)"),
     "encoder_x_a": ("GP18", "i", "RS-422 receiver ← ENCODER X A (marking on the fly)"),
     "encoder_x_b": ("GN18", "i", "RS-422 receiver ← ENCODER X B"),
     "encoder_y_a": ("GP19", "i", "RS-422 receiver ← ENCODER Y A"),
@@ -170,6 +172,10 @@ def ulx3s_platform(device="25F"):
                  *(Subsignal(f"{axis}_{line}", _pins(f"encoder_{axis}_{line}", direction="i"))
                    for axis in "xy" for line in "ab"),
                  Attrs(**lvcmos)),
+        # Pulled down: an unconnected input reads low (no part).
+        Resource("io_in", 0, _pins("io_in[0]", "io_in[1]", direction="i"),
+                 Attrs(**lvcmos, PULLMODE="DOWN")),
+        Resource("io_out", 0, _pins("io_out[0]", "io_out[1]", direction="o"), Attrs(**lvcmos)),
         Resource("machine", 0,
                  Subsignal("start_n", _pins("start_n", direction="i"), Attrs(PULLMODE="UP")),
                  Subsignal("busy", _pins("busy", direction="o")),
@@ -205,11 +211,11 @@ class ULX3SScanner(Elaboratable):
     @staticmethod
     def config(*, modes=None, correction="identity", clock=None, bit_rate=XY2_100_BIT_RATE,
                baud=None, wobble=True, interpolation=True, delays=True, pixel_lines=True,
-               player=True, head_status=True, fly=True, z_axis=True):
+               player=True, head_status=True, fly=True, z_axis=True, queue_io=True):
         """The :class:`~galvoscan.gateware.build_config.BuildConfig` of a ULX3S bitstream:
         with no options, every feature (all three modes, correction, the interpolator, the
         RTC delays, pixel lines, wobble, the job player, the head's status, marking on the fly,
-        the Z channel, both links). ``clock`` in Hz (None: 24 MHz) must
+        the Z channel, I/O in the queue, both links). ``clock`` in Hz (None: 24 MHz) must
         be one the PLL makes exactly from 25 MHz; ``baud`` None: :data:`ULX3S_BAUD` (3 Mbaud)
         where the clock carries it, else the fastest rate it does. A ``ValueError``
         for what cannot be built, before anything is built."""
@@ -226,7 +232,8 @@ class ULX3SScanner(Elaboratable):
             spiral_interpolation=interpolation, vector_delays=delays,
             pixel_lines=pixel_lines and delays and "vector" in modes,
             player=player and "vector" in modes, links=LINKS, head_status=head_status,
-            fly=fly, z_axis=z_axis)
+            fly=fly, z_axis=z_axis,
+            queue_io=queue_io and pixel_lines and delays and "vector" in modes)
 
     def _encoder_pins(self, platform):
         """The encoders' lines, by the top's port names (none without marking on the fly)."""
@@ -263,8 +270,11 @@ class ULX3SScanner(Elaboratable):
             "laser_alarm": platform.request("laser_alarm", 0, dir="-"),
             **({"xy2_status": platform.request("head_status", 0, dir="-")}
                if self.config.head_status else {}),
-            **self._encoder_pins(platform)})
-        plain_outputs(m, scanner, {"uart_tx": uart.tx, "spi_cipo": spi.cipo})
+            **self._encoder_pins(platform),
+            **({"io_in": platform.request("io_in", 0, dir="-")} if self.config.queue_io else {})})
+        plain_outputs(m, scanner, {"uart_tx": uart.tx, "spi_cipo": spi.cipo,
+                                   **({"io_out": platform.request("io_out", 0, dir="-")}
+                                      if self.config.queue_io else {})})
         running_led(m, scanner, platform.request("led", 0, dir="-"))
         if self.config.player:
             # The flash's clock pin is the configuration clock, reached after configuration

@@ -40,11 +40,33 @@ from .spi_flash import SPIFlashModel
 from .xy2_receiver import frame_of_each_pulse
 
 
-__all__ = ["SimulatedBoard", "Belt", "PTYServer", "SimTransport", "SimSPITransport",
+__all__ = ["SimulatedBoard", "Belt", "PartSensor", "PTYServer", "SimTransport", "SimSPITransport",
            "BACKENDS",
            "LASER_PINS", "PIN_FIELDS"]
 
 
+
+
+@dataclass
+class PartSensor:
+    """A part sensor on input ``input``: the first part reaches it ``first_s`` after it is
+    set up, then one every ``every_s`` (None: that one alone), each seen for ``seen_s``.
+    ``level``: what the input reads while a part is seen (the rest of the time, the other)."""
+    input: int = 0
+    first_s: float = 1e-3
+    every_s: float = None
+    seen_s: float = 2e-3
+    level: int = 1
+    start_s: float = 0.0
+
+    def seen(self, now):
+        """Whether a part is seen at the board's time ``now``."""
+        since = now - self.start_s - self.first_s
+        if since < 0:
+            return False
+        if self.every_s is not None:
+            since %= self.every_s
+        return since < self.seen_s
 
 
 @dataclass
@@ -130,6 +152,14 @@ class SimulatedBoard:
         ``("bad_stop", byte)`` (appended to only).
     start_pressed : bool
         The foot switch on ``start_n``, pressed (set by the host; the machine's period).
+    io_inputs : int
+        The inputs ``io_in`` of a build with I/O in the queue, bit k for input k (set by the
+        host, or by :attr:`part_sensor`; the machine's period). 0 at power-up.
+    part_sensor : :class:`PartSensor` or None
+        A part sensor on an input: it sets that bit of :attr:`io_inputs` as parts pass it.
+    io_changes : list of (int, int)
+        ``(cycle, outputs)``: each change of the outputs ``io_out`` (bit k for output k; 0 at
+        power-up), and the clock it was seen on.
     belt : :class:`Belt`
         The conveyor's encoder on a build that marks on the fly (:meth:`belt_moves`; its
         ``count``, and ``glitch_periods``: machine periods with both lines turned over).
@@ -223,6 +253,9 @@ class SimulatedBoard:
         self.bytes_in = []              # (cycle its stop bit ended, byte) of every byte in
         self.frames = []
         self.z_frames = []
+        self.io_changes = []
+        self.io_inputs = 0
+        self.part_sensor = None
         self.sync_rises = []
         self.pulses = []
         self.laser_changes = []
@@ -272,8 +305,22 @@ class SimulatedBoard:
     def run_for(self, seconds):
         """Advance the board by ``seconds`` of its own time."""
         if seconds > 0:
+            sensor = self.part_sensor
+            if sensor is not None:
+                # (The sensor's input as at the step's start: a host steps the board in a
+                # UART bit or a poll, well within a part's time under the sensor.)
+                bit = 1 << sensor.input
+                level = sensor.level if sensor.seen(self.now) else 1 - sensor.level
+                self.io_inputs = (self.io_inputs & ~bit) | (bit if level else 0)
             self.now += seconds
             self.engine.run_until(self.now)
+
+    def parts_arrive(self, *, input=0, first_s=1e-3, every_s=None, seen_s=2e-3, level=1):
+        """Set a :class:`PartSensor` on ``input``, from now on."""
+        if not 0 <= input < 2:
+            raise ValueError(f"the part sensor is on input 0 or 1, not {input!r}")
+        self.part_sensor = PartSensor(input=input, first_s=first_s, every_s=every_s,
+                                      seen_s=seen_s, level=level, start_s=self.now)
 
     def speed(self, seconds=0.2e-3):
         """How fast it runs, as a fraction of real time: measured by running ``seconds`` of

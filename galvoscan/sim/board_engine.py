@@ -68,6 +68,8 @@ class PythonEngine:
             self.sim.add_testbench(process, background=True)
         if hasattr(self.board.top, "xy2_z"):
             self.sim.add_testbench(self._z_line, background=True)
+        if hasattr(self.board.top, "io_out"):
+            self.sim.add_testbench(self._io_outputs, background=True)
         if self.board.flash is not None:
             self.sim.add_testbench(self._flash, background=True)
         if hasattr(self.board.top, "xy2_status"):
@@ -178,6 +180,7 @@ class PythonEngine:
         board = self.board
         alarm = getattr(board.top, "laser_alarm", None)
         start = getattr(board.top, "start_n", None)
+        io_in = getattr(board.top, "io_in", None)
         fly = hasattr(board.top, "encoder_x_a")
         period_fs = round(float(board.machine_period_s) * 1e15)
         while True:
@@ -196,6 +199,8 @@ class PythonEngine:
                 ctx.set(alarm, 0 if board.alarms_clear else 2 ** len(alarm) - 1)
             if start is not None:
                 ctx.set(start, 0b10 if board.start_pressed else 0b11)
+            if io_in is not None:
+                ctx.set(io_in, board.io_inputs & 0b11)
             await ctx.delay(board.machine_period_s)
 
     async def _flash(self, ctx):
@@ -227,6 +232,13 @@ class PythonEngine:
             frame = self._z_receiver.sample(sync, z, z)
             if frame is not None:
                 board.z_frames.append((cycles, frame.x))
+
+    async def _io_outputs(self, ctx):
+        # The outputs io_out, at each change, with the clock count it came with.
+        board, top = self.board, self.board.top
+        async for outputs, in ctx.changed(top.io_out):
+            if outputs != (board.io_changes[-1][1] if board.io_changes else 0):
+                board.io_changes.append((ctx.get(self._clocked.cycles), outputs))
 
     async def _head_status(self, ctx):
         # The head's STATUS line (:mod:`.head`): a bit on each rising CLOCK edge, from the one

@@ -17,7 +17,7 @@ from ..fields import Capabilities, HeadState, HeadStatus, Mode, PlayerStatus, St
 __all__ = ["Register", "all_registers", "MODE_REGISTERS", "WOBBLE_REGISTERS",
            "INTERPOLATION_REGISTERS", "DELAY_REGISTERS", "LASER_REGISTERS",
            "CORRECTION_REGISTERS", "PLAYER_REGISTERS", "HEAD_REGISTERS",
-           "FLY_REGISTERS", "Z_REGISTERS"]
+           "FLY_REGISTERS", "Z_REGISTERS", "IO_REGISTERS"]
 
 
 @dataclass(frozen=True)
@@ -406,6 +406,11 @@ def all_registers(table_points, correction_nodes):
                  "the XY2-100 Z channel (a focus shifter such as varioSCAN), sent in every "
                  "frame on its own data line: 32768 = the middle of its range (no focus "
                  "shift); taken with each frame's position", needs=('z',)),
+        # --- I/O in the queue -------------------------------------------------------------------
+        Register("io", 0x71, "ro", 0, 0, 0, "flags",
+                 "I/O in the queue: bits 1:0 the inputs io_in now, 3:2 the outputs io_out, bit "
+                 "4 an I/O word holds the queue, bit 5 a wait for an input timed out "
+                 "(latched until vec_flush; the job stopped)", needs=('io',)),
     ]
 
 
@@ -445,3 +450,5 @@ FLY_REGISTERS = _needing("fly")
 
 #: Registers only a build with the Z channel has.
 Z_REGISTERS = _needing("z")
+#: Registers of builds with I/O in the queue.
+IO_REGISTERS = _needing("io")

@@ -37,7 +37,7 @@ from ..fields import (STATUS_BITS, Capabilities, FlyControl, HeadState, HeadStat
                       PlayerResult,
                       PlayerState, PlayerStatus, Status, VectorOp, WobbleShape, pack)
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, FLY_REGISTERS, HEAD_REGISTERS,
-                            Z_REGISTERS,
+                            Z_REGISTERS, IO_REGISTERS,
                             INTERPOLATION_REGISTERS,
                             LASER_REGISTERS, MODE_REGISTERS, PLAYER_REGISTERS,
                             WOBBLE_REGISTERS, Register,
@@ -75,11 +75,13 @@ class RegisterMap:
     pixel_lines : bool
     head : bool
     fly : bool
+    z : bool
+    queue_io : bool
     """
 
     def __init__(self, registers, *, choices, table_points, correction_nodes, modes, laser,
                  wobble=False, vector_delays=False, pixel_lines=False, head=False, fly=False,
-                 z=False):
+                 z=False, queue_io=False):
         self.registers = tuple(registers)
         self.by_name = {r.name: r for r in self.registers}
         self.by_address = {r.address: r for r in self.registers}
@@ -96,6 +98,7 @@ class RegisterMap:
         self.head = head
         self.fly = fly
         self.z = z
+        self.queue_io = queue_io
 
     def __iter__(self):
         return iter(self.registers)
@@ -119,7 +122,7 @@ class RegisterMap:
 def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_CORRECTION_NODES,
                  modes=tuple(Mode), laser=True, wobble=False, spiral_interpolation=True,
                  vector_delays=False, pixel_lines=False, player=False, head=False, fly=False,
-                 z=False,
+                 z=False, queue_io=False,
                  resets=None, fixed=None):
     """The register map of a build (by default, the default build's: the same defaults as
     :class:`~galvoscan.gateware.top.GalvoScanTop`).
@@ -155,6 +158,9 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
         The build marks on the fly (else its ``fly_*`` and ``enc_*`` registers are left out).
     z : bool
         The build drives the Z channel (else its ``z`` register is left out).
+    queue_io : bool
+        The build has I/O in the queue (and pixel lines): ``vec_op`` takes bit 9, ``io``, and
+        the ``io`` register is built.
     resets : dict of str to int, optional
         Reset values of ``rw`` registers that differ from the defaults (the scan settings a build
         starts with); each must lie in its register's range. Those of registers the build
@@ -185,7 +191,8 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
     options |= {name for name, built in (
         ("correction", correction_nodes is not None), ("laser", laser), ("wobble", wobble),
         ("interpolation", spiral_interpolation), ("delays", vector_delays),
-        ("player", player), ("head", head), ("fly", fly), ("z", z)) if built}
+        ("player", player), ("head", head), ("fly", fly), ("z", z),
+        ("io", queue_io and pixel_lines and vector_delays)) if built}
     every = {r.name: r for r in all_registers(table_points, correction_nodes or 2)}
     leave_out = {name for name, reg in every.items() if not set(reg.needs) <= options}
     if not vector_delays:
@@ -200,6 +207,15 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                                                 "1; a jump with it is a pixel word, 32 bits in "
                                                 "vec_x (pixels 0-15, bit 0 first) and vec_y "
                                                 "(16-31), which moves nothing; refused if")))
+    if queue_io and pixel_lines and vector_delays:
+        every["vec_op"] = replace(every["vec_op"], high=1023, width=10, description=(
+            every["vec_op"].description.replace("; refused if", "; bit 9 (io): an I/O word "
+                                                "(bits 2:0 what it does: 0 wait for an input, "
+                                                "1 set an output, 2/3 wait for an encoder's "
+                                                "count up/down, 4/5 fly start/end; bit 3 which "
+                                                "input, output or encoder, bit 4 the level, "
+                                                "bit 5 wait for an edge; vec_x, vec_y its "
+                                                "arguments); refused if")))
     by_name = {name: r for name, r in every.items() if name not in leave_out}
     for name, value in (resets or {}).items():
         if name not in every or every[name].access != "rw":
@@ -226,7 +242,9 @@ def register_map(*, table_points=DEFAULT_TABLE_POINTS, correction_nodes=DEFAULT_
                        modes=modes, laser=bool(laser), wobble=bool(wobble),
                        vector_delays=bool(vector_delays) and Mode.VECTOR in modes,
                        pixel_lines=bool(pixel_lines and vector_delays) and Mode.VECTOR in modes,
-                       head=bool(head), fly=bool(fly), z=bool(z))
+                       head=bool(head), fly=bool(fly), z=bool(z),
+                       queue_io=bool(queue_io and pixel_lines and vector_delays) and
+                       Mode.VECTOR in modes)
 
 
 def _host_map():
@@ -236,7 +254,7 @@ def _host_map():
     the board itself refuses, and counts, a value outside its own."""
     default = register_map()
     return register_map(table_points=MAX_TABLE_POINTS, correction_nodes=max(TABLE_SIZES),
-                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True, fly=True, z=True,
+                        wobble=True, vector_delays=True, pixel_lines=True, player=True, head=True, fly=True, z=True, queue_io=True,
                         resets={name: default[name].reset
                                 for name in ("x_first", "x_last", "y_first", "y_last")})
 
@@ -252,4 +270,4 @@ assert all(r.address < READ_FLAG for r in REGISTERS)
 assert all(name in BY_NAME for names in MODE_REGISTERS.values() for name in names)
 assert all(name in BY_NAME for name in CORRECTION_REGISTERS + LASER_REGISTERS +
            WOBBLE_REGISTERS + DELAY_REGISTERS + PLAYER_REGISTERS + HEAD_REGISTERS + FLY_REGISTERS +
-           Z_REGISTERS)
+           Z_REGISTERS + IO_REGISTERS)

@@ -32,13 +32,14 @@ from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..fields import VectorOp
+from ..fields import IOKind, VectorOp
 from ..points import FIELD_CENTRE, OffsetPoint
 from .dda import DIRECTION_BITS, Direction, LineDDA
 
 
 __all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand",
            "DelayedVectorCommand", "VecOpWord", "PixelVecOpWord", "PixelVectorCommand",
+           "IOVecOpWord", "IOVectorCommand", "IOWord",
            "PIXELS_PER_WORD", "command_layout", "OP_JUMP", "OP_MARK"]
 
 
@@ -60,16 +61,30 @@ PixelVecOpWord = data.StructLayout({"op": VectorOp, "corner_frames": 7, "pixels"
 #: A queued command of a build with pixel lines (which has the RTC delays).
 PixelVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7,
                                         "pixels": 1})
+#: The ``vec_op`` word of a build with I/O in the queue (bit 9, ``io``): with ``io`` set, the
+#: word's bits 8:0 are an :data:`IOWord`, and ``vec_x``, ``vec_y`` its arguments.
+IOVecOpWord = data.StructLayout({"op": VectorOp, "corner_frames": 7, "pixels": 1, "io": 1})
+#: A queued command of a build with I/O in the queue (which has pixel lines).
+IOVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_frames": 7,
+                                     "pixels": 1, "io": 1})
+#: Bits 8:0 of an I/O word: what it does (:class:`~..fields.IOKind`), on which input, output
+#: or encoder (``index``), and at which level; ``edge``: a wait for an input to come to the
+#: level, not to be at it.
+IOWord = data.StructLayout({"kind": IOKind, "index": 1, "level": 1, "edge": 1, "_": 3})
 #: Pixels one pixel word carries.
 PIXELS_PER_WORD = 32
 
 
 
-def command_layout(*, delays, pixel_lines=False):
-    """The layout of a queued command in a build with (or without) the delays and pixel
-    lines (which need the delays)."""
+def command_layout(*, delays, pixel_lines=False, queue_io=False):
+    """The layout of a queued command in a build with (or without) the delays, pixel
+    lines (which need the delays) and I/O in the queue (which needs pixel lines)."""
     if pixel_lines and not delays:
         raise ValueError("pixel lines come with vector mode's delays")
+    if queue_io and not pixel_lines:
+        raise ValueError("I/O in the queue comes with pixel lines (their vec_op word)")
+    if queue_io:
+        return IOVectorCommand
     return PixelVectorCommand if pixel_lines else DelayedVectorCommand if delays else \
         VectorCommand
 

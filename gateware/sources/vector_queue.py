@@ -12,7 +12,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out, connect
 
-from .vector import PixelVecOpWord, VecOpWord, command_layout
+from .vector import IOVecOpWord, PixelVecOpWord, VecOpWord, command_layout
 
 
 __all__ = ["VectorQueue"]
@@ -34,10 +34,13 @@ class VectorQueue(wiring.Component):
     pixel_lines : bool
         The build has pixel lines (and the delays): ``vec_op`` is a :data:`PixelVecOpWord`,
         the commands :data:`PixelVectorCommand`.
+    queue_io : bool
+        The build has I/O in the queue (and pixel lines): ``vec_op`` is an
+        :data:`IOVecOpWord`, the commands :data:`IOVectorCommand`.
 
     Interface attributes
     --------------------
-    vec_op : ``In(PixelVecOpWord)`` with pixel lines, ``In(VecOpWord)`` with delays, else ``In(1)``
+    vec_op : ``In(IOVecOpWord)`` with I/O, ``In(PixelVecOpWord)`` with pixel lines, ``In(VecOpWord)`` with delays, else ``In(1)``
         The ``vec_op`` register, the value being pushed while :attr:`push` is high.
     push : ``In(1)``
         A write of ``vec_op`` the register file took (only while :attr:`ready`).
@@ -55,14 +58,17 @@ class VectorQueue(wiring.Component):
         The queued commands, to the vector sequencer.
     """
 
-    def __init__(self, *, depth, delays=False, pixel_lines=False):
+    def __init__(self, *, depth, delays=False, pixel_lines=False, queue_io=False):
         if not isinstance(depth, int) or isinstance(depth, bool) or not 2 <= depth < 1 << 16:
             raise ValueError(f"depth must be a whole number from 2 to 65535, not {depth!r}")
         self.depth = depth
         self.delays = bool(delays)
         self.pixel_lines = bool(pixel_lines)
-        self.layout = command_layout(delays=self.delays, pixel_lines=self.pixel_lines)
-        word = PixelVecOpWord if self.pixel_lines else VecOpWord if self.delays else 1
+        self.queue_io = bool(queue_io)
+        self.layout = command_layout(delays=self.delays, pixel_lines=self.pixel_lines,
+                                     queue_io=self.queue_io)
+        word = IOVecOpWord if self.queue_io else PixelVecOpWord if self.pixel_lines else \
+            VecOpWord if self.delays else 1
         super().__init__({
             "vec_op": In(word),
             "push": In(1),
@@ -81,7 +87,9 @@ class VectorQueue(wiring.Component):
             op = self.vec_op.op
         if self.pixel_lines:
             m.d.comb += command.pixels.eq(self.vec_op.pixels)
-        else:
+        if self.queue_io:
+            m.d.comb += command.io.eq(self.vec_op.io)
+        if not self.delays:
             op = self.vec_op
         m.d.comb += [
             command.op.eq(op),

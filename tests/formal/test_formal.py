@@ -12,6 +12,7 @@ from galvoscan.formal.proofs import (LASER_PROOF_PARAMETERS, PROOFS, command_pat
                                     correction_link_proof, correction_proof, encoder_proof,
                                     fly_clipped_proof, fly_offset_proof, head_status_proof,
                                     laser_safety_proof, pixel_line_proof, player_proof,
+                                    queue_io_proof,
                                     spi_frame_proof, xy2_phy_proof)
 from galvoscan.gateware.field.correction_table import CorrectionTable
 from galvoscan.gateware.laser.controller import LaserController, clocks_at_least
@@ -20,6 +21,7 @@ from galvoscan.formal.runner import run_sby
 from broken_command import BROKEN_COMMAND_PATHS, BROKEN_SPI_TARGETS, SPI_TARGET_SOLVERS
 from broken_encoder import ENCODER_FAULTS, BrokenDecoder
 from broken_status import STATUS_FAULTS, BrokenReceiver
+from broken_queue_io import QUEUE_IO_FAULTS, BrokenQueueIO
 from broken_fly import GATE_FAULTS, OFFSET_FAULTS, BrokenGate, BrokenOffset
 from broken_correction import CORRECTION_FAULTS, WAITING_FAULTS, WritesLateValues
 from broken_laser import LASER_FAULTS, TamperedLaser
@@ -245,3 +247,13 @@ def test_broken_clipped_gates_fail_the_proof(fault, tmp_path):
     assert bmc.status == "FAIL"
     assert "marking passes exactly while the point on the wires was not clipped" in \
         failed_properties(bmc), (fault, bmc.failed)
+
+
+@pytest.mark.parametrize("fault", sorted(QUEUE_IO_FAULTS))
+def test_broken_queue_io_fails_the_proof(fault, tmp_path):
+    _, property = QUEUE_IO_FAULTS[fault]
+    proof = queue_io_proof(make_stage=partial(BrokenQueueIO, fault), helpers=False,
+                           name=f"broken_{fault}")
+    bmc = proof.check(tmp_path)
+    assert bmc.status == "FAIL"
+    assert property in failed_properties(bmc), (fault, bmc.failed)

@@ -37,6 +37,7 @@ def test_the_options_are_normalised_once():
     (dict(head_check=True), "head_check makes the laser obey the head's status"),
     (dict(head_status=True, laser=False, modes=("spiral",), head_check=True),
      "head_check makes the laser obey"),
+    (dict(vector_delays=True, queue_io=True), "I/O in the queue comes with pixel lines"),
     (dict(head_status=True, clk_freq=4e6, baud=500_000),
      "the head status receiver samples a bit 2 clocks after its middle"),
 ])
@@ -48,7 +49,7 @@ def test_bad_options_are_refused_at_construction(options, message):
 def test_the_caps_register_is_what_the_configuration_built():
     # The caps bits in the order the README's register table gives them, bit 0 first.
     order = ("spiral", "raster", "vector", "laser", "correction", "wobble", "delays",
-             "interpolation", "uart", "spi", "player", "pixel_lines", "head", "fly", "z")
+             "interpolation", "uart", "spi", "player", "pixel_lines", "head", "fly", "z", "io")
     for name, config in PRESETS.items():
         caps = preset_register_map(name)["caps"].reset
         built = {flag: bool(caps >> bit & 1) for bit, flag in enumerate(order)}

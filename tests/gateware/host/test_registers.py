@@ -21,7 +21,7 @@ DEFAULT_BUILD = [
     ("link_seq", 0x18, "ro", 0, 0, 0, 8),
     ("keepalive", 0x19, "strobe", 0, 0, 1, 1),
     ("soft_reset", 0x1a, "strobe", 0, 0, 1, 1),
-    ("caps", 0x0e, "ro", 0, 0, 0, 15),
+    ("caps", 0x0e, "ro", 0, 0, 0, 16),
     ("vec_depth", 0x0f, "ro", 0, 0, 0, 16),
     ("mode", 0x02, "rw", 0, 0, 2, 2),
     ("run", 0x03, "rw", 1, 0, 1, 1),
@@ -320,8 +320,8 @@ def test_fixed_registers_read_the_builds_values_and_refuse_writes(reads_from_ram
     accesses = [(0x0e, 0, False, True), (0x0f, 0, False, True), (0x0e, 1, True, True),
                 (0x0f, 7, True, True), (0x0e, 0, False, True), (0x0f, 0, False, True)]
     run(RegisterFile(regmap, reads_from_ram=reads_from_ram), model, accesses)
-    with pytest.raises(ValueError, match="does not fit its 15 bits"):
-        register_map(fixed={"caps": 1 << 15})
+    with pytest.raises(ValueError, match="does not fit its 16 bits"):
+        register_map(fixed={"caps": 1 << 16})
     with pytest.raises(ValueError, match="not a register fixed by the build"):
         register_map(fixed={"errors": 1})
 
