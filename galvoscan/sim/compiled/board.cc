@@ -45,7 +45,7 @@ enum LaserPin { ENABLE, MO, AM, PRR, LATCH, GUIDE };
 
 // The records (gs_board_take).
 enum Record { FRAMES, SYNC_RISES, PULSES, LASER_CHANGES, BYTES_IN, BYTES_OUT, XY2_SAMPLES,
-              PIN_CHANGES, SPI_RESULTS, Z_FRAMES, RECORDS };
+              PIN_CHANGES, SPI_RESULTS, Z_FRAMES, IO_CHANGES, RECORDS };
 
 // Flags of gs_board_new.
 enum Flag { RECORD_SAMPLES = 1, RECORD_PINS = 2 };
@@ -276,6 +276,12 @@ struct Board {
     int64_t belt_rate = 0, belt_count = 0, belt_fraction = 0, belt_glitch = 0;
     int belt_axis = 0;
 #endif
+    // The inputs io_in of a build with I/O in the queue (bit k for input k), set every
+    // machine_fs with the machine's pins; its outputs io_out as last seen (0 at power-up).
+    uint32_t io_inputs = 0;
+#if GS_IO
+    uint32_t last_io_out = 0;
+#endif
 
 #if GS_PLAYER
     FlashModel flash;
@@ -446,6 +452,14 @@ struct Board {
             records[LASER_CHANGES].push_back(laser);
             last_laser = laser;
         }
+#if GS_IO
+        uint32_t io_out = top.GS_PORT_io_out.get<uint32_t>();
+        if (io_out != last_io_out) {
+            records[IO_CHANGES].push_back(cycles);
+            records[IO_CHANGES].push_back(io_out);
+            last_io_out = io_out;
+        }
+#endif
 #if GS_PLAYER
         // The flash, at each change of /CS or SCK (the Python board's trigger), at the time
         // of the clock that made it.
@@ -493,6 +507,9 @@ struct Board {
 #endif
 #if GS_PLAYER
         top.GS_PORT_start_n.set<uint32_t>(start_pressed ? 0b10u : 0b11u);
+#endif
+#if GS_IO
+        top.GS_PORT_io_in.set<uint32_t>(io_inputs & 0b11u);
 #endif
     }
 
@@ -794,6 +811,11 @@ int64_t gs_board_belt(void *handle, int64_t counts_per_s, int axis, int64_t glit
 // The foot switch on start_n (a build with the job player).
 void gs_board_start(void *handle, int pressed) {
     static_cast<Board *>(handle)->start_pressed = pressed;
+}
+
+// The inputs io_in, bit k for input k (a build with I/O in the queue; the machine's period).
+void gs_board_io(void *handle, int64_t inputs) {
+    static_cast<Board *>(handle)->io_inputs = uint32_t(inputs);
 }
 
 // The flash's contents from `address` on, and whether it starts in deep power-down.

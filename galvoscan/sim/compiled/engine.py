@@ -20,7 +20,7 @@ def _fs(seconds):
 
 # The board's records (gs_board_take, board.cc's Record), its flags and its queue's items.
 (FRAMES, SYNC_RISES, PULSES, LASER_CHANGES, BYTES_IN, BYTES_OUT, XY2_SAMPLES, PIN_CHANGES,
- SPI_RESULTS, Z_FRAMES) = range(10)
+ SPI_RESULTS, Z_FRAMES, IO_CHANGES) = range(11)
 RECORD_SAMPLES, RECORD_PINS = 1, 2
 BAD_STOP = 0x100
 SPI_DONE = 2
@@ -63,6 +63,7 @@ class CompiledEngine:
                 raise ValueError("the compiled model has no flash: it was built without "
                                  "the job player")
         self._machine_sent = None   # the machine's inputs as last handed to the model
+        self._io_sent = 0           # the inputs io_in likewise (the model's: 0)
         self._head_sent = ()        # the head's word likewise (none yet: the model's is -1)
         self._belt_sent = (0, "x")  # the belt's rate and axis likewise (the model's: still)
         self._status = (ctypes.c_int64 * 4)()
@@ -99,6 +100,9 @@ class CompiledEngine:
             lib.gs_board_machine(handle, int(machine[0]), int(machine[1]))
             lib.gs_board_start(handle, int(machine[2]))
             self._machine_sent = machine
+        if board.io_inputs != self._io_sent:
+            lib.gs_board_io(handle, board.io_inputs & 0b11)
+            self._io_sent = board.io_inputs
         belt = board.belt
         if (belt.counts_per_s, belt.axis) != self._belt_sent or belt.glitch_periods:
             self._belt_sent = (belt.counts_per_s, belt.axis)
@@ -166,6 +170,9 @@ class CompiledEngine:
         if pending & 1 << Z_FRAMES:
             values = self._take(Z_FRAMES)
             board.z_frames.extend(zip(values[0::2], values[1::2]))
+        if pending & 1 << IO_CHANGES:
+            values = self._take(IO_CHANGES)
+            board.io_changes.extend(zip(values[0::2], values[1::2]))
         if pending & 1 << SPI_RESULTS:
             for value in self._take(SPI_RESULTS):
                 if value == SPI_DONE:

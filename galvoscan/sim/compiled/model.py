@@ -103,6 +103,9 @@ class Design:
         flash and a foot switch.
     z : bool
         The design has XY2-100's Z line (``xy2_z``): the board decodes its frames.
+    io : bool
+        The design has the inputs and outputs of I/O in the queue (``io_in``, ``io_out``):
+        the board drives the one and records the other's changes.
     fly : bool
         The design has the encoders' lines (``encoder_x_a`` …): the board's belt drives them.
     head : bool
@@ -125,6 +128,7 @@ class Design:
     head: bool = False
     fly: bool = False
     z: bool = False
+    io: bool = False
     settle_falling: bool = False
     optimise: bool = True
     description: str = field(default="this design", compare=False)
@@ -138,6 +142,7 @@ class Design:
                   f"#define GS_HEAD {int(self.head)}",
                   f"#define GS_FLY {int(self.fly)}",
                   f"#define GS_Z {int(self.z)}",
+                  f"#define GS_IO {int(self.io)}",
                   f"#define GS_SETTLE_FALLING {int(self.settle_falling)}"]
         return "\n".join(lines) + "\n"
 
@@ -175,8 +180,11 @@ def top_design(top):
     z = "xy2_z" in members
     if z:
         ports["xy2_z"] = "xy2_z"
+    io = "io_in" in members
+    if io:
+        ports.update(io_in="io_in", io_out="io_out")
     return Design(files={"top.il": design_rtlil(top)}, script=YOSYS_SCRIPT, ports=ports,
-                  alarm_bits=alarm_bits, player=player, head=head, fly=fly, z=z)
+                  alarm_bits=alarm_bits, player=player, head=head, fly=fly, z=z, io=io)
 
 
 def _board_source():
@@ -209,6 +217,7 @@ class CompiledModel:
             "gs_board_crash": (None, [p]),
             "gs_board_machine": (None, [p, ctypes.c_int, ctypes.c_int]),
             "gs_board_start": (None, [p, ctypes.c_int]),
+            "gs_board_io": (None, [p, i64]),
             "gs_board_head": (None, [p, ctypes.c_int]),
             "gs_board_belt": (i64, [p, i64, ctypes.c_int, i64]),
             "gs_board_flash": (ctypes.c_int, [p, i64, ctypes.c_char_p, i64, ctypes.c_int]),
