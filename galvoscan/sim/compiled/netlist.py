@@ -62,15 +62,18 @@ ULX3S_PORTS = {
     **NETLIST_PORTS, "clk": "clk25_0__io",
     "flash_cs_n": "spi_flash_0__cs__io", "flash_copi": "spi_flash_0__copi__io",
     "flash_cipo": "spi_flash_0__cipo__io", "flash_clk": "flash_clk", "start_n": "start_n",
-    "xy2_z": "xy2_z_0__io",
+    "xy2_z": "xy2_z_0__io", "io_in": "io_in_0__io", "io_out": "io_out_0__io",
 }
+#: The ULX3S's pins a build has only with the feature that uses them (the Z channel, I/O in
+#: the queue): the board drives and reads those the netlist has.
+ULX3S_OPTIONAL = ("xy2_z", "io_in", "io_out")
 #: The two start inputs the ULX3S's ``start_n`` is made of (bit 0, bit 1), and whether the
 #: pin is active high (FIRE 1 reads 1 pressed; the system top's bit is low then).
 START_PINS = (("machine_0__start_n__io", False), ("button_fire_0__io", True))
 
 #: The pins that are the board's inputs.
 INPUTS = ("uart_rx", "spi_sck", "spi_cs_n", "spi_copi", "interlock_open", "laser_alarm", "clk",
-          "flash_cipo", "start_n")
+          "flash_cipo", "start_n", "io_in")
 
 NETLIST_SCRIPT = ("read_json top.json; techmap -autoproc -map sb_io_sim.v; "
                   "read_verilog cells_sim.v; "
@@ -434,8 +437,11 @@ def netlist_design(build_dir):
         check_ecp5_cells(netlist, top, float(record["clock_mhz"]) * 1e6)
         player = _ulx3s_player_ports(netlist, top)
         pins = {role: pin for role, pin in pins.items()
-                if role in NETLIST_PORTS or (player and role != "xy2_z") or
-                (role == "xy2_z" and pin in ports)}
+                if role in NETLIST_PORTS or
+                (pin in ports if role in ULX3S_OPTIONAL else player)}
+        if ("io_in" in pins) != ("io_out" in pins):
+            raise CompileError(f"{netlist} is not a ULX3S build of every pin (I/O in the "
+                               f"queue's {'io_in' if 'io_in' in pins else 'io_out'} alone)")
         files = {"trellis_io_sim.v": _resource("trellis_io_sim.v"),
                  "ecp5_sim.v": _resource("ecp5_sim.v"),
                  # (Galvoscan's own models stand for the cells they model.)
@@ -457,7 +463,7 @@ def netlist_design(build_dir):
     modules = {"top": top}
     return Design(files={"top.json": json.dumps({"modules": modules}), **files},
                   script=script, ports=dict(pins), alarm_bits=alarm_bits, player=player,
-                  z="xy2_z" in pins, settle_falling=True,
+                  z="xy2_z" in pins, io="io_in" in pins, settle_falling=True,
                   # A netlist's C++ is some 5 MB: the compiler's light optimisation (its
                   # measured times in compiler.py), not -O3.
                   optimise=False,
