@@ -460,6 +460,27 @@ def test_a_ulx3s_netlist_of_missing_pins_is_refused_in_one_line(tmp_path):
     with pytest.raises(CompileError, match="not a ULX3S build of every pin .no xy2_0__clk__io"):
         netlist_design(tmp_path)
 
+def test_a_ulx3s_netlists_queue_io_pins_are_the_boards(tmp_path):
+    """A build with I/O in the queue: its io_in pins driven by the board, its io_out pins
+    read; a netlist with only one of the two is refused in one line."""
+    folder = ulx3s_netlist(tmp_path, {"pll": PLL})
+    netlist = json.loads((folder / "galvoscan_ulx3s.json").read_text())
+    ports = netlist["modules"]["galvoscan_ulx3s"]["ports"]
+    ports.update({ULX3S_PORTS["io_in"]: {"direction": "inout", "bits": [300, 301]},
+                  ULX3S_PORTS["io_out"]: {"direction": "inout", "bits": [302, 303]}})
+    (folder / "galvoscan_ulx3s.json").write_text(json.dumps(netlist))
+    design = netlist_design(folder)
+    assert design.io and "#define GS_IO 1" in design.ports_header()
+    assert (design.ports["io_in"], design.ports["io_out"]) == ("io_in_0__io", "io_out_0__io")
+    directions = json.loads(design.files["top.json"])["modules"]["top"]["ports"]
+    assert (directions["io_in_0__io"]["direction"], directions["io_out_0__io"]["direction"]) \
+        == ("input", "output")
+    del ports[ULX3S_PORTS["io_out"]]
+    (folder / "galvoscan_ulx3s.json").write_text(json.dumps(netlist))
+    with pytest.raises(CompileError, match="io_in alone"):
+        netlist_design(folder)
+
+
 def test_only_the_cells_a_netlist_uses_are_read():
     """Yosys' cell models of the netlist's cells, with what they instantiate and the file's
     defines; none of the others (the UltraPlus SPRAM's alone costs Yosys some 50 s)."""

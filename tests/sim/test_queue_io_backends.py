@@ -34,9 +34,9 @@ def io_word(kind, *, index, level):
 
 @functools.cache
 def run(backend):
-    """(Once a backend, for both tests: they only read its records.) A jump, output 0 set (held), output 1 pulsed, a wait for input 0 to be high (5 ms
-    at most), a jump; input 0 raised :data:`PART_AFTER_S` after. Returns the board and the
-    clock the input was raised on."""
+    """A jump, output 0 set (held), output 1 pulsed, a wait for input 0 to be high (5 ms at
+    most), a jump; input 0 raised :data:`PART_AFTER_S` after. Returns the board and the clock
+    the input was raised on. (Once a backend: the tests only read its records.)"""
     board = SimulatedBoard(backend=backend, **IO_BOARD)
     client = HostClient(SimTransport(board))
     client.write_many([("jump_delay", 20), ("run", 1)])
