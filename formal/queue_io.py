@@ -2,12 +2,12 @@
 before it is marked, a wait for an input ends only at its level, a timed-out wait holds the
 queue until a flush, and the outputs change only as the queue's words say."""
 
-from amaranth.asserts import AnyConst, AnySeq
-from amaranth.hdl import (Assert, Assume, Cat, ClockDomain, Cover, Elaboratable, Module, Mux,
+from amaranth.asserts import AnySeq
+from amaranth.hdl import (Assert, Assume, ClockDomain, Cover, Elaboratable, Module,
                           ResetSignal, Signal)
 
 from ..gateware.fields import IOKind
-from ..gateware.sources.vector import IOWord, PixelVectorCommand
+from ..gateware.sources.vector import PixelVectorCommand, io_word
 
 
 __all__ = ["QueueIOSpec"]
@@ -56,7 +56,7 @@ class QueueIOSpec(Elaboratable):
         if dut.encoders:
             m.d.comb += [dut.count_x.eq(AnySeq(32)), dut.count_y.eq(AnySeq(32))]
         command = command_in.payload
-        word = IOWord(Cat(command.op, command.corner_frames, command.pixels))
+        word = io_word(command)
         taken = command_in.valid & command_in.ready
         io_taken = taken & command.io
 
@@ -81,8 +81,6 @@ class QueueIOSpec(Elaboratable):
                      away_seen.eq(started & ~taken & ~dut.flush &
                                   (away_seen | (input_now != word.level)))]
 
-        # Frame strobes counted from the moment a limited wait began (the spec's clock of it).
-        # (Proved with a few frames a ms: the count stays small.)
 
         out = dut.commands_out
         m.d.comb += [

@@ -33,7 +33,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..fields import IOKind, IOState
-from .vector import IOVectorCommand, IOWord, PixelVectorCommand
+from .vector import IOVectorCommand, PixelVectorCommand, io_word
 
 
 __all__ = ["QueueIO", "IO_INPUTS", "IO_OUTPUTS"]
@@ -113,8 +113,7 @@ class QueueIO(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         command = self.commands_in.payload
-        # (An I/O word's bits 8:0 are the op, corner-hold and pixels fields of a segment's.)
-        word = IOWord(Cat(command.op, command.corner_frames, command.pixels))
+        word = io_word(command)
         is_io = self.commands_in.valid & command.io
 
         # Every other command straight through.
@@ -213,7 +212,7 @@ class QueueIO(wiring.Component):
                 with m.If(self.flush):
                     m.next = "PASS"
             with m.State("SETTLE"):
-                # (The target and the count into the comparisons: two clocks.)
+                # (A clock for the new target to reach the comparisons' flip-flops.)
                 m.next = "WAIT_COUNT"
                 with m.If(self.flush):
                     m.next = "PASS"

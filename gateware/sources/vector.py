@@ -39,7 +39,7 @@ from .dda import DIRECTION_BITS, Direction, LineDDA
 
 __all__ = ["VectorSequencer", "DirectedVectorSequencer", "VectorCommand",
            "DelayedVectorCommand", "VecOpWord", "PixelVecOpWord", "PixelVectorCommand",
-           "IOVecOpWord", "IOVectorCommand", "IOWord",
+           "IOVecOpWord", "IOVectorCommand", "IOWord", "io_word",
            "PIXELS_PER_WORD", "command_layout", "OP_JUMP", "OP_MARK"]
 
 
@@ -73,6 +73,12 @@ IOVectorCommand = data.StructLayout({"op": VectorOp, "x": 16, "y": 16, "corner_f
 IOWord = data.StructLayout({"kind": IOKind, "index": 1, "level": 1, "edge": 1, "_": 3})
 #: Pixels one pixel word carries.
 PIXELS_PER_WORD = 32
+
+
+def io_word(command):
+    """The :data:`IOWord` view of a queued :data:`IOVectorCommand`: an I/O word's bits 8:0
+    are the op, corner-hold and pixels fields of a segment's."""
+    return IOWord(Cat(command.op, command.corner_frames, command.pixels))
 
 
 
