@@ -37,6 +37,7 @@ from .plan.objects import code_object
 from .inputs.drawings import UNITS, load_drawing
 from .geometry.fill import HatchSet, LineOrder
 from .plan.fly import Fly, check_fly, plan_fly
+from .plan.part_io import PartIO, part_io
 from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers, with_file_layers
 from .inputs.photo import Dither, PhotoSpec
@@ -49,6 +50,7 @@ from .inputs.text import TextSpec, text_drawing
 from .plan.objects import JobSettings, MarkObject
 from .plan.sky import job_sky
 from .plan.wobble import WobbleSettings, wobble_registers
+from .settings.io import IO_SETTINGS
 from .settings.sky import SKY_SETTINGS
 from .settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                              WOBBLE_HZ, Z)
@@ -59,7 +61,7 @@ from .build import PRESETS
 
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
-           "HatchSet", "LineOrder", "Fly", "Job",
+           "HatchSet", "LineOrder", "Fly", "PartIO", "part_io", "Job", "job_io",
            "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
            "fields",
            "job_settings", "job_wobble", "apply_wobble", "apply_z", "check_fly", "plan_fly",
@@ -161,8 +163,13 @@ class Job:
     profile's ``[field] z_units_per_mm`` and a bitstream with the Z channel), and SkyWriting
     (``sky_mode`` 0 … 3, ``timelag_us``, ``laser_on_shift_us``, ``nprev_us``, ``npost_us``,
     ``sky_limit``; None: the profile's ``[sky]``; it needs a bitstream with pixel lines,
-    :mod:`galvoscan.plan.sky`). The numbers are checked against their settings
-    (:mod:`galvoscan.settings.laser`, :mod:`galvoscan.settings.sky`) here."""
+    :mod:`galvoscan.plan.sky`), and I/O on a production line: ``wait_input`` (each part
+    waits in the board's queue for that input: ``part``, the part sensor), ``wait_level``,
+    ``wait_timeout_s``, ``set_output`` (set for a PLC once the part is marked: ``done``) and
+    ``output_pulse_ms`` (None: the defaults of :mod:`galvoscan.settings.io`; it needs a
+    bitstream with I/O in the queue, :mod:`galvoscan.plan.part_io`). The numbers are
+    checked against their settings (:mod:`galvoscan.settings.laser`,
+    :mod:`galvoscan.settings.sky`, :mod:`galvoscan.settings.io`) here."""
     drawings: tuple = ()
     texts: tuple = ()
     codes: tuple = ()
@@ -188,17 +195,28 @@ class Job:
     nprev_us: float = None
     npost_us: float = None
     sky_limit: float = None
+    wait_input: str = None
+    wait_level: str = None
+    wait_timeout_s: float = None
+    set_output: str = None
+    output_pulse_ms: float = None
 
     def __post_init__(self):
         if self.fly is not None and not isinstance(self.fly, Fly):
             raise PlanError(f"a job's fly is an api.Fly, not {self.fly!r}")
         for setting in (SPEED, POWER, PRR, PASSES, TOLERANCE, WOBBLE, WOBBLE_ALONG, WOBBLE_HZ,
-                        Z, *SKY_SETTINGS):
+                        Z, *SKY_SETTINGS, *IO_SETTINGS):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
+        job_io(self)                    # (a wait's setting without the wait: refused here)
         for name in ("drawings", "texts", "codes", "photos", "layers", "hatch"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
+
+
+def job_io(job):
+    """``job``'s :class:`PartIO` (what each part waits for and sets), or None."""
+    return part_io(**{setting.name: getattr(job, setting.name) for setting in IO_SETTINGS})
 
 
 # --- planning --------------------------------------------------------------------------------
@@ -306,13 +324,15 @@ class Plan:
     object's ``placement`` and ``drawing`` (to turn marks back into the drawing's own
     coordinates); ``wobbles``: whether any of it wobbles (the board needs the wobble
     stage); ``fly``: a job on the fly's :class:`~galvoscan.plan.fly.FlyPlan` (its registers,
-    and how long the part stays in the field against how long the job takes), else None."""
+    and how long the part stays in the field against how long the job takes), else None;
+    ``io``: what each part waits for and sets (:class:`PartIO`), else None."""
     vector_job: object
     profile: object
     placement: object
     drawing: object
     wobbles: bool = False
     fly: object = None
+    io: PartIO = None
 
     @property
     def estimate_s(self):
@@ -367,6 +387,7 @@ def plan_made(objects, job, profile):
     apply_z(planned.vector_job, job.z_mm, profile)
     if job.fly is not None:
         planned.fly = plan_fly(job.fly, planned.vector_job, profile)
+    planned.io = job_io(job)
     return planned
 
 
@@ -475,19 +496,28 @@ def load_lens_table(client, profile, say=None):
     upload_table(client, table)
 
 
-def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None):
+def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None, io=None):
     """Run ``vector_job`` (its layers one after the other, each at its own settings) with
     ``streamer``: the reports summed into one, and (``board``: a simulated board) the index
     of each layer's first pulse. ``fly``: a job on the fly's registers
     (:meth:`~galvoscan.plan.fly.FlyPlan.registers`), each layer's too, the count zeroed as
-    the first starts (the part is one)."""
+    the first starts (the part is one). ``io``: the part's :class:`PartIO`, its steps
+    queued before the first layer's segments and after the last's (a wait's time-out added
+    to ``timeout_s``)."""
     reports, starts = [], []
     parts = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
     for index, part in enumerate(parts):
         starts.append(len(board.pulses) if board is not None else None)
+        segments = part.segments
+        wait_s = 0.0
+        if io is not None:
+            segments = [*(io.before(fly=fly is not None) if index == 0 else ()), *segments,
+                        *(io.after(fly=fly is not None) if index == len(parts) - 1 else ())]
+            wait_s = io.wait_s if index == 0 else 0.0
         try:
-            reports.append(streamer.run_vector(part.segments, {**part.registers, **(fly or {})},
-                                               timeout_s=timeout_s, ready_timeout_s=timeout_s,
+            reports.append(streamer.run_vector(segments, {**part.registers, **(fly or {})},
+                                               timeout_s=timeout_s + wait_s,
+                                               ready_timeout_s=timeout_s,
                                                clear_count=index == 0))
         except JobAborted as error:
             # A layer marked whole is the part done only if it is the last.
@@ -554,7 +584,7 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     load_lens_table(client, plan.profile, say)
     streamer = JobStreamer(client, progress=progress, pause=pause)
     report, _ = stream_layers(streamer, plan.vector_job, board if simulated else None,
-                              timeout_s, fly=fly)
+                              timeout_s, fly=fly, io=plan.io)
     marks = None
     if simulated:
         points = [p for p in board.points() if p[2] > 0]

@@ -10,7 +10,7 @@ each corner's hold in whole 10 µs frames with the mark that leaves it, in ``vec
 import math
 
 from ..gateware.host.regmap import CORNER_FRAMES_MAX, FRAME_US
-from .segments import PIXELS
+from .segments import IO, PIXELS
 
 
 __all__ = ["corner_frames", "FRAME_US"]
@@ -30,7 +30,7 @@ def corner_frames(segments, polygon_delay_us, *, start=(32768, 32768)):
     here = start
     direction = None                # the last mark's, while marks follow each other
     for op, x, y in segments:
-        if op == PIXELS:                # (a pixel word: no move, no corner)
+        if op in (PIXELS, IO):          # (a pixel word, an I/O step: no move, no corner)
             holds.append(0)
             continue
         dx, dy = x - here[0], y - here[1]

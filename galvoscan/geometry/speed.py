@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from .field import CENTRE, PlanError
-from .segments import MARK, PIXELS, STEPPED
+from .segments import IO, JUMP, MARK, PIXELS, STEPPED
 
 
 __all__ = ["POINTS_PER_S_MAX", "Pitch", "choose_pitch", "fixed_pitch", "estimate_seconds",
@@ -127,12 +127,12 @@ def fixed_pitch(speed_mm_s, prr_hz, units_per_mm, pitch_units, *, pulses_per_poi
 
 
 def _walk(segments):
-    """Lengths (galvo units) and ops of the segments, from the field centre (a pixel word,
-    which moves nothing, 0)."""
+    """Lengths (galvo units) and ops of the segments, from the field centre (a pixel word or an
+    I/O step, which move nothing, 0)."""
 
     here, out = (CENTRE, CENTRE), []
     for op, x, y in segments:
-        if op == PIXELS:
+        if op in (PIXELS, IO):
             out.append((op, 0.0))
             continue
         out.append((op, math.hypot(x - here[0], y - here[1])))
@@ -162,7 +162,7 @@ def segment_seconds(segments, *, pitch_units, pulses_per_point, prr_hz, jump_del
     dwell_s = pulses_per_point / prr_hz
     jump_s = _jump_s(jump_delay_us, frame_s)
     return [math.ceil(length / pitch_units - 1e-12) * dwell_s if op in STEPPED else
-            0.0 if op == PIXELS else jump_s for op, length in _walk(segments)]
+            0.0 if op in (PIXELS, IO) else jump_s for op, length in _walk(segments)]
 
 
 def jump_mark_lengths(segments, units_per_mm, *, pitch_units=None):
@@ -171,7 +171,7 @@ def jump_mark_lengths(segments, units_per_mm, *, pitch_units=None):
     its sweep is neither."""
     walked = _walk(segments)
     mark = sum(length for op, length in walked if op == MARK)
-    jump = sum(length for op, length in walked if op not in STEPPED)
+    jump = sum(length for op, length in walked if op == JUMP)
     lit = sum(bin(x | y << 16).count("1") for op, x, y in segments if op == PIXELS)
     return (mark + lit * (pitch_units or 0)) / units_per_mm, jump / units_per_mm
 

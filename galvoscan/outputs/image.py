@@ -14,7 +14,7 @@ from ..gateware.player.image_format import (CRC_BYTES, FORMAT_VERSION, HEADER_BY
                                             JOB_OFFSET, MAGIC, MAX_IMAGE_BYTES, MAX_SETTINGS,
                                             PLAYER_OWNED, SEGMENT_WORDS, Word)
 from ..geometry.corners import corner_frames
-from .queue_words import check_segment, job_segments, segment_of_words, segment_words
+from .queue_words import check_segment, job_segments, queue_word, segment_of_words
 
 
 __all__ = ["ImageError", "JobImage", "job_image", "read_image", "image_in_flash", "JOB_OFFSET",
@@ -76,8 +76,8 @@ def job_image(segments, registers, *, repeats=1):
     words = [0] * HEADER_WORDS
     for address, value in settings:
         words += [address, value]
-    for (op, x, y), hold in zip(segments, corners):
-        words += segment_words(op, x, y, hold)
+    for segment, hold in zip(segments, corners):
+        words += queue_word(segment, hold)
     assert length == 2 * len(words)
     words[Word.MAGIC_LOW:Word.MAGIC_HIGH + 1] = (int.from_bytes(MAGIC[:2], "little"),
                                                   int.from_bytes(MAGIC[2:], "little"))

@@ -4,21 +4,21 @@ each (:func:`segment_words`, and back: :func:`segment_of_words`), what the board
 (:mod:`.stream`) sends these words and a job image (:mod:`.image`) holds them, so the same
 drawing gives the same wires streamed or played."""
 
-from ..gateware.fields import pack
+from ..gateware.fields import IOKind, pack
 from ..gateware.host.regmap import BY_NAME, VectorOp
-from ..gateware.sources.vector import PixelVecOpWord, VecOpWord
-from ..geometry.segments import JUMP, LINE, MARK, OPS, PIXELS
+from ..gateware.sources.vector import IOVecOpWord, IOWord, PixelVecOpWord, VecOpWord
+from ..geometry.segments import IO, IOStep, JUMP, LINE, MARK, OPS, PIXELS
 
 
-__all__ = ["check_segment", "segment_words", "segment_of_words", "job_segments"]
+__all__ = ["check_segment", "segment_words", "queue_word", "segment_of_words", "job_segments"]
 
 
 def check_segment(op, x, y):
     """Refuse a segment the board would: ``op`` one of :data:`~galvoscan.geometry.segments.OPS`,
     ends within the field (a pixel word's two halves, 16 bits each)."""
     if op not in OPS:
-        raise ValueError(f"a segment is a jump, a mark, a pixel line or a pixel word, not "
-                         f"{op!r}")
+        raise ValueError(f"a segment is a jump, a mark, a pixel line, a pixel word or an I/O "
+                         f"step, not {op!r}")
     for value in (x, y):
         reg = BY_NAME["vec_x"]
         if isinstance(value, bool) or not isinstance(value, int) or \
@@ -26,18 +26,38 @@ def check_segment(op, x, y):
             raise ValueError(f"segment end {value!r} is outside {reg.low} … {reg.high}")
 
 
-def segment_words(op, x, y, corner_frames=0):
+def segment_words(op, x, y, corner_frames=0, step=None):
     """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
     streamer writes and a job image holds: a pixel line is a mark, and a pixel word a jump,
-    with ``vec_op``'s ``pixels`` bit set."""
+    with ``vec_op``'s ``pixels`` bit set; an I/O step (``op`` an
+    :class:`~galvoscan.geometry.segments.IOStep`'s, ``step`` it) has its ``io`` bit set and
+    what it does in bits 8:0."""
+    if op == IO:
+        if not isinstance(step, IOStep):
+            raise ValueError("an I/O step's words need the IOStep (what it does)")
+        return x, y, pack(IOVecOpWord, io=1) | pack(IOWord, kind=step.kind, index=step.index,
+                                                    level=step.level, edge=int(step.edge))
     if op in (LINE, PIXELS):
         return x, y, pack(PixelVecOpWord, op=VectorOp.MARK if op == LINE else VectorOp.JUMP,
                           corner_frames=corner_frames if op == LINE else 0, pixels=1)
     return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
 
 
+def queue_word(segment, corner_frames=0):
+    """:func:`segment_words` of one segment (an ``(op, x, y)`` tuple or an
+    :class:`~galvoscan.geometry.segments.IOStep`)."""
+    op, x, y = segment
+    return segment_words(op, x, y, corner_frames, step=segment if op == IO else None)
+
+
 def segment_of_words(x, y, op_word):
-    """``(op, x, y, corner_frames)``: the segment whose :func:`segment_words` these are."""
+    """``(op, x, y, corner_frames)``: the segment whose :func:`segment_words` these are (an
+    I/O word's ``op`` is its :class:`~galvoscan.geometry.segments.IOStep`, ``corner_frames``
+    0)."""
+    if IOVecOpWord.from_bits(op_word).io:
+        word = IOWord.from_bits(op_word & 0x1FF)
+        return IOStep(IOKind(word.kind), index=word.index, level=word.level,
+                      edge=bool(word.edge), arg_x=x, arg_y=y), x, y, 0
     word = PixelVecOpWord.from_bits(op_word)
     if word.op == VectorOp.MARK:
         op = LINE if word.pixels else MARK
@@ -49,10 +69,19 @@ def segment_of_words(x, y, op_word):
 def job_segments(segments):
     """A vector job's segments as the board is sent them: ending on a jump (to where the last
     mark ends: no move), since the board counts a mark that finds the queue empty as an
-    underrun, and a job's end is none."""
-    segments = list(segments)
-    if segments and segments[-1][0] != JUMP:
-        # (After a pixel line's words: to where the line ends.)
-        end = next(s for s in reversed(segments) if s[0] != PIXELS)
-        segments.append((JUMP, *end[1:]))
-    return segments
+    underrun, and a job's end is none; and a jump of the same kind before each I/O step that
+    follows a mark or a pixel line (the step waits for the sequencer to be idle, and a line
+    must not wait for its pixel words: the board's laser-off delay runs before the step)."""
+    out = []
+    at = None           # the last segment that moved the head: a jump, a mark or a line
+    for segment in segments:
+        if segment[0] == IO and at is not None and at[0] != JUMP:
+            out.append((JUMP, *at[1:3]))
+            at = out[-1]
+        out.append(segment)
+        if segment[0] in (JUMP, MARK, LINE):
+            at = segment
+    if at is not None and at[0] != JUMP:
+        # (After a pixel line's words, or I/O steps: to where the line ends.)
+        out.append((JUMP, *at[1:3]))
+    return out

@@ -31,7 +31,17 @@ the fly off; as it starts, once armed and past the MO lead, the encoder's count 
 (``fly_clear``: the part is where the drawing is) and the fly turned on, just before
 ``run = 1``; it is turned off as the job ends, however it ends. The points the fly carried
 past the field's edge (held there, the laser off: ``fly_clipped``) are counted in the
-report. Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
+report. A job whose parts come on a belt queues the fly's start (``FLY_START``, after its wait
+for the part sensor) instead: the board clears the count and turns the fly on as the part
+arrives, and the host only writes ``run = 1``.
+
+A job with I/O steps (:class:`~galvoscan.geometry.segments.IOStep`: a wait for the part
+sensor, an output for a PLC) needs a bitstream with I/O in the queue (``caps.io``); the
+steps go into the queue between the segments, and the board does each when the segments
+before it are marked. While a wait holds the queue the streamer keeps the watchdog fed; a
+wait that runs out of time (the board's ``io`` register: ``timed_out``) stops the job as a
+fault does, and however an I/O job ends its queue is flushed (``vec_flush``: a held wait
+dropped). Nothing of a job is dropped silently: a refused segment (``vec_rejected``) or frame
 (``errors``) is counted and reported, and :class:`StreamReport` says how many.
 """
 
@@ -42,12 +52,13 @@ from dataclasses import dataclass, field
 
 from ..gateware.points import FIELD_CENTRE
 from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, FlyControl,
-                                    HeadState, Mode, Status, VECTOR_QUEUE_DEPTH, pack)
+                                    HeadState, IOKind, IOState, Mode, Status,
+                                    VECTOR_QUEUE_DEPTH, pack)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import LINE, PIXELS, has_pixel_lines
+from ..geometry.segments import LINE, PIXELS, has_pixel_lines, io_steps
 from ..link.client import ClientError, LinkLost, encode_write
 from .board_state import read_head
-from .queue_words import check_segment, job_segments, segment_words
+from .queue_words import check_segment, job_segments, queue_word
 
 
 __all__ = ["JobAborted", "JobRefused", "JobInterrupted", "StreamReport", "JobStreamer", "Pause",
@@ -250,6 +261,9 @@ class JobStreamer:
         self._capabilities = None
         self._fly = None            # a job on the fly's fly_ctrl (the fly on), while it runs
         self._fly_clear = True
+        self._fly_queued = False    # the job's queue starts the fly (FLY_START), not the host
+        self._io = False            # the job has I/O steps (its queue is flushed as it ends)
+        self._waits = []            # its waits for an input (time-outs read in status())
         self._clipped = 0
         self.pulses = 0
         #: Segments the board's queue holds, read by :meth:`check_ready` (None before).
@@ -274,6 +288,12 @@ class JobStreamer:
         if flags.fault_link:
             raise JobAborted("the board refused a frame while armed (damaged or lost on the "
                              "line): it switched the laser off at once")
+        if self._waits and IOState.from_bits(self.board.read("io")).timed_out:
+            step = self._waits[0]
+            limit = f"{step[1] / 1000:g} s" if step[1] >= 1000 else f"{step[1]} ms"
+            raise JobAborted(f"no part came: input {step.index} was not "
+                             f"{'high' if step.level else 'low'} within {limit} (the wait's "
+                             f"time-out), so the board stopped the job; the laser is off")
         caps = self.capabilities()
         if caps.head and caps.laser and \
                 HeadState.from_bits(self.board.read("head_state")).fault:
@@ -337,6 +357,10 @@ class JobStreamer:
         later layer of the part goes on from it); best effort (the link may be what
         failed)."""
         writes = [("arm", 0), ("run", 0), ("guide", 0)]
+        if self._io:
+            # A wait that holds the queue (for a part that did not come) is dropped, and the
+            # fly the queue started with it.
+            writes.append(("vec_flush", 1))
         if self._fly is not None:
             writes.append(("fly_ctrl", self._fly & ~pack(FlyControl, on=1)))
         for name, value in writes:
@@ -463,9 +487,9 @@ class JobStreamer:
                     continue
                 deadline = self._now() + timeout_s
             count = min(free, self.batch, end - sent)
-            words = [segment_words(op, x, y, hold)
-                     for (op, x, y), hold in zip(segments[sent:sent + count],
-                                                 corners[sent:sent + count])]
+            words = [queue_word(segment, hold)
+                     for segment, hold in zip(segments[sent:sent + count],
+                                              corners[sent:sent + count])]
             # Each answered with the free places after it: the last one's is the room now.
             free = self.board.queue_segments([(op_word, x, y) for x, y, op_word in words])
             sent += count
@@ -512,7 +536,7 @@ class JobStreamer:
         if armed:
             self.board.write("arm", 1)
             self.wait_ready(ready_timeout_s)
-        if self._fly is not None:
+        if self._fly is not None and not self._fly_queued:
             # The part is where the drawing is now: the count from here (unless a layer
             # before this one started it), the fly on, then the run.
             self.board.write_many([*([("fly_clear", 1)] if self._fly_clear else []),
@@ -636,6 +660,16 @@ class JobStreamer:
             raise JobRefused("the board's bitstream has no marking on the fly (the ULX3S's "
                              "has it): mark the job standing still, without --fly; nothing "
                              "was sent")
+        steps = io_steps(segments)
+        if steps and not self.capabilities().io:
+            raise JobRefused("the board's bitstream has no I/O in the queue (the ULX3S's has "
+                             "it): mark the job without --wait-input and --set-output; nothing "
+                             "was sent")
+        if any(step.kind not in (IOKind.WAIT_INPUT, IOKind.SET_OUTPUT) for step in steps) and \
+                not self.capabilities().fly:
+            raise JobRefused("the job waits for an encoder's count or starts the fly in its "
+                             "queue, and the board's bitstream has no marking on the fly (the "
+                             "ULX3S's has it); nothing was sent")
         if "z" in registers and not self.capabilities().z:
             raise JobRefused("the board's bitstream has no Z channel (the ULX3S's has it): "
                              "mark the job without --z or a layer's z; nothing was sent")
@@ -647,9 +681,12 @@ class JobStreamer:
         def body():
             written = self.setup({"run": 0, "mode": Mode.VECTOR.value, **registers})
             self.verify(written)
+            self._io = bool(steps)
+            self._waits = [step for step in steps if step.kind == IOKind.WAIT_INPUT]
             if fly:
                 self._fly = written["fly_ctrl"] | pack(FlyControl, on=1)
                 self._fly_clear = clear_count
+                self._fly_queued = any(step.kind == IOKind.FLY_START for step in steps)
                 clipped = self.board.read("fly_clipped")
             self._watchdog_ms = self.board.read("watchdog")
             corners = corner_frames(segments, written["polygon_delay"]) \
@@ -668,6 +705,8 @@ class JobStreamer:
             return self._job(body, total=len(segments))
         finally:
             self._fly = None
+            self._fly_queued = self._io = False
+            self._waits = []
 
     def run_area(self, registers, *, pulses, timeout_s, ready_timeout_s=5.0):
         """A spiral or raster job: set up, arm, run until the laser has fired ``pulses``

@@ -28,12 +28,13 @@ from ..field.correction_table import TABLE_SIZES
 from .. import limits
 from ..limits import (CORNER_FRAMES_MAX, DEFAULT_CLOCK_HZ, DEFAULT_CORRECTION_NODES,
                       DEFAULT_TABLE_POINTS, FRAME_US, LASER_DELAY_MAX_US, LASER_ON_LEAD_US,
-                      MAX_TABLE_POINTS,
+                      MAX_TABLE_POINTS, MIN_TABLE_POINTS,
                       SCANNER_DELAY_MAX_US, VECTOR_QUEUE_DEPTH, WOBBLE_MAX_AMPLITUDE,
                       WOBBLE_MAX_HZ, WORD_MAX)
 from .. import fields
 from . import register_list
-from ..fields import (STATUS_BITS, Capabilities, FlyControl, HeadState, HeadStatus, Mode,
+from ..fields import (STATUS_BITS, Capabilities, FlyControl, HeadState, HeadStatus, IOKind,
+                      IOState, Mode,
                       PlayerResult,
                       PlayerState, PlayerStatus, Status, VectorOp, WobbleShape, pack)
 from .register_list import (CORRECTION_REGISTERS, DELAY_REGISTERS, FLY_REGISTERS, HEAD_REGISTERS,

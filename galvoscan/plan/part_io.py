@@ -1,0 +1,136 @@
+"""A part's I/O on a production line: the wait for the part sensor before it is marked, and
+the output that tells a PLC it is done, as the I/O steps the board's queue does around the
+part's segments (:class:`~galvoscan.geometry.segments.IOStep`; SCANLAB RTC5/6's list I/O).
+
+Before a part: the held "done" output of the last part set low (an output held, not pulsed),
+then the wait for the input to come to its level (an edge, so a part still at the sensor is
+not marked twice), then, on the fly, the fly's start (the count zeroed as the part arrives:
+the part is where the drawing is). After it: the fly's end, then the output set.
+"""
+
+import math
+from dataclasses import dataclass
+
+from ..gateware.fields import IOKind
+from ..geometry.field import PlanError
+from ..geometry.segments import IOStep
+from ..settings.io import (DEFAULT_OUTPUT_PULSE_MS, DEFAULT_WAIT_TIMEOUT_S, INPUTS, LEVELS,
+                           OUTPUT_PULSE, OUTPUTS, SET_OUTPUT, WAIT_INPUT, WAIT_LEVEL,
+                           WAIT_TIMEOUT)
+
+
+__all__ = ["PartIO", "part_io", "part_steps"]
+
+#: µs a frame lasts: an output's pulse is counted in frames.
+_FRAME_MS = 0.01
+
+
+@dataclass(frozen=True)
+class PartIO:
+    """What each part waits for and sets: ``wait_input`` (a name of
+    :data:`~galvoscan.settings.io.INPUTS`, None: no wait), its ``wait_level`` (``high`` or
+    ``low``) and ``wait_timeout_s`` (0: none), ``set_output`` (a name of
+    :data:`~galvoscan.settings.io.OUTPUTS`, None: none) and its ``output_pulse_ms`` (0: held
+    until the next part's wait starts)."""
+    wait_input: str = None
+    wait_level: str = "high"
+    wait_timeout_s: float = DEFAULT_WAIT_TIMEOUT_S
+    set_output: str = None
+    output_pulse_ms: float = DEFAULT_OUTPUT_PULSE_MS
+
+    def __post_init__(self):
+        for setting in (WAIT_INPUT, WAIT_LEVEL, WAIT_TIMEOUT, SET_OUTPUT, OUTPUT_PULSE):
+            value = getattr(self, setting.name)
+            if value is not None:
+                setting.check(value)
+        if self.wait_input is None and self.set_output is None:
+            raise PlanError("a part's I/O waits for an input or sets an output (or both)")
+
+    @property
+    def timeout_ms(self):
+        """The wait's time-out as the board counts it, ms (0: none)."""
+        return round(self.wait_timeout_s * 1000)
+
+    @property
+    def pulse_frames(self):
+        """The output's pulse as the board counts it, 10 µs frames (0: held)."""
+        return round(self.output_pulse_ms / _FRAME_MS)
+
+    @property
+    def wait_s(self):
+        """The longest a part's wait may add to its job, s (inf: no time-out)."""
+        if self.wait_input is None:
+            return 0.0
+        return self.wait_timeout_s if self.timeout_ms else math.inf
+
+    def before(self, *, fly=False):
+        """The I/O steps before a part's first segment; ``fly``: the part is marked on the
+        fly, its count zeroed and the fly started as it reaches the sensor."""
+        steps = []
+        if self.set_output is not None and not self.pulse_frames:
+            steps.append(IOStep(IOKind.SET_OUTPUT, index=OUTPUTS[self.set_output], level=0))
+        if self.wait_input is not None:
+            steps.append(IOStep(IOKind.WAIT_INPUT, index=INPUTS[self.wait_input],
+                                level=LEVELS[self.wait_level], edge=True,
+                                arg_x=self.timeout_ms))
+            if fly:
+                steps.append(IOStep(IOKind.FLY_START))
+        return steps
+
+    def after(self, *, fly=False):
+        """The I/O steps after a part's last segment."""
+        steps = []
+        if fly and self.wait_input is not None:
+            steps.append(IOStep(IOKind.FLY_END))
+        if self.set_output is not None:
+            steps.append(IOStep(IOKind.SET_OUTPUT, index=OUTPUTS[self.set_output], level=1,
+                                arg_x=self.pulse_frames))
+        return steps
+
+    def line(self):
+        """One line saying what each part waits for and sets."""
+        said = []
+        if self.wait_input is not None:
+            said.append(f"each part waits for input {self.wait_input} (input "
+                        f"{INPUTS[self.wait_input]}) to go {self.wait_level}, "
+                        + (f"{self.wait_timeout_s:g} s at most (then the job stops, the laser "
+                           f"off)" if self.timeout_ms else "for as long as it takes"))
+        if self.set_output is not None:
+            said.append(f"sets output {self.set_output} (output {OUTPUTS[self.set_output]}) "
+                        + (f"for {self.output_pulse_ms:g} ms" if self.pulse_frames else
+                           "until the next part's wait") + " once it is marked")
+        return "I/O: " + "; ".join(said)
+
+
+def part_io(wait_input=None, wait_level=None, wait_timeout_s=None, set_output=None,
+            output_pulse_ms=None):
+    """The :class:`PartIO` of these settings (None: the defaults), or None when there is
+    none; a :class:`~galvoscan.geometry.field.PlanError` for a setting of a wait without the
+    wait (or of an output without it)."""
+    if wait_input is None:
+        given = [s.flag for s, v in ((WAIT_LEVEL, wait_level), (WAIT_TIMEOUT, wait_timeout_s))
+                 if v is not None]
+        if given:
+            raise PlanError(f"{given[0]} is a wait's: give --wait-input too")
+    if set_output is None and output_pulse_ms is not None:
+        raise PlanError(f"{OUTPUT_PULSE.flag} is an output's: give --set-output too")
+    if wait_input is None and set_output is None:
+        return None
+    return PartIO(wait_input=wait_input, wait_level=wait_level or "high",
+                  wait_timeout_s=DEFAULT_WAIT_TIMEOUT_S if wait_timeout_s is None
+                  else wait_timeout_s,
+                  set_output=set_output,
+                  output_pulse_ms=DEFAULT_OUTPUT_PULSE_MS if output_pulse_ms is None
+                  else output_pulse_ms)
+
+
+def part_steps(io, *, fly=False, queued_fly=False):
+    """``(before, after)``: the I/O steps around a part (``io`` a :class:`PartIO` or None);
+    ``fly``: marked on the fly; ``queued_fly``: the queue starts and ends the fly even without
+    a wait (a job image: the stand-alone player has no host to turn it on)."""
+    before = io.before(fly=fly) if io is not None else []
+    after = io.after(fly=fly) if io is not None else []
+    if fly and queued_fly and not any(step.kind == IOKind.FLY_START for step in before):
+        before.append(IOStep(IOKind.FLY_START))
+        after.insert(0, IOStep(IOKind.FLY_END))
+    return before, after

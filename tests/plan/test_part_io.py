@@ -1,0 +1,77 @@
+"""A part's I/O (galvoscan/plan/part_io.py): the steps queued before and after a part, as the
+docs give them (the held output cleared, the wait on an edge with its time-out in ms, the fly
+started at the part), the line it says, and the settings refused in one line."""
+
+import math
+
+import pytest
+
+from galvoscan.gateware.fields import IOKind
+from galvoscan.geometry.field import PlanError
+from galvoscan.plan.part_io import PartIO, part_io
+from galvoscan.settings.schema import SettingError
+
+
+def kinds(steps):
+    return [(s.kind, s.index, s.level, s.edge, s[1]) for s in steps]
+
+
+def test_a_part_waits_for_the_sensor_and_pulses_done():
+    io = part_io(wait_input="part", set_output="done")
+    assert io.wait_timeout_s == 60 and io.output_pulse_ms == 10 and io.wait_level == "high"
+    assert kinds(io.before()) == [(IOKind.WAIT_INPUT, 0, 1, True, 60_000)]
+    assert kinds(io.after()) == [(IOKind.SET_OUTPUT, 0, 1, False, 1000)]   # 10 ms: 1000 frames
+    assert io.wait_s == 60
+
+
+def test_on_the_fly_the_fly_starts_at_the_part():
+    io = part_io(wait_input="in1", wait_level="low", wait_timeout_s=0, set_output="out1",
+                 output_pulse_ms=0)
+    assert kinds(io.before(fly=True)) == [
+        (IOKind.SET_OUTPUT, 1, 0, False, 0),         # the last part's held output cleared
+        (IOKind.WAIT_INPUT, 1, 0, True, 0),          # no time-out
+        (IOKind.FLY_START, 0, 1, False, 0)]
+    assert kinds(io.after(fly=True)) == [(IOKind.FLY_END, 0, 1, False, 0),
+                                         (IOKind.SET_OUTPUT, 1, 1, False, 0)]
+    assert io.wait_s == math.inf
+    assert "for as long as it takes" in io.line() and "until the next part's wait" in io.line()
+
+
+def test_an_output_alone_waits_for_nothing():
+    io = part_io(set_output="done", output_pulse_ms=655.35)
+    assert io.before(fly=True) == [] and io.wait_s == 0
+    assert kinds(io.after(fly=True)) == [(IOKind.SET_OUTPUT, 0, 1, False, 65535)]
+    assert io.line() == "I/O: sets output done (output 0) for 655.35 ms once it is marked"
+
+
+def test_no_io_is_none():
+    assert part_io() is None
+
+
+@pytest.mark.parametrize("settings, error, message", [
+    (dict(wait_level="low"), PlanError, "--wait-level is a wait's: give --wait-input too"),
+    (dict(wait_timeout_s=3), PlanError, "--wait-timeout is a wait's"),
+    (dict(output_pulse_ms=3), PlanError, "--output-pulse is an output's"),
+    (dict(wait_input="belt"), SettingError, "wait input must be part, in1, not 'belt'"),
+    (dict(wait_input="part", wait_timeout_s=65.536), SettingError, "wait timeout must be"),
+    (dict(set_output="done", output_pulse_ms=-0.01), SettingError, "output pulse must be"),
+    (dict(set_output="done", output_pulse_ms=float("nan")), SettingError, "output pulse"),
+])
+def test_wrong_settings_are_one_line(settings, error, message):
+    with pytest.raises(error, match=message.replace("(", r"\(")) as refused:
+        part_io(**settings)
+    assert "\n" not in str(refused.value)
+
+
+def test_a_part_io_needs_something_to_do():
+    with pytest.raises(PlanError, match="waits for an input or sets an output"):
+        PartIO()
+
+
+def test_the_settings_pages_io_table_is_the_declarations():
+    from pathlib import Path
+    from galvoscan.settings.io import IO_SETTINGS
+    from galvoscan.settings.schema import markdown_table
+    page = (Path(__file__).parents[2] / "docs" / "reference" / "settings.md").read_text(
+        encoding="utf-8")
+    assert markdown_table(IO_SETTINGS) in page
