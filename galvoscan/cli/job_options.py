@@ -19,6 +19,7 @@ from ..inputs.text import ALIGNMENTS
 from ..plan.layer_keys import CONTOUR, HATCH, HATCH_LINES, LAYER_KEYS, OUTLINE
 from ..plan.pixel_lines import PHOTO_LINES
 from ..settings.fly import BELT_SPEED, ENCODER, FLY, FLY_DIRECTION, FLY_SPEED
+from ..settings.io import IO_SETTINGS
 from ..settings.sky import SKY_SETTINGS
 from ..settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBLE_ALONG,
                               WOBBLE_HZ, Z)
@@ -49,6 +50,9 @@ GROUPS = {
     "placement": "placement",
     "fly": "marking on the fly (a belt carries the part through the field as it is marked; "
            "needs a bitstream with the fly: the ULX3S's; defaults: the profile's [fly])",
+    "io": "I/O on a production line (each part waits in the board's queue for a part sensor, "
+          "and an output tells a PLC it is done; needs a bitstream with I/O in the queue: the "
+          "ULX3S's)",
     "sky": "SkyWriting (SCANLAB RTC's: each mark run in and out at its speed, laser off, the "
            "laser switched as the lagging mirrors cross its ends; needs a bitstream with "
            "pixel lines: the ULX3S's, build --preset engraver; defaults: the profile's [sky])",
@@ -245,6 +249,8 @@ OPTIONS = (
                                                       BELT_SPEED)),
     # SkyWriting
     *(_setting(setting, "sky", "job") for setting in SKY_SETTINGS),
+    # I/O in the queue
+    *(_setting(setting, "io", "job") for setting in IO_SETTINGS),
 )
 
 _BY_DEST = {option.dest: option for option in OPTIONS}

@@ -88,13 +88,14 @@ def has_link(args, profile):
 
 
 @contextlib.contextmanager
-def board_link(args, profile, *, wobble=False, pixel_lines=False, belt=None):
+def board_link(args, profile, *, wobble=False, pixel_lines=False, belt=None, sensor=None):
     """``(client, simulated_board or None)`` for the job's board, opened; closed after
     (``wobble``: a simulated board is built with the wobble stage; ``pixel_lines``: a
     simulated iCEBreaker runs the engraver's bitstream, which has them; ``belt``: ``(mm_s,
     counts_per_mm, axis)``, the simulated board's belt runs so under its encoder from the
     start, as a real one would under a board; one line, nothing sent, for one its encoder
-    cannot count)."""
+    cannot count; ``sensor``: :meth:`~galvoscan.sim.board.SimulatedBoard.parts_arrive`'s
+    keywords, the simulated line's part sensor, set before the first byte)."""
     if args.sim:
         # (The ULX3S's bitstream at its own rate unless told another: the profile's baud is
         # the real machine's link.)
@@ -114,6 +115,8 @@ def board_link(args, profile, *, wobble=False, pixel_lines=False, belt=None):
                 board.belt_moves(mm_s, counts_per_mm, axis=axis)
             except ValueError as error:
                 fail(f"the simulated board's belt: {error}")
+        if sensor is not None:
+            board.parts_arrive(**sensor)
         timeout = args.timeout or board.answer_timeout_s()
         server = PTYServer(board).start()
         try:

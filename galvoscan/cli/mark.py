@@ -26,6 +26,8 @@ from ..outputs.stream import JobStreamer, StreamReport
 from ..plan.vector_job import hull_outline, plan_job_file
 from ..platforms.ulx3s import ULX3S_BAUD
 from ..settings.fly import BELT_SPEED, ENCODER, FLY_DIRECTION, FLY_SPEED
+from ..gateware.host.regmap import IOState
+from ..settings.io import INPUTS, IO_SETTINGS, LEVELS, OUTPUTS
 from ..settings.sky import SKY_SETTINGS
 from .args import check_backend_needs_sim, fail, failed, image_file, int_in, read_text
 from .jobargs import (add_job_link_options, board_link, frame_job, has_link, link_baud,
@@ -53,7 +55,7 @@ def job_from_args(args):
                 contour=args.contour, outline=not args.no_outline, tolerance_mm=args.tolerance,
                 z_mm=args.z,
                 **{setting.name: getattr(args, option(setting.flag).dest)
-                   for setting in SKY_SETTINGS})
+                   for setting in (*SKY_SETTINGS, *IO_SETTINGS)})
 
 
 #: The options that say how a job flies (``--fly`` says that it does).
@@ -199,6 +201,8 @@ def _cmd_mark(args):
     try:
         if fly is not None:
             api.check_fly(fly, profile)     # (what needs no plan: refused before one)
+        io = api.part_io(**{setting.name: getattr(args, option(setting.flag).dest)
+                            for setting in IO_SETTINGS})
         counter, serials = part_serials(args, profile)
     except PlanError as error:
         fail(error)
@@ -218,6 +222,8 @@ def _cmd_mark(args):
     flies = _fly_plans(args, parts, profile, fly)
     if flies[0] is not None:
         say(flies[0].line())
+    if io is not None:
+        say(io.line())
     if args.save:
         save_job_file(args, args.save)
         say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
@@ -256,8 +262,18 @@ def _cmd_mark(args):
     # checked at, from before the first byte.
     belt = (fly.speed_mm_s, fly.counts_per_mm, fly.axis.lower()) \
         if fly is not None and not fly.simulated and args.sim else None
-    with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines, belt=belt) as \
-            (client, board):
+    sensor = None
+    if args.sim and io is not None and io.wait_input is not None:
+        # The simulated line: a part at the sensor every part's time and a little more, the
+        # first a moment after the board is up.
+        every_s = 1.2 * max(part.estimate_s for part, *_ in parts) + 20e-3
+        sensor = dict(input=INPUTS[io.wait_input], first_s=5e-3, every_s=every_s,
+                      seen_s=min(2e-3, every_s / 2), level=LEVELS[io.wait_level])
+    with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines, belt=belt,
+                    sensor=sensor) as (client, board):
+        if sensor is not None:
+            say(f"the simulated part sensor sees a part every {sensor['every_s'] * 1e3:.0f} "
+                f"ms")
         for number, (part, *_) in enumerate(parts):
             serial = serials[number]
             fly = flies[number]
@@ -293,7 +309,7 @@ def _cmd_mark(args):
                         return 0
                     report, layer_starts = api.stream_layers(
                         streamer, part, board, timeout,
-                        fly=fly.registers() if fly is not None else None)
+                        fly=fly.registers() if fly is not None else None, io=io)
                     reports.append(report)
             finally:
                 bar.close()
@@ -323,6 +339,14 @@ def _cmd_mark(args):
                     counter.advance()       # this part is marked: its number is taken
                 except PlanError as error:
                     failed(error)
+        if board is not None and io is not None and io.set_output is not None and \
+                io.pulse_frames:
+            # The simulated line runs on (a read takes its time) until the last part's output
+            # pulse has ended, so the record holds all of it.
+            bit = 1 << OUTPUTS[io.set_output]
+            for _ in range(round(io.output_pulse_ms * 10) + 100):
+                if not IOState.from_bits(client.read("io")).outputs & bit:
+                    break
         # Every part's, summed: the marks and pulses off the wires are all of them too.
         every = StreamReport.total(reports)
         counts = every.counters
@@ -340,6 +364,12 @@ def _cmd_mark(args):
                 record["pulses_per_point"] = None
             if fly is not None:
                 record["fly"] = dict(fly.record(), clipped=every.clipped)
+            if io is not None:
+                # Each change of the board's outputs off its pins: [s, outputs (bit 0:
+                # output 0)]; and each part's first pulse, s (when its wait let it go).
+                record["io"] = dict(
+                    outputs=[[round(cycle / board.clk_freq, 6), value]
+                             for cycle, value in board.io_changes])
             print(json.dumps(record))
         elif args.json:
             print(json.dumps({"segments": every.segments, "pulses": every.pulses,

@@ -258,8 +258,11 @@ def markdown_table(settings):
             "|---|---|---|---|---|---|"]
     for s in settings:
         default = number_text(s.default) if s.default is not None else s.default_said
+        # (A choice's range is its words.)
+        span = f"{number_text(s.low)} … {number_text(s.high)}" if s.ranged else \
+            ", ".join(s.choices) if s.kind == "choice" else "—"
         rows.append(f"| `{s.flag}` | {f'`{s.key}`' if s.key else '—'} | {s.unit or '—'} | "
-                    f"{number_text(s.low)} … {number_text(s.high)} | {default} | {s.help} |")
+                    f"{span} | {default or '—'} | {s.help} |")
     return "\n".join(rows)
 
 
