@@ -15,7 +15,8 @@ from pathlib import Path
 from ..flashing.icebreaker import DEFAULT_URL as ICEBREAKER_URL
 from ..flashing.ulx3s import DEFAULT_URL as ULX3S_URL
 from ..settings.laser import PRESS_TIMEOUT
-from .args import add_backend_option, add_setting, fail, failed, int_in, output_file, read_bytes
+from .args import (add_backend_option, add_setting, fail, failed, int_in, number_in, output_file,
+                   read_bytes)
 from .machine import add_machine_option, profile_from
 from .job_reports import FIELD_FRAME
 from .mark import add_drawing_options, add_plan_outputs, planned_job
@@ -24,9 +25,24 @@ from .mark import add_drawing_options, add_plan_outputs, planned_job
 __all__ = ["add_parsers"]
 
 
-def _player_map():
-    """The register map of the bitstream that plays images: the marker preset's."""
-    from ..build import preset_register_map
+#: The bitstream that plays images on each board, as a person names it.
+_PLAYER_BUILD = {"icebreaker": "build --preset marker", "ulx3s": "build --board ulx3s"}
+
+
+def _player_config(board):
+    """The configuration of the bitstream that plays images on ``board``: the iCEBreaker's
+    marker preset, or the ULX3S's one bitstream (every feature)."""
+    from ..build import PRESETS, board_config
+    return board_config("ulx3s") if board == "ulx3s" else PRESETS["marker"]
+
+
+def _player_map(board="icebreaker"):
+    """The register map of the bitstream that plays images on ``board``."""
+    from ..build import preset_register_map, preset_settings
+    if board == "ulx3s":
+        config = _player_config(board)
+        settings = preset_settings(config)
+        return config.register_map(resets=settings.register_resets() if settings else None)
     return preset_register_map("marker")
 
 
@@ -34,30 +50,57 @@ def _cmd_store(args):
     from ..outputs.image import ImageError, job_image, read_image
     from ..outputs.queue_words import job_segments
     from .jobfile import use_job_file
+    from .. import api
+    from ..plan.part_io import part_steps
+    from ..settings.io import IO_SETTINGS
+    from .job_options import option_of_flag
+    from .mark import fly_from_args
     use_job_file(args)
     if not args.output and not args.estimate:
         fail("give -o FILE for the image (or --estimate to plan only)")
-    if args.wobble:
+    ulx3s = args.board == "ulx3s"
+    player = _PLAYER_BUILD[args.board]
+    if args.wobble and not ulx3s:
         fail("the stand-alone bitstream (build --preset marker) has no wobble stage: it does "
-             "not fit beside the job player; store the job without --wobble")
+             "not fit beside the job player; store the job without --wobble (or for the "
+             "ULX3S: --board ulx3s)")
     from ..geometry.field import PlanError
     from .content import part_serials
     if args.repeat != 1:
         fail("an image holds one part: --repeats N plays it N times a start (the same serial "
              "each time)")
-    if args.fly is not None:
-        fail("the stand-alone job player does not mark on the fly: `galvoscan mark --fly` "
-             "runs such a job from the PC")
+    if args.fly is not None and not ulx3s:
+        fail("the iCEBreaker's stand-alone bitstream (build --preset marker) does not mark on "
+             "the fly: store the job for the ULX3S (--board ulx3s), or `galvoscan mark --fly` "
+             "runs it from the PC")
     profile = profile_from(args)
+    fly = fly_from_args(args)
     try:
+        if fly is not None:
+            api.check_fly(fly, profile)
+        io = api.part_io(**{setting.name: getattr(args, option_of_flag(setting.flag).dest)
+                            for setting in IO_SETTINGS})
         _, (serial,) = part_serials(args, profile)
     except PlanError as error:
         fail(error)
+    if io is not None and not ulx3s:
+        fail("the iCEBreaker's stand-alone bitstream (build --preset marker) has no I/O in the "
+             "queue: store the job for the ULX3S (--board ulx3s), whose player waits for the "
+             "part sensor and sets the outputs")
     job, _, _, _, _, say = planned_job(args, profile=profile, serial=serial)
-    if job.sky_mode:
-        fail("the stand-alone job player does not take SkyWriting's run-ins and run-outs "
-             "(pixel lines, which the marker build has not): store the job with --sky 0, or "
-             "mark it from the PC")
+    if job.sky_mode and not ulx3s:
+        fail("the iCEBreaker's stand-alone job player does not take SkyWriting's run-ins and "
+             "run-outs (pixel lines, which the marker build has not): store the job with "
+             "--sky 0, or for the ULX3S (--board ulx3s)")
+    flown = None
+    if fly is not None:
+        try:
+            flown = api.plan_fly(fly, job, profile)
+        except PlanError as error:
+            fail(error)
+        say(flown.line())
+    if io is not None:
+        say(io.line())
     if job.layers and len(job.layers) > 1:
         fail(f"the job has {len(job.layers)} layers, each at its own settings; an image holds "
              f"one set (the player sets the registers once): mark it from the PC, or store "
@@ -66,25 +109,34 @@ def _cmd_store(args):
         say(f"the image marks serial {serial} at every start (the player does not count; the "
             f"counter beside the profile is left as it is)")
     registers = dict(job.registers)
-    if "head_check" not in _player_map() and registers.pop("head_check", 0):
+    if flown is not None:
+        # The fly set up off; the queue turns it on as the part comes (or as the job starts).
+        registers.update(flown.registers())
+    if "head_check" not in _player_map(args.board) and registers.pop("head_check", 0):
         # (Off, it is simply not written: the marker has no head to obey.)
         fail("the profile's [galvo] head_check makes the laser obey the scan head, but the "
              "stand-alone bitstream (build --preset marker) does not read the head's STATUS "
              "line: set head_check = false to store the job")
+    before, after = part_steps(io, fly=flown is not None, queued_fly=True)
+    segments = [*before, *job.segments, *after]
     try:
-        image = job_image(job.segments, registers, repeats=args.repeats)
-        read_image(image, regmap=_player_map())     # what the marker's register file takes
+        image = job_image(segments, registers, repeats=args.repeats)
+        # What the player's register file takes.
+        read_image(image, regmap=_player_map(args.board))
     except ImageError as error:
         fail(error)
     if args.estimate:
         say(f"the image would be {len(image):,} bytes; nothing written")
         return 0
     Path(args.output).write_bytes(image)
-    ending = len(job_segments(job.segments)) - len(job.segments)
+    added = len(job_segments(segments)) - len(segments)
+    steps = len(before) + len(after)
     say(f"wrote {args.output}: {len(image):,} bytes, {len(job.segments)} segments"
-        f"{' and the jump, laser off, that ends the job' if ending else ''}, "
-        f"{args.repeats} repeat(s) a start; put it on the board with `galvoscan flash --job "
-        f"{args.output}` (a bitstream built with --preset marker plays it)")
+        f"{f' and {added} jump(s), laser off, before I/O steps and at the end' if added else ''}"
+        f"{f', {steps} I/O step(s)' if steps else ''}, "
+        f"{args.repeats} repeat(s) a start; put it on the board with `galvoscan flash"
+        f"{' --board ulx3s' if ulx3s else ''} --job {args.output}` (a bitstream built with "
+        f"`galvoscan {player}` plays it)")
     return 0
 
 
@@ -188,15 +240,31 @@ def _cmd_standalone(args):
              f"({FLASH_BYTES - JOB_OFFSET:,} bytes from {JOB_OFFSET:#x}); give a job image, "
              f"or a whole {FLASH_BYTES // 2**20} MiB flash image as `flash --to` writes")
     try:
-        planned = read_image(image, regmap=_player_map())
+        planned = read_image(image, regmap=_player_map(args.board))
     except ImageError as error:
         planned = None
         print(f"galvoscan: note: {args.flash}: {error}; the board's player will refuse it",
               file=sys.stderr)
     profile = profile_from(args)
+    from ..build import simulated_bitstream
+    from ..gateware.fields import IOKind
     from ..gateware.settings import ScanSettings
-    board = simulated_board(args, config=PRESETS["marker"],
-                            settings=ScanSettings(mode="vector", run=False), flash=image)
+    if args.board == "ulx3s":
+        config, contents = simulated_bitstream("ulx3s")
+    else:
+        config, contents = PRESETS["marker"], {}
+    board = simulated_board(args, **{**contents, "config": config,
+                                     "settings": ScanSettings(mode="vector", run=False)},
+                            flash=image)
+    waits = [op for op, *_ in (planned.segments if planned else ())
+             if getattr(op, "kind", None) == IOKind.WAIT_INPUT]
+    if waits:
+        # The simulated line: a part at the sensor the image waits on, every --part-every.
+        every_s = args.part_every / 1e3
+        board.parts_arrive(input=waits[0].index, first_s=min(5e-3, every_s / 2),
+                           every_s=every_s, seen_s=min(2e-3, every_s / 2), level=waits[0].level)
+        print(f"the simulated part sensor sees a part every {args.part_every:g} ms",
+              file=sys.stderr)
     client = HostClient(SimTransport(board))
     presses = []
     step = 2e-3
@@ -221,6 +289,10 @@ def _cmd_standalone(args):
     report = _report(board, profile, planned, presses, refused)
     report.update({name.removeprefix("vec_"): client.read(name) for name in
                    ("vec_underruns", "vec_stalls", "vec_rejected", "errors")})
+    if config.queue_io:
+        # Each change of the board's outputs off its pins: [s, outputs (bit 0: output 0)].
+        report["io"] = dict(outputs=[[round(cycle / board.clk_freq, 6), value]
+                                     for cycle, value in board.io_changes])
     if args.json:
         print(json.dumps(report))
     else:
@@ -272,7 +344,12 @@ def add_parsers(commands):
     store.add_argument("-o", "--output", type=output_file, metavar="FILE",
                        help="the job image to write (.img)")
     store.add_argument("--repeats", type=int_in(1, 65535, "repeats"), default=1, metavar="N",
-                       help="times the job runs on each start (default 1)")
+                       help="times the job runs on each start (default 1; with --wait-input, "
+                            "N parts a start, each when the sensor sees it)")
+    store.add_argument("--board", choices=list(_PLAYER_BUILD), default="icebreaker",
+                       help="the board whose bitstream plays the image: icebreaker (build "
+                            "--preset marker; the default) or ulx3s (every feature: the fly, "
+                            "I/O, SkyWriting, wobble)")
     add_plan_outputs(store.add_argument_group("output"))
     add_machine_option(store)
     store.set_defaults(run=_cmd_store)
@@ -302,7 +379,8 @@ def add_parsers(commands):
 
     standalone = commands.add_parser(
         "standalone", help="press the start input of a simulated stand-alone board",
-        description="A simulated stand-alone board (the marker preset's bitstream) whose "
+        description="A simulated stand-alone board (the marker preset's bitstream, or the "
+                    "ULX3S's) whose "
                     "flash holds IMAGE: press its start input, let the player check and "
                     "play the job, and report what the wires and the laser did.")
     standalone.add_argument("--sim", action="store_true", help="the simulated board")
@@ -311,6 +389,13 @@ def add_parsers(commands):
                                  "a whole 16 MiB flash image as `flash --to` writes it")
     standalone.add_argument("--presses", type=int_in(1, 100, "presses"), default=1,
                             metavar="N", help="presses of the start input (default 1)")
+    standalone.add_argument("--board", choices=list(_PLAYER_BUILD), default="icebreaker",
+                            help="the board: icebreaker (the marker preset's bitstream; the "
+                                 "default) or ulx3s (its one bitstream)")
+    standalone.add_argument("--part-every", type=number_in("part every", 1, 60_000),
+                            default=100.0, metavar="MS",
+                            help="an image that waits for a part sensor: the simulated line "
+                                 "brings a part to it every MS ms (default 100)")
     add_setting(standalone, PRESS_TIMEOUT)
     standalone.add_argument("--json", action="store_true",
                             help="print the marks off the wires, the pulses and the "
