@@ -17,14 +17,15 @@ cleaning run's duration) is counted in the board's own time (its laser pulses) r
 the host's clock.
 """
 
+import math
 import os
+import pty
 import select
-from dataclasses import dataclass
 import threading
 import time
-from collections import deque
-import pty
 import tty
+from collections import deque
+from dataclasses import dataclass
 
 from ..gateware.clocking import DEFAULT_BAUD
 from ..gateware.player.image_format import JOB_OFFSET
@@ -67,6 +68,19 @@ class PartSensor:
         if self.every_s is not None:
             since %= self.every_s
         return since < self.seen_s
+
+    def next_change(self, now):
+        """The board's time the sensor next comes to a part or leaves it, after ``now`` (inf:
+        never)."""
+        first = self.start_s + self.first_s
+        since = now - first
+        if since < 0:
+            return first
+        if self.every_s is None:
+            return first + self.seen_s if since < self.seen_s else math.inf
+        phase = since % self.every_s
+        base = now - phase
+        return base + self.seen_s if phase < self.seen_s else base + self.every_s
 
 
 @dataclass
@@ -303,17 +317,24 @@ class SimulatedBoard:
     # --- driving it ----------------------------------------------------------------------------
 
     def run_for(self, seconds):
-        """Advance the board by ``seconds`` of its own time."""
-        if seconds > 0:
+        """Advance the board by ``seconds`` of its own time (with a part sensor, in steps that
+        end where it comes to a part or leaves it, so that a host's long poll misses none)."""
+        if seconds <= 0:
+            return
+        end = self.now + seconds
+        while True:
             sensor = self.part_sensor
+            until = end
             if sensor is not None:
-                # (The sensor's input as at the step's start: a host steps the board in a
-                # UART bit or a poll, well within a part's time under the sensor.)
                 bit = 1 << sensor.input
                 level = sensor.level if sensor.seen(self.now) else 1 - sensor.level
                 self.io_inputs = (self.io_inputs & ~bit) | (bit if level else 0)
-            self.now += seconds
+                # (At least a clock on: a change a rounding away is taken at the next step.)
+                until = min(end, max(sensor.next_change(self.now), self.now + 1 / self.clk_freq))
+            self.now = until
             self.engine.run_until(self.now)
+            if until >= end:
+                return
 
     def parts_arrive(self, *, input=0, first_s=1e-3, every_s=None, seen_s=2e-3, level=1):
         """Set a :class:`PartSensor` on ``input``, from now on."""
