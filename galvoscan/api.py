@@ -23,6 +23,7 @@ read too). Every value is checked where it is given, with the command line's one
 job is planned and checked before any byte goes to a board.
 """
 
+import math
 from dataclasses import dataclass, field, replace
 from datetime import datetime
 
@@ -30,7 +31,7 @@ import numpy as np
 
 from .link.client import FTDISPITransport, HostClient, SerialTransport
 from .correction.upload import upload_table
-from .gateware.fields import WobbleShape
+from .gateware.fields import IOKind, WobbleShape
 from .gateware.points import FIELD_CENTRE
 from .inputs.codes import CodeFill, CodeKind, CodeSpec
 from .plan.objects import code_object
@@ -62,7 +63,8 @@ from .build import PRESETS
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
            "HatchSet", "LineOrder", "Fly", "PartIO", "part_io", "Job", "job_io",
-           "Plan", "Report", "Pause", "plan", "plan_made", "run", "mark_objects", "mark_object",
+           "Plan", "Report", "Pause", "plan", "plan_made", "run", "run_io", "mark_objects",
+           "mark_object",
            "fields",
            "job_settings", "job_wobble", "apply_wobble", "apply_z", "check_fly", "plan_fly",
            "stream_layers",
@@ -591,3 +593,21 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
         xy = np.array([(p[0], p[1]) for p in points], dtype=float).reshape(-1, 2)
         marks = from_galvo(xy, plan.profile.field.size_mm)
     return Report(report, marks)
+
+
+def run_io(steps, board, *, timeout_s=None, pause=None):
+    """Do I/O steps (:class:`~galvoscan.geometry.segments.IOStep` s: waits for inputs,
+    outputs set) alone on ``board`` (a :class:`~galvoscan.link.client.HostClient`), between
+    two jobs (meerk40t's input and output operations between its others): queued and done by
+    the board's queue, the laser never armed. ``timeout_s``: how long it may take (None: the
+    waits' time-outs and a minute more; a wait with none: no limit). Refused
+    (:class:`~galvoscan.outputs.stream.JobRefused`, nothing sent) by a board without I/O in
+    the queue; a wait that times out stops it (:class:`~galvoscan.outputs.stream.JobAborted`).
+    Returns a :class:`Report`."""
+    steps = list(steps)
+    if timeout_s is None:
+        waits = [step[1] for step in steps if step.kind == IOKind.WAIT_INPUT]
+        timeout_s = math.inf if 0 in waits else 60.0 + sum(waits) / 1e3
+    streamer = JobStreamer(board, pause=pause)
+    return Report(streamer.run_vector(steps, {}, armed=False, timeout_s=timeout_s,
+                                      ready_timeout_s=5.0))

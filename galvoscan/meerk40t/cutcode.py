@@ -11,8 +11,11 @@ time at the operation's frequency; a RasterCut's (a raster or image operation's)
 pixels are lines, in the order meerk40t's own galvo driver walks them, each from its first
 pixel's centre to its last's (one pixel: a dot), as ``mark --image`` marks a photo's runs.
 A WaitCut (a wait operation's) splits the job (:func:`job_parts`): the driver holds the board
-for its time between the parts. Input and output cuts are refused in one line: galvoscan's queue
-has no I/O yet (galvoscan issue #38).
+for its time between the parts. An InputCut or OutputCut (meerk40t's input and output
+operations) splits it too, into I/O steps the board's queue does between the parts
+(:func:`io_steps`: a bitstream with I/O in the queue, the ULX3S's): an input cut waits for each
+input of its mask to be at its value's level, an output cut sets each output of its mask to its
+value's, held.
 """
 
 import math
@@ -21,7 +24,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from meerk40t.core.cutcode.cubiccut import CubicCut
 from meerk40t.core.cutcode.dwellcut import DwellCut
+from meerk40t.core.cutcode.inputcut import InputCut
 from meerk40t.core.cutcode.linecut import LineCut
+from meerk40t.core.cutcode.outputcut import OutputCut
 from meerk40t.core.cutcode.plotcut import PlotCut
 from meerk40t.core.cutcode.quadcut import QuadCut
 from meerk40t.core.cutcode.rastercut import RasterCut
@@ -31,10 +36,13 @@ from meerk40t.device.basedevice import PLOT_FINISH, PLOT_JOG, PLOT_RAPID
 from svgelements import CubicBezier, QuadraticBezier
 
 from ..api import Job, Layer, job_settings
+from ..gateware.fields import IOKind
 from ..geometry.drawing import Drawing
 from ..geometry.field import Placement, PlanError, from_galvo
+from ..geometry.segments import IOStep
 from ..inputs.svg import bezier_points
 from ..plan.objects import MarkObject
+from ..settings.io import DEFAULT_WAIT_TIMEOUT_S
 
 
 __all__ = ["POWER_FULL", "DARK", "job_from_cuts", "job_parts", "operation_layer", "outline_cuts"]
@@ -105,10 +113,9 @@ def _cut_points(cut, tolerance_units):
         return runs
     if isinstance(cut, RasterCut):
         return _raster_runs(cut)
-    if type(cut).__name__ in ("InputCut", "OutputCut"):
-        raise PlanError(f"meerk40t's {type(cut).__name__} (an I/O operation) is not marked by "
-                        f"the galvoscan device: galvoscan's queue has no I/O yet (galvoscan "
-                        f"issue #38)")
+    if isinstance(cut, (InputCut, OutputCut)):
+        raise PlanError(f"meerk40t's {type(cut).__name__} (an I/O operation) is no mark: "
+                        f"job_parts takes it out of the cuts as I/O steps")
     raise PlanError(f"meerk40t's {type(cut).__name__} is not one the galvoscan device marks "
                     f"(lines, curves, dwells, waits, PlotCuts and RasterCuts are)")
 
@@ -165,14 +172,53 @@ def _on_the_pixels(run, step_x, step_y):
     return [(float(x), float(y)) for x, y in points]
 
 
+#: Inputs and outputs a bitstream with I/O in the queue has (the bits of a cut's mask).
+IO_BITS = 2
+
+
+def io_steps(cut):
+    """The :class:`~galvoscan.geometry.segments.IOStep` s of meerk40t's InputCut (a wait for
+    each input of ``input_mask`` to be at its ``input_value`` bit's level, at most
+    :data:`~galvoscan.settings.io.DEFAULT_WAIT_TIMEOUT_S`: then the board stops the job) or
+    OutputCut (each output of ``output_mask`` set to its ``output_value`` bit, held), bit 0
+    first. A mask that is not a whole number with bits among the board's two is a
+    :class:`~galvoscan.geometry.field.PlanError` (one line)."""
+    output = isinstance(cut, OutputCut)
+    mask = cut.output_mask if output else cut.input_mask
+    value = cut.output_value if output else cut.input_value
+    what = "output" if output else "input"
+    for name, number in (("mask", mask), ("value", value)):
+        if isinstance(number, bool) or not isinstance(number, int) or number < 0:
+            raise PlanError(f"meerk40t's {what} operation's {name} is {number!r}: a whole "
+                            f"number of bits")
+    if not mask or mask >> IO_BITS:
+        raise PlanError(f"meerk40t's {what} operation's mask is {mask:#b}: the board has "
+                        f"{what}s 0 and 1 (bits 0 and 1)")
+    bits = [bit for bit in range(IO_BITS) if mask >> bit & 1]
+    if output:
+        return [IOStep(IOKind.SET_OUTPUT, index=bit, level=value >> bit & 1) for bit in bits]
+    return [IOStep(IOKind.WAIT_INPUT, index=bit, level=value >> bit & 1,
+                   arg_x=round(DEFAULT_WAIT_TIMEOUT_S * 1000)) for bit in bits]
+
+
 def job_parts(cuts):
-    """``cuts`` split at meerk40t's WaitCuts: a list of ``("cuts", [cut, …])`` and ``("hold",
-    seconds)`` in order (empty cut lists left out). A wait that is not a time of 0 ms or more
-    (meerk40t gives its WaitCut's in ms) is a :class:`~galvoscan.geometry.field.PlanError` (one
-    line)."""
+    """``cuts`` split at meerk40t's WaitCuts, InputCuts and OutputCuts: a list of ``("cuts",
+    [cut, …])``, ``("hold", seconds)`` and ``("io", [IOStep, …])`` in order (empty cut lists
+    left out, the steps of I/O cuts in a row together). A wait that is not a time of 0 ms or
+    more (meerk40t gives its WaitCut's in ms), or an I/O cut :func:`io_steps` refuses, is a
+    :class:`~galvoscan.geometry.field.PlanError` (one line)."""
     parts, current = [], []
     for cut in cuts:
-        if isinstance(cut, WaitCut):
+        if isinstance(cut, (InputCut, OutputCut)):
+            steps = io_steps(cut)
+            if current:
+                parts.append(("cuts", current))
+                current = []
+            if parts and parts[-1][0] == "io":
+                parts[-1][1].extend(steps)
+            else:
+                parts.append(("io", steps))
+        elif isinstance(cut, WaitCut):
             wait_ms = cut.dwell_time
             try:
                 wait_ms = float(wait_ms)

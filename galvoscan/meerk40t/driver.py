@@ -6,7 +6,10 @@ turns them into galvoscan's job (:mod:`.cutcode`), plans and checks it with galv
 console. A WaitCut (meerk40t's wait operation) splits the job into parts, all planned and
 checked first; between them the board is held for the wait (:meth:`GalvoscanDriver._hold`: the
 time let pass on the link's clock, the laser disarmed), as the driver's own ``wait`` holds it;
-its ``dwell`` fires the laser where the head is. A G-code file opened in meerk40t comes as a
+its ``dwell`` fires the laser where the head is. Input and output cuts (meerk40t's I/O
+operations) split it too: their steps are done by the board's queue between the parts
+(:func:`galvoscan.api.run_io`, the laser never armed), on a bitstream with I/O in the queue
+(refused, nothing sent, on one without). A G-code file opened in meerk40t comes as a
 blob (:meth:`GalvoscanDriver.blob`), read by galvoscan's G-code reader.
 
 Stop (the device's ``estop``) acts at the next exchange on the link: the streamer's first write
@@ -242,8 +245,8 @@ class GalvoscanDriver:
         steps = []
         try:
             for kind, part in job_parts(cuts):
-                if kind == "hold":
-                    steps.append(("hold", part))
+                if kind in ("hold", "io"):
+                    steps.append((kind, part))
                     continue
                 job, objects = job_from_cuts(part, profile,
                                              tolerance_mm=self.service.tolerance_mm)
@@ -345,9 +348,16 @@ class GalvoscanDriver:
         ``(None, why)``: it stopped."""
         try:
             reports = []
+            if any(kind == "io" for kind, _ in steps) and \
+                    not JobStreamer(self._client).capabilities().io:
+                raise JobRefused("the board's bitstream has no I/O in the queue, which "
+                                 "meerk40t's input and output operations need (the ULX3S's "
+                                 "has it); nothing was sent")
             for kind, step in steps:
                 if kind == "hold":
                     self._hold(step)
+                elif kind == "io":
+                    reports.append(api.run_io(step, self._client, pause=self.hold))
                 else:
                     reports.append(api.run(step, self._client, say=self._say,
                                            pause=self.hold))

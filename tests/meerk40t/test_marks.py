@@ -5,7 +5,8 @@ read off its elements (not the device's): a line of its text (``linetext``), an 
 (``imageop``: a RasterCut), two operations in one job (each its own layer, each one's speed,
 PRR and pulses per point measured on the wires), a wait operation between two (the board held
 for its time, measured on the wires), the driver's own ``wait`` and ``dwell``, and I/O
-operations refused in one line naming galvoscan issue #38."""
+operations on a board without I/O in the queue refused in one line (tests/meerk40t/test_io.py
+runs them on one with it)."""
 
 import re
 import shutil
@@ -34,6 +35,7 @@ from galvoscan.meerk40t.cutcode import job_from_cuts, job_parts  # noqa: E402
 from meerk40t_session import (FIELD_MM, PROFILE, UNIT_MM, GrblSender,  # noqa: E402
                               distance_to_rect, marks_off_the_wires, median_pitch,
                               outline_gaps, plan_name)
+from fly_marks import writes                            # noqa: E402
 from vector_board import pulses_per_frame               # noqa: E402
 
 
@@ -374,11 +376,12 @@ def spool_and_wait_items(kernel, device, items, timeout_s=60):
 
 # --- input and output operations --------------------------------------------------------------
 
-def test_io_cuts_are_refused_in_one_line_naming_issue_38_and_nothing_sent(meerk40t):
-    """A job with meerk40t's output cut in it, spooled to the device: one line on the console
-    naming galvoscan's issue #38, and not a byte to the board, not even the lines before it."""
+def test_io_cuts_on_a_board_without_io_are_one_line_and_nothing_marked(meerk40t):
+    """A job with meerk40t's output cut in it, spooled to the device on a board whose
+    bitstream has no I/O in the queue (the iCEBreaker's default): one line on the console, and
+    not a write to the board (its caps read alone), not even of the lines before it."""
     kernel, device, board, lines = meerk40t
-    sent = len(board.board.bytes_in)
+    sent, pulses = len(board.board.bytes_in), len(board.board.pulses)
     said = len(lines)
     device.driver.last_report = device.driver.last_error = None
     settings = {"speed": 400.0, "power": 500.0, "frequency": 50.0}
@@ -390,8 +393,9 @@ def test_io_cuts_are_refused_in_one_line_naming_issue_38_and_nothing_sent(meerk4
         assert time.monotonic() < deadline
         time.sleep(0.02)
     errors = [said_line for said_line in lines[said:] if "galvoscan: error:" in said_line]
-    assert len(errors) == 1 and "issue #38" in errors[0] and "nothing sent" in errors[0]
-    assert len(board.board.bytes_in) == sent
+    assert len(errors) == 1 and "no I/O in the queue" in errors[0] and \
+        "nothing was sent" in errors[0]
+    assert writes(board.board.bytes_in[sent:]) == [] and len(board.board.pulses) == pulses
 
 
 def test_waits_split_a_job_and_a_bad_wait_is_one_line():
@@ -406,7 +410,7 @@ def test_waits_split_a_job_and_a_bad_wait_is_one_line():
         with pytest.raises(PlanError) as refused:
             job_parts([a, WaitCut(bad)])
         assert "a wait" in str(refused.value) and "\n" not in str(refused.value)
-    with pytest.raises(PlanError, match="issue #38"):
+    with pytest.raises(PlanError, match="job_parts takes it out"):
         job_from_cuts([InputCut(1, 1)], PROFILE, tolerance_mm=0.01)
 
 
