@@ -147,6 +147,35 @@ def test_the_simulated_encoder_carries_the_marks_and_they_lie_on_the_drawing(fil
           f"({worst * UNITS_PER_MM:.2f} units) off the square after {furthest:.3f} mm of belt")
 
 
+def test_parts_on_the_belt_each_start_the_fly_at_the_sensor(files, capsys):
+    """`--fly X --fly-speed 100 --wait-input part --repeat 2`: each part's count zeroed and the
+    fly turned on by the board's queue as the part comes to the sensor (no fly_clear or fly
+    on from the host); each part's marks, moved back by the belt's travel since its part came
+    to the sensor, lie on the square, whole."""
+    with ulx3s_sim() as Board:
+        assert main(mark_args(files, "--fly", "X", "--fly-speed", "100", "--wait-input",
+                              "part", "--repeat", "2", *SIM_ULX3S)) == 0
+    result = last_json(capsys)
+    assert result["parts"] == 2 and result["fly"]["clipped"] == 0
+    board, = Board.built
+    assert writes(board.bytes_in, "fly_clear") == []
+    assert {v for _, v in writes(board.bytes_in, "fly_ctrl")} == {X_SIMULATED}
+    sensor = board.part_sensor
+    came = [(sensor.start_s + sensor.first_s + k * sensor.every_s) * board.clk_freq
+            for k in range(int(board.now / sensor.every_s) + 1)]
+    parts = {}
+    for clock, x, y in pulsed_frames(board):
+        start = max(at for at in came if at < clock)
+        point = np.array([(x - 32768) / UNITS_PER_MM, (y - 32768) / UNITS_PER_MM])
+        point[0] -= 100 * (clock - start) / board.clk_freq
+        parts.setdefault(start, []).append(point)
+    assert len(parts) == 2
+    for back in parts.values():
+        back = np.array(back)
+        assert max(square_distance(p) for p in back) <= HALF_PITCH_MM
+        assert_whole_square(back)
+
+
 def test_a_real_encoder_under_the_boards_belt_carries_the_marks(files, capsys):
     """`--fly Y --fly-direction - --encoder 200 --belt-speed 250`: with --sim the board's belt
     runs at 250 mm/s under ENCODER Y (50,000 counts/s); the scale is negative (the part moves
