@@ -167,8 +167,8 @@ class Job:
     ``sky_limit``; None: the profile's ``[sky]``; it needs a bitstream with pixel lines,
     :mod:`galvoscan.plan.sky`), and I/O on a production line: ``wait_input`` (each part
     waits in the board's queue for that input: ``part``, the part sensor), ``wait_level``,
-    ``wait_timeout_s``, ``set_output`` (set for a PLC once the part is marked: ``done``) and
-    ``output_pulse_ms`` (None: the defaults of :mod:`galvoscan.settings.io`; it needs a
+    ``wait_timeout_s``, ``set_output`` (set for a PLC once the part is marked: ``done``),
+    ``output_pulse_ms`` and, on the fly, ``sensor_distance_mm`` (None: the defaults of :mod:`galvoscan.settings.io`; it needs a
     bitstream with I/O in the queue, :mod:`galvoscan.plan.part_io`). The numbers are
     checked against their settings (:mod:`galvoscan.settings.laser`,
     :mod:`galvoscan.settings.sky`, :mod:`galvoscan.settings.io`) here."""
@@ -202,6 +202,7 @@ class Job:
     wait_timeout_s: float = None
     set_output: str = None
     output_pulse_ms: float = None
+    sensor_distance_mm: float = None
 
     def __post_init__(self):
         if self.fly is not None and not isinstance(self.fly, Fly):
@@ -390,6 +391,8 @@ def plan_made(objects, job, profile):
     if job.fly is not None:
         planned.fly = plan_fly(job.fly, planned.vector_job, profile)
     planned.io = job_io(job)
+    if planned.io is not None:
+        planned.io.before(fly=planned.fly)  # (a sensor distance off the fly: refused now)
     return planned
 
 
@@ -498,14 +501,16 @@ def load_lens_table(client, profile, say=None):
     upload_table(client, table)
 
 
-def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None, io=None):
+def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None, io=None,
+                  fly_plan=None):
     """Run ``vector_job`` (its layers one after the other, each at its own settings) with
     ``streamer``: the reports summed into one, and (``board``: a simulated board) the index
     of each layer's first pulse. ``fly``: a job on the fly's registers
     (:meth:`~galvoscan.plan.fly.FlyPlan.registers`), each layer's too, the count zeroed as
-    the first starts (the part is one). ``io``: the part's :class:`PartIO`, its steps
-    queued before the first layer's segments and after the last's (a wait's time-out added
-    to ``timeout_s``)."""
+    the first starts (the part is one); ``fly_plan``: its
+    :class:`~galvoscan.plan.fly.FlyPlan` (the encoder's counts a mm, for a sensor distance).
+    ``io``: the part's :class:`PartIO`, its steps queued before the first layer's segments
+    and after the last's (a wait's time-out added to ``timeout_s``)."""
     reports, starts = [], []
     parts = [lj.job for lj in vector_job.layers] if vector_job.layers else [vector_job]
     for index, part in enumerate(parts):
@@ -513,8 +518,9 @@ def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None, io=None):
         segments = part.segments
         wait_s = 0.0
         if io is not None:
-            segments = [*(io.before(fly=fly is not None) if index == 0 else ()), *segments,
-                        *(io.after(fly=fly is not None) if index == len(parts) - 1 else ())]
+            flying = fly_plan or fly is not None
+            segments = [*(io.before(fly=flying) if index == 0 else ()), *segments,
+                        *(io.after(fly=flying) if index == len(parts) - 1 else ())]
             wait_s = io.wait_s if index == 0 else 0.0
         try:
             reports.append(streamer.run_vector(segments, {**part.registers, **(fly or {})},
@@ -580,13 +586,14 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     client = HostClient(SimTransport(board)) if simulated else board
     if timeout_s is None:
         timeout_s = 1e4 if simulated else max(60.0, 10 * plan.estimate_s)
-    fly = None
+    fly = fly_plan = None
     if plan.fly is not None:
-        fly = (plan.fly.at_clock(board.clk_freq) if simulated else plan.fly).registers()
+        fly_plan = plan.fly.at_clock(board.clk_freq) if simulated else plan.fly
+        fly = fly_plan.registers()
     load_lens_table(client, plan.profile, say)
     streamer = JobStreamer(client, progress=progress, pause=pause)
     report, _ = stream_layers(streamer, plan.vector_job, board if simulated else None,
-                              timeout_s, fly=fly, io=plan.io)
+                              timeout_s, fly=fly, io=plan.io, fly_plan=fly_plan)
     marks = None
     if simulated:
         points = [p for p in board.points() if p[2] > 0]

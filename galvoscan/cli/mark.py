@@ -220,6 +220,11 @@ def _cmd_mark(args):
             bar.close()
     job, placement, drawing, profile, wobbles, say = parts[0]
     flies = _fly_plans(args, parts, profile, fly)
+    if io is not None:
+        try:
+            io.before(fly=flies[0])     # (a sensor distance off the fly, or past the count)
+        except PlanError as error:
+            fail(error)
     if flies[0] is not None:
         say(flies[0].line())
     if io is not None:
@@ -266,7 +271,8 @@ def _cmd_mark(args):
     if args.sim and io is not None and io.wait_input is not None:
         # The simulated line: a part at the sensor every part's time and a little more, the
         # first a moment after the board is up.
-        every_s = 1.2 * max(part.estimate_s for part, *_ in parts) + 20e-3
+        every_s = 1.2 * max(part.estimate_s for part, *_ in parts) + 20e-3 + \
+            (io.sensor_distance_mm / flies[0].speed_mm_s if flies[0] is not None else 0.0)
         sensor = dict(input=INPUTS[io.wait_input], first_s=5e-3, every_s=every_s,
                       seen_s=min(2e-3, every_s / 2), level=LEVELS[io.wait_level])
     with board_link(args, profile, wobble=wobbles, pixel_lines=pixel_lines, belt=belt,
@@ -309,7 +315,8 @@ def _cmd_mark(args):
                         return 0
                     report, layer_starts = api.stream_layers(
                         streamer, part, board, timeout,
-                        fly=fly.registers() if fly is not None else None, io=io)
+                        fly=fly.registers() if fly is not None else None, io=io,
+                        fly_plan=fly)
                     reports.append(report)
             finally:
                 bar.close()

@@ -117,7 +117,10 @@ def _cmd_store(args):
         fail("the profile's [galvo] head_check makes the laser obey the scan head, but the "
              "stand-alone bitstream (build --preset marker) does not read the head's STATUS "
              "line: set head_check = false to store the job")
-    before, after = part_steps(io, fly=flown is not None, queued_fly=True)
+    try:
+        before, after = part_steps(io, fly=flown, queued_fly=True)
+    except PlanError as error:
+        fail(error)
     segments = [*before, *job.segments, *after]
     try:
         image = job_image(segments, registers, repeats=args.repeats)

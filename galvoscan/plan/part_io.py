@@ -5,7 +5,10 @@ part's segments (:class:`~galvoscan.geometry.segments.IOStep`; SCANLAB RTC5/6's 
 Before a part: the held "done" output of the last part set low (an output held, not pulsed),
 then the wait for the input to come to its level (an edge, so a part still at the sensor is
 not marked twice), then, on the fly, the fly's start (the count zeroed as the part arrives:
-the part is where the drawing is). After it: the fly's end, then the output set.
+the part is where the drawing is). A sensor some distance before the drawing's place: the
+count zeroed at the sensor (the fly started and ended at once), a wait for the encoder to
+count that distance (RTC's ``wait_for_encoder``), and then the fly's start. After the part:
+the fly's end, then the output set.
 """
 
 import math
@@ -15,8 +18,8 @@ from ..gateware.fields import IOKind
 from ..geometry.field import PlanError
 from ..geometry.segments import IOStep
 from ..settings.io import (DEFAULT_OUTPUT_PULSE_MS, DEFAULT_WAIT_TIMEOUT_S, INPUTS, LEVELS,
-                           OUTPUT_PULSE, OUTPUTS, SET_OUTPUT, WAIT_INPUT, WAIT_LEVEL,
-                           WAIT_TIMEOUT)
+                           OUTPUT_PULSE, OUTPUTS, SENSOR_DISTANCE, SET_OUTPUT, WAIT_INPUT,
+                           WAIT_LEVEL, WAIT_TIMEOUT)
 
 
 __all__ = ["PartIO", "part_io", "part_steps"]
@@ -31,20 +34,25 @@ class PartIO:
     :data:`~galvoscan.settings.io.INPUTS`, None: no wait), its ``wait_level`` (``high`` or
     ``low``) and ``wait_timeout_s`` (0: none), ``set_output`` (a name of
     :data:`~galvoscan.settings.io.OUTPUTS`, None: none) and its ``output_pulse_ms`` (0: held
-    until the next part's wait starts)."""
+    until the next part's wait starts); ``sensor_distance_mm``: on the fly, how far the
+    sensor sits before the drawing's place along the belt (0: at it)."""
     wait_input: str = None
     wait_level: str = "high"
     wait_timeout_s: float = DEFAULT_WAIT_TIMEOUT_S
     set_output: str = None
     output_pulse_ms: float = DEFAULT_OUTPUT_PULSE_MS
+    sensor_distance_mm: float = 0.0
 
     def __post_init__(self):
-        for setting in (WAIT_INPUT, WAIT_LEVEL, WAIT_TIMEOUT, SET_OUTPUT, OUTPUT_PULSE):
+        for setting in (WAIT_INPUT, WAIT_LEVEL, WAIT_TIMEOUT, SET_OUTPUT, OUTPUT_PULSE,
+                        SENSOR_DISTANCE):
             value = getattr(self, setting.name)
             if value is not None:
                 setting.check(value)
         if self.wait_input is None and self.set_output is None:
             raise PlanError("a part's I/O waits for an input or sets an output (or both)")
+        if self.sensor_distance_mm and self.wait_input is None:
+            raise PlanError(f"{SENSOR_DISTANCE.flag} is a wait's: give --wait-input too")
 
     @property
     def timeout_ms(self):
@@ -63,9 +71,22 @@ class PartIO:
             return 0.0
         return self.wait_timeout_s if self.timeout_ms else math.inf
 
-    def before(self, *, fly=False):
+    def sensor_counts(self, fly):
+        """The encoder's counts from the sensor to the drawing's place (``fly``: the part's
+        :class:`~galvoscan.plan.fly.FlyPlan`, its counts a mm), as the board's count wait
+        takes them: a :class:`~galvoscan.geometry.field.PlanError` past its 31 bits."""
+        counts = round(self.sensor_distance_mm * fly.counts_per_mm)
+        if counts >= 1 << 31:
+            raise PlanError(f"{SENSOR_DISTANCE.flag} {self.sensor_distance_mm:g} mm is "
+                            f"{counts:,} counts of the encoder: the board counts to "
+                            f"{(1 << 31) - 1:,}")
+        return counts
+
+    def before(self, *, fly=None):
         """The I/O steps before a part's first segment; ``fly``: the part is marked on the
-        fly, its count zeroed and the fly started as it reaches the sensor."""
+        fly (its :class:`~galvoscan.plan.fly.FlyPlan`; True will do without a sensor
+        distance), its count zeroed and the fly started as it reaches the sensor, or as it
+        reaches the drawing's place, the sensor distance on."""
         steps = []
         if self.set_output is not None and not self.pulse_frames:
             steps.append(IOStep(IOKind.SET_OUTPUT, index=OUTPUTS[self.set_output], level=0))
@@ -73,6 +94,16 @@ class PartIO:
             steps.append(IOStep(IOKind.WAIT_INPUT, index=INPUTS[self.wait_input],
                                 level=LEVELS[self.wait_level], edge=True,
                                 arg_x=self.timeout_ms))
+            if self.sensor_distance_mm:
+                if not hasattr(fly, "counts_per_mm"):
+                    raise PlanError(f"{SENSOR_DISTANCE.flag} is on the fly: give --fly too "
+                                    f"(the encoder counts the belt's travel)")
+                counts = self.sensor_counts(fly)
+                # The count zeroed at the sensor (the fly on and off at once), then a wait
+                # for the belt to bring the part the distance on.
+                steps += [IOStep(IOKind.FLY_START), IOStep(IOKind.FLY_END),
+                          IOStep(IOKind.WAIT_COUNT_UP, arg_x=counts & 0xFFFF,
+                                 arg_y=counts >> 16)]
             if fly:
                 steps.append(IOStep(IOKind.FLY_START))
         return steps
@@ -99,16 +130,20 @@ class PartIO:
             said.append(f"sets output {self.set_output} (output {OUTPUTS[self.set_output]}) "
                         + (f"for {self.output_pulse_ms:g} ms" if self.pulse_frames else
                            "until the next part's wait") + " once it is marked")
+        if self.sensor_distance_mm:
+            said.append(f"the sensor {self.sensor_distance_mm:g} mm before the drawing's "
+                        f"place: each part marked once the encoder has counted that far")
         return "I/O: " + "; ".join(said)
 
 
 def part_io(wait_input=None, wait_level=None, wait_timeout_s=None, set_output=None,
-            output_pulse_ms=None):
+            output_pulse_ms=None, sensor_distance_mm=None):
     """The :class:`PartIO` of these settings (None: the defaults), or None when there is
     none; a :class:`~galvoscan.geometry.field.PlanError` for a setting of a wait without the
     wait (or of an output without it)."""
     if wait_input is None:
-        given = [s.flag for s, v in ((WAIT_LEVEL, wait_level), (WAIT_TIMEOUT, wait_timeout_s))
+        given = [s.flag for s, v in ((WAIT_LEVEL, wait_level), (WAIT_TIMEOUT, wait_timeout_s),
+                                     (SENSOR_DISTANCE, sensor_distance_mm))
                  if v is not None]
         if given:
             raise PlanError(f"{given[0]} is a wait's: give --wait-input too")
@@ -121,12 +156,13 @@ def part_io(wait_input=None, wait_level=None, wait_timeout_s=None, set_output=No
                   else wait_timeout_s,
                   set_output=set_output,
                   output_pulse_ms=DEFAULT_OUTPUT_PULSE_MS if output_pulse_ms is None
-                  else output_pulse_ms)
+                  else output_pulse_ms,
+                  sensor_distance_mm=sensor_distance_mm or 0.0)
 
 
-def part_steps(io, *, fly=False, queued_fly=False):
+def part_steps(io, *, fly=None, queued_fly=False):
     """``(before, after)``: the I/O steps around a part (``io`` a :class:`PartIO` or None);
-    ``fly``: marked on the fly; ``queued_fly``: the queue starts and ends the fly even without
+    ``fly``: marked on the fly (its :class:`~galvoscan.plan.fly.FlyPlan`); ``queued_fly``: the queue starts and ends the fly even without
     a wait (a job image: the stand-alone player has no host to turn it on)."""
     before = io.before(fly=fly) if io is not None else []
     after = io.after(fly=fly) if io is not None else []

@@ -13,7 +13,7 @@ from .schema import Setting
 
 
 __all__ = ["INPUTS", "OUTPUTS", "LEVELS", "WAIT_INPUT", "WAIT_LEVEL", "WAIT_TIMEOUT",
-           "SET_OUTPUT", "OUTPUT_PULSE", "IO_SETTINGS", "DEFAULT_WAIT_TIMEOUT_S",
+           "SET_OUTPUT", "OUTPUT_PULSE", "SENSOR_DISTANCE", "IO_SETTINGS", "DEFAULT_WAIT_TIMEOUT_S",
            "DEFAULT_OUTPUT_PULSE_MS"]
 
 
@@ -61,5 +61,13 @@ OUTPUT_PULSE = Setting(
     help="how long --set-output stays high, in 10 µs steps (0: until the next part's wait "
          "starts)")
 
+SENSOR_DISTANCE = Setting(
+    "sensor_distance_mm", "number", "mm", 0, 10_000, what="sensor distance",
+    flag="--sensor-distance", key="sensor_distance", metavar="MM",
+    help="on the fly, with --wait-input: how far the part sensor sits before the drawing's "
+         "place along the belt; once it sees a part the board's queue waits for the "
+         "encoder to count that far (RTC's wait_for_encoder) before the part is marked "
+         "(default 0: the sensor is at the drawing)")
+
 #: Every I/O setting, in ``--help``'s order.
-IO_SETTINGS = (WAIT_INPUT, WAIT_LEVEL, WAIT_TIMEOUT, SET_OUTPUT, OUTPUT_PULSE)
+IO_SETTINGS = (WAIT_INPUT, WAIT_LEVEL, WAIT_TIMEOUT, SET_OUTPUT, OUTPUT_PULSE, SENSOR_DISTANCE)

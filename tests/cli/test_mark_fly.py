@@ -147,14 +147,18 @@ def test_the_simulated_encoder_carries_the_marks_and_they_lie_on_the_drawing(fil
           f"({worst * UNITS_PER_MM:.2f} units) off the square after {furthest:.3f} mm of belt")
 
 
-def test_parts_on_the_belt_each_start_the_fly_at_the_sensor(files, capsys):
+@pytest.mark.parametrize("distance_mm", [0, 1.5])
+def test_parts_on_the_belt_each_start_the_fly_at_the_sensor(files, capsys, distance_mm):
     """`--fly X --fly-speed 100 --wait-input part --repeat 2`: each part's count zeroed and the
     fly turned on by the board's queue as the part comes to the sensor (no fly_clear or fly
     on from the host); each part's marks, moved back by the belt's travel since its part came
-    to the sensor, lie on the square, whole."""
+    to the sensor, lie on the square, whole. With `--sensor-distance 1.5`, the sensor 1.5 mm
+    before the drawing's place: the queue waits for the encoder to count 1.5 mm (15 ms at
+    100 mm/s) and zeroes the count then: the marks moved back by the travel since."""
     with ulx3s_sim() as Board:
         assert main(mark_args(files, "--fly", "X", "--fly-speed", "100", "--wait-input",
-                              "part", "--repeat", "2", *SIM_ULX3S)) == 0
+                              "part", "--repeat", "2", "--sensor-distance", f"{distance_mm:g}",
+                              *SIM_ULX3S)) == 0
     result = last_json(capsys)
     assert result["parts"] == 2 and result["fly"]["clipped"] == 0
     board, = Board.built
@@ -167,7 +171,7 @@ def test_parts_on_the_belt_each_start_the_fly_at_the_sensor(files, capsys):
     for clock, x, y in pulsed_frames(board):
         start = max(at for at in came if at < clock)
         point = np.array([(x - 32768) / UNITS_PER_MM, (y - 32768) / UNITS_PER_MM])
-        point[0] -= 100 * (clock - start) / board.clk_freq
+        point[0] -= 100 * (clock - start) / board.clk_freq - distance_mm
         parts.setdefault(start, []).append(point)
     assert len(parts) == 2
     for back in parts.values():

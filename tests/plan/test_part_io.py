@@ -75,3 +75,26 @@ def test_the_settings_pages_io_table_is_the_declarations():
     page = (Path(__file__).parents[2] / "docs" / "reference" / "settings.md").read_text(
         encoding="utf-8")
     assert markdown_table(IO_SETTINGS) in page
+
+
+def test_a_sensor_before_the_drawing_waits_for_the_encoder():
+    """1.5 mm at 200 counts/mm: the count zeroed at the sensor, a wait for 300 counts up, then
+    the fly's start; a distance past the count's 31 bits, or off the fly, refused."""
+    class Fly:
+        counts_per_mm = 200.0
+    io = part_io(wait_input="part", sensor_distance_mm=1.5)
+    assert kinds(io.before(fly=Fly())) == [
+        (IOKind.WAIT_INPUT, 0, 1, True, 60_000), (IOKind.FLY_START, 0, 1, False, 0),
+        (IOKind.FLY_END, 0, 1, False, 0), (IOKind.WAIT_COUNT_UP, 0, 1, False, 300),
+        (IOKind.FLY_START, 0, 1, False, 0)]
+    Fly.counts_per_mm = 10_000.0
+    far = part_io(wait_input="part", sensor_distance_mm=9_000)
+    big = far.before(fly=Fly())[3]
+    assert (big[2] << 16 | big[1]) == 90_000_000
+    Fly.counts_per_mm = 250_000.0
+    with pytest.raises(PlanError, match="the board counts to 2,147,483,647"):
+        far.before(fly=Fly())
+    with pytest.raises(PlanError, match="--sensor-distance is on the fly: give --fly too"):
+        io.before(fly=None)
+    with pytest.raises(PlanError, match="--sensor-distance is a wait's"):
+        part_io(set_output="done", sensor_distance_mm=2)
