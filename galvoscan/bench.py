@@ -90,13 +90,41 @@ def _build(label):
                                                         ("player", config.player)) if built]}
 
 
-def _blocks():
-    """Cells by block of the default iCEBreaker build's system top (:mod:`.utilisation`)."""
-    from .build import PRESETS
+def _blocks(board="icebreaker"):
+    """Cells by block of ``board``'s default build's system top (:mod:`.utilisation`)."""
+    from .build import board_config
     from .gateware.top import GalvoScanTop
     from .utilisation import block_utilisation
-    top = GalvoScanTop(PRESETS["default"])
-    return "blocks", block_utilisation(top)
+    top = GalvoScanTop(board_config(board))
+    return "blocks" if board == "icebreaker" else f"blocks_{board}", block_utilisation(top)
+
+
+#: The production line's features in the ULX3S's build → the blocks (and the blocks under
+#: them) that are each one's own: what each costs, in Yosys's cells of the same design
+#: synthesised for the iCE40 (the UP5K's kind of LUT4), hierarchy kept. The registers each adds
+#: to the register file are not in these (that file is one block).
+FEATURE_BLOCKS = {
+    "marking on the fly": ("top.fly_scale", "top.fly", "top.fly_simulated", "top.fly_clipped",
+                           "top.encoder_x", "top.encoder_y"),
+    "head status": ("top.head",),
+    "I/O in the queue": ("top.queue_io",),
+    "laser delays (LaserOnShift with them)": ("top.laser_delays",),
+    "wobble": ("top.wobble",),
+    "job player": ("top.player", "top.flash", "top.start", "top.progress", "top.arbiter"),
+}
+
+
+def feature_cells(blocks):
+    """``{feature: {"luts", "ffs"}}`` of :data:`FEATURE_BLOCKS`, summed from ``blocks`` (a
+    :func:`~galvoscan.utilisation.block_utilisation` record); a feature none of whose blocks
+    is there is left out."""
+    cells = {}
+    for feature, names in FEATURE_BLOCKS.items():
+        found = [counts for block, counts in blocks.items()
+                 if any(block == name or block.startswith(name + ".") for name in names)]
+        if found:
+            cells[feature] = {kind: sum(c[kind] for c in found) for kind in ("luts", "ffs")}
+    return cells
 
 
 def _prove(name):
@@ -167,7 +195,8 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
         prepare()       # (compiled once here, not by the builds and proofs side by side)
     with ProcessPoolExecutor(max_workers=2) as pool:
         jobs = {"boards": [pool.submit(_build, label) for label in BUILDS] if builds else [],
-                "utilisation": [pool.submit(_blocks)] if builds else [],
+                "utilisation": [pool.submit(_blocks), pool.submit(_blocks, "ulx3s")]
+                if builds else [],
                 "proofs": [pool.submit(_prove, proof.name) for proof in PROOFS]
                 if proofs else []}
 
@@ -221,7 +250,11 @@ def run_bench(*, builds=True, proofs=True, replay=True, suite=None, backend="pyt
     step("real time")
     result["real_time"] = real_time_figures(seconds=0.25 if replay else 0.01)
     # The default build's cells by block: {"top.vector.dda": {"luts": …, "ffs": …}, …}.
-    result["blocks"] = result.pop("utilisation", {}).get("blocks", {})
+    utilisation = result.pop("utilisation", {})
+    result["blocks"] = utilisation.get("blocks", {})
+    if "blocks_ulx3s" in utilisation:
+        # What each production feature of the ULX3S's build costs.
+        result["features_ulx3s"] = feature_cells(utilisation["blocks_ulx3s"])
     if result.get("proofs"):
         # What `galvoscan prove` costs in all: every proof's and cover's time, one after another.
         result["proofs_s"] = round(sum(task["seconds"] for tasks in result["proofs"].values()
@@ -324,6 +357,9 @@ def table(result):
         rows.append(("default build by block (Yosys, hierarchy kept: LUT4s / flip-flops)",
                      ", ".join(f"{name.removeprefix('top.') or 'top'} {c['luts']} / {c['ffs']}"
                                for name, c in largest)))
+    for feature, cells in result.get("features_ulx3s", {}).items():
+        rows.append((f"ULX3S build: {feature} (its blocks, Yosys for the iCE40: LUT4s / "
+                     f"flip-flops)", f"{cells['luts']} / {cells['ffs']}"))
     for board_name, what in (("icebreaker", "default build"),
                              ("ulx3s", "ULX3S build (every feature)")):
         seeds = [board for label, board in result.get("boards", {}).items()

@@ -119,3 +119,27 @@ def test_table_shows_seeds_proofs_and_suite():
     assert "| every proof and cover, one after another | 35 s |" in text
     assert "| test suite (the README's test command, on every core) | 10.0 min, 800 passed, " \
            "2 skipped |" in text
+
+
+def test_the_production_features_cells_are_their_blocks():
+    """Each feature's cells: the sum of its blocks and the blocks under them (figures typed
+    here), nothing of another's; the table says them."""
+    from galvoscan.bench import feature_cells, table
+    blocks = {"top.fly_scale": {"luts": 300, "ffs": 100}, "top.fly": {"luts": 70, "ffs": 0},
+              "top.encoder_x": {"luts": 140, "ffs": 50}, "top.encoder_x.sync": {"luts": 0,
+                                                                                "ffs": 4},
+              "top.flyer": {"luts": 999, "ffs": 999},        # (not the fly's: another name)
+              "top.head": {"luts": 56, "ffs": 50}, "top.head.sync": {"luts": 0, "ffs": 2},
+              "top.queue_io": {"luts": 267, "ffs": 133}}
+    cells = feature_cells(blocks)
+    assert cells["marking on the fly"] == {"luts": 510, "ffs": 154}
+    assert cells["head status"] == {"luts": 56, "ffs": 52}
+    assert cells["I/O in the queue"] == {"luts": 267, "ffs": 133}
+    assert "wobble" not in cells
+    text = table({"features_ulx3s": cells, "bench_s": 1, "xy2_100": {"frames_per_s": 1,
+                                                                        "idle_clocks": 0},
+                  "xy2_200": {"frames_per_s": 1, "idle_clocks": 0},
+                  "link": {f"{n}_{k}": 1.0 for n in ("spi", "uart")
+                           for k in ("frames_per_s", "latency_us", "latency_max_us")}})
+    assert "| ULX3S build: I/O in the queue (its blocks, Yosys for the iCE40: LUT4s / " \
+           "flip-flops) | 267 / 133 |" in text
