@@ -104,6 +104,7 @@ def test_main_writes_which_placer_placed_it(tmp_path, monkeypatch):
     ({}, [1], "static 1"),                                  # met at once: one run
     ({1: 23.1}, [1, 2], "static 2"),                        # missed, then met
     ({1: 23.1, 2: 23.5, 3: 23.9}, [1, 2, 3], "static 3"),   # never met: three, the last kept
+    ({1: 22.3, 2: 24.9}, [1, 2], "static 2"),               # 7 % short (the marker's seed 1)
     ({1: 21.3}, [1], "static 1"),                           # 11 % short: no seed makes it
 ])
 def test_a_placement_that_misses_its_clock_is_placed_again_with_the_next_seed(
