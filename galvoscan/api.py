@@ -38,7 +38,7 @@ from .plan.objects import code_object
 from .inputs.drawings import UNITS, load_drawing
 from .geometry.fill import HatchSet, LineOrder
 from .plan.fly import Fly, check_fly, plan_fly
-from .plan.part_io import PartIO, part_io
+from .plan.part_io import PartIO, first_point, part_io
 from .plan.layer_keys import LAYER_KEYS, check_layer, layer_from_table
 from .plan.layers import Layer, merged, plan_layers, with_file_layers
 from .inputs.photo import Dither, PhotoSpec
@@ -58,12 +58,13 @@ from .settings.laser import (PASSES, POWER, PRR, SPEED, TOLERANCE, WOBBLE, WOBBL
 from .sim.board import SimTransport, SimulatedBoard
 # The bitstreams `galvoscan build --preset` builds, by name: a SimulatedBoard of one
 # (config=PRESETS["default"]) is the board that bitstream makes.
-from .build import PRESETS
+from .build import PRESETS, simulated_bitstream
 
 
 __all__ = ["Drawing", "Text", "Code", "Photo", "Layer", "layer_from_table", "LAYER_KEYS",
            "HatchSet", "LineOrder", "Fly", "PartIO", "part_io", "Job", "job_io",
-           "Plan", "Report", "Pause", "plan", "plan_made", "run", "run_io", "mark_objects",
+           "Plan", "Report", "Pause", "plan", "plan_made", "run", "run_io", "simulated_board",
+           "mark_objects",
            "mark_object",
            "fields",
            "job_settings", "job_wobble", "apply_wobble", "apply_z", "check_fly", "plan_fly",
@@ -519,7 +520,8 @@ def stream_layers(streamer, vector_job, board, timeout_s, *, fly=None, io=None,
         wait_s = 0.0
         if io is not None:
             flying = fly_plan or fly is not None
-            segments = [*(io.before(fly=flying) if index == 0 else ()), *segments,
+            at = first_point(segments)
+            segments = [*(io.before(fly=flying, at=at) if index == 0 else ()), *segments,
                         *(io.after(fly=flying) if index == len(parts) - 1 else ())]
             wait_s = io.wait_s if index == 0 else 0.0
         try:
@@ -583,6 +585,13 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
     the profile's ``[fly] board_clock_mhz``; a real encoder's belt is the board's
     (``SimulatedBoard.belt_moves``). Returns a :class:`Report`."""
     simulated = isinstance(board, SimulatedBoard)
+    if simulated and plan.io is not None and plan.io.wait_input is not None and \
+            board.part_sensor is None:
+        # (Else the board would wait, armed, for a part no one brings: the wait's time-out
+        # of the board's own time, half an hour of the host's on the ULX3S's simulated board.)
+        raise PlanError(f"the plan waits for a part at input {plan.io.wait_input}, and the "
+                        f"simulated board has no part sensor: give it one first "
+                        f"(board.parts_arrive(every_s=…)); nothing was sent")
     client = HostClient(SimTransport(board)) if simulated else board
     if timeout_s is None:
         timeout_s = 1e4 if simulated else max(60.0, 10 * plan.estimate_s)
@@ -596,10 +605,23 @@ def run(plan, board, *, timeout_s=None, progress=None, say=None, pause=None):
                               timeout_s, fly=fly, io=plan.io, fly_plan=fly_plan)
     marks = None
     if simulated:
+        if plan.io is not None and plan.io.set_output is not None and plan.io.pulse_frames:
+            # The board runs on until the last part's output pulse has ended (io_changes).
+            board.run_for(plan.io.output_pulse_ms / 1e3 + 0.1e-3)
         points = [p for p in board.points() if p[2] > 0]
         xy = np.array([(p[0], p[1]) for p in points], dtype=float).reshape(-1, 2)
         marks = from_galvo(xy, plan.profile.field.size_mm)
     return Report(report, marks)
+
+
+def simulated_board(board="icebreaker", *, preset="default", backend="auto", **options):
+    """A :class:`SimulatedBoard` of ``board``'s bitstream (``"icebreaker"``, with a
+    ``preset`` of :data:`PRESETS`; or ``"ulx3s"``, every feature: the fly, I/O in the queue,
+    the head's status, Z), with what its memories start with (the ULX3S's correction table);
+    ``options``: the board's own (``mo_lead``, ``clk_freq``, …). A job that waits for a part
+    sensor needs one on it: ``board.parts_arrive(every_s=0.05)``."""
+    config, contents = simulated_bitstream(board, preset=preset)
+    return SimulatedBoard(config=config, backend=backend, **contents, **options)
 
 
 def run_io(steps, board, *, timeout_s=None, pause=None):

@@ -162,3 +162,35 @@ def test_mark_is_the_api(tmp_path, capsys, monkeypatch):
     assert record["mark_mm"] == pytest.approx(plan.mark_mm, abs=1e-3)
     assert record["bounds_mm"] == pytest.approx(list(plan.vector_job.bounds_mm), abs=1e-3)
     assert record["estimate_s"] == pytest.approx(plan.estimate_s, abs=1e-6)
+
+
+def test_parts_on_a_line_through_the_api(tmp_path):
+    """`api.Job(wait_input="part", set_output="done")` on a simulated board with I/O in the
+    queue: refused in one line, nothing sent, while the board has no part sensor (it would
+    wait for good); with one, marked once a part came, and the "done" pulse whole in
+    `board.io_changes` (rise and fall, 2 ms apart) when `api.run` returns."""
+    from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
+    board = api.SimulatedBoard(backend="compiled", **dict(
+        VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True, queue_io=True,
+        fly=True, vector_queue_depth=16))
+    line = tmp_path / "line.svg"
+    line.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="1mm" '
+                    'viewBox="0 0 4 1"><path d="M0 0.5 H4" stroke="#000" fill="none"/></svg>')
+    job = api.Job(drawings=[api.Drawing(str(line))], wait_input="part", set_output="done",
+                  output_pulse_ms=2)
+    plan = api.plan(job)
+    assert plan.io.line().startswith("I/O: each part waits for input part")
+    sent = len(board.bytes_in)
+    with pytest.raises(ValueError, match="the simulated board has no part sensor") as refused:
+        api.run(plan, board)
+    assert "\n" not in str(refused.value) and len(board.bytes_in) == sent
+    board.parts_arrive(first_s=2e-3, every_s=10e-3, seen_s=1e-3)
+    report = api.run(plan, board)
+    assert report.clean and report.pulses > 0
+    # The marks began after a part came (the sensor's own description: one every 10 ms).
+    sensor = board.part_sensor
+    first = board.pulses[0] / board.clk_freq - sensor.start_s - sensor.first_s
+    assert first >= 0 and first % sensor.every_s < 1e-3
+    (rise, high), (fall, low) = board.io_changes
+    assert (high, low) == (1, 0) and rise > board.pulses[-1]
+    assert abs((fall - rise) / board.clk_freq - 2e-3) <= 20e-6

@@ -51,7 +51,7 @@ def _cmd_store(args):
     from ..outputs.queue_words import job_segments
     from .jobfile import use_job_file
     from .. import api
-    from ..plan.part_io import part_steps
+    from ..plan.part_io import first_point, part_steps
     from ..settings.io import IO_SETTINGS
     from .job_options import option_of_flag
     from .mark import fly_from_args
@@ -118,7 +118,8 @@ def _cmd_store(args):
              "stand-alone bitstream (build --preset marker) does not read the head's STATUS "
              "line: set head_check = false to store the job")
     try:
-        before, after = part_steps(io, fly=flown, queued_fly=True)
+        before, after = part_steps(io, fly=flown, queued_fly=True,
+                                   at=first_point(job.segments))
     except PlanError as error:
         fail(error)
     segments = [*before, *job.segments, *after]
@@ -133,7 +134,7 @@ def _cmd_store(args):
         return 0
     Path(args.output).write_bytes(image)
     added = len(job_segments(segments)) - len(segments)
-    steps = len(before) + len(after)
+    steps = sum(1 for op, *_ in (*before, *after) if op == "io")
     say(f"wrote {args.output}: {len(image):,} bytes, {len(job.segments)} segments"
         f"{f' and {added} jump(s), laser off, before I/O steps and at the end' if added else ''}"
         f"{f', {steps} I/O step(s)' if steps else ''}, "

@@ -55,7 +55,7 @@ from ..gateware.host.regmap import (BY_NAME, Capabilities, DELAY_REGISTERS, FlyC
                                     HeadState, IOKind, IOState, Mode, Status,
                                     VECTOR_QUEUE_DEPTH, pack)
 from ..geometry.corners import corner_frames
-from ..geometry.segments import IO, LINE, PIXELS, has_pixel_lines, io_steps
+from ..geometry.segments import LINE, PIXELS, has_pixel_lines, io_steps
 from ..link.client import ClientError, LinkLost, encode_write
 from .board_state import read_head
 from .queue_words import check_segment, job_segments, queue_word
@@ -460,13 +460,6 @@ class JobStreamer:
             self.board.read("fifo_free")
         sent = 0
         started = False
-        if segments and segments[0][0] == IO:
-            # A job that starts with an I/O step (a wait for the part sensor) is armed and
-            # running before the step is queued: the board does an I/O word as soon as it is
-            # at the queue's head, and a part that came while the host was still arming would
-            # be marked only once the host saw the laser ready (a poll later), not as it came.
-            start()
-            started = True
         hold_at = None          # where a pause stops the feed
         deadline = self._now() + timeout_s
         while sent < len(segments):

@@ -2,8 +2,11 @@
 the output that tells a PLC it is done, as the I/O steps the board's queue does around the
 part's segments (:class:`~galvoscan.geometry.segments.IOStep`; SCANLAB RTC5/6's list I/O).
 
-Before a part: the held "done" output of the last part set low (an output held, not pulsed),
-then the wait for the input to come to its level (an edge, so a part still at the sensor is
+Before a part: a jump to where the part's first segment starts (a wait needs it first: the
+board does an I/O word as soon as the sequencer is idle, running or not, and a jump is taken
+only once the board runs, so the wait starts with the laser led in and the queue filled
+behind it, not while the host is still arming), the held "done" output of the last part set
+low (an output held, not pulsed), then the wait for the input to come to its level (an edge, so a part still at the sensor is
 not marked twice), then, on the fly, the fly's start (the count zeroed as the part arrives:
 the part is where the drawing is). A sensor some distance before the drawing's place: the
 count zeroed at the sensor (the fly started and ended at once), a wait for the encoder to
@@ -16,13 +19,13 @@ from dataclasses import dataclass
 
 from ..gateware.fields import IOKind
 from ..geometry.field import PlanError
-from ..geometry.segments import IOStep
+from ..geometry.segments import JUMP, IOStep
 from ..settings.io import (DEFAULT_OUTPUT_PULSE_MS, DEFAULT_WAIT_TIMEOUT_S, INPUTS, LEVELS,
                            OUTPUT_PULSE, OUTPUTS, SENSOR_DISTANCE, SET_OUTPUT, WAIT_INPUT,
                            WAIT_LEVEL, WAIT_TIMEOUT)
 
 
-__all__ = ["PartIO", "part_io", "part_steps"]
+__all__ = ["PartIO", "part_io", "part_steps", "first_point"]
 
 #: µs a frame lasts: an output's pulse is counted in frames.
 _FRAME_MS = 0.01
@@ -82,12 +85,15 @@ class PartIO:
                             f"{(1 << 31) - 1:,}")
         return counts
 
-    def before(self, *, fly=None):
+    def before(self, *, fly=None, at=None):
         """The I/O steps before a part's first segment; ``fly``: the part is marked on the
         fly (its :class:`~galvoscan.plan.fly.FlyPlan`; True will do without a sensor
         distance), its count zeroed and the fly started as it reaches the sensor, or as it
-        reaches the drawing's place, the sensor distance on."""
+        reaches the drawing's place, the sensor distance on; ``at``: where the part's first
+        segment starts (galvo units), jumped to first when it waits."""
         steps = []
+        if self.wait_input is not None and at is not None:
+            steps.append((JUMP, *at))
         if self.set_output is not None and not self.pulse_frames:
             steps.append(IOStep(IOKind.SET_OUTPUT, index=OUTPUTS[self.set_output], level=0))
         if self.wait_input is not None:
@@ -160,13 +166,23 @@ def part_io(wait_input=None, wait_level=None, wait_timeout_s=None, set_output=No
                   sensor_distance_mm=sensor_distance_mm or 0.0)
 
 
-def part_steps(io, *, fly=None, queued_fly=False):
+def part_steps(io, *, fly=None, queued_fly=False, at=None):
     """``(before, after)``: the I/O steps around a part (``io`` a :class:`PartIO` or None);
     ``fly``: marked on the fly (its :class:`~galvoscan.plan.fly.FlyPlan`); ``queued_fly``: the queue starts and ends the fly even without
-    a wait (a job image: the stand-alone player has no host to turn it on)."""
-    before = io.before(fly=fly) if io is not None else []
+    a wait (a job image: the stand-alone player has no host to turn it on); ``at``: where the
+    part's first segment starts."""
+    before = io.before(fly=fly, at=at) if io is not None else []
     after = io.after(fly=fly) if io is not None else []
     if fly and queued_fly and not any(step.kind == IOKind.FLY_START for step in before):
         before.append(IOStep(IOKind.FLY_START))
         after.insert(0, IOStep(IOKind.FLY_END))
     return before, after
+
+
+def first_point(segments):
+    """Where ``segments`` start: their first jump's end (None: they start with no jump)."""
+    for op, x, y in segments:
+        if op == JUMP:
+            return (x, y)
+        return None
+    return None

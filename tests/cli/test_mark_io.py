@@ -70,9 +70,9 @@ def test_each_part_waits_for_the_sensor_and_says_it_is_done(files, capsys):
     parts = [pulses[:gaps[0]], pulses[gaps[0]:]]
     assert len(parts[0]) == len(parts[1]) > 0
     # Each burst starts soon after a part came to the sensor, and never before one came: the
-    # board is armed and running before the wait is queued, so only the jump to the first line
-    # (its delay, held up to twice for its length) and the laser-on delay come after the wait:
-    # 1 ms at most, of the 25 ms between parts.
+    # wait starts only once the board runs (a jump to the first line before it, which the
+    # board takes only then), so only the jump's delay (held up to twice for its length) and
+    # the laser-on delay come after it: 1 ms at most, of the 25 ms between parts.
     for burst in parts:
         came_before = [at for at in came if at <= burst[0]]
         assert came_before and burst[0] - came_before[-1] < 1e-3 * 8e6, (burst[0], came)
