@@ -231,7 +231,9 @@ def _cmd_mark(args):
         say(io.line())
     if args.save:
         save_job_file(args, args.save)
-        say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again)")
+        say(f"wrote {args.save} (`galvoscan mark {args.save}` marks it again" +
+            (f"; --repeat {args.repeat} is the command line's, not the job's: give it again"
+             if args.repeat != 1 else "") + ")")
     if counter is not None:
         say(f"serial{'s' if len(serials) > 1 else ''} {serials[0]}" +
             (f" … {serials[-1]}" if len(serials) > 1 else "") +
@@ -241,7 +243,7 @@ def _cmd_mark(args):
     if len(parts) > 1:
         hours, rest = divmod(round(total_s), 3600)
         said = f"{hours} h {rest // 60:02d} min" if hours else \
-            (f"{rest // 60} min {rest % 60:02d} s" if rest >= 60 else f"{total_s:.1f} s")
+            (f"{rest // 60} min {rest % 60:02d} s" if rest >= 60 else f"{total_s:.2g} s")
         say(f"{len(parts)} parts: estimated time {said} in all, the time to send each part "
             f"aside")
     if args.estimate or not has_link(args, profile):

@@ -288,7 +288,10 @@ def _cmd_standalone(args):
         presses.append(result)
         print(f"press {len(presses)}: {result.label}", file=sys.stderr if args.json else
               sys.stdout)
-    board.run_for(1e-3)
+    # On past the image's longest output pulse (10 µs frames), so the record holds its end.
+    pulses = [op[1] for op, *_ in (planned.segments if planned else ())
+              if getattr(op, "kind", None) == IOKind.SET_OUTPUT]
+    board.run_for(1e-3 + max(pulses, default=0) * 10e-6)
     refused = PlayerStatus.from_bits(client.read("player")).refused
     report = _report(board, profile, planned, presses, refused)
     report.update({name.removeprefix("vec_"): client.read(name) for name in

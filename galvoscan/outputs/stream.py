@@ -644,7 +644,6 @@ class JobStreamer:
         ``clear_count`` is false (a later layer of the same part: the belt has carried it on
         since the first)."""
         segments = job_segments(segments)
-        registers = self._without_missing_delays(registers)
         if has_pixel_lines(segments) and not self.capabilities().pixel_lines:
             if not any(op == PIXELS for op, *_ in segments):
                 # Pixel lines without pixel words: SkyWriting's run-ins and run-outs.
@@ -673,6 +672,8 @@ class JobStreamer:
         if "z" in registers and not self.capabilities().z:
             raise JobRefused("the board's bitstream has no Z channel (the ULX3S's has it): "
                              "mark the job without --z or a layer's z; nothing was sent")
+        # (Said once every refusal above is past: a job refused says only why.)
+        registers = self._without_missing_delays(registers)
         if "z" not in registers and self.capabilities().z:
             # A job that gives no Z is marked at the focus shifter's middle, never at what the
             # job before it left there.

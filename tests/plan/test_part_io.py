@@ -98,3 +98,15 @@ def test_a_sensor_before_the_drawing_waits_for_the_encoder():
         io.before(fly=None)
     with pytest.raises(PlanError, match="--sensor-distance is a wait's"):
         part_io(set_output="done", sensor_distance_mm=2)
+
+
+def test_a_wait_is_led_by_a_jump_to_the_parts_first_point():
+    """With where the part starts, its wait comes after a jump there (a word the board takes
+    only once it runs); an output alone needs none."""
+    from galvoscan.plan.part_io import first_point
+    segments = [("jump", 100, 200), ("mark", 300, 200)]
+    io = part_io(wait_input="part", set_output="done")
+    steps = io.before(at=first_point(segments))
+    assert steps[0] == ("jump", 100, 200) and steps[1].kind == IOKind.WAIT_INPUT
+    assert part_io(set_output="done").before(at=(1, 2)) == []
+    assert first_point([("mark", 1, 2)]) is None and first_point([]) is None
