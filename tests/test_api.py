@@ -169,10 +169,8 @@ def test_parts_on_a_line_through_the_api(tmp_path):
     queue: refused in one line, nothing sent, while the board has no part sensor (it would
     wait for good); with one, marked once a part came, and the "done" pulse whole in
     `board.io_changes` (rise and fall, 2 ms apart) when `api.run` returns."""
-    from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
-    board = api.SimulatedBoard(backend="compiled", **dict(
-        VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True, queue_io=True,
-        fly=True, vector_queue_depth=16))
+    from sim_board import IO_BOARD
+    board = api.SimulatedBoard(backend="compiled", **IO_BOARD)
     line = tmp_path / "line.svg"
     line.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="4mm" height="1mm" '
                     'viewBox="0 0 4 1"><path d="M0 0.5 H4" stroke="#000" fill="none"/></svg>')

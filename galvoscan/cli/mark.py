@@ -42,7 +42,7 @@ from .machine import add_machine_option, profile_from
 
 
 __all__ = ["add_parsers", "add_drawing_options", "add_plan_outputs", "planned_job",
-           "fly_from_args"]
+           "fly_from_args", "io_from_args"]
 
 
 def job_from_args(args):
@@ -79,6 +79,14 @@ def fly_from_args(args):
                        direction=values[FLY_DIRECTION])
     except ValueError as error:
         fail(error)
+
+
+def io_from_args(args):
+    """The command line's (and its job file's) :class:`~galvoscan.api.PartIO`, or None (no
+    part sensor, no output); a :class:`~galvoscan.geometry.field.PlanError` for a wait's or
+    an output's setting without the wait or the output."""
+    return api.part_io(**{setting.name: getattr(args, option(setting.flag).dest)
+                          for setting in IO_SETTINGS})
 
 
 def _fly_plans(args, parts, profile, fly):
@@ -201,8 +209,7 @@ def _cmd_mark(args):
     try:
         if fly is not None:
             api.check_fly(fly, profile)     # (what needs no plan: refused before one)
-        io = api.part_io(**{setting.name: getattr(args, option(setting.flag).dest)
-                            for setting in IO_SETTINGS})
+        io = io_from_args(args)
         counter, serials = part_serials(args, profile)
     except PlanError as error:
         fail(error)

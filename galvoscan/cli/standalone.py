@@ -52,9 +52,7 @@ def _cmd_store(args):
     from .jobfile import use_job_file
     from .. import api
     from ..plan.part_io import first_point, part_steps
-    from ..settings.io import IO_SETTINGS
-    from .job_options import option_of_flag
-    from .mark import fly_from_args
+    from .mark import fly_from_args, io_from_args
     use_job_file(args)
     if not args.output and not args.estimate:
         fail("give -o FILE for the image (or --estimate to plan only)")
@@ -78,8 +76,7 @@ def _cmd_store(args):
     try:
         if fly is not None:
             api.check_fly(fly, profile)
-        io = api.part_io(**{setting.name: getattr(args, option_of_flag(setting.flag).dest)
-                            for setting in IO_SETTINGS})
+        io = io_from_args(args)
         _, (serial,) = part_serials(args, profile)
     except PlanError as error:
         fail(error)
@@ -252,6 +249,7 @@ def _cmd_standalone(args):
     profile = profile_from(args)
     from ..build import simulated_bitstream
     from ..gateware.fields import IOKind
+    from ..gateware.limits import FRAME_US
     from ..gateware.settings import ScanSettings
     if args.board == "ulx3s":
         config, contents = simulated_bitstream("ulx3s")
@@ -291,7 +289,7 @@ def _cmd_standalone(args):
     # On past the image's longest output pulse (10 µs frames), so the record holds its end.
     pulses = [op[1] for op, *_ in (planned.segments if planned else ())
               if getattr(op, "kind", None) == IOKind.SET_OUTPUT]
-    board.run_for(1e-3 + max(pulses, default=0) * 10e-6)
+    board.run_for(1e-3 + max(pulses, default=0) * FRAME_US * 1e-6)
     refused = PlayerStatus.from_bits(client.read("player")).refused
     report = _report(board, profile, planned, presses, refused)
     report.update({name.removeprefix("vec_"): client.read(name) for name in

@@ -80,9 +80,6 @@ class IOStep(tuple):
             (self.kind, self.index, self.level, self.edge) == \
             (other.kind, other.index, other.level, other.edge)
 
-    def __ne__(self, other):
-        return not self == other
-
     def __hash__(self):
         return hash((tuple(self), self.kind, self.index, self.level, self.edge))
 

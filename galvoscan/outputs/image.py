@@ -2,7 +2,7 @@
 (``galvoscan store`` writes one, ``galvoscan flash --job`` puts it at its offset).
 
 The format is declared once, in :mod:`galvoscan.gateware.player.image_format`; the segments
-are the words the streamer writes (:func:`~.queue_words.segment_words`), planned as ``mark`` plans
+are the words the streamer writes (:func:`~.queue_words.queue_word`), planned as ``mark`` plans
 them, so the same drawing gives the same wires streamed or played.
 """
 

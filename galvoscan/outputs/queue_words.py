@@ -1,5 +1,5 @@
 """A job's segments as the board's queue takes them: the ``(vec_x, vec_y, vec_op)`` words of
-each (:func:`segment_words`, and back: :func:`segment_of_words`), what the board would refuse
+each (:func:`queue_word`, and back: :func:`segment_of_words`), what the board would refuse
 (:func:`check_segment`), and the jump a job ends on (:func:`job_segments`). The streamer
 (:mod:`.stream`) sends these words and a job image (:mod:`.image`) holds them, so the same
 drawing gives the same wires streamed or played."""
@@ -10,7 +10,7 @@ from ..gateware.sources.vector import IOVecOpWord, IOWord, PixelVecOpWord, VecOp
 from ..geometry.segments import IO, IOStep, JUMP, LINE, MARK, OPS, PIXELS
 
 
-__all__ = ["check_segment", "segment_words", "queue_word", "segment_of_words", "job_segments"]
+__all__ = ["check_segment", "queue_word", "segment_of_words", "job_segments"]
 
 
 def check_segment(op, x, y):
@@ -26,32 +26,26 @@ def check_segment(op, x, y):
             raise ValueError(f"segment end {value!r} is outside {reg.low} … {reg.high}")
 
 
-def segment_words(op, x, y, corner_frames=0, step=None):
-    """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment: what the
-    streamer writes and a job image holds: a pixel line is a mark, and a pixel word a jump,
-    with ``vec_op``'s ``pixels`` bit set; an I/O step (``op`` an
-    :class:`~galvoscan.geometry.segments.IOStep`'s, ``step`` it) has its ``io`` bit set and
-    what it does in bits 8:0."""
+def queue_word(segment, corner_frames=0):
+    """The ``(vec_x, vec_y, vec_op)`` register values that queue one segment (an ``(op, x,
+    y)`` tuple, or an :class:`~galvoscan.geometry.segments.IOStep`): what the streamer writes
+    and a job image holds. A pixel line is a mark, and a pixel word a jump, with ``vec_op``'s
+    ``pixels`` bit set; an I/O step has its ``io`` bit set and what it does in bits 8:0."""
+    op, x, y = segment
     if op == IO:
-        if not isinstance(step, IOStep):
+        if not isinstance(segment, IOStep):
             raise ValueError("an I/O step's words need the IOStep (what it does)")
-        return x, y, pack(IOVecOpWord, io=1) | pack(IOWord, kind=step.kind, index=step.index,
-                                                    level=step.level, edge=int(step.edge))
+        return x, y, pack(IOVecOpWord, io=1) | pack(
+            IOWord, kind=segment.kind, index=segment.index, level=segment.level,
+            edge=int(segment.edge))
     if op in (LINE, PIXELS):
         return x, y, pack(PixelVecOpWord, op=VectorOp.MARK if op == LINE else VectorOp.JUMP,
                           corner_frames=corner_frames if op == LINE else 0, pixels=1)
     return x, y, pack(VecOpWord, op=VectorOp[op.upper()], corner_frames=corner_frames)
 
 
-def queue_word(segment, corner_frames=0):
-    """:func:`segment_words` of one segment (an ``(op, x, y)`` tuple or an
-    :class:`~galvoscan.geometry.segments.IOStep`)."""
-    op, x, y = segment
-    return segment_words(op, x, y, corner_frames, step=segment if op == IO else None)
-
-
 def segment_of_words(x, y, op_word):
-    """``(op, x, y, corner_frames)``: the segment whose :func:`segment_words` these are (an
+    """``(op, x, y, corner_frames)``: the segment whose :func:`queue_word` these are (an
     I/O word's ``op`` is its :class:`~galvoscan.geometry.segments.IOStep`, ``corner_frames``
     0)."""
     if IOVecOpWord.from_bits(op_word).io:

@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 
 from ..gateware.fields import IOKind
+from ..gateware.limits import FRAME_US
 from ..geometry.field import PlanError
 from ..geometry.segments import JUMP, IOStep
 from ..settings.io import (DEFAULT_OUTPUT_PULSE_MS, DEFAULT_WAIT_TIMEOUT_S, INPUTS, LEVELS,
@@ -27,8 +28,6 @@ from ..settings.io import (DEFAULT_OUTPUT_PULSE_MS, DEFAULT_WAIT_TIMEOUT_S, INPU
 
 __all__ = ["PartIO", "part_io", "part_steps", "first_point"]
 
-#: µs a frame lasts: an output's pulse is counted in frames.
-_FRAME_MS = 0.01
 
 
 @dataclass(frozen=True)
@@ -65,7 +64,7 @@ class PartIO:
     @property
     def pulse_frames(self):
         """The output's pulse as the board counts it, 10 µs frames (0: held)."""
-        return round(self.output_pulse_ms / _FRAME_MS)
+        return round(self.output_pulse_ms * 1000 / FRAME_US)
 
     @property
     def wait_s(self):

@@ -24,7 +24,7 @@ from galvoscan.sim.board import SimTransport, SimulatedBoard
 from galvoscan.sim.xy2_receiver import frame_of_each_pulse
 
 from fly_marks import pulsed_frames, writes
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
+from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, part_arrivals, quick_sim_board
 from ulx3s_board import ulx3s_board, ulx3s_sim as shared_ulx3s_sim
 
 
@@ -164,9 +164,7 @@ def test_parts_on_the_belt_each_start_the_fly_at_the_sensor(files, capsys, dista
     board, = Board.built
     assert writes(board.bytes_in, "fly_clear") == []
     assert {v for _, v in writes(board.bytes_in, "fly_ctrl")} == {X_SIMULATED}
-    sensor = board.part_sensor
-    came = [(sensor.start_s + sensor.first_s + k * sensor.every_s) * board.clk_freq
-            for k in range(int(board.now / sensor.every_s) + 1)]
+    came = part_arrivals(board)
     parts = {}
     for clock, x, y in pulsed_frames(board):
         start = max(at for at in came if at < clock)

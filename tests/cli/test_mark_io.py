@@ -12,7 +12,7 @@ import pytest
 from galvoscan.cli import main
 
 from fly_marks import writes
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, quick_sim_board
+from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD, part_arrivals, quick_sim_board
 from ulx3s_board import ulx3s_sim as shared_ulx3s_sim
 
 
@@ -40,17 +40,6 @@ def mark_args(files, *more):
             "--machine", str(files / "machine.toml"), *more]
 
 
-def arrivals(board):
-    """The clocks each part came to the sensor on (its rise, level high), from the simulated
-    line's own description: the first, then one every period, until the board's time now."""
-    sensor = board.part_sensor
-    clocks, k = [], 0
-    while (at := sensor.start_s + sensor.first_s + k * sensor.every_s) < board.now:
-        clocks.append(at * board.clk_freq)
-        k += 1
-    return clocks
-
-
 def test_each_part_waits_for_the_sensor_and_says_it_is_done(files, capsys):
     with shared_ulx3s_sim(QUICK_SIM_BOARD["mo_lead"]) as Board:
         assert main(mark_args(files, "--wait-input", "part", "--set-output", "done",
@@ -62,7 +51,7 @@ def test_each_part_waits_for_the_sensor_and_says_it_is_done(files, capsys):
     record = json.loads(captured.out)
     assert record["parts"] == 2 and record["underruns"] == 0
     board, = Board.built
-    came = arrivals(board)
+    came = part_arrivals(board)
     # The pulses fall in two bursts, a part each, of the same count.
     pulses = board.pulses
     gaps = [k for k in range(1, len(pulses)) if pulses[k] - pulses[k - 1] > 1000 * FRAME_CLOCKS]

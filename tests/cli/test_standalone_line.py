@@ -13,7 +13,7 @@ from galvoscan.cli import main
 from galvoscan.gateware.fields import FlyControl, IOKind
 from galvoscan.outputs.image import read_image
 
-from sim_board import QUICK_SIM_BOARD
+from sim_board import QUICK_SIM_BOARD, part_arrivals
 from ulx3s_board import ulx3s_sim
 
 
@@ -49,9 +49,7 @@ def test_the_ulx3s_player_waits_for_each_part_and_says_it_is_done(drawing, tmp_p
     report = json.loads(capsys.readouterr().out)
     assert report["presses"] == ["done"] and report["underruns"] == 0
     board, = Board.built
-    sensor = board.part_sensor
-    came = [(sensor.start_s + sensor.first_s + k * sensor.every_s) * board.clk_freq
-            for k in range(int(board.now / sensor.every_s) + 1)]
+    came = part_arrivals(board)
     pulses = board.pulses
     gaps = [k for k in range(1, len(pulses)) if pulses[k] - pulses[k - 1] > 300 * FRAME_CLOCKS]
     assert len(gaps) == 1

@@ -6,9 +6,8 @@ import socket
 import pytest
 
 from galvoscan.build import PRESETS
-from galvoscan.meerk40t.device import STATUS_POLL_S
 
-from meerk40t_session import make_kernel
+from meerk40t_session import device_on
 from sim_board import SimBoard
 
 
@@ -24,18 +23,8 @@ def meerk40t():
     config = PRESETS["default"]
     board = SimBoard(config=config, clk_freq=config.clk_freq, baud=config.baud,
                      backend="compiled", record_laser=True)
-    kernel = make_kernel()
-    device = kernel.device
-    assert device.name == "galvoscan"
-    device.driver.make_board = lambda: board.board
-    device.status_poll_s = 0.0
-    assert device.driver.board is None, f"polled within {STATUS_POLL_S} s of the start"
-    lines = []
-    kernel.channel("console").watch(lambda line: lines.append(str(line)))
-    try:
+    with device_on(board.board) as (kernel, device, lines):
         yield kernel, device, board, lines
-    finally:
-        kernel()
 
 
 @pytest.fixture

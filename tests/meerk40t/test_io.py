@@ -19,29 +19,18 @@ from galvoscan.geometry.field import PlanError          # noqa: E402
 from galvoscan.meerk40t.cutcode import io_steps, job_parts  # noqa: E402
 from galvoscan.sim.board import SimulatedBoard          # noqa: E402
 
-from meerk40t_session import make_kernel                # noqa: E402
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD     # noqa: E402
+from meerk40t_session import device_on                 # noqa: E402
+from sim_board import IO_BOARD                          # noqa: E402
 
 
-#: The smallest build with I/O in the queue (tests/sim/test_queue_io_backends.py's).
-IO_BOARD = dict(VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True,
-                queue_io=True, fly=True, vector_queue_depth=16)
 SETTINGS = {"speed": 400.0, "power": 500.0, "frequency": 50.0}
 
 
 @pytest.fixture(scope="module")
 def io_device():
     board = SimulatedBoard(backend="compiled", **IO_BOARD)
-    kernel = make_kernel()
-    device = kernel.device
-    device.driver.make_board = lambda: board
-    device.status_poll_s = 0.0
-    lines = []
-    kernel.channel("console").watch(lambda line: lines.append(str(line)))
-    try:
+    with device_on(board) as (kernel, device, lines):
         yield kernel, device, board, lines
-    finally:
-        kernel()
 
 
 def _spooled(device, lines, items, timeout_s=60):

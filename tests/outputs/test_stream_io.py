@@ -14,7 +14,7 @@ from galvoscan.sim.board import SimTransport, SimulatedBoard
 from galvoscan.sim.contract import LASER_PINS
 
 from fake_board import FakeBoard
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
+from sim_board import IO_BOARD
 
 
 #: ``caps`` bits as the registers page gives them: bit 13 fly, bit 15 io.
@@ -59,10 +59,6 @@ def test_a_queued_fly_start_leaves_the_count_and_the_fly_to_the_queue():
     assert ops[0] >> 9 == 1 and ops[1] >> 9 == 1 and ops[-1] >> 9 == 1
     # Ended by flushing the queue (a held wait dropped), after the laser was disarmed.
     assert names.index("vec_flush", names.index("arm", names.index("run"))) > 0
-
-
-IO_BOARD = dict(VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True,
-                queue_io=True, fly=True, vector_queue_depth=16)
 
 
 def test_a_part_that_never_comes_stops_the_job_and_the_next_one_runs():

@@ -9,7 +9,7 @@ from hypothesis import given, strategies as st
 
 from galvoscan.sim.board import PartSensor, SimulatedBoard
 
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
+from sim_board import IO_BOARD
 
 
 #: Times in whole µs, as a board's are (a clock is 0.04 … 0.125 µs).
@@ -40,9 +40,7 @@ def test_the_sensor_changes_where_it_says(start_us, seen_us, every_us, first_us,
 def test_a_long_step_still_sees_the_part():
     """One 20 ms step (a host's status poll) over a part seen for 2 ms of it: the board's
     input was high for it, as its io register's wait shows: a wait for the part ends."""
-    board = SimulatedBoard(backend="compiled", **dict(
-        VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True, queue_io=True,
-        fly=True, vector_queue_depth=16))
+    board = SimulatedBoard(backend="compiled", **IO_BOARD)
     changes = []
     board.parts_arrive(input=0, first_s=5e-3, seen_s=2e-3)
     start = board.now

@@ -13,13 +13,8 @@ from galvoscan.gateware.sources.vector import IOVecOpWord, IOWord, VecOpWord
 from galvoscan.link.client import HostClient
 from galvoscan.sim.board import SimTransport, SimulatedBoard
 
-from sim_board import QUICK_SIM_BOARD, VECTOR_BOARD
+from sim_board import IO_BOARD
 
-
-#: The smallest build with I/O in the queue (which needs pixel lines, hence the delays), on
-#: the fly as the ULX3S's is (the queue's waits for an encoder's count are wired then).
-IO_BOARD = dict(VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True,
-                queue_io=True, fly=True, vector_queue_depth=16)
 FIRST, SECOND = (30000, 30000), (34000, 34000)
 #: The pulse on output 1, in 10 µs frames.
 PULSE_FRAMES = 3

@@ -27,6 +27,7 @@ from meerk40t.image import imagetools
 from meerk40t.kernel import Kernel
 from meerk40t.network import kernelserver
 
+from galvoscan.meerk40t.device import STATUS_POLL_S
 from galvoscan.profile.machine import default_profile
 
 from vector_board import pulses_per_frame
@@ -36,7 +37,7 @@ __all__ = ["PROFILE", "FIELD_MM", "UNIT_MM", "RECT_MM", "SPEED_MM_S", "PRR_KHZ",
            "POWER_PERMILLE", "LEFT", "TOP", "RIGHT", "BOTTOM", "make_kernel", "spool_and_wait",
            "status_bar_signal", "status_bar_heard", "plan_name", "rect_command",
            "marks_off_the_wires", "distance_to_rect", "outline_gaps", "median_pitch",
-           "GrblSender"]
+           "GrblSender", "device_on"]
 
 
 PROFILE = default_profile()
@@ -67,6 +68,25 @@ def make_kernel():
     kernel(partial=True)
     kernel.console("service device start -i galvoscan 0\n")
     return kernel
+
+
+@contextlib.contextmanager
+def device_on(board):
+    """``(kernel, device, lines)``: a meerk40t kernel with the galvoscan device on ``board``
+    (a :class:`~galvoscan.sim.board.SimulatedBoard`), its status poll off, what it says on
+    the console in ``lines``; the kernel shut down after."""
+    kernel = make_kernel()
+    device = kernel.device
+    assert device.name == "galvoscan"
+    device.driver.make_board = lambda: board
+    device.status_poll_s = 0.0
+    assert device.driver.board is None, f"polled within {STATUS_POLL_S} s of the start"
+    lines = []
+    kernel.channel("console").watch(lambda line: lines.append(str(line)))
+    try:
+        yield kernel, device, lines
+    finally:
+        kernel()
 
 
 def spool_and_wait(kernel, device, command, *, timeout_s=60):

@@ -345,6 +345,26 @@ VECTOR_BOARD = dict(VECTOR_ONLY, settings=ScanSettings(mode="vector", run=False)
 #: (tests/gateware/laser/test_laser.py checks the lead).
 QUICK_SIM_BOARD = {"clk_freq": 8e6, "mo_lead": 0.5e-3}
 
+#: The smallest build with I/O in the queue (which needs pixel lines, hence the delays), on
+#: the fly as the ULX3S's is (the queue's waits for an encoder's count are wired then), at
+#: :data:`QUICK_SIM_BOARD`'s clock and lead: one compiled model for every I/O test.
+IO_BOARD = dict(VECTOR_BOARD, **QUICK_SIM_BOARD, vector_delays=True, pixel_lines=True,
+                queue_io=True, fly=True, vector_queue_depth=16)
+
+
+def part_arrivals(board):
+    """The clocks a simulated board's part sensor saw each part come on, until the board's
+    time now: from the sensor's own description (the first ``first_s`` after it was set,
+    then one every ``every_s``), not from the board's records."""
+    sensor = board.part_sensor
+    clocks, k = [], 0
+    while (at := sensor.start_s + sensor.first_s + k * (sensor.every_s or 0)) < board.now:
+        clocks.append(at * board.clk_freq)
+        if sensor.every_s is None:
+            break
+        k += 1
+    return clocks
+
 
 def quick_board(**kwargs):
     """The default build at :data:`QUICK_SIM_BOARD` and the link's 1 Mbaud on the compiled
